@@ -1,0 +1,454 @@
+//! The 44 functions of the FMI 2.0 C API, each a thin shell around `enter`.
+//! The model they serve is `crate::ExportedModel`.
+
+use super::*;
+use crate::fmi2::instance::unavailable_status;
+use crate::fmi2::phase::Call;
+
+type M = crate::ExportedModel;
+
+const OK: FmiResult<Status> = Ok(Status::Ok);
+
+#[no_mangle]
+pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
+    c"default".as_ptr()
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetVersion() -> *const c_char {
+    c"2.0".as_ptr()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetDebugLogging(
+    c: fmi2Component,
+    logging_on: fmi2Boolean,
+    n_categories: usize,
+    categories: *const fmi2String,
+) -> fmi2Status {
+    enter::<M>(c, Call::SetDebugLogging, |h| {
+        let names = slice(Call::SetDebugLogging, categories, n_categories, "categories")?;
+        let names: Vec<String> = names.iter().map(|&n| text(n).unwrap_or_default()).collect();
+        h.instance.set_debug_logging(logging_on != 0, &names)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Instantiate(
+    instance_name: fmi2String,
+    fmu_type: fmi2Type,
+    guid: fmi2String,
+    resource_location: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    logging_on: fmi2Boolean,
+) -> fmi2Component {
+    catch_unwind(|| instantiate::<M>(instance_name, fmu_type, guid, resource_location, functions, logging_on))
+        .unwrap_or(std::ptr::null_mut())
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+    free_instance::<M>(c)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetupExperiment(
+    c: fmi2Component,
+    tolerance_defined: fmi2Boolean,
+    tolerance: fmi2Real,
+    start_time: fmi2Real,
+    stop_time_defined: fmi2Boolean,
+    stop_time: fmi2Real,
+) -> fmi2Status {
+    enter::<M>(c, Call::SetupExperiment, |h| {
+        let tolerance = (tolerance_defined != 0).then_some(tolerance);
+        let stop = (stop_time_defined != 0).then_some(stop_time);
+        h.instance.setup_experiment(tolerance, start_time, stop)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+    enter::<M>(c, Call::EnterInitializationMode, |h| h.instance.enter_initialization_mode().and(OK))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+    enter::<M>(c, Call::ExitInitializationMode, |h| h.instance.exit_initialization_mode().and(OK))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+    enter::<M>(c, Call::Terminate, |h| h.instance.terminate().and(OK))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+    enter::<M>(c, Call::Reset, |h| h.instance.reset().and(OK))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    let call = Call::GetReal;
+    enter::<M>(c, call, |h| {
+        let vrs = slice(call, vr, nvr, "vr")?;
+        h.instance.get_reals(vrs, slice_mut(call, value, nvr, "value")?)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    let call = Call::GetInteger;
+    enter::<M>(c, call, |h| {
+        let vrs = slice(call, vr, nvr, "vr")?;
+        h.instance.get_integers(vrs, slice_mut(call, value, nvr, "value")?)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    let call = Call::GetBoolean;
+    enter::<M>(c, call, |h| {
+        let vrs = slice(call, vr, nvr, "vr")?;
+        h.instance.get_booleans(vrs, slice_mut(call, value, nvr, "value")?)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    let call = Call::GetString;
+    enter::<M>(c, call, |h| {
+        let vrs = slice(call, vr, nvr, "vr")?;
+        slice_mut(call, value, nvr, "value")?;
+        h.instance.check_strings(call, vrs)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    let call = Call::SetReal;
+    enter::<M>(c, call, |h| {
+        h.instance.set_reals(slice(call, vr, nvr, "vr")?, slice(call, value, nvr, "value")?)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Integer,
+) -> fmi2Status {
+    let call = Call::SetInteger;
+    enter::<M>(c, call, |h| {
+        h.instance.set_integers(slice(call, vr, nvr, "vr")?, slice(call, value, nvr, "value")?)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    let call = Call::SetBoolean;
+    enter::<M>(c, call, |h| {
+        h.instance.set_booleans(slice(call, vr, nvr, "vr")?, slice(call, value, nvr, "value")?)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2String,
+) -> fmi2Status {
+    let call = Call::SetString;
+    enter::<M>(c, call, |h| {
+        let vrs = slice(call, vr, nvr, "vr")?;
+        slice(call, value, nvr, "value")?;
+        h.instance.check_strings(call, vrs)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    let call = Call::GetFMUstate;
+    enter::<M>(c, call, |h| {
+        let snapshot = h.instance.snapshot();
+        h.keep_state(call, state, snapshot)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
+    let call = Call::SetFMUstate;
+    enter::<M>(c, call, |h| {
+        let snapshot = h.own_state(call, state)?.clone();
+        h.instance.restore(&snapshot);
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    let call = Call::FreeFMUstate;
+    enter::<M>(c, call, |h| h.free_state(call, state).and(OK))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
+    let call = Call::SerializedFMUstateSize;
+    enter::<M>(c, call, |h| {
+        let n = h.own_state(call, state)?.to_bytes(M::description()).len();
+        *out_ref(call, size, "size")? = n;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SerializeFMUstate(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    serialized: *mut fmi2Byte,
+    size: usize,
+) -> fmi2Status {
+    let call = Call::SerializeFMUstate;
+    enter::<M>(c, call, |h| {
+        let bytes = h.own_state(call, state)?.to_bytes(M::description());
+        if size < bytes.len() {
+            return Err(FmiError::error(format!(
+                "{}: the buffer holds {size} bytes, the state needs {} (ask fmi2SerializedFMUstateSize)",
+                call.name(),
+                bytes.len()
+            )));
+        }
+        let target = slice_mut(call, serialized as *mut u8, bytes.len(), "serializedState")?;
+        target.copy_from_slice(&bytes);
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+    c: fmi2Component,
+    serialized: *const fmi2Byte,
+    size: usize,
+    state: *mut fmi2FMUstate,
+) -> fmi2Status {
+    let call = Call::DeSerializeFMUstate;
+    enter::<M>(c, call, |h| {
+        let bytes = slice(call, serialized as *const u8, size, "serializedState")?;
+        let snapshot = Snapshot::<M>::from_bytes(bytes, M::description())
+            .map_err(|why| FmiError::error(format!("{}: rejected: {why}", call.name())))?;
+        h.keep_state(call, state, snapshot)?;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+    c: fmi2Component,
+    _unknown_refs: *const fmi2ValueReference,
+    _n_unknown: usize,
+    _known_refs: *const fmi2ValueReference,
+    _n_known: usize,
+    _dv_known: *const fmi2Real,
+    _dv_unknown: *mut fmi2Real,
+) -> fmi2Status {
+    unsupported::<M>(c, Call::GetDirectionalDerivative, "providesDirectionalDerivative is false")
+}
+
+// ---- Model Exchange: this FMU is Co-Simulation only (no <ModelExchange>).
+
+const NO_ME: &str = "this FMU implements Co-Simulation only";
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
+    unsupported::<M>(c, Call::EnterEventMode, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2NewDiscreteStates(c: fmi2Component, _info: *mut fmi2EventInfo) -> fmi2Status {
+    unsupported::<M>(c, Call::NewDiscreteStates, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
+    unsupported::<M>(c, Call::EnterContinuousTimeMode, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+    c: fmi2Component,
+    _no_set_prior: fmi2Boolean,
+    _enter_event_mode: *mut fmi2Boolean,
+    _terminate_simulation: *mut fmi2Boolean,
+) -> fmi2Status {
+    unsupported::<M>(c, Call::CompletedIntegratorStep, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, _time: fmi2Real) -> fmi2Status {
+    unsupported::<M>(c, Call::SetTime, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, _x: *const fmi2Real, _nx: usize) -> fmi2Status {
+    unsupported::<M>(c, Call::SetContinuousStates, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, _dx: *mut fmi2Real, _nx: usize) -> fmi2Status {
+    unsupported::<M>(c, Call::GetDerivatives, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, _z: *mut fmi2Real, _ni: usize) -> fmi2Status {
+    unsupported::<M>(c, Call::GetEventIndicators, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, _x: *mut fmi2Real, _nx: usize) -> fmi2Status {
+    unsupported::<M>(c, Call::GetContinuousStates, NO_ME)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
+    c: fmi2Component,
+    _x_nominal: *mut fmi2Real,
+    _nx: usize,
+) -> fmi2Status {
+    unsupported::<M>(c, Call::GetNominalsOfContinuousStates, NO_ME)
+}
+
+// ---- Co-Simulation
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+    c: fmi2Component,
+    _vr: *const fmi2ValueReference,
+    _nvr: usize,
+    _order: *const fmi2Integer,
+    _value: *const fmi2Real,
+) -> fmi2Status {
+    unsupported::<M>(c, Call::SetRealInputDerivatives, "canInterpolateInputs is false: inputs are held over a step")
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+    c: fmi2Component,
+    _vr: *const fmi2ValueReference,
+    _nvr: usize,
+    _order: *const fmi2Integer,
+    _value: *mut fmi2Real,
+) -> fmi2Status {
+    unsupported::<M>(c, Call::GetRealOutputDerivatives, "maxOutputDerivativeOrder is 0")
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DoStep(
+    c: fmi2Component,
+    current_communication_point: fmi2Real,
+    communication_step_size: fmi2Real,
+    _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
+) -> fmi2Status {
+    enter::<M>(c, Call::DoStep, |h| {
+        h.instance.do_step(current_communication_point, communication_step_size).and(OK)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+    unsupported::<M>(c, Call::CancelStep, "steps are synchronous (canRunAsynchronuously is false)")
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, _value: *mut fmi2Status) -> fmi2Status {
+    enter::<M>(c, Call::GetStatus, |_| Err(unavailable_status(Call::GetStatus, kind)))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
+    let call = Call::GetRealStatus;
+    enter::<M>(c, call, |h| {
+        let status = h.instance.real_status(kind)?;
+        *out_ref(call, value, "value")? = status;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetIntegerStatus(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    _value: *mut fmi2Integer,
+) -> fmi2Status {
+    enter::<M>(c, Call::GetIntegerStatus, |_| Err(unavailable_status(Call::GetIntegerStatus, kind)))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBooleanStatus(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    let call = Call::GetBooleanStatus;
+    enter::<M>(c, call, |h| {
+        let status = h.instance.boolean_status(kind)?;
+        *out_ref(call, value, "value")? = status as fmi2Boolean;
+        OK
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStringStatus(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    _value: *mut fmi2String,
+) -> fmi2Status {
+    enter::<M>(c, Call::GetStringStatus, |_| Err(unavailable_status(Call::GetStringStatus, kind)))
+}

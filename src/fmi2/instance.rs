@@ -1,0 +1,431 @@
+//! One FMU instance: the state machine, the checks every get and set goes
+//! through (value reference, type, causality, phase, value), time keeping
+//! for `fmi2DoStep`, and FMU states. Plain safe Rust over a generic model;
+//! the FFI module calls it and turns its errors into statuses and log lines.
+
+use super::description::{Causality, Initial, Kind, ModelDescription, Variability, Variable};
+use super::ffi::Logger;
+use super::logging::LogFilter;
+use super::model::Model;
+use super::phase::{Call, Phase};
+use super::snapshot::Snapshot;
+use super::status::{FmiError, FmiResult, Status};
+
+/// `fmi2StatusKind` values (FMI 2.0 headers).
+pub const DO_STEP_STATUS: i32 = 0;
+pub const PENDING_STATUS: i32 = 1;
+pub const LAST_SUCCESSFUL_TIME: i32 = 2;
+pub const TERMINATED: i32 = 3;
+
+/// Relative tolerance when the communication point is compared with the
+/// instance's time: importers compute time in their own ways (t + h, or
+/// t0 + n*h), which may differ by a few ulps, never by 1e-13 of the time.
+const TIME_TOLERANCE: f64 = 1e-13;
+
+/// The type family of a get/set function.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Family {
+    Real,
+    Integer,
+    Boolean,
+    String,
+}
+
+impl Family {
+    fn of(kind: Kind) -> Family {
+        match kind {
+            Kind::Real => Family::Real,
+            Kind::Integer | Kind::Enumeration { .. } => Family::Integer,
+            Kind::Boolean => Family::Boolean,
+            Kind::String => Family::String,
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            Family::Real => "Real",
+            Family::Integer => "Integer",
+            Family::Boolean => "Boolean",
+            Family::String => "String",
+        }
+    }
+}
+
+pub struct Instance<M: Model> {
+    logger: Logger,
+    log: LogFilter,
+    phase: Phase,
+    time: f64,
+    start_time: f64,
+    stop_time: Option<f64>,
+    tolerance: Option<f64>,
+    /// Kept for models that ship resources; this one needs none.
+    #[allow(dead_code)]
+    resource_location: Option<String>,
+    model: M,
+}
+
+impl<M: Model> Instance<M> {
+    pub fn new(logger: Logger, logging_on: bool, resource_location: Option<String>) -> Self {
+        let instance = Instance {
+            logger,
+            log: LogFilter::new(Self::description().log_categories, logging_on),
+            phase: Phase::Instantiated,
+            time: 0.0,
+            start_time: 0.0,
+            stop_time: None,
+            tolerance: None,
+            resource_location,
+            model: M::at_start_values(),
+        };
+        instance.log_event("instantiated");
+        instance
+    }
+
+    fn description() -> &'static ModelDescription {
+        M::description()
+    }
+
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    pub fn log(&self, status: Status, category: &str, message: &str) {
+        if self.log.allows(category) {
+            self.logger.log(status, category, message);
+        }
+    }
+
+    fn log_event(&self, message: &str) {
+        self.log(Status::Ok, "logEvents", message);
+    }
+
+    /// Entry check of every call: is it allowed in the current phase?
+    pub fn begin(&mut self, call: Call) -> FmiResult {
+        if self.log.traces_calls() {
+            self.log(Status::Ok, "logAll", call.name());
+        }
+        if call.is_allowed_in(self.phase) {
+            Ok(())
+        } else {
+            Err(FmiError::error(format!(
+                "{}: illegal call sequence: not allowed in the state \"{}\"",
+                call.name(),
+                self.phase.name()
+            )))
+        }
+    }
+
+    /// Reports a failed call; an `Error` puts the instance into the error
+    /// state, from which `fmi2Reset` or `fmi2SetFMUstate` bring it back.
+    pub fn fail(&mut self, error: FmiError) -> Status {
+        self.log(error.status, error.status.log_category(), &error.message);
+        if error.status >= Status::Error {
+            self.phase = Phase::Error;
+        }
+        error.status
+    }
+
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[String]) -> FmiResult {
+        self.log.set(on, categories).map_err(|m| FmiError::error(format!("fmi2SetDebugLogging: {m}")))
+    }
+
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> FmiResult {
+        let name = "fmi2SetupExperiment";
+        if !start.is_finite() {
+            return Err(FmiError::error(format!("{name}: startTime = {start} must be finite")));
+        }
+        if let Some(stop) = stop {
+            if !(stop.is_finite() && stop >= start) {
+                return Err(FmiError::error(format!("{name}: stopTime = {stop} must be finite and >= startTime = {start}")));
+            }
+        }
+        if let Some(tol) = tolerance {
+            if !(tol.is_finite() && tol > 0.0) {
+                return Err(FmiError::error(format!("{name}: tolerance = {tol} must be finite and > 0")));
+            }
+        }
+        self.tolerance = tolerance;
+        self.start_time = start;
+        self.stop_time = stop;
+        self.time = start;
+        Ok(())
+    }
+
+    pub fn enter_initialization_mode(&mut self) -> FmiResult {
+        self.phase = Phase::InitializationMode;
+        self.log_event("entered initialization mode");
+        Ok(())
+    }
+
+    pub fn exit_initialization_mode(&mut self) -> FmiResult {
+        self.settle_initial_values()?;
+        self.phase = Phase::StepComplete;
+        self.log_event("initialization done");
+        Ok(())
+    }
+
+    /// Checks every parameter against its allowed range, then lets the model
+    /// compute its initial state. Nothing changes when a check fails.
+    fn settle_initial_values(&mut self) -> FmiResult {
+        for v in Self::description().variables {
+            if v.causality == Causality::Parameter && v.kind == Kind::Real && !v.range.is_unbounded() {
+                let value = self.model.get_real(v.vr)?;
+                if !v.range.contains(value) {
+                    return Err(out_of_range(v, value));
+                }
+            }
+        }
+        let mut model = self.model.clone();
+        model.initialize()?;
+        self.model = model;
+        Ok(())
+    }
+
+    pub fn terminate(&mut self) -> FmiResult {
+        self.phase = Phase::Terminated;
+        self.log_event("terminated");
+        Ok(())
+    }
+
+    pub fn reset(&mut self) -> FmiResult {
+        self.model = M::at_start_values();
+        self.phase = Phase::Instantiated;
+        self.time = 0.0;
+        self.start_time = 0.0;
+        self.stop_time = None;
+        self.tolerance = None;
+        self.log_event("reset to the start values");
+        Ok(())
+    }
+
+    /// Looks up a value reference and checks that it is of the family the
+    /// function handles.
+    fn variable(&self, call: Call, vr: u32, family: Family) -> FmiResult<&'static Variable> {
+        let v = Self::description()
+            .variable(vr)
+            .ok_or_else(|| FmiError::error(format!("{}: unknown value reference {vr}", call.name())))?;
+        if Family::of(v.kind) != family {
+            return Err(FmiError::error(format!(
+                "{}: {} (value reference {vr}) is of type {}, not {}",
+                call.name(),
+                v.name,
+                Family::of(v.kind).name(),
+                family.name()
+            )));
+        }
+        Ok(v)
+    }
+
+    /// In initialization mode the outputs follow the parameters and inputs
+    /// set so far, so they are computed before they are read.
+    fn prepare_get(&mut self) -> FmiResult {
+        if self.phase == Phase::InitializationMode {
+            self.settle_initial_values()?;
+        }
+        Ok(())
+    }
+
+    pub fn get_reals(&mut self, vrs: &[u32], values: &mut [f64]) -> FmiResult {
+        self.prepare_get()?;
+        for (vr, value) in vrs.iter().zip(values.iter_mut()) {
+            self.variable(Call::GetReal, *vr, Family::Real)?;
+            *value = self.model.get_real(*vr)?;
+        }
+        Ok(())
+    }
+
+    pub fn get_integers(&mut self, vrs: &[u32], values: &mut [i32]) -> FmiResult {
+        self.prepare_get()?;
+        for (vr, value) in vrs.iter().zip(values.iter_mut()) {
+            self.variable(Call::GetInteger, *vr, Family::Integer)?;
+            *value = self.model.get_integer(*vr)?;
+        }
+        Ok(())
+    }
+
+    pub fn get_booleans(&mut self, vrs: &[u32], values: &mut [i32]) -> FmiResult {
+        self.prepare_get()?;
+        for (vr, value) in vrs.iter().zip(values.iter_mut()) {
+            self.variable(Call::GetBoolean, *vr, Family::Boolean)?;
+            *value = self.model.get_boolean(*vr)? as i32;
+        }
+        Ok(())
+    }
+
+    /// The model has no String variables, so only an empty request succeeds.
+    pub fn check_strings(&self, call: Call, vrs: &[u32]) -> FmiResult {
+        vrs.iter().try_for_each(|&vr| self.variable(call, vr, Family::String).map(|_| ()))
+    }
+
+    /// May `v` be set now? FMI 2.0, section 2.2.7 (the table of when a
+    /// variable may be set) for co-simulation.
+    fn check_settable(&self, call: Call, v: &Variable) -> FmiResult {
+        let ok = match v.causality {
+            Causality::Input => true,
+            Causality::Parameter => match self.phase {
+                Phase::Instantiated => matches!(v.initial, Initial::Exact | Initial::Approx),
+                Phase::InitializationMode => v.initial == Initial::Exact,
+                _ => v.variability == Variability::Tunable,
+            },
+            _ => false,
+        } && v.variability != Variability::Constant;
+        if ok {
+            return Ok(());
+        }
+        let why = match v.causality {
+            Causality::Parameter => format!(
+                "it is a {} parameter and cannot be set in the state \"{}\" (only before initialization ends)",
+                if v.variability == Variability::Fixed { "fixed" } else { "tunable" },
+                self.phase.name()
+            ),
+            other => format!("its causality is {other:?}; only parameters and inputs can be set"),
+        };
+        Err(FmiError::error(format!("{}: cannot set {}: {why}", call.name(), v.name)))
+    }
+
+    /// Validates every value before it applies any, so a rejected call
+    /// changes nothing.
+    fn set_all<T: Copy>(
+        &mut self,
+        call: Call,
+        family: Family,
+        vrs: &[u32],
+        values: &[T],
+        check: impl Fn(&Variable, T) -> FmiResult,
+        apply: impl Fn(&mut M, u32, T) -> FmiResult,
+    ) -> FmiResult {
+        for (&vr, &value) in vrs.iter().zip(values) {
+            let v = self.variable(call, vr, family)?;
+            self.check_settable(call, v)?;
+            check(v, value).map_err(|e| FmiError::error(format!("{}: {}", call.name(), e.message)))?;
+        }
+        for (&vr, &value) in vrs.iter().zip(values) {
+            apply(&mut self.model, vr, value)?;
+        }
+        Ok(())
+    }
+
+    pub fn set_reals(&mut self, vrs: &[u32], values: &[f64]) -> FmiResult {
+        self.set_all(
+            Call::SetReal,
+            Family::Real,
+            vrs,
+            values,
+            |v, x| {
+                // Parameters are range-checked when initialization ends (they
+                // may pass through odd values while a user sets them one by
+                // one); inputs take effect at once, so they are checked now.
+                let checked = !x.is_finite() || v.causality == Causality::Input;
+                if checked && !(x.is_finite() && v.range.contains(x)) {
+                    Err(out_of_range(v, x))
+                } else {
+                    Ok(())
+                }
+            },
+            |m, vr, x| m.set_real(vr, x),
+        )
+    }
+
+    pub fn set_integers(&mut self, vrs: &[u32], values: &[i32]) -> FmiResult {
+        self.set_all(
+            Call::SetInteger,
+            Family::Integer,
+            vrs,
+            values,
+            |v, x| match v.kind {
+                Kind::Enumeration { type_name, values } if !values.contains(&x) => Err(FmiError::error(format!(
+                    "{} = {x} is not a value of the enumeration {type_name} (allowed {}..{})",
+                    v.name,
+                    values.iter().min().unwrap_or(&0),
+                    values.iter().max().unwrap_or(&0)
+                ))),
+                _ => Ok(()),
+            },
+            |m, vr, x| m.set_integer(vr, x),
+        )
+    }
+
+    pub fn set_booleans(&mut self, vrs: &[u32], values: &[i32]) -> FmiResult {
+        self.set_all(
+            Call::SetBoolean,
+            Family::Boolean,
+            vrs,
+            values,
+            |v, x| {
+                if x == 0 || x == 1 {
+                    Ok(())
+                } else {
+                    Err(FmiError::error(format!("{} = {x} is not a Boolean (allowed 0 = false, 1 = true)", v.name)))
+                }
+            },
+            |m, vr, x| m.set_boolean(vr, x != 0),
+        )
+    }
+
+    pub fn do_step(&mut self, current: f64, h: f64) -> FmiResult {
+        let name = Call::DoStep.name();
+        if !(h.is_finite() && h > 0.0) {
+            return Err(FmiError::error(format!("{name}: communicationStepSize = {h} must be finite and > 0")));
+        }
+        let tolerance = TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0);
+        if !current.is_finite() || (current - self.time).abs() > tolerance {
+            return Err(FmiError::error(format!(
+                "{name}: currentCommunicationPoint = {current} is not the current time {} of the instance",
+                self.time
+            )));
+        }
+        match self.model.do_step(h) {
+            Ok(()) => {
+                // Take the importer's time so that rounding never accumulates.
+                self.time = current + h;
+                Ok(())
+            }
+            Err(e) => {
+                if e.status == Status::Discard {
+                    self.phase = Phase::StepFailed;
+                }
+                Err(FmiError { status: e.status, message: format!("{name} at t = {current} with h = {h}: {}", e.message) })
+            }
+        }
+    }
+
+    pub fn real_status(&self, kind: i32) -> FmiResult<f64> {
+        match kind {
+            LAST_SUCCESSFUL_TIME => Ok(self.time),
+            _ => Err(unavailable_status(Call::GetRealStatus, kind)),
+        }
+    }
+
+    pub fn boolean_status(&self, kind: i32) -> FmiResult<bool> {
+        match kind {
+            // The model never asks the importer to stop.
+            TERMINATED => Ok(false),
+            _ => Err(unavailable_status(Call::GetBooleanStatus, kind)),
+        }
+    }
+
+    pub fn snapshot(&self) -> Snapshot<M> {
+        Snapshot { phase: self.phase, time: self.time, model: self.model.clone() }
+    }
+
+    pub fn restore(&mut self, snapshot: &Snapshot<M>) {
+        self.phase = snapshot.phase;
+        self.time = snapshot.time;
+        self.model.clone_from(&snapshot.model);
+        self.log_event(&format!("FMU state restored at t = {}", self.time));
+    }
+}
+
+fn out_of_range(v: &Variable, value: f64) -> FmiError {
+    let unit = if v.unit.is_empty() || v.unit == "1" { String::new() } else { format!(" {}", v.unit) };
+    FmiError::error(format!("{} = {value}{unit} is outside its allowed range {}", v.name, v.range))
+}
+
+/// FMI 2.0: a status kind the FMU does not provide answers fmi2Discard.
+pub fn unavailable_status(call: Call, kind: i32) -> FmiError {
+    let what = match kind {
+        DO_STEP_STATUS | PENDING_STATUS => "steps are synchronous, so there is no pending step".to_string(),
+        _ => format!("status kind {kind} is not provided by {}", call.name()),
+    };
+    FmiError::discard(format!("{}: {what}", call.name()))
+}

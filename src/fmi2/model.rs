@@ -1,0 +1,53 @@
+//! What a model provides to the FMI layer. The layer owns the state machine,
+//! the checks against the model description, logging and FMU states; a model
+//! only stores values, computes outputs and advances in time.
+
+use super::description::{Causality, ModelDescription, Start};
+use super::snapshot::Persist;
+use super::status::FmiResult;
+
+pub trait Model: Clone + Default + Persist + 'static {
+    /// The table generated from this model's `modelDescription.xml`.
+    fn description() -> &'static ModelDescription;
+
+    // Value access by value reference. The layer calls these only with value
+    // references of the right type, with values already checked against the
+    // description (finite, in range, a legal Boolean or enumeration value)
+    // and only where causality and phase allow the set.
+    fn get_real(&self, vr: u32) -> FmiResult<f64>;
+    fn set_real(&mut self, vr: u32, value: f64) -> FmiResult;
+    fn get_integer(&self, vr: u32) -> FmiResult<i32>;
+    fn set_integer(&mut self, vr: u32, value: i32) -> FmiResult;
+    fn get_boolean(&self, vr: u32) -> FmiResult<bool>;
+    fn set_boolean(&mut self, vr: u32, value: bool) -> FmiResult;
+
+    /// Checks what the description's ranges cannot say (relations between
+    /// values) and computes the initial state from parameters and inputs.
+    /// Called when initialization ends, and before outputs are read during
+    /// initialization. Must not change anything when it fails.
+    fn initialize(&mut self) -> FmiResult;
+
+    /// Advances the model over a communication step of length `h` > 0, the
+    /// inputs held at their current values. On failure the model must be
+    /// left as it was before the step.
+    fn do_step(&mut self, h: f64) -> FmiResult;
+
+    /// The model with every parameter and input at its start value.
+    fn at_start_values() -> Self {
+        let mut model = Self::default();
+        for v in Self::description().variables {
+            if !matches!(v.causality, Causality::Parameter | Causality::Input) {
+                continue;
+            }
+            // The start values are checked by build.rs and a test covers that
+            // every one is accepted, so a failure here cannot happen.
+            let _ = match v.start {
+                Start::Real(x) => model.set_real(v.vr, x),
+                Start::Integer(x) => model.set_integer(v.vr, x),
+                Start::Boolean(x) => model.set_boolean(v.vr, x),
+                Start::None => Ok(()),
+            };
+        }
+        model
+    }
+}

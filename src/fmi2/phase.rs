@@ -1,0 +1,181 @@
+//! The FMI 2.0 co-simulation state machine: the phases an instance goes
+//! through and, for every function, the phases in which it may be called
+//! (FMI 2.0 standard, section 4.2.4, the state chart of the slave).
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    Instantiated = 0,
+    InitializationMode = 1,
+    StepComplete = 2,
+    StepFailed = 3,
+    Terminated = 4,
+    Error = 5,
+}
+
+impl Phase {
+    pub const ALL: [Phase; 6] = [
+        Phase::Instantiated,
+        Phase::InitializationMode,
+        Phase::StepComplete,
+        Phase::StepFailed,
+        Phase::Terminated,
+        Phase::Error,
+    ];
+
+    const fn bit(self) -> u8 {
+        1 << self as u8
+    }
+
+    pub fn from_u8(x: u8) -> Option<Phase> {
+        Phase::ALL.get(x as usize).copied()
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Instantiated => "instantiated",
+            Phase::InitializationMode => "initialization mode",
+            Phase::StepComplete => "step complete",
+            Phase::StepFailed => "step failed",
+            Phase::Terminated => "terminated",
+            Phase::Error => "error",
+        }
+    }
+}
+
+const INSTANTIATED: u8 = Phase::Instantiated.bit();
+const INIT: u8 = Phase::InitializationMode.bit();
+const COMPLETE: u8 = Phase::StepComplete.bit();
+const FAILED: u8 = Phase::StepFailed.bit();
+const TERMINATED: u8 = Phase::Terminated.bit();
+const ERROR: u8 = Phase::Error.bit();
+const ANY: u8 = INSTANTIATED | INIT | COMPLETE | FAILED | TERMINATED | ERROR;
+const NONE: u8 = 0;
+
+/// Every fmi2 function that takes an instance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Call {
+    SetDebugLogging,
+    FreeInstance,
+    SetupExperiment,
+    EnterInitializationMode,
+    ExitInitializationMode,
+    Terminate,
+    Reset,
+    GetReal,
+    GetInteger,
+    GetBoolean,
+    GetString,
+    SetReal,
+    SetInteger,
+    SetBoolean,
+    SetString,
+    GetFMUstate,
+    SetFMUstate,
+    FreeFMUstate,
+    SerializedFMUstateSize,
+    SerializeFMUstate,
+    DeSerializeFMUstate,
+    GetDirectionalDerivative,
+    // Model Exchange: not offered by this FMU's description (no <ModelExchange>).
+    EnterEventMode,
+    NewDiscreteStates,
+    EnterContinuousTimeMode,
+    CompletedIntegratorStep,
+    SetTime,
+    SetContinuousStates,
+    GetDerivatives,
+    GetEventIndicators,
+    GetContinuousStates,
+    GetNominalsOfContinuousStates,
+    // Co-Simulation
+    SetRealInputDerivatives,
+    GetRealOutputDerivatives,
+    DoStep,
+    CancelStep,
+    GetStatus,
+    GetRealStatus,
+    GetIntegerStatus,
+    GetBooleanStatus,
+    GetStringStatus,
+}
+
+impl Call {
+    /// The phases in which the standard allows this call.
+    const fn allowed(self) -> u8 {
+        use Call::*;
+        match self {
+            SetDebugLogging | FreeInstance | Reset => ANY,
+            SetupExperiment | EnterInitializationMode => INSTANTIATED,
+            ExitInitializationMode => INIT,
+            Terminate => COMPLETE | FAILED,
+            GetReal | GetInteger | GetBoolean | GetString => INIT | COMPLETE | FAILED | TERMINATED | ERROR,
+            SetReal | SetInteger | SetBoolean | SetString => INSTANTIATED | INIT | COMPLETE,
+            GetFMUstate | SetFMUstate | FreeFMUstate | SerializedFMUstateSize | SerializeFMUstate
+            | DeSerializeFMUstate => ANY,
+            GetDirectionalDerivative => INIT | COMPLETE | FAILED | TERMINATED | ERROR,
+            EnterEventMode | NewDiscreteStates | EnterContinuousTimeMode | CompletedIntegratorStep
+            | SetTime | SetContinuousStates | GetDerivatives | GetEventIndicators
+            | GetContinuousStates | GetNominalsOfContinuousStates => NONE,
+            SetRealInputDerivatives => INSTANTIATED | INIT | COMPLETE,
+            GetRealOutputDerivatives => COMPLETE | FAILED | TERMINATED | ERROR,
+            DoStep => COMPLETE,
+            // Steps are synchronous, so there is never a step in progress to cancel.
+            CancelStep => NONE,
+            GetStatus | GetRealStatus | GetIntegerStatus | GetBooleanStatus | GetStringStatus => {
+                COMPLETE | FAILED | TERMINATED
+            }
+        }
+    }
+
+    pub fn is_allowed_in(self, phase: Phase) -> bool {
+        self.allowed() & phase.bit() != 0
+    }
+
+    /// The C name, for log messages.
+    pub fn name(self) -> &'static str {
+        use Call::*;
+        match self {
+            SetDebugLogging => "fmi2SetDebugLogging",
+            FreeInstance => "fmi2FreeInstance",
+            SetupExperiment => "fmi2SetupExperiment",
+            EnterInitializationMode => "fmi2EnterInitializationMode",
+            ExitInitializationMode => "fmi2ExitInitializationMode",
+            Terminate => "fmi2Terminate",
+            Reset => "fmi2Reset",
+            GetReal => "fmi2GetReal",
+            GetInteger => "fmi2GetInteger",
+            GetBoolean => "fmi2GetBoolean",
+            GetString => "fmi2GetString",
+            SetReal => "fmi2SetReal",
+            SetInteger => "fmi2SetInteger",
+            SetBoolean => "fmi2SetBoolean",
+            SetString => "fmi2SetString",
+            GetFMUstate => "fmi2GetFMUstate",
+            SetFMUstate => "fmi2SetFMUstate",
+            FreeFMUstate => "fmi2FreeFMUstate",
+            SerializedFMUstateSize => "fmi2SerializedFMUstateSize",
+            SerializeFMUstate => "fmi2SerializeFMUstate",
+            DeSerializeFMUstate => "fmi2DeSerializeFMUstate",
+            GetDirectionalDerivative => "fmi2GetDirectionalDerivative",
+            EnterEventMode => "fmi2EnterEventMode",
+            NewDiscreteStates => "fmi2NewDiscreteStates",
+            EnterContinuousTimeMode => "fmi2EnterContinuousTimeMode",
+            CompletedIntegratorStep => "fmi2CompletedIntegratorStep",
+            SetTime => "fmi2SetTime",
+            SetContinuousStates => "fmi2SetContinuousStates",
+            GetDerivatives => "fmi2GetDerivatives",
+            GetEventIndicators => "fmi2GetEventIndicators",
+            GetContinuousStates => "fmi2GetContinuousStates",
+            GetNominalsOfContinuousStates => "fmi2GetNominalsOfContinuousStates",
+            SetRealInputDerivatives => "fmi2SetRealInputDerivatives",
+            GetRealOutputDerivatives => "fmi2GetRealOutputDerivatives",
+            DoStep => "fmi2DoStep",
+            CancelStep => "fmi2CancelStep",
+            GetStatus => "fmi2GetStatus",
+            GetRealStatus => "fmi2GetRealStatus",
+            GetIntegerStatus => "fmi2GetIntegerStatus",
+            GetBooleanStatus => "fmi2GetBooleanStatus",
+            GetStringStatus => "fmi2GetStringStatus",
+        }
+    }
+}

@@ -1,0 +1,153 @@
+//! FMU states (`fmi2GetFMUstate` and friends) and their serialized form.
+//!
+//! Serialized layout, all integers little-endian:
+//!
+//! | bytes        | content                                              |
+//! |--------------|------------------------------------------------------|
+//! | 0..8         | magic `FMI2SNAP`                                     |
+//! | 8..12        | format version (u32)                                 |
+//! | 12..20       | FNV-1a hash of the model's GUID (u64): foreign states|
+//! | 20..24       | payload length n (u32)                               |
+//! | 24..24+n     | payload: phase (u8), time (f64), model fields        |
+//! | 24+n..32+n   | FNV-1a checksum of bytes 0..24+n (u64)               |
+//!
+//! Reals are stored as their bit patterns, so a restored state continues
+//! bit-identically.
+
+use super::description::ModelDescription;
+use super::phase::Phase;
+
+const MAGIC: &[u8; 8] = b"FMI2SNAP";
+const FORMAT_VERSION: u32 = 1;
+const HEADER: usize = 24;
+const TRAILER: usize = 8;
+
+/// Everything an instance needs to continue from a saved point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Snapshot<M> {
+    pub phase: Phase,
+    pub time: f64,
+    pub model: M,
+}
+
+/// Writes the fields of a model's state in a fixed order.
+#[derive(Default)]
+pub struct StateWriter {
+    bytes: Vec<u8>,
+}
+
+impl StateWriter {
+    pub fn f64(&mut self, x: f64) {
+        self.bytes.extend_from_slice(&x.to_bits().to_le_bytes());
+    }
+    pub fn i32(&mut self, x: i32) {
+        self.bytes.extend_from_slice(&x.to_le_bytes());
+    }
+    pub fn bool(&mut self, x: bool) {
+        self.bytes.push(x as u8);
+    }
+}
+
+/// Reads fields back in the order `StateWriter` wrote them; every read
+/// checks that the bytes are there and make a legal value.
+pub struct StateReader<'a> {
+    bytes: &'a [u8],
+}
+
+impl<'a> StateReader<'a> {
+    fn take<const N: usize>(&mut self, what: &str) -> Result<[u8; N], String> {
+        if self.bytes.len() < N {
+            return Err(format!("payload ends before {what}"));
+        }
+        let (head, rest) = self.bytes.split_at(N);
+        self.bytes = rest;
+        Ok(head.try_into().expect("split_at gives N bytes"))
+    }
+    pub fn f64(&mut self, what: &str) -> Result<f64, String> {
+        Ok(f64::from_bits(u64::from_le_bytes(self.take(what)?)))
+    }
+    /// A Real that must be finite (all of a model's stored Reals are).
+    pub fn finite(&mut self, what: &str) -> Result<f64, String> {
+        let x = self.f64(what)?;
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(format!("{what} is {x}"))
+        }
+    }
+    pub fn i32(&mut self, what: &str) -> Result<i32, String> {
+        Ok(i32::from_le_bytes(self.take(what)?))
+    }
+    pub fn bool(&mut self, what: &str) -> Result<bool, String> {
+        match self.take::<1>(what)?[0] {
+            0 => Ok(false),
+            1 => Ok(true),
+            b => Err(format!("{what} is {b}, not a Boolean")),
+        }
+    }
+}
+
+/// The parts of a model that the FMI layer saves and restores.
+pub trait Persist: Sized {
+    fn save(&self, out: &mut StateWriter);
+    fn load(input: &mut StateReader) -> Result<Self, String>;
+}
+
+/// FNV-1a, 64 bit: cheap, and any change of a byte changes it.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+impl<M: Persist> Snapshot<M> {
+    pub fn to_bytes(&self, description: &ModelDescription) -> Vec<u8> {
+        let mut payload = StateWriter::default();
+        payload.bytes.push(self.phase as u8);
+        payload.f64(self.time);
+        self.model.save(&mut payload);
+        let n = payload.bytes.len();
+        let mut out = Vec::with_capacity(HEADER + n + TRAILER);
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&fnv1a(description.guid.as_bytes()).to_le_bytes());
+        out.extend_from_slice(&(n as u32).to_le_bytes());
+        out.extend_from_slice(&payload.bytes);
+        out.extend_from_slice(&fnv1a(&out).to_le_bytes());
+        out
+    }
+
+    /// Rejects bytes that are short, corrupted, of another format version or
+    /// of another model, with the reason.
+    pub fn from_bytes(bytes: &[u8], description: &ModelDescription) -> Result<Self, String> {
+        if bytes.len() < HEADER + TRAILER {
+            return Err(format!("{} bytes is too short for an FMU state (at least {})", bytes.len(), HEADER + TRAILER));
+        }
+        if &bytes[0..8] != MAGIC {
+            return Err("the bytes are not an FMU state of this FMU (wrong magic number)".into());
+        }
+        let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().expect("4 bytes"));
+        let u64_at = |i: usize| u64::from_le_bytes(bytes[i..i + 8].try_into().expect("8 bytes"));
+        let version = u32_at(8);
+        if version != FORMAT_VERSION {
+            return Err(format!("format version {version} is not supported (this FMU writes version {FORMAT_VERSION})"));
+        }
+        if u64_at(12) != fnv1a(description.guid.as_bytes()) {
+            return Err(format!("the state belongs to another model (GUID differs from {})", description.guid));
+        }
+        let n = u32_at(20) as usize;
+        if bytes.len() != HEADER + n + TRAILER {
+            return Err(format!("the state is truncated or padded ({} bytes, its header says {})", bytes.len(), HEADER + n + TRAILER));
+        }
+        if u64_at(HEADER + n) != fnv1a(&bytes[..HEADER + n]) {
+            return Err("checksum mismatch: the state is corrupted".into());
+        }
+        let mut reader = StateReader { bytes: &bytes[HEADER..HEADER + n] };
+        let phase_byte = reader.take::<1>("phase")?[0];
+        let phase = Phase::from_u8(phase_byte).ok_or(format!("phase {phase_byte} is unknown"))?;
+        let time = reader.finite("time")?;
+        let model = M::load(&mut reader)?;
+        if !reader.bytes.is_empty() {
+            return Err(format!("{} bytes left over after the model's fields", reader.bytes.len()));
+        }
+        Ok(Snapshot { phase, time, model })
+    }
+}
