@@ -1,0 +1,138 @@
+#!/usr/bin/env python3
+"""Build the release library and write the FMU.
+
+    python3 fmu/package.py [--out out/ConvertingSpan.fmu] [--no-build]
+
+The FMU holds modelDescription.xml, binaries/linux64/<modelIdentifier>.so and
+documentation/index.html. The documentation's variable and unit tables are
+rendered from modelDescription.xml, so they never disagree with the FMU.
+Only the Python standard library is used.
+"""
+
+import argparse
+import html
+import subprocess
+import sys
+import zipfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+MODEL_DESCRIPTION = ROOT / "modelDescription.xml"
+TEMPLATE = ROOT / "fmu" / "documentation" / "index.html"
+LIBRARY = ROOT / "target" / "release" / "libconverting_span.so"
+RANGE_TOOL = "ConvertingSpan.range"
+# Fixed timestamp: the same inputs give the same archive bytes.
+ZIP_TIME = (2026, 1, 1, 0, 0, 0)
+
+
+def build_library():
+    subprocess.run(["cargo", "build", "--release", "--lib", "--quiet"], cwd=ROOT, check=True)
+
+
+def allowed_range(var, t):
+    """The allowed values as the FMU checks them: XML min/max plus strict bounds."""
+    strict = var.find(f"./Annotations/Tool[@name='{RANGE_TOOL}']/Range")
+    low = high = None
+    if strict is not None and "greaterThan" in strict.attrib:
+        low = f"&gt; {strict.get('greaterThan')}"
+    elif t.get("min") is not None:
+        low = f"&ge; {t.get('min')}"
+    if strict is not None and "lessThan" in strict.attrib:
+        high = f"&lt; {strict.get('lessThan')}"
+    elif t.get("max") is not None:
+        high = f"&le; {t.get('max')}"
+    return ", ".join(x for x in (low, high) if x) or "any finite value"
+
+
+def variable_rows(root):
+    enums = {
+        st.get("name"): [(i.get("value"), i.get("name")) for i in st.iter("Item")]
+        for st in root.iter("SimpleType")
+    }
+    rows = []
+    for var in root.find("ModelVariables"):
+        kind_el = var[0]
+        kind = kind_el.tag
+        unit = kind_el.get("unit", "")
+        if kind == "Enumeration":
+            items = enums[kind_el.get("declaredType")]
+            allowed = ", ".join(f"{v} = {html.escape(n)}" for v, n in items)
+            kind = f"Enumeration ({kind_el.get('declaredType')})"
+        elif kind == "Boolean":
+            allowed = "true / false"
+        else:
+            allowed = allowed_range(var, kind_el)
+        rows.append(
+            "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>".format(
+                html.escape(var.get("name")),
+                var.get("causality", "local"),
+                kind,
+                html.escape(unit),
+                html.escape(kind_el.get("start", "")),
+                allowed,
+                html.escape(var.get("description", "")),
+            )
+        )
+    return "\n".join(rows)
+
+
+def unit_rows(root):
+    rows = []
+    for st in root.iter("SimpleType"):
+        for item in st.iter("Item"):
+            rows.append(
+                f"<tr><td>{st.get('name')}</td><td>{item.get('value')}</td>"
+                f"<td>{html.escape(item.get('name'))}</td><td>{html.escape(item.get('description', ''))}</td></tr>"
+            )
+    return "\n".join(rows)
+
+
+def documentation(root):
+    text = TEMPLATE.read_text(encoding="utf-8")
+    replacements = {
+        "<!-- VARIABLES -->": variable_rows(root),
+        "<!-- UNIT_CHOICES -->": unit_rows(root),
+        "<!-- GUID -->": html.escape(root.get("guid")),
+        "<!-- VERSION -->": html.escape(root.get("version", "")),
+    }
+    for key, value in replacements.items():
+        if key not in text:
+            sys.exit(f"package.py: {TEMPLATE} lacks the placeholder {key}")
+        text = text.replace(key, value)
+    return text
+
+
+def write_fmu(out, library):
+    root = ET.parse(MODEL_DESCRIPTION).getroot()
+    identifier = root.find("CoSimulation").get("modelIdentifier")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    entries = [
+        ("modelDescription.xml", MODEL_DESCRIPTION.read_bytes()),
+        (f"binaries/linux64/{identifier}.so", library.read_bytes()),
+        ("documentation/index.html", documentation(root).encode("utf-8")),
+    ]
+    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
+        for name, data in entries:
+            info = zipfile.ZipInfo(name, ZIP_TIME)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            zf.writestr(info, data)
+    return out
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "ConvertingSpan.fmu", help="where to write the FMU")
+    parser.add_argument("--no-build", action="store_true", help="package the library as it is")
+    args = parser.parse_args()
+    if not args.no_build:
+        build_library()
+    if not LIBRARY.exists():
+        sys.exit(f"package.py: {LIBRARY} is missing; run without --no-build")
+    out = write_fmu(args.out.resolve(), LIBRARY)
+    print(f"wrote {out} ({out.stat().st_size} bytes; library {LIBRARY.stat().st_size} bytes)")
+
+
+if __name__ == "__main__":
+    main()

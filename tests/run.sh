@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Every test: Rust tests of the model core and of the C API, then the packaged
+# FMU through a C importer and through FMPy (pytest).
+set -euo pipefail
+source "$(dirname "$0")/../fmu/env.sh"
+cd "$ROOT"
+cargo test --release --quiet
+python3 fmu/package.py
+"$PY" -m pytest tests/python -q
