@@ -18,7 +18,7 @@ import numpy as np
 from fmpy import simulate_fmu
 from fmpy.util import write_csv
 
-OUTPUTS = ["v", "T", "web_a.F", "web_b.F", "web_b.eps", "summary_Strain", "summary_Stress"]
+OUTPUTS = ["web_a.v", "v", "T", "web_a.F", "web_b.F", "web_b.eps", "summary_Strain", "summary_Stress"]
 
 
 def scene_inputs():
@@ -60,11 +60,17 @@ def plot(result, path):
     ax_t.set_ylabel("span tension T [N]")
     ax_t.set_title("ConvertingSpan: PET film laminated with Al foil, 1 m span")
     ax_t.grid(True)
+    ax_v.plot(result["time"], result["web_a.v"], color="tab:gray", linestyle="--", label="upstream roller web_a.v")
     ax_v.plot(result["time"], result["v"], color="tab:blue", label="web speed v (= web_b.v)")
     ax_v.set_ylabel("speed [m/s]")
     ax_v.set_xlabel("time [s]")
     ax_v.grid(True)
-    ax_v.legend(loc="upper right")
+    # The 0.1 % draw is invisible at this scale: show it on its own axis.
+    ax_d = ax_v.twinx()
+    ax_d.plot(result["time"], 100 * (result["v"] / result["web_a.v"] - 1), color="tab:green", label="draw v_b/v_a - 1")
+    ax_d.set_ylabel("draw [%]")
+    lines = ax_v.get_lines() + ax_d.get_lines()
+    ax_v.legend(lines, [line.get_label() for line in lines], loc="center right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
