@@ -543,7 +543,7 @@ fn generate(md: &ModelDescription) -> String {
         w,
         "pub static DESCRIPTION: ModelDescription = ModelDescription {{\n    model_name: {:?},\n    model_identifier: {:?},\n    guid: {:?},\n    \
          log_categories: &[{}],\n    variables: &VARIABLES,\n    vr_index: &VR_INDEX,\n    output_dependencies: {},\n    initial_dependencies: {},\n    \
-         can_handle_variable_communication_step_size: {},\n    can_get_and_set_fmu_state: {},\n    can_serialize_fmu_state: {},\n}};\n",
+         can_handle_variable_communication_step_size: {},\n    can_interpolate_inputs: {},\n    can_get_and_set_fmu_state: {},\n    can_serialize_fmu_state: {},\n}};\n",
         md.attrs.get("modelName").cloned().unwrap_or_default(),
         cs["modelIdentifier"],
         md.attrs["guid"],
@@ -551,6 +551,7 @@ fn generate(md: &ModelDescription) -> String {
         dependencies(&md.outputs),
         dependencies(&md.initial_unknowns),
         flag("canHandleVariableCommunicationStepSize"),
+        flag("canInterpolateInputs"),
         flag("canGetAndSetFMUstate"),
         flag("canSerializeFMUstate"),
     )

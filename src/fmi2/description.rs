@@ -123,6 +123,7 @@ pub struct ModelDescription {
     pub output_dependencies: &'static [Dependency],
     pub initial_dependencies: &'static [Dependency],
     pub can_handle_variable_communication_step_size: bool,
+    pub can_interpolate_inputs: bool,
     pub can_get_and_set_fmu_state: bool,
     pub can_serialize_fmu_state: bool,
 }

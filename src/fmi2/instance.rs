@@ -6,7 +6,7 @@
 use super::description::{Causality, Initial, Kind, ModelDescription, Variability, Variable};
 use super::ffi::Logger;
 use super::logging::LogFilter;
-use super::model::Model;
+use super::model::{Experiment, Model};
 use super::phase::{Call, Phase};
 use super::snapshot::Snapshot;
 use super::status::{FmiError, FmiResult, Status};
@@ -55,9 +55,7 @@ pub struct Instance<M: Model> {
     log: LogFilter,
     phase: Phase,
     time: f64,
-    start_time: f64,
-    stop_time: Option<f64>,
-    tolerance: Option<f64>,
+    experiment: Experiment,
     /// Kept for models that ship resources; this one needs none.
     #[allow(dead_code)]
     resource_location: Option<String>,
@@ -71,9 +69,7 @@ impl<M: Model> Instance<M> {
             log: LogFilter::new(Self::description().log_categories, logging_on),
             phase: Phase::Instantiated,
             time: 0.0,
-            start_time: 0.0,
-            stop_time: None,
-            tolerance: None,
+            experiment: Experiment::default(),
             resource_location,
             model: M::at_start_values(),
         };
@@ -144,9 +140,7 @@ impl<M: Model> Instance<M> {
                 return Err(FmiError::error(format!("{name}: tolerance = {tol} must be finite and > 0")));
             }
         }
-        self.tolerance = tolerance;
-        self.start_time = start;
-        self.stop_time = stop;
+        self.experiment = Experiment { tolerance, start_time: start, stop_time: stop };
         self.time = start;
         Ok(())
     }
@@ -168,15 +162,20 @@ impl<M: Model> Instance<M> {
     /// compute its initial state. Nothing changes when a check fails.
     fn settle_initial_values(&mut self) -> FmiResult {
         for v in Self::description().variables {
-            if v.causality == Causality::Parameter && v.kind == Kind::Real && !v.range.is_unbounded() {
-                let value = self.model.get_real(v.vr)?;
-                if !v.range.contains(value) {
-                    return Err(out_of_range(v, value));
-                }
+            if v.causality != Causality::Parameter || v.range.is_unbounded() {
+                continue;
+            }
+            let value = match v.kind {
+                Kind::Real => self.model.get_real(v.vr)?,
+                Kind::Integer => self.model.get_integer(v.vr)? as f64,
+                _ => continue,
+            };
+            if !v.range.contains(value) {
+                return Err(out_of_range(v, value));
             }
         }
         let mut model = self.model.clone();
-        model.initialize()?;
+        model.initialize(&self.experiment)?;
         self.model = model;
         Ok(())
     }
@@ -191,9 +190,7 @@ impl<M: Model> Instance<M> {
         self.model = M::at_start_values();
         self.phase = Phase::Instantiated;
         self.time = 0.0;
-        self.start_time = 0.0;
-        self.stop_time = None;
-        self.tolerance = None;
+        self.experiment = Experiment::default();
         self.log_event("reset to the start values");
         Ok(())
     }
@@ -360,6 +357,36 @@ impl<M: Model> Instance<M> {
             },
             |m, vr, x| m.set_boolean(vr, x != 0),
         )
+    }
+
+    /// `fmi2SetRealInputDerivatives`: first derivatives of Real inputs.
+    pub fn set_input_derivatives(&mut self, vrs: &[u32], orders: &[i32], values: &[f64]) -> FmiResult {
+        let call = Call::SetRealInputDerivatives;
+        if !Self::description().can_interpolate_inputs {
+            return Err(FmiError::error(format!("{}: canInterpolateInputs is false", call.name())));
+        }
+        for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(values) {
+            let v = self.variable(call, vr, Family::Real)?;
+            if v.causality != Causality::Input {
+                return Err(FmiError::error(format!("{}: {} is not an input", call.name(), v.name)));
+            }
+            if order != 1 {
+                return Err(FmiError::error(format!(
+                    "{}: order {order} for {}: only first derivatives (order 1) are supported",
+                    call.name(),
+                    v.name
+                )));
+            }
+            if !value.is_finite() {
+                return Err(FmiError::error(format!("{}: derivative of {} = {value} must be finite", call.name(), v.name)));
+            }
+        }
+        let mut model = self.model.clone();
+        for (&vr, &value) in vrs.iter().zip(values) {
+            model.set_input_derivative(vr, value).map_err(|e| FmiError::error(format!("{}: {}", call.name(), e.message)))?;
+        }
+        self.model = model;
+        Ok(())
     }
 
     pub fn do_step(&mut self, current: f64, h: f64) -> FmiResult {

@@ -6,6 +6,14 @@ use super::description::{Causality, ModelDescription, Start};
 use super::snapshot::Persist;
 use super::status::FmiResult;
 
+/// What the importer said in `fmi2SetupExperiment`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Experiment {
+    pub tolerance: Option<f64>,
+    pub start_time: f64,
+    pub stop_time: Option<f64>,
+}
+
 pub trait Model: Clone + Default + Persist + 'static {
     /// The table generated from this model's `modelDescription.xml`.
     fn description() -> &'static ModelDescription;
@@ -21,11 +29,16 @@ pub trait Model: Clone + Default + Persist + 'static {
     fn get_boolean(&self, vr: u32) -> FmiResult<bool>;
     fn set_boolean(&mut self, vr: u32, value: bool) -> FmiResult;
 
+    /// First derivative of a continuous Real input over the next
+    /// communication step (`fmi2SetRealInputDerivatives`, order 1). The layer
+    /// has checked that `vr` is a Real input and the value finite.
+    fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult;
+
     /// Checks what the description's ranges cannot say (relations between
     /// values) and computes the initial state from parameters and inputs.
     /// Called when initialization ends, and before outputs are read during
     /// initialization. Must not change anything when it fails.
-    fn initialize(&mut self) -> FmiResult;
+    fn initialize(&mut self, experiment: &Experiment) -> FmiResult;
 
     /// Advances the model over a communication step of length `h` > 0, the
     /// inputs held at their current values. On failure the model must be

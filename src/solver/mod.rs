@@ -1,7 +1,15 @@
-//! Numerical building blocks shared by the models.
+//! Numerical building blocks shared by the models: the exact step of a
+//! linear ODE, compensated sums, and a family of integrators on fixed-size
+//! arrays (no heap allocation in a step).
 
 mod compensated;
+pub mod dopri5;
+pub mod fixed;
+mod linalg;
 mod linear;
+pub mod ode;
+pub mod rosenbrock;
 
 pub use compensated::CompensatedSum;
 pub use linear::{decay_integral, phi1};
+pub use ode::{Control, Failure, Ode, Solution};

@@ -3,6 +3,8 @@
 //!
 //! * `parameters` — what the user sets, in SI units;
 //! * `physics` — the equations, numbered as in the model documentation;
+//! * `stepping` — one communication step: the choice of method, the balance
+//!   written for the integrators;
 //! * `sensor` — unit conversion of the sensor outputs;
 //! * `description` — the interface generated from modelDescription.xml;
 //! * this file — the mapping of variables to fields, and the FMI model hooks.
@@ -11,28 +13,59 @@ pub mod description;
 pub mod parameters;
 pub mod physics;
 pub mod sensor;
+pub mod stepping;
 
-use crate::fmi2::{FmiError, FmiResult, Model, Persist, StateReader, StateWriter};
+use crate::fmi2::{Experiment, FmiError, FmiResult, Model, Persist, StateReader, StateWriter};
 use crate::solver::CompensatedSum;
 use description::{Boolean, Integer, Real, DESCRIPTION};
-use parameters::{Inputs, Parameters, WebProperties};
+use parameters::{Inputs, Parameters, SolverChoice, WebProperties};
 use sensor::SensorScale;
 
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ConvertingSpan {
     pub params: Parameters,
     pub inputs: Inputs,
+    /// First derivatives of the inputs over the next step, when the importer
+    /// gives them (`fmi2SetRealInputDerivatives`); cleared after each step.
+    input_rates: Option<Inputs>,
     /// The state: unstretched length of web in the span, m.
     unstretched: CompensatedSum,
-    /// Derived from the parameters when initialization ends.
+    /// Rates of inputs that enter the outputs (dv_b/dt, dL/dt): the given
+    /// derivatives, or backward differences over the last step.
+    rates: Rates,
+    /// web_b.v and L at the start of the last step, and its length.
+    previous: Previous,
+    /// The step an adaptive method proposes next, kept between steps.
+    adaptive_step: f64,
+    /// Derived when initialization ends.
     sensor: SensorScale,
+    tolerance: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rates {
+    /// dv_b/dt, m/s2.
+    pub speed_b: f64,
+    /// dL/dt, m/s.
+    pub length: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Previous {
+    speed_b: f64,
+    length: f64,
+    step: f64,
 }
 
 /// Every output, computed together from the state and the inputs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outputs {
+    pub length: f64,
     pub strain: f64,
+    /// Tension, = the force at the entry end a.
     pub tension: f64,
+    /// Force at the exit end b.
+    pub exit_force: f64,
 }
 
 impl ConvertingSpan {
@@ -40,14 +73,45 @@ impl ConvertingSpan {
         self.unstretched.value()
     }
 
+    /// dv_b/dt and dL/dt as the outputs use them [11]: the importer's input
+    /// derivatives when it gave them for this step, otherwise the backward
+    /// differences over the last communication step.
+    pub fn input_rates(&self) -> Rates {
+        match &self.input_rates {
+            Some(r) => Rates {
+                speed_b: r.speed_b,
+                length: physics::length_rate(&self.params, &self.inputs, r),
+            },
+            None => self.rates,
+        }
+    }
+
     pub fn outputs(&self) -> Outputs {
-        let strain = physics::strain(self.params.span_length, self.unstretched);
-        Outputs { strain, tension: physics::tension(&self.params, &self.inputs, strain) }
+        let p = &self.params;
+        let u = &self.inputs;
+        let length = physics::span_length(p, u);
+        let strain = physics::strain(length, self.unstretched, 0.0);
+        let x = self.unstretched.value();
+        // Effects that are off are not computed at all.
+        let rates = if p.include_damping || p.include_mass { self.input_rates() } else { Rates::default() };
+        let mut effective_strain = strain;
+        if p.include_damping {
+            let strain_rate = physics::strain_rate(length, rates.length, x, strain, physics::unstretched_rate(u, strain));
+            effective_strain += p.span_web.retardation_time * strain_rate;
+        }
+        let tension = physics::tension(p, effective_strain);
+        let exit_force = if p.include_mass {
+            tension + physics::momentum_difference(p, u, strain, x, rates.speed_b)
+        } else {
+            tension
+        };
+        Outputs { length, strain, tension, exit_force }
     }
 
     /// The value of a Real variable.
     pub fn real(&self, var: Real) -> f64 {
         let p = &self.params;
+        let u = &self.inputs;
         let sensor_on = |x: f64| if p.use_sensor { x } else { 0.0 };
         match var {
             Real::L => p.span_length,
@@ -62,47 +126,57 @@ impl ConvertingSpan {
             Real::wp2_density => p.span_web.density,
             Real::wp2_d_r => p.span_web.retardation_time,
             Real::eps_start => p.strain_start,
-            Real::web_a_v => self.inputs.speed_a,
-            Real::web_a_eps => self.inputs.strain_a,
-            Real::web_b_v => self.inputs.speed_b,
-            Real::v => sensor_on(self.inputs.speed_b * self.sensor.speed),
+            Real::tolerance => p.tolerance,
+            Real::web_a_v => u.speed_a,
+            Real::web_a_eps => u.strain_a,
+            Real::web_b_v => u.speed_b,
+            Real::frame_a_x => u.frame_a[0],
+            Real::frame_a_y => u.frame_a[1],
+            Real::frame_b_x => u.frame_b[0],
+            Real::frame_b_y => u.frame_b[1],
+            Real::v => sensor_on(u.speed_b * self.sensor.speed),
             Real::T => sensor_on(self.outputs().tension * self.sensor.force),
-            // Without web mass the web pulls equally on both rollers.
-            Real::web_a_F | Real::web_b_F | Real::summary_Tension => self.outputs().tension,
+            Real::web_a_F | Real::summary_Tension => self.outputs().tension,
+            Real::web_b_F => self.outputs().exit_force,
             Real::web_b_eps | Real::summary_Strain => self.outputs().strain,
-            Real::summary_Length => p.span_length,
+            Real::summary_Length => self.outputs().length,
             // [8] stress on the unstrained cross-section of wp2
             Real::summary_Stress => self.outputs().tension / p.span_web.area(),
             Real::unstretchedLength => self.unstretched.value(),
+            Real::m_web => physics::web_mass(&p.span_web, self.unstretched.value()),
         }
     }
 
-    /// Sets a parameter or input; `Err` for variables that cannot be set.
-    pub fn set_real_var(&mut self, var: Real, x: f64) -> FmiResult {
+    /// The field behind a Real parameter or input; `None` for outputs.
+    fn real_field(&mut self, var: Real) -> Option<&mut f64> {
         let p = &mut self.params;
-        let web = |which: &mut WebProperties, field: Real| -> FmiResult {
-            match field {
-                Real::wp1_E | Real::wp2_E => which.modulus = x,
-                Real::wp1_thickness | Real::wp2_thickness => which.thickness = x,
-                Real::wp1_width | Real::wp2_width => which.width = x,
-                Real::wp1_density | Real::wp2_density => which.density = x,
-                Real::wp1_d_r | Real::wp2_d_r => which.retardation_time = x,
-                _ => unreachable_var(field)?,
-            }
-            Ok(())
-        };
-        match var {
-            Real::L => p.span_length = x,
+        let u = &mut self.inputs;
+        fn web(w: &mut WebProperties, field: Real) -> Option<&mut f64> {
+            Some(match field {
+                Real::wp1_E | Real::wp2_E => &mut w.modulus,
+                Real::wp1_thickness | Real::wp2_thickness => &mut w.thickness,
+                Real::wp1_width | Real::wp2_width => &mut w.width,
+                Real::wp1_density | Real::wp2_density => &mut w.density,
+                _ => &mut w.retardation_time,
+            })
+        }
+        Some(match var {
+            Real::L => &mut p.span_length,
             Real::wp1_E | Real::wp1_thickness | Real::wp1_width | Real::wp1_density | Real::wp1_d_r => {
-                web(&mut p.incoming, var)?
+                return web(&mut p.incoming, var)
             }
             Real::wp2_E | Real::wp2_thickness | Real::wp2_width | Real::wp2_density | Real::wp2_d_r => {
-                web(&mut p.span_web, var)?
+                return web(&mut p.span_web, var)
             }
-            Real::eps_start => p.strain_start = x,
-            Real::web_a_v => self.inputs.speed_a = x,
-            Real::web_a_eps => self.inputs.strain_a = x,
-            Real::web_b_v => self.inputs.speed_b = x,
+            Real::eps_start => &mut p.strain_start,
+            Real::tolerance => &mut p.tolerance,
+            Real::web_a_v => &mut u.speed_a,
+            Real::web_a_eps => &mut u.strain_a,
+            Real::web_b_v => &mut u.speed_b,
+            Real::frame_a_x => &mut u.frame_a[0],
+            Real::frame_a_y => &mut u.frame_a[1],
+            Real::frame_b_x => &mut u.frame_b[0],
+            Real::frame_b_y => &mut u.frame_b[1],
             Real::v
             | Real::T
             | Real::web_a_F
@@ -112,8 +186,14 @@ impl ConvertingSpan {
             | Real::summary_Length
             | Real::summary_Strain
             | Real::summary_Stress
-            | Real::unstretchedLength => unreachable_var(var)?,
-        }
+            | Real::unstretchedLength
+            | Real::m_web => return None,
+        })
+    }
+
+    /// Sets a parameter or input; `Err` for variables that cannot be set.
+    pub fn set_real_var(&mut self, var: Real, x: f64) -> FmiResult {
+        *self.real_field(var).ok_or_else(|| FmiError::error(format!("{var:?} cannot be set")))? = x;
         Ok(())
     }
 
@@ -121,6 +201,8 @@ impl ConvertingSpan {
         match var {
             Boolean::includeDamping => &mut p.include_damping,
             Boolean::preventNegativeTension => &mut p.prevent_negative_tension,
+            Boolean::includeMass => &mut p.include_mass,
+            Boolean::variableLength => &mut p.variable_length,
             Boolean::startAtEquilibrium => &mut p.start_at_equilibrium,
             Boolean::useSensor => &mut p.use_sensor,
         }
@@ -130,14 +212,51 @@ impl ConvertingSpan {
         match var {
             Integer::toUnitV => &mut p.speed_unit,
             Integer::toUnitF => &mut p.force_unit,
+            Integer::solver => &mut p.solver,
+            Integer::substeps => &mut p.substeps,
         }
     }
-}
 
-/// The FMI layer only sets parameters and inputs; reaching this is a bug
-/// reported as an error rather than a panic.
-fn unreachable_var(var: Real) -> FmiResult {
-    Err(FmiError::error(format!("{var:?} cannot be set")))
+    /// Advances over one communication step of length h [3].
+    fn advance(&mut self, h: f64) -> FmiResult {
+        let p = &self.params;
+        let start = self.inputs;
+        let moving = self.input_rates.is_some_and(|r| r != Inputs::default());
+        let rates = self.input_rates.unwrap_or_default();
+        let length = stepping::shortest_length(p, &start, &rates, h);
+        if !(length > 0.0) {
+            return Err(FmiError::error(format!(
+                "the span length |frame_b - frame_a| reaches {length} m within the step: the rollers meet"
+            )));
+        }
+        let choice = stepping::method(p, moving).map_err(FmiError::error)?;
+        let balance = stepping::Balance { params: p, start, rates, moving, x0: self.unstretched, step: h };
+        let (next, adaptive_step) = stepping::integrate(&balance, choice, self.tolerance, p.substeps, self.adaptive_step)?;
+        let x = next.value();
+        if !(x.is_finite() && x > 0.0) {
+            return Err(FmiError::discard(format!(
+                "the unstretched length of web in the span would become {x} m (web_a.v = {}, web_b.v = {}): \
+                 web fed in from both ends grows without bound; take a shorter step",
+                start.speed_a, start.speed_b
+            )));
+        }
+        // Commit: nothing above changed the model.
+        let length_now = physics::span_length(p, &start);
+        self.rates = match &self.input_rates {
+            Some(r) => Rates { speed_b: r.speed_b, length: physics::length_rate(p, &start.advanced(r, h), r) },
+            None if self.previous.step > 0.0 => Rates {
+                speed_b: (start.speed_b - self.previous.speed_b) / self.previous.step,
+                length: (length_now - self.previous.length) / self.previous.step,
+            },
+            None => Rates::default(),
+        };
+        self.previous = Previous { speed_b: start.speed_b, length: length_now, step: h };
+        self.inputs = start.advanced(&rates, h);
+        self.input_rates = None;
+        self.unstretched = next;
+        self.adaptive_step = adaptive_step;
+        Ok(())
+    }
 }
 
 fn unknown_vr(vr: u32) -> FmiError {
@@ -178,8 +297,30 @@ impl Model for ConvertingSpan {
         Ok(())
     }
 
-    fn initialize(&mut self) -> FmiResult {
+    fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult {
+        let var = Real::from_vr(vr).ok_or_else(|| unknown_vr(vr))?;
+        if SolverChoice::from_i32(self.params.solver) == Some(SolverChoice::Exact) && value != 0.0 {
+            return Err(FmiError::error(format!(
+                "derivative of {} = {value}: solver = exact holds the inputs over a step; choose solver = auto or rosenbrock",
+                var.name()
+            )));
+        }
+        let mut rates = self.input_rates.unwrap_or_default();
+        let mut target = Self { inputs: rates, ..Self::default() };
+        *target.real_field(var).ok_or_else(|| FmiError::error(format!("{} is not an input", var.name())))? = value;
+        rates = target.inputs;
+        self.input_rates = Some(rates);
+        Ok(())
+    }
+
+    fn initialize(&mut self, experiment: &Experiment) -> FmiResult {
         let p = &self.params;
+        let length = physics::span_length(p, &self.inputs);
+        if !(length > 0.0) {
+            return Err(FmiError::error(format!(
+                "variableLength: the span length |frame_b - frame_a| = {length} m must be > 0 (the rollers coincide)"
+            )));
+        }
         let strain = if p.start_at_equilibrium {
             physics::equilibrium_strain(&self.inputs).ok_or_else(|| {
                 FmiError::error(format!(
@@ -192,24 +333,38 @@ impl Model for ConvertingSpan {
         } else {
             p.strain_start
         };
+        let choice = SolverChoice::from_i32(p.solver).ok_or_else(|| FmiError::error(format!("solver = {} is not a solver", p.solver)))?;
+        if choice == SolverChoice::Exact && self.input_rates.is_some_and(|r| r != Inputs::default()) {
+            return Err(FmiError::error(
+                "solver = exact holds the inputs over a step, but input derivatives were given: choose solver = auto or rosenbrock",
+            ));
+        }
         self.sensor = SensorScale::new(p)
             .ok_or_else(|| FmiError::error(format!("toUnitV = {} or toUnitF = {} has no unit", p.speed_unit, p.force_unit)))?;
-        self.unstretched = physics::unstretched_length(p.span_length, strain);
+        self.tolerance = effective_tolerance(p.tolerance, experiment.tolerance);
+        self.unstretched = physics::unstretched_length(length, strain);
+        self.rates = Rates::default();
+        self.previous = Previous::default();
+        self.adaptive_step = 0.0;
         Ok(())
     }
 
     fn do_step(&mut self, h: f64) -> FmiResult {
-        let next = physics::exact_step(self.params.span_length, &self.inputs, self.unstretched, h);
-        let x = next.value();
-        if !(x.is_finite() && x > 0.0) {
-            return Err(FmiError::discard(format!(
-                "the unstretched length of web in the span would become {x} m (web_a.v = {}, web_b.v = {}): \
-                 web fed in from both ends grows without bound; take a shorter step",
-                self.inputs.speed_a, self.inputs.speed_b
-            )));
-        }
-        self.unstretched = next;
-        Ok(())
+        self.advance(h)
+    }
+}
+
+/// The tolerance rule [12]: the parameter `tolerance` when the user set it;
+/// left at its start value, the tolerance of fmi2SetupExperiment if the
+/// importer gave one.
+pub fn effective_tolerance(parameter: f64, experiment: Option<f64>) -> f64 {
+    let default = match DESCRIPTION.variable(Real::tolerance.vr()).map(|v| v.start) {
+        Some(crate::fmi2::description::Start::Real(x)) => x,
+        _ => parameter,
+    };
+    match experiment {
+        Some(t) if parameter == default => t,
+        _ => parameter,
     }
 }
 
@@ -222,17 +377,31 @@ impl Persist for ConvertingSpan {
                 out.f64(x);
             }
         }
-        for b in [p.include_damping, p.prevent_negative_tension, p.start_at_equilibrium, p.use_sensor] {
+        for b in [
+            p.include_damping,
+            p.prevent_negative_tension,
+            p.include_mass,
+            p.variable_length,
+            p.start_at_equilibrium,
+            p.use_sensor,
+        ] {
             out.bool(b);
         }
         out.f64(p.strain_start);
-        out.i32(p.speed_unit);
-        out.i32(p.force_unit);
-        out.f64(self.inputs.speed_a);
-        out.f64(self.inputs.strain_a);
-        out.f64(self.inputs.speed_b);
+        for i in [p.speed_unit, p.force_unit, p.solver, p.substeps] {
+            out.i32(i);
+        }
+        out.f64(p.tolerance);
+        save_inputs(out, &self.inputs);
+        out.bool(self.input_rates.is_some());
+        save_inputs(out, &self.input_rates.unwrap_or_default());
         out.f64(self.unstretched.hi());
         out.f64(self.unstretched.lo());
+        for x in [self.rates.speed_b, self.rates.length, self.previous.speed_b, self.previous.length, self.previous.step] {
+            out.f64(x);
+        }
+        out.f64(self.adaptive_step);
+        out.f64(self.tolerance);
     }
 
     fn load(r: &mut StateReader) -> Result<Self, String> {
@@ -254,21 +423,58 @@ impl Persist for ConvertingSpan {
             span_web,
             include_damping: r.bool("includeDamping")?,
             prevent_negative_tension: r.bool("preventNegativeTension")?,
+            include_mass: r.bool("includeMass")?,
+            variable_length: r.bool("variableLength")?,
             start_at_equilibrium: r.bool("startAtEquilibrium")?,
             use_sensor: r.bool("useSensor")?,
             strain_start: r.finite("eps_start")?,
             speed_unit: r.i32("toUnitV")?,
             force_unit: r.i32("toUnitF")?,
+            solver: r.i32("solver")?,
+            substeps: r.i32("substeps")?,
+            tolerance: r.finite("tolerance")?,
         };
-        let inputs = Inputs {
-            speed_a: r.finite("web_a.v")?,
-            strain_a: r.finite("web_a.eps")?,
-            speed_b: r.finite("web_b.v")?,
-        };
+        let inputs = load_inputs(r)?;
+        let has_rates = r.bool("input derivatives given")?;
+        let rates = load_inputs(r)?;
         let unstretched = CompensatedSum::from_parts(r.finite("unstretched length")?, r.finite("unstretched length carry")?);
-        // The sensor scale is derived from the parameters; a state saved
-        // before initialization ended has none yet and that is kept so.
+        let rates_out = Rates { speed_b: r.finite("dv_b/dt")?, length: r.finite("dL/dt")? };
+        let previous = Previous {
+            speed_b: r.finite("previous web_b.v")?,
+            length: r.finite("previous length")?,
+            step: r.finite("previous step")?,
+        };
+        let adaptive_step = r.finite("adaptive step")?;
+        let tolerance = r.finite("effective tolerance")?;
+        // Derived from the parameters; a state saved before initialization
+        // ended has none yet, and that is kept so.
         let sensor = SensorScale::new(&params).unwrap_or_default();
-        Ok(ConvertingSpan { params, inputs, unstretched, sensor })
+        Ok(ConvertingSpan {
+            params,
+            inputs,
+            input_rates: has_rates.then_some(rates),
+            unstretched,
+            rates: rates_out,
+            previous,
+            adaptive_step,
+            sensor,
+            tolerance,
+        })
     }
+}
+
+fn save_inputs(out: &mut StateWriter, u: &Inputs) {
+    for x in [u.speed_a, u.strain_a, u.speed_b, u.frame_a[0], u.frame_a[1], u.frame_b[0], u.frame_b[1]] {
+        out.f64(x);
+    }
+}
+
+fn load_inputs(r: &mut StateReader) -> Result<Inputs, String> {
+    Ok(Inputs {
+        speed_a: r.finite("web_a.v")?,
+        strain_a: r.finite("web_a.eps")?,
+        speed_b: r.finite("web_b.v")?,
+        frame_a: [r.finite("frame_a.x")?, r.finite("frame_a.y")?],
+        frame_b: [r.finite("frame_b.x")?, r.finite("frame_b.y")?],
+    })
 }

@@ -25,11 +25,45 @@ impl WebProperties {
     pub fn stiffness(&self) -> f64 {
         self.modulus * self.area()
     }
+
+    /// Mass per unstretched length rho_l = density * A, kg/m.
+    pub fn linear_density(&self) -> f64 {
+        self.density * self.area()
+    }
+}
+
+/// The `solver` enumeration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SolverChoice {
+    Auto = 1,
+    Exact = 2,
+    Rosenbrock = 3,
+    Dopri5 = 4,
+    Rk4 = 5,
+    Euler = 6,
+}
+
+impl SolverChoice {
+    pub fn from_i32(x: i32) -> Option<Self> {
+        use SolverChoice::*;
+        [Auto, Exact, Rosenbrock, Dopri5, Rk4, Euler].into_iter().find(|s| *s as i32 == x)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverChoice::Auto => "auto",
+            SolverChoice::Exact => "exact",
+            SolverChoice::Rosenbrock => "rosenbrock",
+            SolverChoice::Dopri5 => "dopri5",
+            SolverChoice::Rk4 => "rk4",
+            SolverChoice::Euler => "euler",
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Parameters {
-    /// L, m.
+    /// L, m (when the length is not taken from the roller positions).
     pub span_length: f64,
     /// wp1: the web arriving at a.
     pub incoming: WebProperties,
@@ -37,6 +71,8 @@ pub struct Parameters {
     pub span_web: WebProperties,
     pub include_damping: bool,
     pub prevent_negative_tension: bool,
+    pub include_mass: bool,
+    pub variable_length: bool,
     pub start_at_equilibrium: bool,
     /// Initial span strain when not starting at equilibrium.
     pub strain_start: f64,
@@ -45,9 +81,16 @@ pub struct Parameters {
     pub speed_unit: i32,
     /// Enumeration value of `toUnitF`.
     pub force_unit: i32,
+    /// Enumeration value of `solver`.
+    pub solver: i32,
+    /// Relative tolerance of the adaptive solvers, as set by the user.
+    pub tolerance: f64,
+    /// Sub-steps of the fixed-step solvers.
+    pub substeps: i32,
 }
 
-/// Inputs, held constant over each communication step.
+/// Inputs at one instant. Within a communication step they are held, or,
+/// when the importer gives first derivatives, they move linearly.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Inputs {
     /// v_a: surface speed of the upstream roller, m/s.
@@ -56,4 +99,27 @@ pub struct Inputs {
     pub strain_a: f64,
     /// v_b: surface speed of the downstream roller, m/s.
     pub speed_b: f64,
+    /// (x, y) where the web leaves roller a, m.
+    pub frame_a: [f64; 2],
+    /// (x, y) where the web meets roller b, m.
+    pub frame_b: [f64; 2],
+}
+
+impl Inputs {
+    /// The inputs `tau` seconds later when they change at `rates` per second.
+    pub fn advanced(&self, rates: &Inputs, tau: f64) -> Inputs {
+        let at = |x: f64, r: f64| x + r * tau;
+        Inputs {
+            speed_a: at(self.speed_a, rates.speed_a),
+            strain_a: at(self.strain_a, rates.strain_a),
+            speed_b: at(self.speed_b, rates.speed_b),
+            frame_a: [at(self.frame_a[0], rates.frame_a[0]), at(self.frame_a[1], rates.frame_a[1])],
+            frame_b: [at(self.frame_b[0], rates.frame_b[0]), at(self.frame_b[1], rates.frame_b[1])],
+        }
+    }
+
+    /// The roller-to-roller vector r_b - r_a.
+    pub fn span_vector(&self) -> [f64; 2] {
+        [self.frame_b[0] - self.frame_a[0], self.frame_b[1] - self.frame_a[1]]
+    }
 }

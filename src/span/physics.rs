@@ -3,65 +3,92 @@
 //!
 //! The state is the unstretched length of web in the span, x = L/(1+eps_b).
 
-use super::parameters::{Inputs, Parameters};
+use super::parameters::{Inputs, Parameters, WebProperties};
 use crate::solver::{decay_integral, CompensatedSum};
 
-/// Span strain, eps_b = L/x - 1 [1], written (L - x)/x: with x as a
-/// compensated sum, `L - hi` is exact near L and the strain keeps full
-/// relative precision even at strains of 1e-6.
-pub fn strain(span_length: f64, unstretched: CompensatedSum) -> f64 {
-    ((span_length - unstretched.hi()) - unstretched.lo()) / unstretched.value()
+/// Span length [9]: the parameter L, or |r_b - r_a| with `variableLength`.
+pub fn span_length(p: &Parameters, u: &Inputs) -> f64 {
+    if p.variable_length {
+        let [dx, dy] = u.span_vector();
+        dx.hypot(dy)
+    } else {
+        p.span_length
+    }
+}
+
+/// dL/dt [9] when the roller positions move at `rates` (0 for a fixed L).
+pub fn length_rate(p: &Parameters, u: &Inputs, rates: &Inputs) -> f64 {
+    if !p.variable_length {
+        return 0.0;
+    }
+    let [dx, dy] = u.span_vector();
+    let [rx, ry] = rates.span_vector();
+    (dx * rx + dy * ry) / dx.hypot(dy)
+}
+
+/// Span strain, eps_b = L/x - 1 [1], written (L - x)/x with x = x0 + y:
+/// with x0 a compensated sum, `L - hi` is exact near L and the strain keeps
+/// full relative precision even at strains of 1e-6.
+pub fn strain(length: f64, x0: CompensatedSum, y: f64) -> f64 {
+    (((length - x0.hi()) - x0.lo()) - y) / (x0.value() + y)
 }
 
 /// The unstretched length that holds strain `eps` in a span of length L [1]:
 /// L/(1+eps) = L - L*eps/(1+eps), split so that no digit of eps is lost.
-pub fn unstretched_length(span_length: f64, eps: f64) -> CompensatedSum {
-    CompensatedSum::two_sum(span_length, -span_length * eps / (1.0 + eps))
+pub fn unstretched_length(length: f64, eps: f64) -> CompensatedSum {
+    CompensatedSum::two_sum(length, -length * eps / (1.0 + eps))
 }
 
-/// dx/dt = q_a - q_b [2], unstretched length per second. Web entering at a
-/// carries eps_a; web leaving through either end carries the span's strain,
-/// and so does web entering backwards at b (v_b < 0).
+/// The strain of the web entering through a: eps_a for forward flow; web
+/// leaving backwards through a carries the span's strain.
+fn strain_in(u: &Inputs, strain_b: f64) -> f64 {
+    if u.speed_a >= 0.0 {
+        u.strain_a
+    } else {
+        strain_b
+    }
+}
+
+/// Unstretched length entering through a per second, q_a [2].
+pub fn inflow(u: &Inputs, strain_b: f64) -> f64 {
+    u.speed_a / (1.0 + strain_in(u, strain_b))
+}
+
+/// dx/dt = q_a - q_b [2], unstretched length per second. Web leaving
+/// through b carries the span's strain, and so does web entering
+/// backwards at b (v_b < 0).
 ///
 /// With eps_in the strain entering at a, the difference
 /// v_a/(1+eps_in) - v_b/(1+eps_b) is formed as
 /// ((v_a - v_b) + (v_a*eps_b - v_b*eps_in)) / ((1+eps_in)(1+eps_b)),
 /// which does not cancel when v_a ~ v_b.
-pub fn unstretched_rate(inputs: &Inputs, strain_b: f64) -> f64 {
-    let Inputs { speed_a: va, strain_a, speed_b: vb } = *inputs;
-    let strain_in = if va >= 0.0 { strain_a } else { strain_b };
-    ((va - vb) + (va * strain_b - vb * strain_in)) / ((1.0 + strain_in) * (1.0 + strain_b))
+pub fn unstretched_rate(u: &Inputs, strain_b: f64) -> f64 {
+    let (va, vb, eps_in) = (u.speed_a, u.speed_b, strain_in(u, strain_b));
+    ((va - vb) + (va * strain_b - vb * eps_in)) / ((1.0 + eps_in) * (1.0 + strain_b))
 }
 
 /// lambda = -d(dx/dt)/dx = (v_b - min(v_a, 0)) / L [3]: the inverse time
 /// constant of the span, negative when web is fed in from both ends.
-pub fn decay_rate(span_length: f64, inputs: &Inputs) -> f64 {
-    (inputs.speed_b - inputs.speed_a.min(0.0)) / span_length
+pub fn decay_rate(length: f64, u: &Inputs) -> f64 {
+    (u.speed_b - u.speed_a.min(0.0)) / length
 }
 
-/// The exact step over h with inputs held [3]: the balance is linear in x.
-pub fn exact_step(span_length: f64, inputs: &Inputs, unstretched: CompensatedSum, h: f64) -> CompensatedSum {
-    let rate = unstretched_rate(inputs, strain(span_length, unstretched));
-    let lambda = decay_rate(span_length, inputs);
-    unstretched.plus(rate * decay_integral(lambda, h))
+/// The exact step over h with inputs held and L constant [3]: the balance
+/// is then linear in x with constant coefficients.
+pub fn exact_step(length: f64, u: &Inputs, x: CompensatedSum, h: f64) -> CompensatedSum {
+    let rate = unstretched_rate(u, strain(length, x, 0.0));
+    x.plus(rate * decay_integral(decay_rate(length, u), h))
 }
 
-/// d(eps_b)/dt = -(1+eps_b)^2 / L * dx/dt [4].
-pub fn strain_rate(span_length: f64, strain_b: f64, unstretched_rate: f64) -> f64 {
-    -(1.0 + strain_b) * (1.0 + strain_b) / span_length * unstretched_rate
+/// d(eps_b)/dt = dL/dt / x - (1+eps_b)^2 / L * dx/dt [4].
+pub fn strain_rate(length: f64, length_rate: f64, x: f64, strain_b: f64, unstretched_rate: f64) -> f64 {
+    length_rate / x - (1.0 + strain_b) * (1.0 + strain_b) / length * unstretched_rate
 }
 
-/// Span tension [5]: T = E2*A2*(eps_b + d_r2*deps_b/dt), the damping term
-/// only with `includeDamping` (computed only then), clamped at 0 for a
-/// slack web with `preventNegativeTension`.
-pub fn tension(p: &Parameters, inputs: &Inputs, strain_b: f64) -> f64 {
-    let web = &p.span_web;
-    let mut effective_strain = strain_b;
-    if p.include_damping {
-        let rate = unstretched_rate(inputs, strain_b);
-        effective_strain += web.retardation_time * strain_rate(p.span_length, strain_b, rate);
-    }
-    let t = web.stiffness() * effective_strain;
+/// Span tension [5] from the strain (plus d_r * strain rate with damping),
+/// clamped at 0 for a slack web with `preventNegativeTension`.
+pub fn tension(p: &Parameters, effective_strain: f64) -> f64 {
+    let t = p.span_web.stiffness() * effective_strain;
     if p.prevent_negative_tension {
         t.max(0.0)
     } else {
@@ -69,12 +96,26 @@ pub fn tension(p: &Parameters, inputs: &Inputs, strain_b: f64) -> f64 {
     }
 }
 
+/// Web mass in the span, m = rho_l2 * x [10].
+pub fn web_mass(web: &WebProperties, x: f64) -> f64 {
+    web.linear_density() * x
+}
+
+/// F_b - F_a = q_a (rho_in v_b - rho_in' v_a) + m dv_b/dt [10]: the momentum
+/// the span's web gains per second. Web entering at a is wp1 (rho_l1);
+/// web leaving backwards through a is the span's own (rho_l2).
+pub fn momentum_difference(p: &Parameters, u: &Inputs, strain_b: f64, x: f64, speed_b_rate: f64) -> f64 {
+    let rho_span = p.span_web.linear_density();
+    let rho_in = if u.speed_a >= 0.0 { p.incoming.linear_density() } else { rho_span };
+    inflow(u, strain_b) * (rho_span * u.speed_b - rho_in * u.speed_a) + web_mass(&p.span_web, x) * speed_b_rate
+}
+
 /// Strain at the steady state of the inputs [6]:
 /// 1 + eps_b = (v_b/v_a)(1 + eps_a), formed as (v_b - v_a + v_b*eps_a)/v_a;
 /// eps_b = eps_a when v_a = 0. `None` where no steady state exists
 /// (speeds of opposite signs, or a ratio that overflows).
-pub fn equilibrium_strain(inputs: &Inputs) -> Option<f64> {
-    let Inputs { speed_a: va, strain_a, speed_b: vb } = *inputs;
+pub fn equilibrium_strain(u: &Inputs) -> Option<f64> {
+    let Inputs { speed_a: va, strain_a, speed_b: vb, .. } = *u;
     if va == 0.0 {
         return Some(strain_a);
     }

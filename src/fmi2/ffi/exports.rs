@@ -370,12 +370,18 @@ pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *const fmi2Real,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *const fmi2Real,
 ) -> fmi2Status {
-    unsupported::<M>(c, Call::SetRealInputDerivatives, "canInterpolateInputs is false: inputs are held over a step")
+    let call = Call::SetRealInputDerivatives;
+    enter::<M>(c, call, |h| {
+        let vrs = slice(call, vr, nvr, "vr")?;
+        let orders = slice(call, order, nvr, "order")?;
+        h.instance.set_input_derivatives(vrs, orders, slice(call, value, nvr, "value")?)?;
+        OK
+    })
 }
 
 #[no_mangle]
