@@ -17,6 +17,13 @@ pub const PENDING_STATUS: i32 = 1;
 pub const LAST_SUCCESSFUL_TIME: i32 = 2;
 pub const TERMINATED: i32 = 3;
 
+/// Test-only (feature `test-hooks`): `fmi2SetDebugLogging(c, fmi2True, 1,
+/// {TEST_PANIC_CATEGORY})` arms the instance so that its next `fmi2DoStep`
+/// panics inside the step, after the model has advanced and before the time
+/// has: the half-done update that poisoning guards against.
+#[cfg(feature = "test-hooks")]
+pub const TEST_PANIC_CATEGORY: &str = "testHook.panicInNextDoStep";
+
 /// Relative tolerance when the communication point is compared with the
 /// instance's time: importers compute time in their own ways (t + h, or
 /// t0 + n*h), which may differ by a few ulps, never by 1e-13 of the time.
@@ -60,6 +67,8 @@ pub struct Instance<M: Model> {
     #[allow(dead_code)]
     resource_location: Option<String>,
     model: M,
+    #[cfg(feature = "test-hooks")]
+    panic_in_next_step: bool,
 }
 
 impl<M: Model> Instance<M> {
@@ -72,6 +81,8 @@ impl<M: Model> Instance<M> {
             experiment: Experiment::default(),
             resource_location,
             model: M::at_start_values(),
+            #[cfg(feature = "test-hooks")]
+            panic_in_next_step: false,
         };
         instance.log_event("instantiated");
         instance
@@ -122,6 +133,11 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn set_debug_logging(&mut self, on: bool, categories: &[String]) -> FmiResult {
+        #[cfg(feature = "test-hooks")]
+        if on && categories.len() == 1 && categories[0] == TEST_PANIC_CATEGORY {
+            self.panic_in_next_step = true;
+            return Ok(());
+        }
         self.log.set(on, categories).map_err(|m| FmiError::error(format!("fmi2SetDebugLogging: {m}")))
     }
 
@@ -403,6 +419,10 @@ impl<M: Model> Instance<M> {
         }
         match self.model.do_step(h) {
             Ok(()) => {
+                #[cfg(feature = "test-hooks")]
+                if std::mem::take(&mut self.panic_in_next_step) {
+                    panic!("test hook: forced panic inside the model's step (state advanced, time not)");
+                }
                 // Take the importer's time so that rounding never accumulates.
                 self.time = current + h;
                 Ok(())

@@ -131,6 +131,13 @@ impl Call {
         self.allowed() & phase.bit() != 0
     }
 
+    /// After a panic was caught inside a call, the instance's data may be
+    /// half updated: it is poisoned, and only these calls are accepted
+    /// (`fmi2Reset` rebuilds it from the start values and clears the poison).
+    pub fn is_allowed_when_poisoned(self) -> bool {
+        matches!(self, Call::Reset | Call::FreeInstance)
+    }
+
     /// The C name, for log messages.
     pub fn name(self) -> &'static str {
         use Call::*;

@@ -4,7 +4,8 @@
 //!
 //! * turns the `fmi2Component` into a reference, refusing NULL and pointers
 //!   that do not carry this library's tag,
-//! * catches panics, so that none crosses `extern "C"`,
+//! * catches panics, so that none crosses `extern "C"`, and poisons the
+//!   instance that panicked (only `fmi2Reset` and `fmi2FreeInstance` then),
 //! * checks the call against the state machine,
 //! * turns an error into an `fmi2Status` plus one log line.
 //!
@@ -117,6 +118,10 @@ struct Handle<M: Model> {
     tag: u64,
     instance: Instance<M>,
     states: Vec<*mut Snapshot<M>>,
+    /// Set when a panic was caught inside a call: the instance may be half
+    /// updated, so only the calls of `Call::is_allowed_when_poisoned` are
+    /// accepted until an `fmi2Reset` succeeds.
+    poisoned: bool,
 }
 
 impl<M: Model> Handle<M> {
@@ -215,7 +220,7 @@ unsafe fn instantiate<M: Model>(
         }
     }
     let instance = Instance::<M>::new(logger, logging_on != 0, text(resource_location));
-    Box::into_raw(Box::new(Handle { tag: TAG, instance, states: Vec::new() })) as fmi2Component
+    Box::into_raw(Box::new(Handle { tag: TAG, instance, states: Vec::new(), poisoned: false })) as fmi2Component
 }
 
 /// `fmi2FreeInstance`.
@@ -238,13 +243,26 @@ unsafe fn enter<M: Model>(
 ) -> fmi2Status {
     let Some(handle) = handle::<M>(c) else { return fmi2Error };
     let outcome = catch_unwind(AssertUnwindSafe(|| {
+        if handle.poisoned && !call.is_allowed_when_poisoned() {
+            return Err(FmiError::error(format!(
+                "{}: refused: an internal error (a panic) in an earlier call may have left the instance \
+                 half updated; only fmi2Reset or fmi2FreeInstance are accepted now",
+                call.name()
+            )));
+        }
         handle.instance.begin(call)?;
         body(&mut *handle)
     }));
     let status = match outcome {
-        Ok(Ok(status)) => status,
+        Ok(Ok(status)) => {
+            if call == Call::Reset {
+                handle.poisoned = false;
+            }
+            status
+        }
         Ok(Err(error)) => handle.instance.fail(error),
         Err(panic) => {
+            handle.poisoned = true;
             let what = panic
                 .downcast_ref::<&str>()
                 .map(|s| s.to_string())
