@@ -1,0 +1,388 @@
+/*
+ * A minimal FMI 2.0 co-simulation importer for ConvertingSpan, written
+ * against FMPy's copy of the standard headers. tests/python/test_c_importer.py
+ * compiles it with
+ *
+ *     gcc -Wall -Werror -I <fmpy>/c-code importer.c -o importer -ldl
+ *
+ * and runs it as
+ *
+ *     importer <path of binaries/linux64/ConvertingSpan.so> <GUID> name=vr ...
+ *
+ * The value references come from the command line (the test reads them from
+ * modelDescription.xml); none is written here. Results go to stdout as CSV:
+ *
+ *     param,<name>,<value>                  a parameter or input this program set
+ *     info,<what>,<text>                    fmi2GetVersion, fmi2GetTypesPlatform
+ *     status,<label>,<fmi2Status>           a call that must succeed
+ *     illegal,<label>,<fmi2Status>          a call that the standard forbids here
+ *     row,<k>,<t>,<T>,<strain>,<x>,<v>      outputs after k steps (k = 0: after init)
+ *     feedthrough,<k>,<T before>,<T after>  T read before and after an input change
+ *     cont,<run>,<i>,<t>,<T>,<strain>,<x>   continuation runs after the FMU state tests
+ *     check,<what>,<0|1>                    a comparison made here
+ *
+ * Log messages of the FMU go to stderr as log,<instance>,<status>,<category>,<message>.
+ * The exit code is 0 if every call that must succeed did, 1 otherwise, 2 on
+ * a usage or loading problem.
+ */
+
+#include <dlfcn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+
+/* ---- the API, looked up with dlsym and typed with the header's TYPEs ---- */
+
+typedef struct {
+    fmi2GetVersionTYPE *getVersion;
+    fmi2GetTypesPlatformTYPE *getTypesPlatform;
+    fmi2InstantiateTYPE *instantiate;
+    fmi2FreeInstanceTYPE *freeInstance;
+    fmi2SetupExperimentTYPE *setupExperiment;
+    fmi2EnterInitializationModeTYPE *enterInitializationMode;
+    fmi2ExitInitializationModeTYPE *exitInitializationMode;
+    fmi2TerminateTYPE *terminate;
+    fmi2ResetTYPE *reset;
+    fmi2GetRealTYPE *getReal;
+    fmi2SetRealTYPE *setReal;
+    fmi2SetIntegerTYPE *setInteger;
+    fmi2SetBooleanTYPE *setBoolean;
+    fmi2DoStepTYPE *doStep;
+    fmi2GetFMUstateTYPE *getFMUstate;
+    fmi2SetFMUstateTYPE *setFMUstate;
+    fmi2FreeFMUstateTYPE *freeFMUstate;
+    fmi2SerializedFMUstateSizeTYPE *serializedFMUstateSize;
+    fmi2SerializeFMUstateTYPE *serializeFMUstate;
+    fmi2DeSerializeFMUstateTYPE *deSerializeFMUstate;
+} Api;
+
+/* #sym and sym##TYPE take the argument before macro expansion, so
+   LOAD(instantiate, fmi2Instantiate) looks up "fmi2Instantiate" and casts
+   to fmi2InstantiateTYPE*. */
+#define LOAD(field, sym)                                                        \
+    do {                                                                        \
+        api->field = (sym##TYPE *)dlsym(lib, #sym);                             \
+        if (api->field == NULL) {                                               \
+            fprintf(stderr, "importer: dlsym(%s) failed: %s\n", #sym, dlerror()); \
+            return 0;                                                           \
+        }                                                                       \
+    } while (0)
+
+static int load_api(void *lib, Api *api)
+{
+    LOAD(getVersion, fmi2GetVersion);
+    LOAD(getTypesPlatform, fmi2GetTypesPlatform);
+    LOAD(instantiate, fmi2Instantiate);
+    LOAD(freeInstance, fmi2FreeInstance);
+    LOAD(setupExperiment, fmi2SetupExperiment);
+    LOAD(enterInitializationMode, fmi2EnterInitializationMode);
+    LOAD(exitInitializationMode, fmi2ExitInitializationMode);
+    LOAD(terminate, fmi2Terminate);
+    LOAD(reset, fmi2Reset);
+    LOAD(getReal, fmi2GetReal);
+    LOAD(setReal, fmi2SetReal);
+    LOAD(setInteger, fmi2SetInteger);
+    LOAD(setBoolean, fmi2SetBoolean);
+    LOAD(doStep, fmi2DoStep);
+    LOAD(getFMUstate, fmi2GetFMUstate);
+    LOAD(setFMUstate, fmi2SetFMUstate);
+    LOAD(freeFMUstate, fmi2FreeFMUstate);
+    LOAD(serializedFMUstateSize, fmi2SerializedFMUstateSize);
+    LOAD(serializeFMUstate, fmi2SerializeFMUstate);
+    LOAD(deSerializeFMUstate, fmi2DeSerializeFMUstate);
+    return 1;
+}
+
+/* ---- logger: variadic, formats with vsnprintf like any FMI importer ---- */
+
+static void logger(fmi2ComponentEnvironment env, fmi2String instanceName, fmi2Status status,
+                   fmi2String category, fmi2String message, ...)
+{
+    char text[4096];
+    va_list args;
+    (void)env;
+    va_start(args, message);
+    vsnprintf(text, sizeof text, message ? message : "(null)", args);
+    va_end(args);
+    fprintf(stderr, "log,%s,%d,%s,%s\n", instanceName ? instanceName : "(null)", (int)status,
+            category ? category : "(null)", text);
+}
+
+/* ---- value references from the command line ---- */
+
+static int n_refs;
+static char **ref_args;
+
+static fmi2ValueReference vr_of(const char *name)
+{
+    size_t n = strlen(name);
+    for (int i = 0; i < n_refs; i++) {
+        if (strncmp(ref_args[i], name, n) == 0 && ref_args[i][n] == '=') {
+            return (fmi2ValueReference)strtoul(ref_args[i] + n + 1, NULL, 10);
+        }
+    }
+    fprintf(stderr, "importer: no value reference given for %s (pass %s=<vr>)\n", name, name);
+    exit(2);
+}
+
+/* ---- bookkeeping ---- */
+
+static int failures;
+
+static fmi2Status must(const char *label, fmi2Status status)
+{
+    printf("status,%s,%d\n", label, (int)status);
+    if (status != fmi2OK) {
+        failures++;
+    }
+    return status;
+}
+
+static void illegal(const char *label, fmi2Status status)
+{
+    printf("illegal,%s,%d\n", label, (int)status);
+}
+
+static void set_real(const Api *api, fmi2Component c, const char *name, double value)
+{
+    fmi2ValueReference vr = vr_of(name);
+    char label[128];
+    snprintf(label, sizeof label, "set %s", name);
+    must(label, api->setReal(c, &vr, 1, &value));
+    printf("param,%s,%.17g\n", name, value);
+}
+
+static void set_integer(const Api *api, fmi2Component c, const char *name, int value)
+{
+    fmi2ValueReference vr = vr_of(name);
+    fmi2Integer v = value;
+    char label[128];
+    snprintf(label, sizeof label, "set %s", name);
+    must(label, api->setInteger(c, &vr, 1, &v));
+    printf("param,%s,%d\n", name, value);
+}
+
+static void set_boolean(const Api *api, fmi2Component c, const char *name, int value)
+{
+    fmi2ValueReference vr = vr_of(name);
+    fmi2Boolean v = value ? fmi2True : fmi2False;
+    char label[128];
+    snprintf(label, sizeof label, "set %s", name);
+    must(label, api->setBoolean(c, &vr, 1, &v));
+    printf("param,%s,%d\n", name, value ? 1 : 0);
+}
+
+enum { O_T, O_STRAIN, O_X, O_V, N_OUT };
+
+static void get_outputs(const Api *api, fmi2Component c, double out[N_OUT])
+{
+    fmi2ValueReference vrs[N_OUT] = {vr_of("T"), vr_of("summary_Strain"), vr_of("unstretchedLength"), vr_of("v")};
+    fmi2Status s = api->getReal(c, vrs, N_OUT, out);
+    if (s != fmi2OK) {
+        must("get outputs", s);
+    }
+}
+
+/* The scene. The test reads it back from the param lines. */
+#define H 1e-3
+#define N_STEPS 1000
+#define N_CONT 100
+
+/* n steps from t, with web_b.v changed at step n/2; values into rec[n][3]. */
+static int continuation(const Api *api, fmi2Component c, double t, int n, double rec[][3])
+{
+    fmi2ValueReference vb = vr_of("web_b.v");
+    for (int i = 0; i < n; i++) {
+        if (i == n / 2) {
+            double v = 4.999;
+            if (api->setReal(c, &vb, 1, &v) != fmi2OK) {
+                return 0;
+            }
+        }
+        if (api->doStep(c, t + i * H, H, fmi2True) != fmi2OK) {
+            return 0;
+        }
+        double out[N_OUT];
+        get_outputs(api, c, out);
+        rec[i][0] = out[O_T];
+        rec[i][1] = out[O_STRAIN];
+        rec[i][2] = out[O_X];
+    }
+    return 1;
+}
+
+static void print_cont(const char *run, double t, int n, double rec[][3])
+{
+    for (int i = 0; i < n; i++) {
+        printf("cont,%s,%d,%.17g,%.17g,%.17g,%.17g\n", run, i + 1, t + (i + 1) * H, rec[i][0], rec[i][1], rec[i][2]);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 4) {
+        fprintf(stderr, "usage: %s <library.so> <GUID> name=vr ...\n", argv[0]);
+        return 2;
+    }
+    const char *library = argv[1];
+    const char *guid = argv[2];
+    n_refs = argc - 3;
+    ref_args = argv + 3;
+
+    void *lib = dlopen(library, RTLD_NOW | RTLD_LOCAL);
+    if (lib == NULL) {
+        fprintf(stderr, "importer: dlopen(%s) failed: %s\n", library, dlerror());
+        return 2;
+    }
+    Api api_storage;
+    Api *api = &api_storage;
+    if (!load_api(lib, api)) {
+        return 2;
+    }
+    printf("info,version,%s\n", api->getVersion());
+    printf("info,platform,%s\n", api->getTypesPlatform());
+
+    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    const char *resources = "file:///nonexistent/resources";
+
+    /* ---------------- the scene ---------------- */
+    fmi2Component c = api->instantiate("scene", fmi2CoSimulation, guid, resources, &callbacks, fmi2False, fmi2True);
+    printf("check,instantiate,%d\n", c != NULL);
+    if (c == NULL) {
+        return 1;
+    }
+    must("setupExperiment", api->setupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, 2.0));
+    set_real(api, c, "L", 2.0);
+    set_real(api, c, "wp2.width", 1.3);
+    set_real(api, c, "wp2.d_r", 0.01);
+    set_boolean(api, c, "includeDamping", 1);
+    set_integer(api, c, "toUnitV", 2); /* m/min */
+    must("enterInitializationMode", api->enterInitializationMode(c));
+    set_real(api, c, "web_a.v", 5.0);
+    set_real(api, c, "web_a.eps", 1e-3);
+    set_real(api, c, "web_b.v", 5.0);
+    must("exitInitializationMode", api->exitInitializationMode(c));
+
+    double out[N_OUT];
+    get_outputs(api, c, out);
+    printf("row,0,%.17g,%.17g,%.17g,%.17g,%.17g\n", 0.0, out[O_T], out[O_STRAIN], out[O_X], out[O_V]);
+
+    fmi2ValueReference vb = vr_of("web_b.v");
+    int step_failures = 0;
+    for (int k = 0; k < N_STEPS; k++) {
+        double t = k * H;
+        if (k == N_STEPS / 2) {
+            double before[N_OUT], after[N_OUT], v = 5.005;
+            get_outputs(api, c, before);
+            must("set web_b.v halfway", api->setReal(c, &vb, 1, &v));
+            printf("param,web_b.v@%d,%.17g\n", k, v);
+            get_outputs(api, c, after);
+            printf("feedthrough,%d,%.17g,%.17g\n", k, before[O_T], after[O_T]);
+        }
+        fmi2Status s = api->doStep(c, t, H, fmi2True);
+        if (s != fmi2OK) {
+            step_failures++;
+            must("doStep", s);
+            break;
+        }
+        get_outputs(api, c, out);
+        printf("row,%d,%.17g,%.17g,%.17g,%.17g,%.17g\n", k + 1, (k + 1) * H, out[O_T], out[O_STRAIN], out[O_X], out[O_V]);
+    }
+    printf("check,all steps ok,%d\n", step_failures == 0);
+
+    /* ---------------- FMU state: save, continue, restore, continue ---------------- */
+    double t_end = N_STEPS * H;
+    static double run_a[N_CONT][3], run_b[N_CONT][3], run_c[N_CONT][3];
+    fmi2FMUstate state = NULL;
+    must("getFMUstate", api->getFMUstate(c, &state));
+    printf("check,continuation a,%d\n", continuation(api, c, t_end, N_CONT, run_a));
+    must("setFMUstate", api->setFMUstate(c, state));
+    printf("check,continuation b,%d\n", continuation(api, c, t_end, N_CONT, run_b));
+    printf("check,restore identical,%d\n", memcmp(run_a, run_b, sizeof run_a) == 0);
+    print_cont("a", t_end, N_CONT, run_a);
+
+    /* ---------------- serialize, deserialize into a second instance ---------------- */
+    size_t size = 0;
+    must("serializedFMUstateSize", api->serializedFMUstateSize(c, state, &size));
+    printf("info,serialized size,%zu\n", size);
+    fmi2Byte *bytes = malloc(size);
+    must("serializeFMUstate", api->serializeFMUstate(c, state, bytes, size));
+
+    fmi2Component c2 = api->instantiate("copy", fmi2CoSimulation, guid, resources, &callbacks, fmi2False, fmi2False);
+    printf("check,instantiate copy,%d\n", c2 != NULL);
+    if (c2 == NULL) {
+        return 1;
+    }
+    fmi2FMUstate state2 = NULL;
+    must("deSerializeFMUstate", api->deSerializeFMUstate(c2, bytes, size, &state2));
+    must("setFMUstate copy", api->setFMUstate(c2, state2));
+    printf("check,continuation c,%d\n", continuation(api, c2, t_end, N_CONT, run_c));
+    printf("check,deserialized identical,%d\n", memcmp(run_a, run_c, sizeof run_a) == 0);
+
+    /* a corrupted serialized state is refused */
+    bytes[size / 2] ^= 0x20;
+    fmi2FMUstate state3 = NULL;
+    illegal("deSerializeFMUstate corrupted", api->deSerializeFMUstate(c2, bytes, size, &state3));
+    printf("check,corrupted gives no state,%d\n", state3 == NULL);
+    free(bytes);
+
+    must("freeFMUstate copy", api->freeFMUstate(c2, &state2));
+    api->freeInstance(c2);
+    must("freeFMUstate", api->freeFMUstate(c, &state));
+    printf("check,freed state is NULL,%d\n", state == NULL);
+    must("terminate", api->terminate(c));
+    illegal("doStep after terminate", api->doStep(c, t_end, H, fmi2True));
+    api->freeInstance(c);
+
+    /* ---------------- illegal calls ---------------- */
+    fmi2Component bad = api->instantiate("illegal", fmi2CoSimulation, "{00000000-0000-0000-0000-000000000000}",
+                                         resources, &callbacks, fmi2False, fmi2False);
+    printf("check,wrong GUID gives NULL,%d\n", bad == NULL);
+    /* The FMU quotes the GUID in its message: a '%' in it must reach the
+       logger escaped as "%%", or vsnprintf would read arguments that are not there. */
+    bad = api->instantiate("illegal", fmi2CoSimulation, "{100%-wrong-%s-%d-guid}", resources, &callbacks,
+                           fmi2False, fmi2False);
+    printf("check,percent GUID gives NULL,%d\n", bad == NULL);
+    bad = api->instantiate("illegal", fmi2ModelExchange, guid, resources, &callbacks, fmi2False, fmi2False);
+    printf("check,model exchange gives NULL,%d\n", bad == NULL);
+
+    fmi2Component d = api->instantiate("illegal", fmi2CoSimulation, guid, resources, &callbacks, fmi2False, fmi2False);
+    printf("check,instantiate illegal,%d\n", d != NULL);
+    if (d == NULL) {
+        return 1;
+    }
+    illegal("doStep before init", api->doStep(d, 0.0, H, fmi2True));
+    must("reset after error", api->reset(d));
+    illegal("exitInitializationMode before enter", api->exitInitializationMode(d));
+    must("reset after error 2", api->reset(d));
+    {
+        fmi2ValueReference vr = vr_of("T");
+        double value = 1.0;
+        illegal("getReal before init", api->getReal(d, &vr, 1, &value));
+        must("reset after error 3", api->reset(d));
+        illegal("setReal output T", api->setReal(d, &vr, 1, &value));
+        must("reset after error 4", api->reset(d));
+    }
+    must("setupExperiment illegal", api->setupExperiment(d, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    must("enterInitializationMode illegal", api->enterInitializationMode(d));
+    illegal("doStep in initialization mode", api->doStep(d, 0.0, H, fmi2True));
+    must("reset after error 5", api->reset(d));
+    must("setupExperiment illegal 2", api->setupExperiment(d, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    must("enterInitializationMode illegal 2", api->enterInitializationMode(d));
+    must("exitInitializationMode illegal 2", api->exitInitializationMode(d));
+    illegal("doStep at the wrong time", api->doStep(d, 0.5, H, fmi2True));
+    must("reset after error 6", api->reset(d));
+    must("setupExperiment illegal 3", api->setupExperiment(d, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    must("enterInitializationMode illegal 3", api->enterInitializationMode(d));
+    must("exitInitializationMode illegal 3", api->exitInitializationMode(d));
+    must("doStep after reset", api->doStep(d, 0.0, H, fmi2True));
+    must("terminate illegal", api->terminate(d));
+    api->freeInstance(d);
+
+    dlclose(lib);
+    printf("check,failures,%d\n", failures == 0);
+    return failures == 0 ? 0 : 1;
+}
