@@ -213,20 +213,12 @@ impl<M: Model> Instance<M> {
 
     /// Looks up a value reference and checks that it is of the family the
     /// function handles.
+    #[inline]
     fn variable(&self, call: Call, vr: u32, family: Family) -> FmiResult<&'static Variable> {
-        let v = Self::description()
-            .variable(vr)
-            .ok_or_else(|| FmiError::error(format!("{}: unknown value reference {vr}", call.name())))?;
-        if Family::of(v.kind) != family {
-            return Err(FmiError::error(format!(
-                "{}: {} (value reference {vr}) is of type {}, not {}",
-                call.name(),
-                v.name,
-                Family::of(v.kind).name(),
-                family.name()
-            )));
+        match Self::description().variable(vr) {
+            Some(v) if Family::of(v.kind) == family => Ok(v),
+            found => Err(wrong_variable(call, vr, found, family)),
         }
-        Ok(v)
     }
 
     /// In initialization mode the outputs follow the parameters and inputs
@@ -272,6 +264,7 @@ impl<M: Model> Instance<M> {
 
     /// May `v` be set now? FMI 2.0, section 2.2.7 (the table of when a
     /// variable may be set) for co-simulation.
+    #[inline]
     fn check_settable(&self, call: Call, v: &Variable) -> FmiResult {
         let ok = match v.causality {
             Causality::Input => true,
@@ -283,21 +276,15 @@ impl<M: Model> Instance<M> {
             _ => false,
         } && v.variability != Variability::Constant;
         if ok {
-            return Ok(());
+            Ok(())
+        } else {
+            Err(not_settable(call, v, self.phase))
         }
-        let why = match v.causality {
-            Causality::Parameter => format!(
-                "it is a {} parameter and cannot be set in the state \"{}\" (only before initialization ends)",
-                if v.variability == Variability::Fixed { "fixed" } else { "tunable" },
-                self.phase.name()
-            ),
-            other => format!("its causality is {other:?}; only parameters and inputs can be set"),
-        };
-        Err(FmiError::error(format!("{}: cannot set {}: {why}", call.name(), v.name)))
     }
 
     /// Validates every value before it applies any, so a rejected call
     /// changes nothing.
+    #[inline]
     fn set_all<T: Copy>(
         &mut self,
         call: Call,
@@ -310,7 +297,7 @@ impl<M: Model> Instance<M> {
         for (&vr, &value) in vrs.iter().zip(values) {
             let v = self.variable(call, vr, family)?;
             self.check_settable(call, v)?;
-            check(v, value).map_err(|e| FmiError::error(format!("{}: {}", call.name(), e.message)))?;
+            check(v, value).map_err(|e| prefixed(call, e))?;
         }
         for (&vr, &value) in vrs.iter().zip(values) {
             apply(&mut self.model, vr, value)?;
@@ -463,9 +450,42 @@ impl<M: Model> Instance<M> {
     }
 }
 
+#[cold]
+fn wrong_variable(call: Call, vr: u32, found: Option<&Variable>, family: Family) -> FmiError {
+    FmiError::error(match found {
+        None => format!("{}: unknown value reference {vr}", call.name()),
+        Some(v) => format!(
+            "{}: {} (value reference {vr}) is of type {}, not {}",
+            call.name(),
+            v.name,
+            Family::of(v.kind).name(),
+            family.name()
+        ),
+    })
+}
+
+#[cold]
+fn not_settable(call: Call, v: &Variable, phase: Phase) -> FmiError {
+    let why = match v.causality {
+        Causality::Parameter => format!(
+            "it is a {} parameter and cannot be set in the state \"{}\" (only before initialization ends)",
+            if v.variability == Variability::Fixed { "fixed" } else { "tunable" },
+            phase.name()
+        ),
+        other => format!("its causality is {other:?}; only parameters and inputs can be set"),
+    };
+    FmiError::error(format!("{}: cannot set {}: {why}", call.name(), v.name))
+}
+
+#[cold]
 fn out_of_range(v: &Variable, value: f64) -> FmiError {
     let unit = if v.unit.is_empty() || v.unit == "1" { String::new() } else { format!(" {}", v.unit) };
     FmiError::error(format!("{} = {value}{unit} is outside its allowed range {}", v.name, v.range))
+}
+
+#[cold]
+fn prefixed(call: Call, e: FmiError) -> FmiError {
+    FmiError::error(format!("{}: {}", call.name(), e.message))
 }
 
 /// FMI 2.0: a status kind the FMU does not provide answers fmi2Discard.

@@ -142,7 +142,7 @@ impl<M: Persist> Snapshot<M> {
         }
         let mut reader = StateReader { bytes: &bytes[HEADER..HEADER + n] };
         let phase_byte = reader.take::<1>("phase")?[0];
-        let phase = Phase::from_u8(phase_byte).ok_or(format!("phase {phase_byte} is unknown"))?;
+        let phase = Phase::from_u8(phase_byte).ok_or_else(|| format!("phase {phase_byte} is unknown"))?;
         let time = reader.finite("time")?;
         let model = M::load(&mut reader)?;
         if !reader.bytes.is_empty() {

@@ -40,6 +40,7 @@ pub struct ConvertingSpan {
     /// Derived when initialization ends.
     sensor: SensorScale,
     tolerance: f64,
+    solver: SolverChoice,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -86,6 +87,7 @@ impl ConvertingSpan {
         }
     }
 
+    #[inline]
     pub fn outputs(&self) -> Outputs {
         let p = &self.params;
         let u = &self.inputs;
@@ -109,6 +111,7 @@ impl ConvertingSpan {
     }
 
     /// The value of a Real variable.
+    #[inline]
     pub fn real(&self, var: Real) -> f64 {
         let p = &self.params;
         let u = &self.inputs;
@@ -148,6 +151,7 @@ impl ConvertingSpan {
     }
 
     /// The field behind a Real parameter or input; `None` for outputs.
+    #[inline]
     fn real_field(&mut self, var: Real) -> Option<&mut f64> {
         let p = &mut self.params;
         let u = &mut self.inputs;
@@ -192,9 +196,15 @@ impl ConvertingSpan {
     }
 
     /// Sets a parameter or input; `Err` for variables that cannot be set.
+    #[inline]
     pub fn set_real_var(&mut self, var: Real, x: f64) -> FmiResult {
-        *self.real_field(var).ok_or_else(|| FmiError::error(format!("{var:?} cannot be set")))? = x;
-        Ok(())
+        match self.real_field(var) {
+            Some(field) => {
+                *field = x;
+                Ok(())
+            }
+            None => Err(not_settable(var)),
+        }
     }
 
     fn boolean_field(p: &mut Parameters, var: Boolean) -> &mut bool {
@@ -219,19 +229,27 @@ impl ConvertingSpan {
 
     /// Advances over one communication step of length h [3].
     fn advance(&mut self, h: f64) -> FmiResult {
-        let p = &self.params;
         let start = self.inputs;
-        let moving = self.input_rates.is_some_and(|r| r != Inputs::default());
-        let rates = self.input_rates.unwrap_or_default();
-        let length = stepping::shortest_length(p, &start, &rates, h);
-        if !(length > 0.0) {
-            return Err(FmiError::error(format!(
-                "the span length |frame_b - frame_a| reaches {length} m within the step: the rollers meet"
-            )));
-        }
-        let choice = stepping::method(p, moving).map_err(FmiError::error)?;
-        let balance = stepping::Balance { params: p, start, rates, moving, x0: self.unstretched, step: h };
-        let (next, adaptive_step) = stepping::integrate(&balance, choice, self.tolerance, p.substeps, self.adaptive_step)?;
+        let rates = match self.input_rates {
+            Some(r) if r != Inputs::default() => Some(r),
+            _ => None,
+        };
+        let held_exact = rates.is_none() && matches!(self.solver, SolverChoice::Auto | SolverChoice::Exact);
+        let (next, adaptive_step) = if held_exact {
+            // The common case, kept short: held inputs, so L is constant too
+            // and the exact step applies.
+            let length = physics::span_length(&self.params, &start);
+            check_length(length)?;
+            (physics::exact_step(length, &start, self.unstretched, h), self.adaptive_step)
+        } else {
+            let p = &self.params;
+            let moving = rates.is_some();
+            let rates = rates.unwrap_or_default();
+            check_length(stepping::shortest_length(p, &start, &rates, h))?;
+            let choice = stepping::method(self.solver, moving).map_err(FmiError::error)?;
+            let balance = stepping::Balance { params: p, start, rates, moving, x0: self.unstretched, step: h };
+            stepping::integrate(&balance, choice, self.tolerance, p.substeps, self.adaptive_step)?
+        };
         let x = next.value();
         if !(x.is_finite() && x > 0.0) {
             return Err(FmiError::discard(format!(
@@ -241,24 +259,52 @@ impl ConvertingSpan {
             )));
         }
         // Commit: nothing above changed the model.
-        let length_now = physics::span_length(p, &start);
-        self.rates = match &self.input_rates {
-            Some(r) => Rates { speed_b: r.speed_b, length: physics::length_rate(p, &start.advanced(r, h), r) },
-            None if self.previous.step > 0.0 => Rates {
-                speed_b: (start.speed_b - self.previous.speed_b) / self.previous.step,
-                length: (length_now - self.previous.length) / self.previous.step,
-            },
-            None => Rates::default(),
-        };
-        self.previous = Previous { speed_b: start.speed_b, length: length_now, step: h };
-        self.inputs = start.advanced(&rates, h);
+        if self.params.include_mass || self.params.include_damping {
+            self.update_rates(&start, rates.as_ref(), h);
+        }
+        if let Some(r) = rates {
+            self.inputs = start.advanced(&r, h);
+        }
         self.input_rates = None;
         self.unstretched = next;
         self.adaptive_step = adaptive_step;
         Ok(())
     }
+
+    /// The rates the outputs use after a step [11]: the given derivatives,
+    /// or backward differences between the starts of the last two steps.
+    /// Only the effects that read them (damping, web mass) pay for this.
+    fn update_rates(&mut self, start: &Inputs, given: Option<&Inputs>, h: f64) {
+        let p = &self.params;
+        let length = physics::span_length(p, start);
+        self.rates = match given {
+            Some(r) => Rates { speed_b: r.speed_b, length: physics::length_rate(p, &start.advanced(r, h), r) },
+            None if self.previous.step > 0.0 => Rates {
+                speed_b: (start.speed_b - self.previous.speed_b) / self.previous.step,
+                length: (length - self.previous.length) / self.previous.step,
+            },
+            None => Rates::default(),
+        };
+        self.previous = Previous { speed_b: start.speed_b, length, step: h };
+    }
 }
 
+fn check_length(length: f64) -> FmiResult {
+    if length > 0.0 {
+        Ok(())
+    } else {
+        Err(FmiError::error(format!(
+            "the span length |frame_b - frame_a| reaches {length} m within the step: the rollers meet"
+        )))
+    }
+}
+
+#[cold]
+fn not_settable(var: Real) -> FmiError {
+    FmiError::error(format!("{} cannot be set", var.name()))
+}
+
+#[cold]
 fn unknown_vr(vr: u32) -> FmiError {
     FmiError::error(format!("value reference {vr} is not a variable of this type"))
 }
@@ -268,10 +314,12 @@ impl Model for ConvertingSpan {
         &DESCRIPTION
     }
 
+    #[inline]
     fn get_real(&self, vr: u32) -> FmiResult<f64> {
         Real::from_vr(vr).map(|var| self.real(var)).ok_or_else(|| unknown_vr(vr))
     }
 
+    #[inline]
     fn set_real(&mut self, vr: u32, value: f64) -> FmiResult {
         self.set_real_var(Real::from_vr(vr).ok_or_else(|| unknown_vr(vr))?, value)
     }
@@ -342,6 +390,7 @@ impl Model for ConvertingSpan {
         self.sensor = SensorScale::new(p)
             .ok_or_else(|| FmiError::error(format!("toUnitV = {} or toUnitF = {} has no unit", p.speed_unit, p.force_unit)))?;
         self.tolerance = effective_tolerance(p.tolerance, experiment.tolerance);
+        self.solver = choice;
         self.unstretched = physics::unstretched_length(length, strain);
         self.rates = Rates::default();
         self.previous = Previous::default();
@@ -449,6 +498,7 @@ impl Persist for ConvertingSpan {
         // Derived from the parameters; a state saved before initialization
         // ended has none yet, and that is kept so.
         let sensor = SensorScale::new(&params).unwrap_or_default();
+        let solver = SolverChoice::from_i32(params.solver).unwrap_or_default();
         Ok(ConvertingSpan {
             params,
             inputs,
@@ -459,6 +509,7 @@ impl Persist for ConvertingSpan {
             adaptive_step,
             sensor,
             tolerance,
+            solver,
         })
     }
 }

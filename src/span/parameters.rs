@@ -33,8 +33,9 @@ impl WebProperties {
 }
 
 /// The `solver` enumeration.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SolverChoice {
+    #[default]
     Auto = 1,
     Exact = 2,
     Rosenbrock = 3,

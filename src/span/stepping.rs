@@ -66,8 +66,7 @@ impl Ode<1> for Balance<'_> {
 }
 
 /// The method a step uses, with the reason an explicit choice cannot work.
-pub fn method(p: &Parameters, moving: bool) -> Result<SolverChoice, String> {
-    let choice = SolverChoice::from_i32(p.solver).ok_or(format!("solver = {} is not a solver", p.solver))?;
+pub fn method(choice: SolverChoice, moving: bool) -> Result<SolverChoice, String> {
     match choice {
         SolverChoice::Auto if moving => Ok(SolverChoice::Rosenbrock),
         SolverChoice::Auto => Ok(SolverChoice::Exact),

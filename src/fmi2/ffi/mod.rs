@@ -280,29 +280,37 @@ unsafe fn unsupported<M: Model>(c: fmi2Component, call: Call, why: &str) -> fmi2
 }
 
 /// `n` elements from the importer; NULL is fine only for `n == 0`.
+#[inline]
 unsafe fn slice<'a, T>(call: Call, ptr: *const T, n: usize, what: &str) -> FmiResult<&'a [T]> {
     if n == 0 {
         Ok(&[])
     } else if ptr.is_null() {
-        Err(FmiError::error(format!("{}: {what} is NULL", call.name())))
+        Err(null_argument(call, what))
     } else {
         Ok(std::slice::from_raw_parts(ptr, n))
     }
 }
 
+#[inline]
 unsafe fn slice_mut<'a, T>(call: Call, ptr: *mut T, n: usize, what: &str) -> FmiResult<&'a mut [T]> {
     if n == 0 {
         Ok(&mut [])
     } else if ptr.is_null() {
-        Err(FmiError::error(format!("{}: {what} is NULL", call.name())))
+        Err(null_argument(call, what))
     } else {
         Ok(std::slice::from_raw_parts_mut(ptr, n))
     }
 }
 
+#[inline]
 fn out_ref<'a, T>(call: Call, ptr: *mut T, what: &str) -> FmiResult<&'a mut T> {
     // SAFETY: the importer passes a valid pointer or NULL, as the standard requires.
-    unsafe { ptr.as_mut() }.ok_or_else(|| FmiError::error(format!("{}: {what} is NULL", call.name())))
+    unsafe { ptr.as_mut() }.ok_or_else(|| null_argument(call, what))
+}
+
+#[cold]
+fn null_argument(call: Call, what: &str) -> FmiError {
+    FmiError::error(format!("{}: {what} is NULL", call.name()))
 }
 
 /// A copy of a C string (lossy UTF-8); `None` for NULL.
