@@ -168,7 +168,7 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn exit_initialization_mode(&mut self) -> FmiResult {
-        self.settle_initial_values()?;
+        self.settle_initial_values().map_err(|e| prefixed(Call::ExitInitializationMode, e))?;
         self.phase = Phase::StepComplete;
         self.log_event("initialization done");
         Ok(())
@@ -223,15 +223,15 @@ impl<M: Model> Instance<M> {
 
     /// In initialization mode the outputs follow the parameters and inputs
     /// set so far, so they are computed before they are read.
-    fn prepare_get(&mut self) -> FmiResult {
+    fn prepare_get(&mut self, call: Call) -> FmiResult {
         if self.phase == Phase::InitializationMode {
-            self.settle_initial_values()?;
+            self.settle_initial_values().map_err(|e| prefixed(call, e))?;
         }
         Ok(())
     }
 
     pub fn get_reals(&mut self, vrs: &[u32], values: &mut [f64]) -> FmiResult {
-        self.prepare_get()?;
+        self.prepare_get(Call::GetReal)?;
         for (vr, value) in vrs.iter().zip(values.iter_mut()) {
             self.variable(Call::GetReal, *vr, Family::Real)?;
             *value = self.model.get_real(*vr)?;
@@ -240,7 +240,7 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn get_integers(&mut self, vrs: &[u32], values: &mut [i32]) -> FmiResult {
-        self.prepare_get()?;
+        self.prepare_get(Call::GetInteger)?;
         for (vr, value) in vrs.iter().zip(values.iter_mut()) {
             self.variable(Call::GetInteger, *vr, Family::Integer)?;
             *value = self.model.get_integer(*vr)?;
@@ -249,7 +249,7 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn get_booleans(&mut self, vrs: &[u32], values: &mut [i32]) -> FmiResult {
-        self.prepare_get()?;
+        self.prepare_get(Call::GetBoolean)?;
         for (vr, value) in vrs.iter().zip(values.iter_mut()) {
             self.variable(Call::GetBoolean, *vr, Family::Boolean)?;
             *value = self.model.get_boolean(*vr)? as i32;
@@ -485,7 +485,7 @@ fn out_of_range(v: &Variable, value: f64) -> FmiError {
 
 #[cold]
 fn prefixed(call: Call, e: FmiError) -> FmiError {
-    FmiError::error(format!("{}: {}", call.name(), e.message))
+    FmiError { status: e.status, message: format!("{}: {}", call.name(), e.message) }
 }
 
 /// FMI 2.0: a status kind the FMU does not provide answers fmi2Discard.

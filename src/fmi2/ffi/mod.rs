@@ -213,10 +213,11 @@ unsafe fn instantiate<M: Model>(
     match text(guid) {
         Some(g) if g == description.guid => {}
         other => {
+            let given = other.map_or("NULL".to_string(), |g| format!("\"{g}\""));
             return refuse(format!(
-                "GUID {other:?} does not match this FMU's {} (the modelDescription.xml and the binary differ)",
+                "GUID {given} does not match this FMU's {} (the modelDescription.xml and the binary differ)",
                 description.guid
-            ))
+            ));
         }
     }
     let instance = Instance::<M>::new(logger, logging_on != 0, text(resource_location));
