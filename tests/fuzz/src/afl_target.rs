@@ -1,0 +1,13 @@
+//! The coverage-guided target for cargo-afl: each input is one call
+//! sequence (see lib.rs); a broken rule panics, which AFL++ records as a
+//! crash. `fuzz_nohook!` leaves the panic hook alone, so the panics that the
+//! FMU itself catches (the test hook's) are not taken for crashes.
+//!
+//! Build and run: bash tests/hardening.sh --afl SECONDS
+fn main() {
+    afl::fuzz_nohook!(|data: &[u8]| {
+        if let Err(v) = converting_span_fuzz::run(data) {
+            panic!("violation: {}", v.0);
+        }
+    });
+}

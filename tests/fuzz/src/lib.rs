@@ -1,0 +1,2099 @@
+//! Fuzz harness of the exported C API.
+//!
+//! `run(bytes)` reads a sequence of FMI calls out of `bytes` (each byte
+//! string is one sequence) and makes them through the real `fmi2*` entry
+//! points of the library: random calls in random states with random
+//! arguments — NULL pointers, NaN and infinities, huge, negative and
+//! denormal values, unknown value references, out-of-range enumeration and
+//! Boolean values, FMU states that are foreign, freed or freed twice,
+//! serialized states that are random, mutated, truncated or forged (payload
+//! changed and the checksum recomputed), instantiate/free cycles, and the
+//! test hook that makes a step panic.
+//!
+//! Beside it runs an oracle: an independent model of the FMI 2.0
+//! co-simulation state machine (FMI 2.0, section 4.2.4) and of the argument
+//! rules. After every call it checks
+//!
+//! * the status: a call in a state where the standard does not allow it, or
+//!   with an invalid argument, must answer `fmi2Error` (and the instance is
+//!   then in the error state); a valid call must answer `fmi2OK`; where the
+//!   outcome depends on the model's numbers (ending initialization or a step
+//!   after values were changed) the allowed set is `{OK, Discard, Error}`
+//!   with the state machine following the answer; never `fmi2Fatal`,
+//!   `fmi2Pending` or a value that is no `fmi2Status`;
+//! * that every non-OK status is explained by a log line of that status
+//!   (while its log category is on), and that the logger only ever gets
+//!   well-formed calls with a known category;
+//! * that every Real the FMU returns (outputs, parameters, the last
+//!   successful time) is finite, that `fmi2FreeFMUstate` sets the state to
+//!   NULL, that a serialized state deserializes to one that serializes to
+//!   the same bytes, and that a restored state continues where it was saved.
+//!
+//! Memory errors are not seen by the oracle: run the harness under
+//! AddressSanitizer or valgrind for those (tests/hardening.sh does both).
+//!
+//! A broken rule is a `Violation`. Two kinds of non-finite outputs are
+//! counted as `Finding`s rather than violations because they are known
+//! product issues (see tests/fuzz/README.md and the report): outputs that
+//! overflow after extreme but accepted values, and forged FMU states.
+
+#![allow(clippy::missing_safety_doc)]
+
+#[path = "../../harden/mod.rs"]
+pub mod harden;
+
+use converting_span::fmi2::description::{
+    Causality, Initial, Kind, ModelDescription, Variability, Variable,
+};
+use converting_span::fmi2::instance::TEST_PANIC_CATEGORY;
+use converting_span::fmi2::Model;
+use harden::*;
+use std::ffi::{c_char, CString};
+use std::ptr::null_mut;
+
+type Desc = &'static ModelDescription;
+
+fn desc() -> Desc {
+    <converting_span::ExportedModel as Model>::description()
+}
+
+// ---------------------------------------------------------------- input
+
+/// The bytes of one sequence, read front to back; zeros once they run out.
+pub struct Source<'a> {
+    bytes: &'a [u8],
+}
+
+impl<'a> Source<'a> {
+    pub fn new(bytes: &'a [u8]) -> Self {
+        Source { bytes }
+    }
+    pub fn is_empty(&self) -> bool {
+        self.bytes.is_empty()
+    }
+    pub fn u8(&mut self) -> u8 {
+        match self.bytes.split_first() {
+            Some((&b, rest)) => {
+                self.bytes = rest;
+                b
+            }
+            None => 0,
+        }
+    }
+    pub fn u32(&mut self) -> u32 {
+        u32::from_le_bytes([self.u8(), self.u8(), self.u8(), self.u8()])
+    }
+    pub fn u64(&mut self) -> u64 {
+        (self.u32() as u64) << 32 | self.u32() as u64
+    }
+    /// One of `n` choices.
+    pub fn pick(&mut self, n: usize) -> usize {
+        self.u8() as usize % n
+    }
+    /// True with probability about k/256.
+    pub fn chance(&mut self, k: u8) -> bool {
+        self.u8() < k
+    }
+}
+
+/// Reals that break things: specials, extremes, denormals, and ordinary ones.
+const NASTY_REALS: [f64; 24] = [
+    f64::NAN,
+    -f64::NAN,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    f64::MAX,
+    f64::MIN,
+    1e308,
+    -1e308,
+    1e200,
+    1e-200,
+    f64::MIN_POSITIVE,
+    5e-324,
+    -5e-324,
+    2.2e-310,
+    0.0,
+    -0.0,
+    1.0,
+    -1.0,
+    -1e-3,
+    1e-3,
+    5.0,
+    -5.0,
+    1e15,
+    0.999_999_999,
+];
+
+const NASTY_INTS: [i32; 10] = [0, 1, 2, 3, 6, 7, -1, i32::MIN, i32::MAX, 100];
+
+fn real(src: &mut Source) -> f64 {
+    match src.pick(4) {
+        0 => f64::from_bits(src.u64()),
+        _ => NASTY_REALS[src.pick(NASTY_REALS.len())],
+    }
+}
+
+/// A value near a variable's start value (or 1), inside its range when it
+/// has one: keeps sequences on the paths where the model really computes.
+fn sane_real(src: &mut Source, v: &Variable) -> f64 {
+    use converting_span::fmi2::description::Start;
+    let base = match v.start {
+        Start::Real(x) if x != 0.0 => x,
+        _ => 1e-3,
+    };
+    let x = base * (0.5 + src.u8() as f64 / 170.0);
+    if v.range.contains(x) {
+        x
+    } else {
+        base
+    }
+}
+
+fn integer(src: &mut Source, v: Option<&Variable>) -> i32 {
+    match (src.pick(3), v.map(|v| v.kind)) {
+        (0, Some(Kind::Enumeration { values, .. })) => values[src.pick(values.len())],
+        (1, _) => NASTY_INTS[src.pick(NASTY_INTS.len())],
+        _ => src.u32() as i32,
+    }
+}
+
+fn boolean(src: &mut Source) -> i32 {
+    match src.pick(4) {
+        0 | 1 => src.pick(2) as i32,
+        2 => [2, -1, i32::MIN, i32::MAX, 255][src.pick(5)],
+        _ => src.u32() as i32,
+    }
+}
+
+/// A value reference: mostly of the wanted kind, sometimes any variable's,
+/// sometimes unknown.
+fn vr(src: &mut Source, want: impl std::ops::Fn(&Variable) -> bool) -> u32 {
+    let d = desc();
+    match src.pick(8) {
+        0 => src.u32(),
+        1 => [0, u32::MAX, d.vr_index.len() as u32, 1000][src.pick(4)],
+        2 => d.variables[src.pick(d.variables.len())].vr,
+        _ => {
+            let wanted: Vec<&Variable> = d.variables.iter().filter(|v| want(v)).collect();
+            if wanted.is_empty() {
+                src.u32()
+            } else {
+                wanted[src.pick(wanted.len())].vr
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------- oracle
+
+/// The co-simulation states of FMI 2.0 that this FMU can be in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum St {
+    Instantiated,
+    Init,
+    StepComplete,
+    StepFailed,
+    Terminated,
+    Error,
+}
+
+impl St {
+    /// The serialized phase byte (documented order of src/fmi2/snapshot.rs).
+    fn from_byte(b: u8) -> Option<St> {
+        [
+            St::Instantiated,
+            St::Init,
+            St::StepComplete,
+            St::StepFailed,
+            St::Terminated,
+            St::Error,
+        ]
+        .get(b as usize)
+        .copied()
+    }
+}
+
+/// Where the standard allows each call (FMI 2.0 co-simulation state table;
+/// stepInProgress and stepCanceled never occur: steps are synchronous).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fn {
+    SetDebugLogging,
+    SetupExperiment,
+    EnterInit,
+    ExitInit,
+    Terminate,
+    Reset,
+    Get,
+    Set,
+    StateOp,
+    GetDirectionalDerivative,
+    ModelExchange,
+    SetRealInputDerivatives,
+    GetRealOutputDerivatives,
+    DoStep,
+    CancelStep,
+    GetStatus,
+}
+
+fn allowed(f: Fn, s: St) -> bool {
+    use St::*;
+    match f {
+        Fn::SetDebugLogging | Fn::Reset | Fn::StateOp => true,
+        Fn::SetupExperiment | Fn::EnterInit => s == Instantiated,
+        Fn::ExitInit => s == Init,
+        Fn::Terminate => matches!(s, StepComplete | StepFailed),
+        Fn::Get | Fn::GetDirectionalDerivative => s != Instantiated,
+        Fn::Set | Fn::SetRealInputDerivatives => matches!(s, Instantiated | Init | StepComplete),
+        Fn::GetRealOutputDerivatives => matches!(s, StepComplete | StepFailed | Terminated | Error),
+        Fn::DoStep => s == StepComplete,
+        Fn::ModelExchange | Fn::CancelStep => false,
+        Fn::GetStatus => matches!(s, StepComplete | StepFailed | Terminated),
+    }
+}
+
+/// May `v` be set in state `s`? FMI 2.0, section 2.2.7, for co-simulation.
+fn settable(v: &Variable, s: St) -> bool {
+    if v.variability == Variability::Constant {
+        return false;
+    }
+    match v.causality {
+        Causality::Input => true,
+        Causality::Parameter => match s {
+            St::Instantiated => matches!(v.initial, Initial::Exact | Initial::Approx),
+            St::Init => v.initial == Initial::Exact,
+            _ => v.variability == Variability::Tunable,
+        },
+        _ => false,
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Family {
+    Real,
+    Integer,
+    Boolean,
+    String,
+}
+
+fn family(v: &Variable) -> Family {
+    match v.kind {
+        Kind::Real => Family::Real,
+        Kind::Integer | Kind::Enumeration { .. } => Family::Integer,
+        Kind::Boolean => Family::Boolean,
+        Kind::String => Family::String,
+    }
+}
+
+fn var(vr: u32, f: Family) -> Option<&'static Variable> {
+    desc().variable(vr).filter(|v| family(v) == f)
+}
+
+/// What the oracle knows of an FMU state it holds.
+#[derive(Clone, Debug)]
+struct StateInfo {
+    ptr: usize,
+    st: St,
+    time: f64,
+    /// Values of the instance when it was saved, as far as the oracle knows.
+    values: Values,
+    initialized: bool,
+}
+
+/// How far the oracle can predict model-dependent outcomes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Values {
+    /// Start values and a plain experiment: initialization and moderate
+    /// steps must succeed.
+    Pristine,
+    /// Changed, all with moderate magnitudes.
+    Moderate,
+    /// Some value of magnitude above 1e100 or below 1e-100 was accepted.
+    Extreme,
+    /// Restored from bytes forged by the harness (checksum recomputed).
+    Forged,
+}
+
+impl Values {
+    fn worsen(self, to: Values) -> Values {
+        let rank = |v: Values| v as u8;
+        if rank(to) > rank(self) {
+            to
+        } else {
+            self
+        }
+    }
+}
+
+fn magnitude(x: f64) -> Values {
+    let a = x.abs();
+    if a == 0.0 || (1e-100..=1e100).contains(&a) {
+        Values::Moderate
+    } else {
+        Values::Extreme
+    }
+}
+
+/// One instance slot of a sequence.
+struct Slot {
+    c: fmi2Component,
+    log: Box<Log>,
+    _functions: Box<fmi2CallbackFunctions>,
+    name: String,
+    st: St,
+    time: f64,
+    values: Values,
+    /// Initialization ended since the instance was created or reset.
+    initialized: bool,
+    poisoned: bool,
+    armed: bool,
+    /// Which of logStatusWarning/Discard/Error and logAll are on.
+    status_log: [bool; 3],
+    log_all: bool,
+    states: Vec<StateInfo>,
+}
+
+/// A serialized state the harness got from the FMU.
+#[derive(Clone)]
+struct Blob {
+    bytes: Vec<u8>,
+    info: StateInfo,
+}
+
+/// A broken rule: what was called, what came back, what was expected.
+#[derive(Debug, Clone)]
+pub struct Violation(pub String);
+
+/// A non-finite output of a known kind (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Finding {
+    OverflowAfterExtremeValues,
+    ForgedState,
+    /// fmi2GetReal in the error state of an instance whose initialization
+    /// never ended returns outputs computed from the unset state (inf).
+    OutputsOfUninitializedInstance,
+}
+
+/// What one sequence did.
+#[derive(Default, Debug, Clone)]
+pub struct Outcome {
+    pub calls: u64,
+    /// Calls per answered status (OK, Warning, Discard, Error).
+    pub statuses: [u64; 4],
+    pub steps_ok: u64,
+    pub panics_caught: u64,
+    pub deserialized_ok: u64,
+    pub findings: Vec<(Finding, String)>,
+    /// Calls made on an instance, per state it was in (St order).
+    pub by_state: [u64; 6],
+}
+
+struct Run {
+    slots: [Option<Slot>; 2],
+    /// Pointers of FMU states that were freed (for double frees).
+    dead_states: Vec<usize>,
+    blobs: Vec<Blob>,
+    /// Readable memory that is no instance (a foreign component).
+    foreign: Box<[u64; 8]>,
+    out: Outcome,
+    /// Description of the call under way, for messages.
+    what: String,
+    /// FUZZ_TRACE set: print every call (for replaying one sequence).
+    trace: bool,
+}
+
+const STEP_TOLERANCE: f64 = 1e-13;
+
+fn fail<T>(msg: String) -> Result<T, Violation> {
+    Err(Violation(msg))
+}
+
+impl Run {
+    fn check_status(&mut self, s: i32, allowed: &[i32]) -> Result<(), Violation> {
+        self.out.calls += 1;
+        if self.trace {
+            eprintln!("{} -> {}", self.what, status_name(s));
+        }
+        if (0..=3).contains(&s) {
+            self.out.statuses[s as usize] += 1;
+        }
+        if !allowed.contains(&s) {
+            let names: Vec<&str> = allowed.iter().map(|&a| status_name(a)).collect();
+            return fail(format!(
+                "{}: returned {} ({s}), expected one of {names:?}",
+                self.what,
+                status_name(s)
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks the log lines of slot `i` after a call that returned `s`, and
+    /// moves the oracle's state on an error.
+    fn after(&mut self, i: usize, s: i32) -> Result<(), Violation> {
+        let what = self.what.clone();
+        let slot = self.slots[i].as_mut().expect("slot");
+        let lines = slot.log.take();
+        let malformed = std::mem::take(&mut *slot.log.malformed.lock().unwrap());
+        if !malformed.is_empty() {
+            return fail(format!("{what}: malformed logger calls {malformed:?}"));
+        }
+        for l in &lines {
+            if !desc().log_categories.contains(&l.category.as_str()) {
+                return fail(format!("{what}: log line with unknown category {l:?}"));
+            }
+            if l.instance != slot.name {
+                return fail(format!(
+                    "{what}: log line names instance {:?}, not {:?}",
+                    l.instance, slot.name
+                ));
+            }
+        }
+        if (WARNING..=ERROR).contains(&s) {
+            let on = slot.log_all || slot.status_log[(s - WARNING) as usize];
+            if on && !lines.iter().any(|l| l.status == s) {
+                return fail(format!(
+                    "{what}: returned {} without a log line saying why: {lines:?}",
+                    status_name(s)
+                ));
+            }
+        }
+        if s == ERROR {
+            slot.st = St::Error;
+        }
+        Ok(())
+    }
+
+    fn slot(&self, i: usize) -> &Slot {
+        self.slots[i].as_ref().expect("slot")
+    }
+
+    fn slot_mut(&mut self, i: usize) -> &mut Slot {
+        self.slots[i].as_mut().expect("slot")
+    }
+
+    fn finite(&mut self, i: usize, x: f64, name: &str) -> Result<(), Violation> {
+        if x.is_finite() {
+            return Ok(());
+        }
+        let (values, initialized) = (self.slot(i).values, self.slot(i).initialized);
+        let finding = match values {
+            _ if !initialized => Finding::OutputsOfUninitializedInstance,
+            Values::Forged => Finding::ForgedState,
+            Values::Extreme => Finding::OverflowAfterExtremeValues,
+            _ => {
+                return fail(format!(
+                    "{}: {name} = {x} is not finite (values: {values:?})",
+                    self.what
+                ))
+            }
+        };
+        self.out
+            .findings
+            .push((finding, format!("{}: {name} = {x}", self.what)));
+        Ok(())
+    }
+}
+
+/// Runs one sequence. `Err` is a broken rule.
+pub fn run(bytes: &[u8]) -> Result<Outcome, Violation> {
+    let mut r = Run {
+        slots: [None, None],
+        dead_states: Vec::new(),
+        blobs: Vec::new(),
+        foreign: Box::new([0x5a5a_5a5a_5a5a_5a5a; 8]),
+        out: Outcome::default(),
+        what: String::new(),
+        trace: std::env::var_os("FUZZ_TRACE").is_some(),
+    };
+    let mut src = Source::new(bytes);
+    let result = (|| {
+        let mut ops = 0;
+        while !src.is_empty() && ops < 400 {
+            ops += 1;
+            step(&mut r, &mut src)?;
+        }
+        Ok(())
+    })();
+    // Free what is left, whatever happened.
+    for slot in r.slots.iter_mut() {
+        if let Some(s) = slot.take() {
+            unsafe { fmi2FreeInstance(s.c) };
+        }
+    }
+    result.map(|()| r.out)
+}
+
+fn new_slot(
+    name: String,
+    c: fmi2Component,
+    log: Box<Log>,
+    functions: Box<fmi2CallbackFunctions>,
+    logging_on: bool,
+) -> Slot {
+    Slot {
+        c,
+        log,
+        _functions: functions,
+        name,
+        st: St::Instantiated,
+        time: 0.0,
+        values: Values::Pristine,
+        initialized: false,
+        poisoned: false,
+        armed: false,
+        status_log: [true; 3],
+        log_all: false,
+        states: Vec::new(),
+    }
+    .with_logging(logging_on)
+}
+
+impl Slot {
+    fn with_logging(self, _logging_on: bool) -> Slot {
+        // logStatus* are on from the start whatever loggingOn says; logAll is off.
+        self
+    }
+}
+
+/// A component pointer for a call: mostly a live instance of a slot.
+enum Target {
+    Slot(usize),
+    Null,
+    Foreign,
+}
+
+fn target(r: &Run, src: &mut Source) -> Target {
+    let i = src.pick(2);
+    match src.pick(32) {
+        0 => Target::Null,
+        1 => Target::Foreign,
+        _ if r.slots[i].is_some() => Target::Slot(i),
+        _ if r.slots[1 - i].is_some() => Target::Slot(1 - i),
+        _ => Target::Null,
+    }
+}
+
+fn component(r: &Run, t: &Target) -> fmi2Component {
+    match t {
+        Target::Slot(i) => r.slot(*i).c,
+        Target::Null => null_mut(),
+        Target::Foreign => r.foreign.as_ptr() as fmi2Component,
+    }
+}
+
+/// Common frame of calls that take an instance: a call on NULL or a
+/// foreign pointer must answer fmi2Error; on an instance the expected
+/// status comes from `expect` (given the slot), unless the call is not
+/// allowed in the current state or the instance is poisoned.
+fn call_on<F, E>(
+    r: &mut Run,
+    t: Target,
+    f: Fn,
+    name: &str,
+    expect: E,
+    call: F,
+) -> Result<Option<(usize, i32)>, Violation>
+where
+    F: std::ops::FnOnce(fmi2Component) -> i32,
+    E: std::ops::FnOnce(&Slot) -> Vec<i32>,
+{
+    let c = component(r, &t);
+    let i = match t {
+        Target::Slot(i) => i,
+        _ => {
+            r.what = format!(
+                "{name} on a {} component",
+                if c.is_null() { "NULL" } else { "foreign" }
+            );
+            let s = call(c);
+            r.check_status(s, &[ERROR])?;
+            return Ok(None);
+        }
+    };
+    let (st, poisoned) = (r.slot(i).st, r.slot(i).poisoned);
+    r.out.by_state[st as usize] += 1;
+    r.what = format!(
+        "{name} [state {st:?}{}]",
+        if poisoned { ", poisoned" } else { "" }
+    );
+    let slot = r.slot(i);
+    let expected = if slot.poisoned && f != Fn::Reset {
+        vec![ERROR]
+    } else if !allowed(f, slot.st) {
+        vec![ERROR]
+    } else {
+        expect(slot)
+    };
+    let s = call(c);
+    if let Err(v) = r.check_status(s, &expected) {
+        let log: Vec<String> = r
+            .slot(i)
+            .log
+            .take()
+            .into_iter()
+            .map(|l| l.message)
+            .collect();
+        return fail(format!("{}; the FMU logged {log:?}", v.0));
+    }
+    r.after(i, s)?;
+    Ok(Some((i, s)))
+}
+
+/// An array of `n` elements for the FMU to read, or NULL.
+fn maybe_null<T>(src: &mut Source, v: &[T]) -> *const T {
+    if src.chance(12) {
+        std::ptr::null()
+    } else {
+        v.as_ptr()
+    }
+}
+
+fn step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let op = src.u8();
+    // Lifecycle and stepping calls are drawn more often than the rest, so
+    // that sequences get past initialization and into stepping.
+    match op % 64 {
+        0..=1 => op_instantiate(r, src),
+        2 => op_free_instance(r, src),
+        3 => op_setup(r, src),
+        4 => op_simple(r, src, Fn::EnterInit),
+        5 => op_simple(r, src, Fn::ExitInit),
+        6 => op_simple(r, src, Fn::Terminate),
+        7 => op_simple(r, src, Fn::Reset),
+        8..=10 => op_get(r, src, Family::Real),
+        11 => op_get(r, src, Family::Integer),
+        12 => op_get(r, src, Family::Boolean),
+        13 => op_get(r, src, Family::String),
+        14..=18 => op_set_real(r, src),
+        19..=20 => op_set_int(r, src, Family::Integer),
+        21..=22 => op_set_int(r, src, Family::Boolean),
+        23 => op_set_string(r, src),
+        24..=26 => op_get_state(r, src),
+        27..=28 => op_set_state(r, src),
+        29 => op_free_state(r, src),
+        30..=31 => op_serialize(r, src),
+        32..=34 => op_deserialize(r, src),
+        35..=40 => op_do_step(r, src),
+        41..=42 => op_status(r, src),
+        43 => op_unsupported(r, src),
+        44..=45 => op_input_derivatives(r, src),
+        46 => op_debug_logging(r, src),
+        47 => op_arm_panic(r, src),
+        // A quarter of the operations are legal lifecycle moves.
+        _ => op_lifecycle_macro(r, src),
+    }
+}
+
+fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let i = src.pick(2);
+    if let Some(old) = r.slots[i].take() {
+        unsafe { fmi2FreeInstance(old.c) };
+    }
+    let log = Box::<Log>::default();
+    let functions = Box::new(callbacks(&log));
+    let right_type = !src.chance(16);
+    let fmu_type = if right_type {
+        1
+    } else {
+        [0, 2, -1, i32::MAX][src.pick(4)]
+    };
+    let guid_kind = src.pick(24);
+    let name = format!("fuzz{}", src.u8());
+    let name_c = CString::new(name.clone()).unwrap();
+    let guid_c = CString::new(match guid_kind {
+        0 => "{00000000-0000-0000-0000-000000000000}".to_string(),
+        1 => String::new(),
+        _ => guid().to_string(),
+    })
+    .unwrap();
+    let guid_ptr = if guid_kind == 2 && src.chance(128) {
+        std::ptr::null()
+    } else {
+        guid_c.as_ptr()
+    };
+    let guid_ok = guid_kind >= 2 && !guid_ptr.is_null();
+    let null_functions = src.chance(8);
+    let null_name = src.chance(8);
+    let resources = CString::new("file:///nonexistent/resources").unwrap();
+    let logging_on = boolean(src);
+    let c = unsafe {
+        fmi2Instantiate(
+            if null_name {
+                std::ptr::null()
+            } else {
+                name_c.as_ptr()
+            },
+            fmu_type,
+            guid_ptr,
+            if src.chance(128) {
+                std::ptr::null()
+            } else {
+                resources.as_ptr()
+            },
+            if null_functions {
+                std::ptr::null()
+            } else {
+                &*functions
+            },
+            boolean(src),
+            logging_on,
+        )
+    };
+    r.what = format!(
+        "fmi2Instantiate(type {fmu_type}, guid ok {guid_ok}, functions NULL {null_functions})"
+    );
+    r.out.calls += 1;
+    let should = right_type && guid_ok && !null_functions;
+    if c.is_null() == should {
+        if !c.is_null() {
+            unsafe { fmi2FreeInstance(c) };
+        }
+        return fail(format!("{}: returned {c:?}", r.what));
+    }
+    let lines = log.take();
+    if c.is_null() {
+        if !null_functions && !lines.iter().any(|l| l.status == ERROR) {
+            return fail(format!("{}: refused without saying why: {lines:?}", r.what));
+        }
+        return Ok(());
+    }
+    let name = if null_name { String::new() } else { name };
+    r.slots[i] = Some(new_slot(name, c, log, functions, logging_on != 0));
+    Ok(())
+}
+
+fn op_free_instance(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    match src.pick(6) {
+        0 => unsafe { fmi2FreeInstance(null_mut()) },
+        1 => unsafe { fmi2FreeInstance(r.foreign.as_ptr() as fmi2Component) },
+        k => {
+            if let Some(slot) = r.slots[k % 2].take() {
+                // Its states go with it: their pointers are dead from now on.
+                r.dead_states.extend(slot.states.iter().map(|s| s.ptr));
+                unsafe { fmi2FreeInstance(slot.c) };
+            }
+        }
+    }
+    r.out.calls += 1;
+    Ok(())
+}
+
+fn op_setup(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let sane = src.chance(160);
+    let (tol_def, tol, start, stop_def, stop) = if sane {
+        (src.pick(2) as i32, 1e-6, 0.0, src.pick(2) as i32, 10.0)
+    } else {
+        (boolean(src), real(src), real(src), boolean(src), real(src))
+    };
+    let bad = !start.is_finite()
+        || (stop_def != 0 && !(stop.is_finite() && stop >= start))
+        || (tol_def != 0 && !(tol.is_finite() && tol > 0.0));
+    let res = call_on(
+        r,
+        t,
+        Fn::SetupExperiment,
+        &format!("fmi2SetupExperiment({tol_def}, {tol:e}, {start:e}, {stop_def}, {stop:e})"),
+        |_| if bad { vec![ERROR] } else { vec![OK] },
+        |c| unsafe { fmi2SetupExperiment(c, tol_def, tol, start, stop_def, stop) },
+    )?;
+    if let Some((i, OK)) = res {
+        let slot = r.slot_mut(i);
+        slot.time = start;
+        if !sane {
+            slot.values = slot
+                .values
+                .worsen(magnitude(start))
+                .worsen(Values::Moderate);
+            if tol_def != 0 {
+                slot.values = slot.values.worsen(magnitude(tol));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_simple(r: &mut Run, src: &mut Source, f: Fn) -> Result<(), Violation> {
+    let t = target(r, src);
+    let (name, call): (&str, unsafe extern "C" fn(fmi2Component) -> i32) = match f {
+        Fn::EnterInit => ("fmi2EnterInitializationMode", fmi2EnterInitializationMode),
+        Fn::ExitInit => ("fmi2ExitInitializationMode", fmi2ExitInitializationMode),
+        Fn::Terminate => ("fmi2Terminate", fmi2Terminate),
+        _ => ("fmi2Reset", fmi2Reset),
+    };
+    let res = call_on(
+        r,
+        t,
+        f,
+        name,
+        |slot| match f {
+            // Ending initialization computes with the values set so far.
+            Fn::ExitInit if slot.values != Values::Pristine => vec![OK, ERROR],
+            _ => vec![OK],
+        },
+        |c| unsafe { call(c) },
+    )?;
+    if let Some((i, OK)) = res {
+        let slot = r.slot_mut(i);
+        match f {
+            Fn::EnterInit => slot.st = St::Init,
+            Fn::ExitInit => {
+                slot.st = St::StepComplete;
+                slot.initialized = true;
+            }
+            Fn::Terminate => slot.st = St::Terminated,
+            _ => {
+                slot.st = St::Instantiated;
+                slot.time = 0.0;
+                slot.values = Values::Pristine;
+                slot.initialized = false;
+                slot.poisoned = false;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
+    let t = target(r, src);
+    let n = src.pick(6);
+    let vrs: Vec<u32> = (0..n).map(|_| vr(src, |v| family(v) == fam)).collect();
+    let null_vr = n > 0 && src.chance(10);
+    let null_values = n > 0 && src.chance(10);
+    let known = vrs.iter().all(|&x| var(x, fam).is_some());
+    let name = format!(
+        "fmi2Get{}({vrs:?}{}{})",
+        match fam {
+            Family::Real => "Real",
+            Family::Integer => "Integer",
+            Family::Boolean => "Boolean",
+            Family::String => "String",
+        },
+        if null_vr { ", vr NULL" } else { "" },
+        if null_values { ", value NULL" } else { "" }
+    );
+    let mut reals = vec![f64::NAN; n];
+    let mut ints = vec![-7i32; n];
+    let mut strs: Vec<fmi2String> = vec![std::ptr::null(); n];
+    let vr_ptr = if null_vr {
+        std::ptr::null()
+    } else {
+        vrs.as_ptr()
+    };
+    let res = call_on(
+        r,
+        t,
+        Fn::Get,
+        &name,
+        |slot| {
+            if null_vr || null_values || !known {
+                vec![ERROR]
+            } else if slot.st == St::Init && slot.values != Values::Pristine {
+                // In initialization mode the outputs are computed first,
+                // which fails if the values set so far are inconsistent.
+                vec![OK, ERROR]
+            } else {
+                vec![OK]
+            }
+        },
+        |c| unsafe {
+            match fam {
+                Family::Real => fmi2GetReal(
+                    c,
+                    vr_ptr,
+                    n,
+                    if null_values {
+                        null_mut()
+                    } else {
+                        reals.as_mut_ptr()
+                    },
+                ),
+                Family::Integer => fmi2GetInteger(
+                    c,
+                    vr_ptr,
+                    n,
+                    if null_values {
+                        null_mut()
+                    } else {
+                        ints.as_mut_ptr()
+                    },
+                ),
+                Family::Boolean => fmi2GetBoolean(
+                    c,
+                    vr_ptr,
+                    n,
+                    if null_values {
+                        null_mut()
+                    } else {
+                        ints.as_mut_ptr()
+                    },
+                ),
+                Family::String => fmi2GetString(
+                    c,
+                    vr_ptr,
+                    n,
+                    if null_values {
+                        null_mut()
+                    } else {
+                        strs.as_mut_ptr()
+                    },
+                ),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        for (k, &x) in vrs.iter().enumerate() {
+            let v = var(x, fam).expect("known");
+            match fam {
+                Family::Real => r.finite(i, reals[k], v.name)?,
+                Family::Boolean if !(ints[k] == 0 || ints[k] == 1) => {
+                    return fail(format!(
+                        "{}: {} = {} is not a Boolean",
+                        r.what, v.name, ints[k]
+                    ))
+                }
+                Family::Integer => {
+                    if let Kind::Enumeration { values, .. } = v.kind {
+                        if !values.contains(&ints[k]) && r.slot(i).values != Values::Forged {
+                            return fail(format!(
+                                "{}: {} = {} is not an enumeration value",
+                                r.what, v.name, ints[k]
+                            ));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Frame of the three numeric setters: checks every (vr, value) pair.
+fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let n = src.pick(5);
+    let mut vrs = Vec::new();
+    let mut values = Vec::new();
+    let sane = src.chance(150);
+    for _ in 0..n {
+        let x = vr(src, |v| {
+            family(v) == Family::Real
+                && matches!(v.causality, Causality::Input | Causality::Parameter)
+        });
+        let value = match var(x, Family::Real) {
+            Some(v) if sane => sane_real(src, v),
+            _ => real(src),
+        };
+        vrs.push(x);
+        values.push(value);
+    }
+    let null_vr = n > 0 && src.chance(8);
+    let null_values = n > 0 && src.chance(8);
+    let vr_ptr = if null_vr {
+        std::ptr::null()
+    } else {
+        vrs.as_ptr()
+    };
+    let value_ptr = if null_values {
+        std::ptr::null()
+    } else {
+        values.as_ptr()
+    };
+    let pairs: Vec<(u32, f64)> = vrs.iter().copied().zip(values.iter().copied()).collect();
+    let res = call_on(
+        r,
+        t,
+        Fn::Set,
+        &format!(
+            "fmi2SetReal({pairs:?}{}{})",
+            if null_vr { ", vr NULL" } else { "" },
+            if null_values { ", value NULL" } else { "" }
+        ),
+        |slot| {
+            let ok = !null_vr
+                && !null_values
+                && pairs.iter().all(|&(x, value)| match var(x, Family::Real) {
+                    Some(v) => {
+                        settable(v, slot.st)
+                            && value.is_finite()
+                            && (v.causality != Causality::Input || v.range.contains(value))
+                    }
+                    None => false,
+                });
+            vec![if ok { OK } else { ERROR }]
+        },
+        |c| unsafe { fmi2SetReal(c, vr_ptr, n, value_ptr) },
+    )?;
+    if let Some((i, OK)) = res {
+        let slot = r.slot_mut(i);
+        for &(_, value) in &pairs {
+            slot.values = slot
+                .values
+                .worsen(Values::Moderate)
+                .worsen(magnitude(value));
+        }
+    }
+    Ok(())
+}
+
+fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
+    let t = target(r, src);
+    let n = src.pick(4);
+    let mut vrs = Vec::new();
+    let mut values = Vec::new();
+    for _ in 0..n {
+        let x = vr(src, |v| {
+            family(v) == fam && v.causality == Causality::Parameter
+        });
+        vrs.push(x);
+        values.push(if fam == Family::Boolean {
+            boolean(src)
+        } else {
+            integer(src, var(x, fam))
+        });
+    }
+    let null_vr = n > 0 && src.chance(8);
+    let null_values = n > 0 && src.chance(8);
+    let vr_ptr = if null_vr {
+        std::ptr::null()
+    } else {
+        vrs.as_ptr()
+    };
+    let value_ptr = if null_values {
+        std::ptr::null()
+    } else {
+        values.as_ptr()
+    };
+    let pairs: Vec<(u32, i32)> = vrs.iter().copied().zip(values.iter().copied()).collect();
+    let name = if fam == Family::Boolean {
+        "fmi2SetBoolean"
+    } else {
+        "fmi2SetInteger"
+    };
+    let res = call_on(
+        r,
+        t,
+        Fn::Set,
+        &format!(
+            "{name}({pairs:?}{}{})",
+            if null_vr { ", vr NULL" } else { "" },
+            if null_values { ", value NULL" } else { "" }
+        ),
+        |slot| {
+            let ok = !null_vr
+                && !null_values
+                && pairs.iter().all(|&(x, value)| match var(x, fam) {
+                    Some(v) => {
+                        settable(v, slot.st)
+                            && match v.kind {
+                                Kind::Boolean => value == 0 || value == 1,
+                                Kind::Enumeration { values, .. } => values.contains(&value),
+                                _ => true,
+                            }
+                    }
+                    None => false,
+                });
+            vec![if ok { OK } else { ERROR }]
+        },
+        |c| unsafe {
+            if fam == Family::Boolean {
+                fmi2SetBoolean(c, vr_ptr, n, value_ptr)
+            } else {
+                fmi2SetInteger(c, vr_ptr, n, value_ptr)
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        if n > 0 {
+            let slot = r.slot_mut(i);
+            slot.values = slot.values.worsen(Values::Moderate);
+        }
+    }
+    Ok(())
+}
+
+fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let n = src.pick(3);
+    let vrs: Vec<u32> = (0..n)
+        .map(|_| vr(src, |v| family(v) == Family::String))
+        .collect();
+    let text = CString::new("a string").unwrap();
+    let values: Vec<fmi2String> = (0..n)
+        .map(|_| {
+            if src.chance(64) {
+                std::ptr::null()
+            } else {
+                text.as_ptr()
+            }
+        })
+        .collect();
+    let vr_ptr = maybe_null(src, &vrs);
+    let value_ptr = maybe_null(src, &values);
+    let ok_args = n == 0 || (!vr_ptr.is_null() && !value_ptr.is_null());
+    let known = vrs
+        .iter()
+        .all(|&x| var(x, Family::String).is_some_and(|v| v.causality != Causality::Output));
+    call_on(
+        r,
+        t,
+        Fn::Set,
+        &format!("fmi2SetString({vrs:?})"),
+        |_| {
+            if ok_args && (n == 0 || known) {
+                vec![OK, ERROR]
+            } else {
+                vec![ERROR]
+            }
+        },
+        |c| unsafe { fmi2SetString(c, vr_ptr, n, value_ptr) },
+    )?;
+    Ok(())
+}
+
+/// A state pointer to hand to the FMU: one of this slot's, another slot's,
+/// a freed one, NULL, or garbage (never dereferenced unless it is a live
+/// state of the instance: the FMU looks it up first).
+fn any_state(r: &Run, src: &mut Source, i: Option<usize>) -> usize {
+    let own: Vec<usize> = i
+        .and_then(|i| r.slots[i].as_ref())
+        .map(|s| s.states.iter().map(|x| x.ptr).collect())
+        .unwrap_or_default();
+    let other: Vec<usize> = i
+        .and_then(|i| r.slots[1 - i].as_ref())
+        .map(|s| s.states.iter().map(|x| x.ptr).collect())
+        .unwrap_or_default();
+    match src.pick(10) {
+        0 => 0,
+        1 => r.foreign.as_ptr() as usize,
+        2 if !other.is_empty() => other[src.pick(other.len())],
+        3 if !r.dead_states.is_empty() => r.dead_states[src.pick(r.dead_states.len())],
+        4 => src.u64() as usize | 1,
+        _ if !own.is_empty() => own[src.pick(own.len())],
+        _ => 0,
+    }
+}
+
+fn slot_of(t: &Target) -> Option<usize> {
+    match t {
+        Target::Slot(i) => Some(*i),
+        _ => None,
+    }
+}
+
+fn owns(r: &Run, i: usize, p: usize) -> Option<usize> {
+    r.slot(i).states.iter().position(|s| s.ptr == p && p != 0)
+}
+
+fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let initial = if src.chance(180) {
+        0
+    } else {
+        any_state(r, src, i)
+    };
+    let null_slot = src.chance(8);
+    let mut slot_value = initial as fmi2FMUstate;
+    let slot_ptr: *mut fmi2FMUstate = if null_slot {
+        null_mut()
+    } else {
+        &mut slot_value
+    };
+    let owned = i.and_then(|i| owns(r, i, initial));
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!(
+            "fmi2GetFMUstate(*state = {initial:#x}{})",
+            if null_slot { ", state NULL" } else { "" }
+        ),
+        |_| {
+            vec![if !null_slot && (initial == 0 || owned.is_some()) {
+                OK
+            } else {
+                ERROR
+            }]
+        },
+        |c| unsafe { fmi2GetFMUstate(c, slot_ptr) },
+    )?;
+    if let Some((i, s)) = res {
+        let got = slot_value as usize;
+        if s != OK {
+            if got != initial {
+                return fail(format!("{}: failed but changed *state to {got:#x}", r.what));
+            }
+            return Ok(());
+        }
+        if got == 0 || (initial != 0 && got != initial) {
+            return fail(format!("{}: returned state {got:#x}", r.what));
+        }
+        let slot = r.slot_mut(i);
+        let info = StateInfo {
+            ptr: got,
+            st: slot.st,
+            time: slot.time,
+            values: slot.values,
+            initialized: slot.initialized,
+        };
+        match owned {
+            Some(k) => slot.states[k] = info,
+            None => {
+                r.dead_states.retain(|&p| p != got);
+                r.slot_mut(i).states.push(info);
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let p = any_state(r, src, i);
+    let owned = i.and_then(|i| owns(r, i, p));
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!("fmi2SetFMUstate({p:#x})"),
+        |_| vec![if owned.is_some() { OK } else { ERROR }],
+        |c| unsafe { fmi2SetFMUstate(c, p as fmi2FMUstate) },
+    )?;
+    if let (Some((i, OK)), Some(k)) = (res, owned) {
+        let slot = r.slot_mut(i);
+        let info = slot.states[k].clone();
+        slot.st = info.st;
+        slot.time = info.time;
+        slot.values = info.values;
+        slot.initialized = info.initialized;
+        // A restored state continues where it was saved.
+        if allowed(Fn::GetStatus, info.st) {
+            let mut t = f64::NAN;
+            let s = unsafe { fmi2GetRealStatus(slot.c, 2, &mut t) };
+            slot.log.take();
+            if s != OK || t.to_bits() != info.time.to_bits() {
+                return fail(format!(
+                    "{}: after restoring, last successful time is {t} ({s}), saved {}",
+                    r.what, info.time
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_free_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let p = any_state(r, src, i);
+    let null_slot = src.chance(8);
+    let mut slot_value = p as fmi2FMUstate;
+    let slot_ptr: *mut fmi2FMUstate = if null_slot {
+        null_mut()
+    } else {
+        &mut slot_value
+    };
+    let owned = i.and_then(|i| owns(r, i, p));
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!(
+            "fmi2FreeFMUstate(*state = {p:#x}{})",
+            if null_slot { ", state NULL" } else { "" }
+        ),
+        |_| {
+            vec![if !null_slot && (p == 0 || owned.is_some()) {
+                OK
+            } else {
+                ERROR
+            }]
+        },
+        |c| unsafe { fmi2FreeFMUstate(c, slot_ptr) },
+    )?;
+    if let Some((i, s)) = res {
+        if s == OK {
+            if !slot_value.is_null() {
+                return fail(format!(
+                    "{}: *state is {slot_value:?} after the free, not NULL",
+                    r.what
+                ));
+            }
+            if let Some(k) = owned {
+                r.slot_mut(i).states.remove(k);
+                r.dead_states.push(p);
+            }
+        } else if slot_value as usize != p {
+            return fail(format!("{}: failed but changed *state", r.what));
+        }
+    }
+    Ok(())
+}
+
+fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let p = any_state(r, src, i);
+    let owned = i.and_then(|i| owns(r, i, p));
+    let null_size = src.chance(10);
+    let mut size = usize::MAX;
+    let size_ptr: *mut usize = if null_size { null_mut() } else { &mut size };
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!("fmi2SerializedFMUstateSize({p:#x})"),
+        |_| {
+            vec![if owned.is_some() && !null_size {
+                OK
+            } else {
+                ERROR
+            }]
+        },
+        |c| unsafe { fmi2SerializedFMUstateSize(c, p as fmi2FMUstate, size_ptr) },
+    )?;
+    let Some((i, OK)) = res else { return Ok(()) };
+    if size == 0 || size > 1 << 20 {
+        return fail(format!("{}: size {size}", r.what));
+    }
+    // Serialize into a buffer that is big enough, too small, or NULL.
+    let (buf_len, null_buf) = match src.pick(8) {
+        0 => (size - 1, false),
+        1 => (0, false),
+        2 => (size, true),
+        3 => (size + 100, false),
+        _ => (size, false),
+    };
+    let mut buf = vec![0xa5u8; buf_len.max(1)];
+    let buf_ptr: *mut fmi2Byte = if null_buf {
+        null_mut()
+    } else {
+        buf.as_mut_ptr() as *mut c_char
+    };
+    let (c, poisoned) = (r.slot(i).c, r.slot(i).poisoned);
+    r.what = format!(
+        "fmi2SerializeFMUstate(size {buf_len} for {size}{})",
+        if null_buf { ", NULL buffer" } else { "" }
+    );
+    let expected = if poisoned || buf_len < size || null_buf {
+        ERROR
+    } else {
+        OK
+    };
+    let s = unsafe { fmi2SerializeFMUstate(c, p as fmi2FMUstate, buf_ptr, buf_len) };
+    r.check_status(s, &[expected])?;
+    r.after(i, s)?;
+    if s == OK {
+        buf.truncate(size);
+        let info = r.slot(i).states[owned.expect("owned")].clone();
+        if buf[24] > 5 {
+            return fail(format!("{}: phase byte {}", r.what, buf[24]));
+        }
+        r.blobs.push(Blob { bytes: buf, info });
+        if r.blobs.len() > 8 {
+            r.blobs.remove(0);
+        }
+    }
+    Ok(())
+}
+
+/// FNV-1a, 64 bit, as documented in src/fmi2/snapshot.rs: the harness
+/// recomputes the checksum to forge states that get past it.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+fn fix_checksum(b: &mut [u8]) {
+    if b.len() >= 32 {
+        let n = b.len() - 8;
+        let sum = fnv1a(&b[..n]);
+        b[n..].copy_from_slice(&sum.to_le_bytes());
+    }
+}
+
+#[derive(Debug, PartialEq)]
+enum Bytes {
+    Genuine,
+    /// Changed without fixing the checksum, truncated, or extended: refused.
+    Corrupt,
+    /// Changed and the checksum recomputed: accepted or refused.
+    Forged,
+    Random,
+}
+
+fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let (mut bytes, mut kind, info) = if r.blobs.is_empty() || src.chance(40) {
+        let n = src.pick(80);
+        (
+            (0..n).map(|_| src.u8()).collect::<Vec<u8>>(),
+            Bytes::Random,
+            None,
+        )
+    } else {
+        let b = r.blobs[src.pick(r.blobs.len())].clone();
+        (b.bytes, Bytes::Genuine, Some(b.info))
+    };
+    if kind == Bytes::Genuine {
+        match src.pick(8) {
+            0 | 1 => {}
+            2 => {
+                // Flip bits anywhere; the checksum no longer matches.
+                for _ in 0..1 + src.pick(4) {
+                    let k = src.pick(256) * bytes.len() / 256;
+                    bytes[k] ^= 1 << src.pick(8);
+                }
+                kind = Bytes::Corrupt;
+            }
+            3 => {
+                let keep = src.pick(256) * bytes.len() / 256;
+                bytes.truncate(keep);
+                kind = Bytes::Corrupt;
+            }
+            4 => {
+                bytes.extend((0..1 + src.pick(16)).map(|_| src.u8()));
+                kind = Bytes::Corrupt;
+            }
+            _ => {
+                // Forge: overwrite some bytes (header or payload), recompute
+                // the checksum.
+                for _ in 0..1 + src.pick(6) {
+                    let k = src.pick(256) * (bytes.len() - 8) / 256;
+                    bytes[k] = match src.pick(4) {
+                        0 => 0xff,
+                        1 => 0,
+                        _ => src.u8(),
+                    };
+                }
+                if src.chance(64) {
+                    // A whole Real of the payload: NaN, inf, 0, negative...
+                    let k = 25 + 8 * src.pick((bytes.len().saturating_sub(41)) / 8 + 1);
+                    if k + 8 <= bytes.len() - 8 {
+                        bytes[k..k + 8].copy_from_slice(&real(src).to_le_bytes());
+                    }
+                }
+                fix_checksum(&mut bytes);
+                kind = Bytes::Forged;
+            }
+        }
+    }
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let initial = if src.chance(200) {
+        0
+    } else {
+        any_state(r, src, i)
+    };
+    let owned = i.and_then(|i| owns(r, i, initial));
+    let null_bytes = src.chance(8);
+    let null_slot = src.chance(8);
+    let mut slot_value = initial as fmi2FMUstate;
+    let slot_ptr: *mut fmi2FMUstate = if null_slot {
+        null_mut()
+    } else {
+        &mut slot_value
+    };
+    let bytes_ptr = if null_bytes {
+        std::ptr::null()
+    } else {
+        bytes.as_ptr() as *const c_char
+    };
+    let args_ok =
+        !null_slot && (initial == 0 || owned.is_some()) && (!null_bytes || bytes.is_empty());
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!(
+            "fmi2DeSerializeFMUstate({kind:?}, {} bytes, *state = {initial:#x})",
+            bytes.len()
+        ),
+        |_| match (&kind, args_ok) {
+            (_, false) | (Bytes::Corrupt, _) => vec![ERROR],
+            (Bytes::Genuine, true) => vec![OK],
+            _ => vec![OK, ERROR],
+        },
+        |c| unsafe { fmi2DeSerializeFMUstate(c, bytes_ptr, bytes.len(), slot_ptr) },
+    )?;
+    let Some((i, s)) = res else { return Ok(()) };
+    let got = slot_value as usize;
+    if s != OK {
+        if got != initial {
+            return fail(format!("{}: failed but changed *state", r.what));
+        }
+        return Ok(());
+    }
+    r.out.deserialized_ok += 1;
+    // Bytes that were accepted: a known phase and a finite time.
+    let st = St::from_byte(bytes[24]);
+    let time = f64::from_le_bytes(bytes[25..33].try_into().unwrap());
+    let (Some(st), true) = (st, time.is_finite()) else {
+        return fail(format!(
+            "{}: accepted phase byte {} and time {time}",
+            r.what, bytes[24]
+        ));
+    };
+    let genuine = kind == Bytes::Genuine;
+    let info = match (kind, info) {
+        (Bytes::Genuine, Some(info)) => StateInfo { ptr: got, ..info },
+        _ => StateInfo {
+            ptr: got,
+            st,
+            time,
+            values: Values::Forged,
+            initialized: true,
+        },
+    };
+    if got == 0 || (initial != 0 && got != initial) {
+        return fail(format!("{}: returned state {got:#x}", r.what));
+    }
+    match owned {
+        Some(k) => r.slot_mut(i).states[k] = info,
+        None => {
+            r.dead_states.retain(|&p| p != got);
+            r.slot_mut(i).states.push(info);
+        }
+    }
+    // A genuine state serializes to the same bytes again.
+    if let Some(k) = owns(r, i, got) {
+        let c = r.slot(i).c;
+        let mut size = 0usize;
+        let mut again = vec![0u8; bytes.len()];
+        let ok = unsafe {
+            fmi2SerializedFMUstateSize(c, got as fmi2FMUstate, &mut size) == OK
+                && size == bytes.len()
+                && fmi2SerializeFMUstate(
+                    c,
+                    got as fmi2FMUstate,
+                    again.as_mut_ptr() as *mut c_char,
+                    size,
+                ) == OK
+        };
+        let poisoned = r.slot(i).poisoned;
+        r.slot(i).log.take();
+        // (Forged bytes may hold non-canonical fields, e.g. values behind a
+        // false flag, which the model does not keep: only genuine ones must
+        // come back byte for byte.)
+        if !poisoned && (!ok || (genuine && again != bytes)) {
+            let diff: Vec<(usize, u8, u8)> = bytes
+                .iter()
+                .zip(&again)
+                .enumerate()
+                .filter(|(_, (a, b))| a != b)
+                .map(|(k, (a, b))| (k, *a, *b))
+                .collect();
+            return fail(format!(
+                "{}: the state does not serialize to the bytes it came from (size {size}, differing bytes (offset, given, now) {diff:?})",
+                r.what
+            ));
+        }
+        let _ = k;
+    }
+    Ok(())
+}
+
+fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let Some(i) = slot_of(&t) else {
+        let c = component(r, &t);
+        r.what = "fmi2DoStep on NULL/foreign".into();
+        let s = unsafe { fmi2DoStep(c, 0.0, 0.1, 1) };
+        return r.check_status(s, &[ERROR]);
+    };
+    let (time, st_before, poisoned_before) = (r.slot(i).time, r.slot(i).st, r.slot(i).poisoned);
+    let (tc, t_exact) = match src.pick(16) {
+        0 => (real(src), false),
+        1 => (time + time.abs().max(1.0) * 1e-9, false),
+        2 => (time * (1.0 + 1e-15), false),
+        _ => (time, true),
+    };
+    let h = match src.pick(8) {
+        0 => real(src),
+        1 => [1e-9, 1e-6, 1e3, 1e6][src.pick(4)],
+        _ => [1e-3, 0.01, 0.1, 0.5][src.pick(4)],
+    };
+    let no_prior = boolean(src);
+    let tol = STEP_TOLERANCE * tc.abs().max(time.abs()).max(1.0);
+    let t_ok = tc.is_finite() && (t_exact || (tc - time).abs() <= 0.5 * tol);
+    let t_bad = !tc.is_finite() || (tc - time).abs() > 2.0 * tol;
+    let h_ok = h.is_finite() && h > 0.0;
+    let res = call_on(
+        r,
+        t,
+        Fn::DoStep,
+        &format!("fmi2DoStep({tc:e}, {h:e}) at time {time:e}"),
+        |slot| {
+            if !h_ok || t_bad {
+                vec![ERROR]
+            } else if !t_ok {
+                vec![OK, DISCARD, ERROR]
+            } else if slot.armed {
+                // The hook panics once the model has stepped.
+                vec![ERROR, DISCARD]
+            } else if slot.values == Values::Pristine && h <= 10.0 {
+                vec![OK]
+            } else {
+                vec![OK, DISCARD, ERROR]
+            }
+        },
+        |c| unsafe { fmi2DoStep(c, tc, h, no_prior) },
+    )?;
+    let Some((i, s)) = res else { return Ok(()) };
+    let slot = r.slot_mut(i);
+    match s {
+        OK => {
+            slot.time = tc + h;
+            r.out.steps_ok += 1;
+            let c = r.slot(i).c;
+            let mut last = f64::NAN;
+            let st = unsafe { fmi2GetRealStatus(c, 2, &mut last) };
+            r.slot(i).log.take();
+            if st != OK || last.to_bits() != (tc + h).to_bits() {
+                // t + h can overflow to infinity: that is a finding of its own.
+                if st == OK && !last.is_finite() {
+                    r.finite(i, last, "last successful time")?;
+                    r.slot_mut(i).values = Values::Extreme;
+                } else {
+                    return fail(format!(
+                        "{}: then last successful time {last} ({st}), expected {}",
+                        r.what,
+                        tc + h
+                    ));
+                }
+            }
+            // Every output is finite after a successful step.
+            let reals: Vec<&Variable> = desc()
+                .variables
+                .iter()
+                .filter(|v| family(v) == Family::Real)
+                .collect();
+            let vrs: Vec<u32> = reals.iter().map(|v| v.vr).collect();
+            let mut values = vec![f64::NAN; vrs.len()];
+            let gs = unsafe { fmi2GetReal(c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr()) };
+            r.slot(i).log.take();
+            if gs != OK {
+                return fail(format!(
+                    "{}: then fmi2GetReal of every Real answered {gs}",
+                    r.what
+                ));
+            }
+            r.what = format!("{} then fmi2GetReal", r.what);
+            for (v, x) in reals.iter().zip(values) {
+                r.finite(i, x, v.name)?;
+            }
+        }
+        DISCARD => {
+            if slot.armed {
+                // Discarded before the hook fired: still armed.
+            }
+            slot.st = St::StepFailed;
+        }
+        ERROR => {
+            if slot.armed && h_ok && t_ok && st_before == St::StepComplete && !poisoned_before {
+                slot.armed = false;
+                slot.poisoned = true;
+                r.out.panics_caught += 1;
+            }
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+fn op_status(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let which = src.pick(5);
+    let kind = match src.pick(4) {
+        0 => src.u32() as i32,
+        _ => src.pick(5) as i32,
+    };
+    let null_value = src.chance(16);
+    let mut real_v = f64::NAN;
+    let mut int_v = -7i32;
+    let mut str_v: fmi2String = std::ptr::null();
+    let name = [
+        "fmi2GetStatus",
+        "fmi2GetRealStatus",
+        "fmi2GetIntegerStatus",
+        "fmi2GetBooleanStatus",
+        "fmi2GetStringStatus",
+    ][which];
+    let res = call_on(
+        r,
+        t,
+        Fn::GetStatus,
+        &format!(
+            "{name}(kind {kind}{})",
+            if null_value { ", value NULL" } else { "" }
+        ),
+        |_| match (which, kind) {
+            (1, 2) | (3, 3) => vec![if null_value { ERROR } else { OK }],
+            // Status kinds the FMU does not provide answer fmi2Discard.
+            _ if null_value => vec![DISCARD, ERROR],
+            _ => vec![DISCARD],
+        },
+        |c| unsafe {
+            let rv = if null_value {
+                null_mut()
+            } else {
+                &mut real_v as *mut f64
+            };
+            let iv = if null_value {
+                null_mut()
+            } else {
+                &mut int_v as *mut i32
+            };
+            let sv = if null_value {
+                null_mut()
+            } else {
+                &mut str_v as *mut fmi2String
+            };
+            match which {
+                0 => fmi2GetStatus(c, kind, iv),
+                1 => fmi2GetRealStatus(c, kind, rv),
+                2 => fmi2GetIntegerStatus(c, kind, iv),
+                3 => fmi2GetBooleanStatus(c, kind, iv),
+                _ => fmi2GetStringStatus(c, kind, sv),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        match which {
+            1 => {
+                let expected = r.slot(i).time;
+                r.finite(i, real_v, "last successful time")?;
+                if real_v.to_bits() != expected.to_bits() {
+                    return fail(format!(
+                        "{}: last successful time {real_v}, expected {expected}",
+                        r.what
+                    ));
+                }
+            }
+            3 if int_v != 0 => return fail(format!("{}: terminated = {int_v}", r.what)),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Model Exchange functions, directional derivatives, output derivatives
+/// and fmi2CancelStep: not offered, so fmi2Error in every state.
+fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let which = src.pick(14);
+    let n = src.pick(4);
+    let vrs: Vec<u32> = (0..n).map(|_| vr(src, |_| true)).collect();
+    let mut buf = vec![0.0f64; 8];
+    let mut flags = [0i32; 2];
+    let mut info = fmi2EventInfo {
+        newDiscreteStatesNeeded: 0,
+        terminateSimulation: 0,
+        nominalsOfContinuousStatesChanged: 0,
+        valuesOfContinuousStatesChanged: 0,
+        nextEventTimeDefined: 0,
+        nextEventTime: 0.0,
+    };
+    let null = src.chance(64);
+    let p = if null { null_mut() } else { buf.as_mut_ptr() };
+    let orders = vec![1i32; n];
+    let x = real(src);
+    let (f, name) = match which {
+        0 => (Fn::GetDirectionalDerivative, "fmi2GetDirectionalDerivative"),
+        11 => (Fn::CancelStep, "fmi2CancelStep"),
+        12 | 13 => (Fn::GetRealOutputDerivatives, "fmi2GetRealOutputDerivatives"),
+        _ => (Fn::ModelExchange, "a Model Exchange function"),
+    };
+    let n_out = n.min(buf.len());
+    let res = call_on(
+        r,
+        t,
+        f,
+        &format!("{name} (#{which})"),
+        |_| {
+            if f == Fn::GetRealOutputDerivatives {
+                vec![OK, ERROR]
+            } else {
+                vec![ERROR]
+            }
+        },
+        |c| unsafe {
+            match which {
+                0 => fmi2GetDirectionalDerivative(c, vrs.as_ptr(), n, vrs.as_ptr(), n, p, p),
+                1 => fmi2EnterEventMode(c),
+                2 => fmi2NewDiscreteStates(c, if null { null_mut() } else { &mut info }),
+                3 => fmi2EnterContinuousTimeMode(c),
+                4 => {
+                    fmi2CompletedIntegratorStep(c, 1, flags.as_mut_ptr(), flags.as_mut_ptr().add(1))
+                }
+                5 => fmi2SetTime(c, x),
+                6 => fmi2SetContinuousStates(c, p, n),
+                7 => fmi2GetDerivatives(c, p, n),
+                8 => fmi2GetEventIndicators(c, p, n),
+                9 => fmi2GetContinuousStates(c, p, n),
+                10 => fmi2GetNominalsOfContinuousStates(c, p, n),
+                11 => fmi2CancelStep(c),
+                _ => fmi2GetRealOutputDerivatives(c, vrs.as_ptr(), n_out, orders.as_ptr(), p),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        for &v in &buf[..n_out] {
+            r.finite(i, v, "an output derivative")?;
+        }
+    }
+    Ok(())
+}
+
+fn op_input_derivatives(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let n = src.pick(4);
+    let vrs: Vec<u32> = (0..n)
+        .map(|_| {
+            vr(src, |v| {
+                v.causality == Causality::Input && family(v) == Family::Real
+            })
+        })
+        .collect();
+    let orders: Vec<i32> = (0..n)
+        .map(|_| {
+            if src.chance(200) {
+                1
+            } else {
+                integer(src, None)
+            }
+        })
+        .collect();
+    let values: Vec<f64> = (0..n)
+        .map(|_| {
+            if src.chance(128) {
+                (src.u8() as f64 - 128.0) / 16.0
+            } else {
+                real(src)
+            }
+        })
+        .collect();
+    let vr_ptr = maybe_null(src, &vrs);
+    let order_ptr = maybe_null(src, &orders);
+    let value_ptr = maybe_null(src, &values);
+    let valid = n == 0
+        || (!vr_ptr.is_null() && !order_ptr.is_null() && !value_ptr.is_null())
+            && vrs.iter().zip(&orders).zip(&values).all(|((&x, &o), v)| {
+                var(x, Family::Real).is_some_and(|v| v.causality == Causality::Input)
+                    && o == 1
+                    && v.is_finite()
+            });
+    let can = desc().can_interpolate_inputs;
+    let res = call_on(
+        r,
+        t,
+        Fn::SetRealInputDerivatives,
+        &format!("fmi2SetRealInputDerivatives({vrs:?}, {orders:?}, {values:?})"),
+        // The model may refuse derivatives it cannot use (e.g. with a
+        // solver that holds the inputs), which it says in the log.
+        |_| {
+            if valid && can && n > 0 {
+                vec![OK, ERROR]
+            } else {
+                vec![if valid && (can || n == 0) { OK } else { ERROR }]
+            }
+        },
+        |c| unsafe { fmi2SetRealInputDerivatives(c, vr_ptr, n, order_ptr, value_ptr) },
+    );
+    // With canInterpolateInputs false even an empty call may be refused.
+    let res = match res {
+        Err(_) if !can && n == 0 => Ok(None),
+        other => other,
+    }?;
+    if let Some((i, OK)) = res {
+        if n > 0 {
+            let slot = r.slot_mut(i);
+            slot.values = slot.values.worsen(Values::Moderate);
+            for v in &values {
+                slot.values = slot.values.worsen(magnitude(*v));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_debug_logging(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let cats = desc().log_categories;
+    let n = src.pick(4);
+    let names: Vec<CString> = (0..n)
+        .map(|_| match src.pick(8) {
+            0 => CString::new("noSuchCategory").unwrap(),
+            1 => CString::new("").unwrap(),
+            _ => CString::new(cats[src.pick(cats.len())]).unwrap(),
+        })
+        .collect();
+    let mut ptrs: Vec<fmi2String> = names.iter().map(|s| s.as_ptr()).collect();
+    if n > 0 && src.chance(12) {
+        ptrs[0] = std::ptr::null();
+    }
+    let array = maybe_null(src, &ptrs);
+    let on = boolean(src);
+    let strs: Vec<String> = names
+        .iter()
+        .map(|s| s.to_string_lossy().into_owned())
+        .collect();
+    let known =
+        !ptrs.contains(&std::ptr::null()) && strs.iter().all(|s| cats.contains(&s.as_str()));
+    let ok = n == 0 || (!array.is_null() && known);
+    let res = call_on(
+        r,
+        t,
+        Fn::SetDebugLogging,
+        &format!("fmi2SetDebugLogging({on}, {strs:?})"),
+        |_| vec![if ok { OK } else { ERROR }],
+        |c| unsafe { fmi2SetDebugLogging(c, on, n, array) },
+    )?;
+    if let Some((i, OK)) = res {
+        let slot = r.slot_mut(i);
+        let on = on != 0;
+        let status_cats = ["logStatusWarning", "logStatusDiscard", "logStatusError"];
+        if n == 0 {
+            slot.status_log = [on; 3];
+            slot.log_all = on;
+        } else {
+            for (k, c) in status_cats.iter().enumerate() {
+                if strs.iter().any(|s| s == c) {
+                    slot.status_log[k] = on;
+                }
+            }
+            if strs.iter().any(|s| s == "logAll") {
+                slot.log_all = on;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_arm_panic(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    if !src.chance(64) {
+        return op_lifecycle_macro(r, src);
+    }
+    let cat = CString::new(TEST_PANIC_CATEGORY).unwrap();
+    let p = cat.as_ptr();
+    let res = call_on(
+        r,
+        t,
+        Fn::SetDebugLogging,
+        "arm the panic hook",
+        |_| vec![OK],
+        |c| unsafe { fmi2SetDebugLogging(c, 1, 1, &p) },
+    )?;
+    if let Some((i, OK)) = res {
+        r.slot_mut(i).armed = true;
+    }
+    Ok(())
+}
+
+/// A legal move: instantiate, or the next lifecycle call of the state the
+/// slot is in, with sane arguments. Keeps random sequences going deep.
+fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let i = src.pick(2);
+    let Some(slot) = r.slots[i].as_ref() else {
+        let log = Box::<Log>::default();
+        let functions = Box::new(callbacks(&log));
+        let name = CString::new(format!("fuzz{i}")).unwrap();
+        let g = CString::new(guid()).unwrap();
+        let c = unsafe {
+            fmi2Instantiate(
+                name.as_ptr(),
+                1,
+                g.as_ptr(),
+                std::ptr::null(),
+                &*functions,
+                0,
+                0,
+            )
+        };
+        r.out.calls += 1;
+        if c.is_null() {
+            return fail(format!(
+                "fmi2Instantiate with valid arguments returned NULL: {:?}",
+                log.take()
+            ));
+        }
+        log.take();
+        r.slots[i] = Some(new_slot(format!("fuzz{i}"), c, log, functions, false));
+        return Ok(());
+    };
+    let (c, st, time, poisoned, pristine) = (
+        slot.c,
+        slot.st,
+        slot.time,
+        slot.poisoned,
+        slot.values == Values::Pristine,
+    );
+    r.what = format!("lifecycle move in state {st:?}");
+    let (s, expected, next): (i32, Vec<i32>, Option<St>) = unsafe {
+        if poisoned || matches!(st, St::Error | St::Terminated | St::StepFailed) {
+            (fmi2Reset(c), vec![OK], Some(St::Instantiated))
+        } else {
+            match st {
+                St::Instantiated => {
+                    let s = fmi2SetupExperiment(c, 0, 0.0, time, 0, 0.0);
+                    r.check_status(s, &[OK])?;
+                    r.after(i, s)?;
+                    (fmi2EnterInitializationMode(c), vec![OK], Some(St::Init))
+                }
+                St::Init => (
+                    fmi2ExitInitializationMode(c),
+                    if pristine { vec![OK] } else { vec![OK, ERROR] },
+                    Some(St::StepComplete),
+                ),
+                _ => {
+                    // A few ordinary steps.
+                    let armed = r.slot(i).armed;
+                    let s = fmi2DoStep(c, time, 0.01, 1);
+                    let expected = if armed {
+                        vec![ERROR, DISCARD]
+                    } else if pristine {
+                        vec![OK]
+                    } else {
+                        vec![OK, DISCARD, ERROR]
+                    };
+                    (s, expected, None)
+                }
+            }
+        }
+    };
+    r.check_status(s, &expected)?;
+    r.after(i, s)?;
+    let slot = r.slot_mut(i);
+    if s == OK {
+        match next {
+            Some(St::Instantiated) => {
+                slot.st = St::Instantiated;
+                slot.time = 0.0;
+                slot.values = Values::Pristine;
+                slot.initialized = false;
+                slot.poisoned = false;
+            }
+            Some(n) => {
+                slot.initialized |= n == St::StepComplete;
+                slot.st = n
+            }
+            None => {
+                slot.time = time + 0.01;
+                r.out.steps_ok += 1;
+            }
+        }
+    } else if next.is_none() {
+        if s == DISCARD {
+            slot.st = St::StepFailed;
+        } else if s == ERROR && slot.armed {
+            slot.armed = false;
+            slot.poisoned = true;
+            r.out.panics_caught += 1;
+        }
+    }
+    Ok(())
+}
