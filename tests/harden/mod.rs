@@ -10,9 +10,9 @@
 #![allow(dead_code, non_snake_case, clippy::missing_safety_doc)]
 
 pub use converting_span::fmi2::ffi::{
-    fmi2Boolean, fmi2Byte, fmi2CallbackFunctions, fmi2CallbackLogger, fmi2Component, fmi2ComponentEnvironment,
-    fmi2EventInfo, fmi2FMUstate, fmi2Integer, fmi2Real, fmi2Status, fmi2StatusKind, fmi2String, fmi2Type,
-    fmi2ValueReference,
+    fmi2Boolean, fmi2Byte, fmi2CallbackFunctions, fmi2CallbackLogger, fmi2Component,
+    fmi2ComponentEnvironment, fmi2EventInfo, fmi2FMUstate, fmi2Integer, fmi2Real, fmi2Status,
+    fmi2StatusKind, fmi2String, fmi2Type, fmi2ValueReference,
 };
 use std::ffi::{c_char, CStr, CString};
 use std::sync::Mutex;
@@ -131,9 +131,18 @@ unsafe extern "C" fn logger(
         (Some(instance), Some(category), Some(message)) if (OK..=PENDING).contains(&status) => {
             // The message went through printf escaping: undo it.
             let message = message.replace("%%", "%");
-            log.lines.lock().unwrap().push(LogLine { instance, status, category, message })
+            log.lines.lock().unwrap().push(LogLine {
+                instance,
+                status,
+                category,
+                message,
+            })
         }
-        other => log.malformed.lock().unwrap().push(format!("status {status}, strings {other:?}")),
+        other => log
+            .malformed
+            .lock()
+            .unwrap()
+            .push(format!("status {status}, strings {other:?}")),
     }
 }
 
@@ -145,7 +154,13 @@ pub fn callbacks(log: &Log) -> fmi2CallbackFunctions {
     // arguments identically, and the FMU never passes variadic ones.
     let logger: fmi2CallbackLogger = unsafe {
         std::mem::transmute::<
-            unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String),
+            unsafe extern "C" fn(
+                fmi2ComponentEnvironment,
+                fmi2String,
+                fmi2Status,
+                fmi2String,
+                fmi2String,
+            ),
             fmi2CallbackLogger,
         >(logger)
     };
@@ -182,9 +197,23 @@ impl Fmu {
         let functions = Box::new(callbacks(&log));
         let name = CString::new(name).unwrap();
         let guid = CString::new(guid()).unwrap();
-        let c = unsafe { fmi2Instantiate(name.as_ptr(), 1, guid.as_ptr(), std::ptr::null(), &*functions, 0, 0) };
+        let c = unsafe {
+            fmi2Instantiate(
+                name.as_ptr(),
+                1,
+                guid.as_ptr(),
+                std::ptr::null(),
+                &*functions,
+                0,
+                0,
+            )
+        };
         assert!(!c.is_null(), "fmi2Instantiate failed: {:?}", log.take());
-        Fmu { c, log, _functions: functions }
+        Fmu {
+            c,
+            log,
+            _functions: functions,
+        }
     }
 
     pub fn set_real(&self, name: &str, x: f64) -> i32 {
@@ -223,7 +252,13 @@ impl Fmu {
     }
 
     pub fn messages(&self) -> Vec<String> {
-        self.log.lines.lock().unwrap().iter().map(|l| l.message.clone()).collect()
+        self.log
+            .lines
+            .lock()
+            .unwrap()
+            .iter()
+            .map(|l| l.message.clone())
+            .collect()
     }
 }
 
