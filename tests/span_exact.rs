@@ -327,3 +327,60 @@ fn saved_fields_load_back_identically() {
     let back = converting_span::fmi2::snapshot::Snapshot::<ConvertingSpan>::from_bytes(&bytes, ConvertingSpan::description()).unwrap();
     assert_eq!(back.model, m, "every field survives save and load");
 }
+
+#[test]
+fn slack_crossings_are_located_inside_the_step() {
+    // Held inputs, no damping: the tension reaches 0 when x = L, at
+    // tau* = ln((x0 - x_inf)/(L - x_inf)) / lambda. Located by bisection on
+    // the exact trajectory: to 1e-9 s here (64 halvings of a 0.5 s step).
+    let (l, u) = (1.0, Held { va: 5.0, eps_a: 1e-3, vb: 4.95 });
+    let mut m = span(l, Held { vb: 5.0, ..u });
+    m.params.prevent_negative_tension = true;
+    m.initialize(&Experiment::default()).unwrap();
+    let x0 = m.unstretched_length();
+    set_inputs(&mut m, u);
+    m.do_step(0.5).unwrap();
+    let event = m.step_events().first().copied().expect("the web goes slack inside the step");
+    let lambda = u.vb / l;
+    let x_inf = u.va / (1.0 + u.eps_a) / lambda;
+    let expected = ((x0 - x_inf) / (l - x_inf)).ln() / lambda;
+    assert!((event.offset - expected).abs() < 1e-9, "{} vs {expected}", event.offset);
+    assert!(event.what.contains("slack"));
+    m.do_step(0.5).unwrap();
+    assert!(m.step_events().is_empty(), "no crossing in a step that stays slack");
+    // Re-tension: the crossing back is reported too.
+    set_inputs(&mut m, Held { vb: 5.05, ..u });
+    let mut back = None;
+    for _ in 0..20 {
+        m.do_step(0.05).unwrap();
+        back = back.or(m.step_events().first().copied());
+    }
+    assert!(back.is_some_and(|e| e.what.contains("tension again")));
+}
+
+#[test]
+fn slack_crossings_with_moving_inputs_use_the_step_interpolant() {
+    // web_b.v ramps down through the steady state: rosenbrock at a tight
+    // tolerance; the crossing found on the cubic Hermite interpolant of
+    // 0.05 s steps (a quarter of the span's time constant) must agree with
+    // the one found on 0.0005 s steps to 1e-5 s: the interpolant's error is
+    // O(h^4), about 2e-6 s of crossing time here.
+    let locate = |h: f64| -> f64 {
+        let mut m = span(1.0, Held { va: 5.0, eps_a: 1e-3, vb: 5.0 });
+        m.params.prevent_negative_tension = true;
+        m.params.tolerance = 1e-12;
+        m.initialize(&Experiment::default()).unwrap();
+        let mut t = 0.0;
+        loop {
+            m.set_input_derivative(Real::web_b_v.vr(), -0.2).unwrap();
+            m.do_step(h).unwrap();
+            if let Some(e) = m.step_events().first() {
+                return t + e.offset;
+            }
+            t += h;
+            assert!(t < 2.0, "the web must go slack");
+        }
+    };
+    let (coarse, fine) = (locate(0.05), locate(0.0005));
+    assert!((coarse - fine).abs() < 1e-5, "{coarse} vs {fine}");
+}

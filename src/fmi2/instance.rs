@@ -412,6 +412,12 @@ impl<M: Model> Instance<M> {
                 }
                 // Take the importer's time so that rounding never accumulates.
                 self.time = current + h;
+                let events = self.model.step_events();
+                if !events.is_empty() && self.log.allows("logEvents") {
+                    for e in events {
+                        self.log(Status::Ok, "logEvents", &format!("t = {}: {}", current + e.offset, e.what));
+                    }
+                }
                 Ok(())
             }
             Err(e) => {

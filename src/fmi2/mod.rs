@@ -10,6 +10,6 @@ pub mod phase;
 pub mod snapshot;
 pub mod status;
 
-pub use model::{Experiment, Model};
+pub use model::{Event, Experiment, Model};
 pub use snapshot::{Persist, StateReader, StateWriter};
 pub use status::{FmiError, FmiResult, Status};

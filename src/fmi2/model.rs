@@ -14,6 +14,14 @@ pub struct Experiment {
     pub stop_time: Option<f64>,
 }
 
+/// Something that happened inside a communication step, `offset` seconds
+/// after its start. Static text: reporting costs nothing unless logged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Event {
+    pub offset: f64,
+    pub what: &'static str,
+}
+
 pub trait Model: Clone + Default + Persist + 'static {
     /// The table generated from this model's `modelDescription.xml`.
     fn description() -> &'static ModelDescription;
@@ -44,6 +52,11 @@ pub trait Model: Clone + Default + Persist + 'static {
     /// inputs held at their current values. On failure the model must be
     /// left as it was before the step.
     fn do_step(&mut self, h: f64) -> FmiResult;
+
+    /// What happened inside the last step, for the `logEvents` category.
+    fn step_events(&self) -> &[Event] {
+        &[]
+    }
 
     /// The model with every parameter and input at its start value.
     fn at_start_values() -> Self {

@@ -15,7 +15,7 @@ pub mod physics;
 pub mod sensor;
 pub mod stepping;
 
-use crate::fmi2::{Experiment, FmiError, FmiResult, Model, Persist, StateReader, StateWriter};
+use crate::fmi2::{Event, Experiment, FmiError, FmiResult, Model, Persist, StateReader, StateWriter};
 use crate::solver::CompensatedSum;
 use description::{Boolean, Integer, Real, DESCRIPTION};
 use parameters::{Inputs, Parameters, SolverChoice, WebProperties};
@@ -41,6 +41,8 @@ pub struct ConvertingSpan {
     sensor: SensorScale,
     tolerance: f64,
     solver: SolverChoice,
+    /// Where the tension crossed zero inside the last step (slack web).
+    slack_event: Option<Event>,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -96,18 +98,73 @@ impl ConvertingSpan {
         let x = self.unstretched.value();
         // Effects that are off are not computed at all.
         let rates = if p.include_damping || p.include_mass { self.input_rates() } else { Rates::default() };
-        let mut effective_strain = strain;
-        if p.include_damping {
-            let strain_rate = physics::strain_rate(length, rates.length, x, strain, physics::unstretched_rate(u, strain));
-            effective_strain += p.span_web.retardation_time * strain_rate;
-        }
-        let tension = physics::tension(p, effective_strain);
+        let tension = physics::tension(p, self.effective_strain(length, self.unstretched, u, rates.length));
         let exit_force = if p.include_mass {
             tension + physics::momentum_difference(p, u, strain, x, rates.speed_b)
         } else {
             tension
         };
         Outputs { length, strain, tension, exit_force }
+    }
+
+    /// The bracket of [5]: the strain, plus d_r2 times its rate with damping.
+    fn effective_strain(&self, length: f64, x: CompensatedSum, u: &Inputs, length_rate: f64) -> f64 {
+        let p = &self.params;
+        let strain = physics::strain(length, x, 0.0);
+        if p.include_damping {
+            let rate = physics::unstretched_rate(u, strain);
+            strain + p.span_web.retardation_time * physics::strain_rate(length, length_rate, x.value(), strain, rate)
+        } else {
+            strain
+        }
+    }
+
+    /// With a slack web, where inside the step [0, h] the tension crossed
+    /// zero: bisection on the step's trajectory (exact for held inputs, a
+    /// cubic Hermite interpolant of the integrator's end points otherwise).
+    fn slack_crossing(&self, start: &Inputs, rates: Option<&Inputs>, next: CompensatedSum, h: f64) -> Option<Event> {
+        let p = &self.params;
+        let x0 = self.unstretched;
+        let zero_rates = Inputs::default();
+        let r = rates.unwrap_or(&zero_rates);
+        let length_rate = physics::length_rate(p, start, r);
+        let tension_at = |tau: f64, x: CompensatedSum| {
+            let u = start.advanced(r, tau);
+            self.effective_strain(physics::span_length(p, &u), x, &u, length_rate)
+        };
+        let (g0, g1) = (tension_at(0.0, x0), tension_at(h, next));
+        if (g0 > 0.0) == (g1 > 0.0) {
+            return None;
+        }
+        let change = (next.hi() - x0.hi()) + (next.lo() - x0.lo());
+        let (f0, f1) = (
+            physics::unstretched_rate(start, physics::strain(physics::span_length(p, start), x0, 0.0)),
+            {
+                let u = start.advanced(r, h);
+                physics::unstretched_rate(&u, physics::strain(physics::span_length(p, &u), next, 0.0))
+            },
+        );
+        let trajectory = |tau: f64| -> CompensatedSum {
+            if rates.is_none() {
+                physics::exact_step(physics::span_length(p, start), start, x0, tau)
+            } else {
+                // Cubic Hermite on [0, h] through (x0, f0) and (x1, f1).
+                let s = tau / h;
+                let (h10, h01, h11) = (s.powi(3) - 2.0 * s * s + s, -2.0 * s.powi(3) + 3.0 * s * s, s.powi(3) - s * s);
+                x0.plus(h10 * h * f0 + h01 * change + h11 * h * f1)
+            }
+        };
+        let (mut lo, mut hi) = (0.0, h);
+        for _ in 0..64 {
+            let mid = 0.5 * (lo + hi);
+            if (tension_at(mid, trajectory(mid)) > 0.0) == (g0 > 0.0) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let what = if g0 > 0.0 { "the web goes slack (tension reaches 0)" } else { "the web takes up tension again" };
+        Some(Event { offset: 0.5 * (lo + hi), what })
     }
 
     /// The value of a Real variable.
@@ -259,6 +316,11 @@ impl ConvertingSpan {
             )));
         }
         // Commit: nothing above changed the model.
+        self.slack_event = if self.params.prevent_negative_tension {
+            self.slack_crossing(&start, rates.as_ref(), next, h)
+        } else {
+            None
+        };
         if self.params.include_mass || self.params.include_damping {
             self.update_rates(&start, rates.as_ref(), h);
         }
@@ -401,6 +463,10 @@ impl Model for ConvertingSpan {
     fn do_step(&mut self, h: f64) -> FmiResult {
         self.advance(h)
     }
+
+    fn step_events(&self) -> &[Event] {
+        self.slack_event.as_slice()
+    }
 }
 
 /// The tolerance rule [12]: the parameter `tolerance` when the user set it;
@@ -510,6 +576,8 @@ impl Persist for ConvertingSpan {
             sensor,
             tolerance,
             solver,
+            // Transient: what happened inside the last step, not state.
+            slack_event: None,
         })
     }
 }
