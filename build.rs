@@ -56,6 +56,7 @@ fn fail(source: &str, problems: &[String]) -> ! {
 struct ModelDescription {
     attrs: BTreeMap<String, String>,
     co_simulation: Option<BTreeMap<String, String>>,
+    model_exchange: Option<BTreeMap<String, String>>,
     /// Unit name -> [(unit or display unit name, factor from the unit to it)].
     units: Vec<(String, Vec<(String, f64)>)>,
     /// Enumeration type name -> items (name, value).
@@ -63,6 +64,7 @@ struct ModelDescription {
     log_categories: Vec<String>,
     variables: Vec<Variable>,
     outputs: Vec<Unknown>,
+    derivatives: Vec<Unknown>,
     initial_unknowns: Vec<Unknown>,
 }
 
@@ -107,29 +109,32 @@ impl Variable {
             _ => "none",
         }
     }
+    /// `wp1.E` -> `wp1_E`, `der(x)` -> `der_x`: every character a Rust
+    /// identifier cannot hold becomes `_`, trailing ones are dropped.
     fn rust_name(&self) -> String {
-        self.name().replace('.', "_")
+        let mapped: String = self.name().chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
+        mapped.trim_end_matches('_').to_string()
     }
 }
 
-fn attributes(e: &BytesStart, reader: &Reader<&[u8]>) -> Result<BTreeMap<String, String>, String> {
+fn attributes(e: &BytesStart, reader: &Reader<&[u8]>, xml: &str) -> Result<BTreeMap<String, String>, String> {
     let mut map = BTreeMap::new();
     for a in e.attributes() {
-        let a = a.map_err(|err| format!("line {}: bad attribute: {err}", line_of(reader)))?;
+        let a = a.map_err(|err| format!("line {}: bad attribute: {err}", line_of(reader, xml)))?;
         let key = String::from_utf8_lossy(a.key.as_ref()).into_owned();
         let value = a
             .unescape_value()
-            .map_err(|err| format!("line {}: bad attribute value: {err}", line_of(reader)))?
+            .map_err(|err| format!("line {}: bad attribute value: {err}", line_of(reader, xml)))?
             .into_owned();
         map.insert(key, value);
     }
     Ok(map)
 }
 
-fn line_of(reader: &Reader<&[u8]>) -> usize {
-    let pos = reader.buffer_position() as usize;
-    let text = reader.get_ref();
-    1 + text[..pos.min(text.len())].iter().filter(|&&b| b == b'\n').count()
+/// The line the reader has reached in `xml` (`get_ref` is only the unread rest).
+fn line_of(reader: &Reader<&[u8]>, xml: &str) -> usize {
+    let pos = (reader.buffer_position() as usize).min(xml.len());
+    1 + xml.as_bytes()[..pos].iter().filter(|&&b| b == b'\n').count()
 }
 
 fn number(s: &str, what: &str, line: usize) -> Result<f64, String> {
@@ -149,7 +154,7 @@ fn parse(xml: &str) -> Result<ModelDescription, String> {
     loop {
         let event = reader
             .read_event()
-            .map_err(|e| format!("line {}: XML error: {e}", line_of(&reader)))?;
+            .map_err(|e| format!("line {}: XML error: {e}", line_of(&reader, xml)))?;
         let (e, empty) = match &event {
             Event::Start(e) => (e.clone(), false),
             Event::Empty(e) => (e.clone(), true),
@@ -169,12 +174,13 @@ fn parse(xml: &str) -> Result<ModelDescription, String> {
             _ => continue,
         };
         let name = String::from_utf8_lossy(e.name().as_ref()).into_owned();
-        let attrs = attributes(&e, &reader)?;
-        let line = line_of(&reader);
+        let attrs = attributes(&e, &reader, xml)?;
+        let line = line_of(&reader, xml);
         let parent = path.last().map(String::as_str).unwrap_or("");
         match (parent, name.as_str()) {
             ("", "fmiModelDescription") => md.attrs = attrs,
             ("fmiModelDescription", "CoSimulation") => md.co_simulation = Some(attrs),
+            ("fmiModelDescription", "ModelExchange") => md.model_exchange = Some(attrs),
             ("UnitDefinitions", "Unit") => {
                 let unit = attrs.get("name").cloned().unwrap_or_default();
                 let entry = (unit.clone(), vec![(unit, 1.0)]);
@@ -240,7 +246,7 @@ fn parse(xml: &str) -> Result<ModelDescription, String> {
                     }
                 }
             }
-            ("Outputs" | "InitialUnknowns", "Unknown") => {
+            ("Outputs" | "Derivatives" | "InitialUnknowns", "Unknown") => {
                 let index = attrs
                     .get("index")
                     .and_then(|i| i.parse().ok())
@@ -254,10 +260,10 @@ fn parse(xml: &str) -> Result<ModelDescription, String> {
                     ),
                 };
                 let u = Unknown { line, index, dependencies };
-                if parent == "Outputs" {
-                    md.outputs.push(u);
-                } else {
-                    md.initial_unknowns.push(u);
+                match parent {
+                    "Outputs" => md.outputs.push(u),
+                    "Derivatives" => md.derivatives.push(u),
+                    _ => md.initial_unknowns.push(u),
                 }
             }
             _ => {}
@@ -370,9 +376,35 @@ fn check(md: &ModelDescription) -> Vec<String> {
         }
     }
 
-    // ModelStructure: Outputs list every output, in order; InitialUnknowns every
-    // output with initial approx/calculated; dependencies name only knowns.
+    // ModelStructure: Outputs list every output, in order; Derivatives every
+    // variable with a `derivative` attribute; InitialUnknowns every output,
+    // state and derivative with initial approx/calculated; dependencies name
+    // only knowns (inputs and states; for InitialUnknowns also exact parameters).
     let index_of = |u: &Unknown| md.variables.get(u.index.wrapping_sub(1));
+    let derivative_indices: Vec<usize> = (1..=md.variables.len())
+        .filter(|&i| md.variables[i - 1].type_attrs.contains_key("derivative"))
+        .collect();
+    let state_indices: BTreeSet<usize> = derivative_indices
+        .iter()
+        .filter_map(|&i| md.variables[i - 1].type_attrs["derivative"].parse().ok())
+        .collect();
+    for &s in &state_indices {
+        if md.variables.get(s.wrapping_sub(1)).is_none_or(|v| v.kind != "Real") {
+            problems.push(format!("derivative=\"{s}\" does not name a Real variable"));
+        }
+    }
+    let listed_derivatives: Vec<usize> = md.derivatives.iter().map(|u| u.index).collect();
+    if listed_derivatives != derivative_indices {
+        problems.push(format!(
+            "ModelStructure/Derivatives must list the derivatives {derivative_indices:?} in index order, found {listed_derivatives:?}"
+        ));
+    }
+    if md.model_exchange.is_some() {
+        let declared: usize = md.attrs.get("numberOfEventIndicators").and_then(|n| n.parse().ok()).unwrap_or(0);
+        if state_indices.is_empty() && declared == 0 {
+            problems.push("a <ModelExchange> model needs continuous states or event indicators".into());
+        }
+    }
     let outputs: Vec<usize> = (1..=md.variables.len())
         .filter(|&i| md.variables[i - 1].causality() == "output")
         .collect();
@@ -384,6 +416,8 @@ fn check(md: &ModelDescription) -> Vec<String> {
     }
     let initial_expected: Vec<usize> = outputs
         .iter()
+        .chain(&derivative_indices)
+        .chain(&state_indices)
         .copied()
         .filter(|&i| matches!(md.variables[i - 1].initial(), "approx" | "calculated"))
         .chain(
@@ -399,8 +433,10 @@ fn check(md: &ModelDescription) -> Vec<String> {
             "ModelStructure/InitialUnknowns must list {initial_expected:?} in index order, found {initial_listed:?}"
         ));
     }
+    let is_state = |v: &Variable| state_indices.iter().any(|&s| std::ptr::eq(&md.variables[s - 1], v));
     for (unknowns, known_ok) in [
-        (&md.outputs, &(|v: &Variable| v.causality() == "input") as &dyn Fn(&Variable) -> bool),
+        (&md.outputs, &(|v: &Variable| v.causality() == "input" || is_state(v)) as &dyn Fn(&Variable) -> bool),
+        (&md.derivatives, &|v: &Variable| v.causality() == "input" || is_state(v)),
         (&md.initial_unknowns, &|v: &Variable| {
             v.causality() == "input" || (v.causality() == "parameter" && v.initial() == "exact")
         }),
@@ -551,7 +587,8 @@ fn generate(md: &ModelDescription, source: &str) -> String {
         w,
         "pub static DESCRIPTION: ModelDescription = ModelDescription {{\n    model_name: {:?},\n    model_identifier: {:?},\n    guid: {:?},\n    \
          log_categories: &[{}],\n    variables: &VARIABLES,\n    vr_index: &VR_INDEX,\n    output_dependencies: {},\n    initial_dependencies: {},\n    \
-         can_handle_variable_communication_step_size: {},\n    can_interpolate_inputs: {},\n    can_get_and_set_fmu_state: {},\n    can_serialize_fmu_state: {},\n}};\n",
+         can_handle_variable_communication_step_size: {},\n    can_interpolate_inputs: {},\n    can_get_and_set_fmu_state: {},\n    can_serialize_fmu_state: {},\n    \
+         model_exchange: {},\n    states: &[{}],\n    derivatives: {},\n    number_of_event_indicators: {},\n}};\n",
         md.attrs.get("modelName").cloned().unwrap_or_default(),
         cs["modelIdentifier"],
         md.attrs["guid"],
@@ -562,6 +599,14 @@ fn generate(md: &ModelDescription, source: &str) -> String {
         flag("canInterpolateInputs"),
         flag("canGetAndSetFMUstate"),
         flag("canSerializeFMUstate"),
+        md.model_exchange.is_some(),
+        md.derivatives
+            .iter()
+            .map(|u| md.variables[u.index - 1].type_attrs["derivative"].parse::<usize>().map_or(0, vr_of_index).to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        dependencies(&md.derivatives),
+        md.attrs.get("numberOfEventIndicators").and_then(|n| n.parse::<usize>().ok()).unwrap_or(0),
     )
     .unwrap();
 

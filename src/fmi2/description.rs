@@ -126,6 +126,13 @@ pub struct ModelDescription {
     pub can_interpolate_inputs: bool,
     pub can_get_and_set_fmu_state: bool,
     pub can_serialize_fmu_state: bool,
+    /// A `<ModelExchange>` element is present.
+    pub model_exchange: bool,
+    /// Value references of the continuous states, in the order of `derivatives`.
+    pub states: &'static [u32],
+    /// ModelStructure/Derivatives: the derivative variables and their dependencies.
+    pub derivatives: &'static [Dependency],
+    pub number_of_event_indicators: usize,
 }
 
 impl ModelDescription {

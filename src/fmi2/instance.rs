@@ -29,6 +29,14 @@ pub const TEST_PANIC_CATEGORY: &str = "testHook.panicInNextDoStep";
 /// t0 + n*h), which may differ by a few ulps, never by 1e-13 of the time.
 const TIME_TOLERANCE: f64 = 1e-13;
 
+/// What `fmi2NewDiscreteStates` reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DiscreteUpdate {
+    pub new_discrete_states_needed: bool,
+    pub terminate_simulation: bool,
+    pub next_event_time: Option<f64>,
+}
+
 /// The type family of a get/set function.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Family {
@@ -72,13 +80,13 @@ pub struct Instance<M: Model> {
 }
 
 impl<M: Model> Instance<M> {
-    pub fn new(logger: Logger, logging_on: bool, resource_location: Option<String>) -> Self {
+    pub fn new(logger: Logger, logging_on: bool, resource_location: Option<String>, model_exchange: bool) -> Self {
         let instance = Instance {
             logger,
             log: LogFilter::new(Self::description().log_categories, logging_on),
             phase: Phase::Instantiated,
             time: 0.0,
-            experiment: Experiment::default(),
+            experiment: Experiment { model_exchange, ..Experiment::default() },
             resource_location,
             model: M::at_start_values(),
             #[cfg(feature = "test-hooks")]
@@ -156,7 +164,7 @@ impl<M: Model> Instance<M> {
                 return Err(FmiError::error(format!("{name}: tolerance = {tol} must be finite and > 0")));
             }
         }
-        self.experiment = Experiment { tolerance, start_time: start, stop_time: stop };
+        self.experiment = Experiment { tolerance, start_time: start, stop_time: stop, ..self.experiment };
         self.time = start;
         Ok(())
     }
@@ -169,7 +177,7 @@ impl<M: Model> Instance<M> {
 
     pub fn exit_initialization_mode(&mut self) -> FmiResult {
         self.settle_initial_values().map_err(|e| prefixed(Call::ExitInitializationMode, e))?;
-        self.phase = Phase::StepComplete;
+        self.phase = if self.experiment.model_exchange { Phase::EventMode } else { Phase::StepComplete };
         self.log_event("initialization done");
         Ok(())
     }
@@ -206,7 +214,7 @@ impl<M: Model> Instance<M> {
         self.model = M::at_start_values();
         self.phase = Phase::Instantiated;
         self.time = 0.0;
-        self.experiment = Experiment::default();
+        self.experiment = Experiment { model_exchange: self.experiment.model_exchange, ..Experiment::default() };
         self.log_event("reset to the start values");
         Ok(())
     }
@@ -427,6 +435,76 @@ impl<M: Model> Instance<M> {
                 Err(FmiError { status: e.status, message: format!("{name} at t = {current} with h = {h}: {}", e.message) })
             }
         }
+    }
+
+    // ---- Model Exchange
+
+    pub fn set_time(&mut self, time: f64) -> FmiResult {
+        if !time.is_finite() {
+            return Err(FmiError::error(format!("{}: time = {time} must be finite", Call::SetTime.name())));
+        }
+        self.time = time;
+        Ok(())
+    }
+
+    fn check_count(call: Call, what: &str, given: usize, declared: usize) -> FmiResult {
+        if given == declared {
+            Ok(())
+        } else {
+            Err(FmiError::error(format!("{}: {given} {what} given, the model has {declared}", call.name())))
+        }
+    }
+
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
+        let call = Call::SetContinuousStates;
+        Self::check_count(call, "states", x.len(), Self::description().states.len())?;
+        if let Some(bad) = x.iter().find(|v| !v.is_finite()) {
+            return Err(FmiError::error(format!("{}: a state value is {bad}", call.name())));
+        }
+        self.model.set_continuous_states(x).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> FmiResult {
+        let call = Call::GetContinuousStates;
+        Self::check_count(call, "states", x.len(), Self::description().states.len())?;
+        self.prepare_get(call)?;
+        self.model.get_continuous_states(x).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> FmiResult {
+        let call = Call::GetDerivatives;
+        Self::check_count(call, "derivatives", dx.len(), Self::description().states.len())?;
+        self.prepare_get(call)?;
+        self.model.get_derivatives(dx).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn get_event_indicators(&mut self, z: &mut [f64]) -> FmiResult {
+        let call = Call::GetEventIndicators;
+        Self::check_count(call, "event indicators", z.len(), Self::description().number_of_event_indicators)?;
+        self.prepare_get(call)?;
+        self.model.get_event_indicators(z).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn get_nominals(&mut self, nominals: &mut [f64]) -> FmiResult {
+        let call = Call::GetNominalsOfContinuousStates;
+        Self::check_count(call, "nominals", nominals.len(), Self::description().states.len())?;
+        self.model.get_nominals(nominals).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn enter_event_mode(&mut self) -> FmiResult {
+        self.phase = Phase::EventMode;
+        Ok(())
+    }
+
+    /// The model has no discrete states and no time events; the slack
+    /// event indicator only marks a kink in the tension.
+    pub fn new_discrete_states(&mut self) -> DiscreteUpdate {
+        DiscreteUpdate::default()
+    }
+
+    pub fn enter_continuous_time_mode(&mut self) -> FmiResult {
+        self.phase = Phase::ContinuousTimeMode;
+        Ok(())
     }
 
     pub fn real_status(&self, kind: i32) -> FmiResult<f64> {

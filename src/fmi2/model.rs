@@ -4,11 +4,17 @@
 
 use super::description::{Causality, ModelDescription, Start};
 use super::snapshot::Persist;
-use super::status::FmiResult;
+use super::status::{FmiError, FmiResult};
 
-/// What the importer said in `fmi2SetupExperiment`.
+fn no_model_exchange() -> FmiError {
+    FmiError::error("this model does not implement Model Exchange")
+}
+
+/// What the importer said in `fmi2Instantiate` and `fmi2SetupExperiment`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Experiment {
+    /// The instance is a Model Exchange instance (the importer integrates).
+    pub model_exchange: bool,
     pub tolerance: Option<f64>,
     pub start_time: f64,
     pub stop_time: Option<f64>,
@@ -56,6 +62,30 @@ pub trait Model: Clone + Default + Persist + 'static {
     /// What happened inside the last step, for the `logEvents` category.
     fn step_events(&self) -> &[Event] {
         &[]
+    }
+
+    // Model Exchange. Slices have the lengths the description declares
+    // (`states`, `number_of_event_indicators`); the layer checks them.
+
+    fn get_continuous_states(&self, _x: &mut [f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    /// Must not change anything when it fails.
+    fn set_continuous_states(&mut self, _x: &[f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    fn get_derivatives(&self, _dx: &mut [f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    fn get_nominals(&self, _nominals: &mut [f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    fn get_event_indicators(&self, _z: &mut [f64]) -> FmiResult {
+        Err(no_model_exchange())
     }
 
     /// The model with every parameter and input at its start value.

@@ -1,6 +1,8 @@
-//! The FMI 2.0 co-simulation state machine: the phases an instance goes
-//! through and, for every function, the phases in which it may be called
-//! (FMI 2.0 standard, section 4.2.4, the state chart of the slave).
+//! The FMI 2.0 state machines: the phases an instance goes through and, for
+//! every function, the phases in which it may be called (FMI 2.0 standard:
+//! 3.2.3 for Model Exchange, 4.2.4 for Co-Simulation). One table serves both
+//! interfaces: a co-simulation instance never enters event or continuous-time
+//! mode, a model-exchange instance never a step phase.
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
@@ -10,16 +12,22 @@ pub enum Phase {
     StepFailed = 3,
     Terminated = 4,
     Error = 5,
+    /// Model Exchange: discrete-time changes may happen.
+    EventMode = 6,
+    /// Model Exchange: the importer integrates the continuous states.
+    ContinuousTimeMode = 7,
 }
 
 impl Phase {
-    pub const ALL: [Phase; 6] = [
+    pub const ALL: [Phase; 8] = [
         Phase::Instantiated,
         Phase::InitializationMode,
         Phase::StepComplete,
         Phase::StepFailed,
         Phase::Terminated,
         Phase::Error,
+        Phase::EventMode,
+        Phase::ContinuousTimeMode,
     ];
 
     const fn bit(self) -> u8 {
@@ -38,6 +46,8 @@ impl Phase {
             Phase::StepFailed => "step failed",
             Phase::Terminated => "terminated",
             Phase::Error => "error",
+            Phase::EventMode => "event mode",
+            Phase::ContinuousTimeMode => "continuous-time mode",
         }
     }
 }
@@ -48,7 +58,11 @@ const COMPLETE: u8 = Phase::StepComplete.bit();
 const FAILED: u8 = Phase::StepFailed.bit();
 const TERMINATED: u8 = Phase::Terminated.bit();
 const ERROR: u8 = Phase::Error.bit();
-const ANY: u8 = INSTANTIATED | INIT | COMPLETE | FAILED | TERMINATED | ERROR;
+const EVENT: u8 = Phase::EventMode.bit();
+const CONTINUOUS: u8 = Phase::ContinuousTimeMode.bit();
+const ANY: u8 = INSTANTIATED | INIT | COMPLETE | FAILED | TERMINATED | ERROR | EVENT | CONTINUOUS;
+/// Where values may be read: after initialization started, for diagnosis also after errors.
+const READABLE: u8 = INIT | COMPLETE | FAILED | TERMINATED | ERROR | EVENT | CONTINUOUS;
 const NONE: u8 = 0;
 
 /// Every fmi2 function that takes an instance.
@@ -76,7 +90,7 @@ pub enum Call {
     SerializeFMUstate,
     DeSerializeFMUstate,
     GetDirectionalDerivative,
-    // Model Exchange: not offered by this FMU's description (no <ModelExchange>).
+    // Model Exchange
     EnterEventMode,
     NewDiscreteStates,
     EnterContinuousTimeMode,
@@ -107,15 +121,17 @@ impl Call {
             SetDebugLogging | FreeInstance | Reset => ANY,
             SetupExperiment | EnterInitializationMode => INSTANTIATED,
             ExitInitializationMode => INIT,
-            Terminate => COMPLETE | FAILED,
-            GetReal | GetInteger | GetBoolean | GetString => INIT | COMPLETE | FAILED | TERMINATED | ERROR,
-            SetReal | SetInteger | SetBoolean | SetString => INSTANTIATED | INIT | COMPLETE,
+            Terminate => COMPLETE | FAILED | EVENT | CONTINUOUS,
+            GetReal | GetInteger | GetBoolean | GetString => READABLE,
+            SetReal | SetInteger | SetBoolean | SetString => INSTANTIATED | INIT | COMPLETE | EVENT | CONTINUOUS,
             GetFMUstate | SetFMUstate | FreeFMUstate | SerializedFMUstateSize | SerializeFMUstate
             | DeSerializeFMUstate => ANY,
-            GetDirectionalDerivative => INIT | COMPLETE | FAILED | TERMINATED | ERROR,
-            EnterEventMode | NewDiscreteStates | EnterContinuousTimeMode | CompletedIntegratorStep
-            | SetTime | SetContinuousStates | GetDerivatives | GetEventIndicators
-            | GetContinuousStates | GetNominalsOfContinuousStates => NONE,
+            GetDirectionalDerivative => READABLE,
+            EnterEventMode | SetTime => EVENT | CONTINUOUS,
+            NewDiscreteStates | EnterContinuousTimeMode => EVENT,
+            CompletedIntegratorStep | SetContinuousStates => CONTINUOUS,
+            GetDerivatives | GetEventIndicators | GetContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
+            GetNominalsOfContinuousStates => INSTANTIATED | EVENT | CONTINUOUS | TERMINATED | ERROR,
             SetRealInputDerivatives => INSTANTIATED | INIT | COMPLETE,
             GetRealOutputDerivatives => COMPLETE | FAILED | TERMINATED | ERROR,
             DoStep => COMPLETE,

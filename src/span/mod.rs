@@ -107,6 +107,12 @@ impl ConvertingSpan {
         Outputs { length, strain, tension, exit_force }
     }
 
+    /// dx/dt [2] now, with the inputs as they are.
+    fn unstretched_rate(&self) -> f64 {
+        let length = physics::span_length(&self.params, &self.inputs);
+        physics::unstretched_rate(&self.inputs, physics::strain(length, self.unstretched, 0.0))
+    }
+
     /// The bracket of [5]: the strain, plus d_r2 times its rate with damping.
     fn effective_strain(&self, length: f64, x: CompensatedSum, u: &Inputs, length_rate: f64) -> f64 {
         let p = &self.params;
@@ -204,6 +210,7 @@ impl ConvertingSpan {
             Real::summary_Stress => self.outputs().tension / p.span_web.area(),
             Real::unstretchedLength => self.unstretched.value(),
             Real::m_web => physics::web_mass(&p.span_web, self.unstretched.value()),
+            Real::der_unstretchedLength => self.unstretched_rate(),
         }
     }
 
@@ -248,7 +255,8 @@ impl ConvertingSpan {
             | Real::summary_Strain
             | Real::summary_Stress
             | Real::unstretchedLength
-            | Real::m_web => return None,
+            | Real::m_web
+            | Real::der_unstretchedLength => return None,
         })
     }
 
@@ -443,6 +451,21 @@ impl Model for ConvertingSpan {
         } else {
             p.strain_start
         };
+        if experiment.model_exchange {
+            // Model Exchange gives the current inputs only, not their rates.
+            if p.include_mass {
+                return Err(FmiError::error(
+                    "includeMass needs dv_b/dt (web_b.v's rate), which Model Exchange does not provide: \
+                     use Co-Simulation (input derivatives or the documented estimate) or set includeMass = false",
+                ));
+            }
+            if p.include_damping && p.variable_length {
+                return Err(FmiError::error(
+                    "includeDamping with variableLength needs dL/dt (the rollers' speeds), which Model Exchange \
+                     does not provide: use Co-Simulation or switch one of them off",
+                ));
+            }
+        }
         let choice = SolverChoice::from_i32(p.solver).ok_or_else(|| FmiError::error(format!("solver = {} is not a solver", p.solver)))?;
         if choice == SolverChoice::Exact && self.input_rates.is_some_and(|r| r != Inputs::default()) {
             return Err(FmiError::error(
@@ -466,6 +489,46 @@ impl Model for ConvertingSpan {
 
     fn step_events(&self) -> &[Event] {
         self.slack_event.as_slice()
+    }
+
+    // Model Exchange [13]: the importer integrates the unstretched length.
+
+    fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
+        x[0] = self.unstretched.value();
+        Ok(())
+    }
+
+    fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
+        if !(x[0] > 0.0) {
+            // An integrator's trial value, not a web: ask for a smaller step.
+            return Err(FmiError::discard(format!("unstretchedLength = {} m is not a length of web (must be > 0)", x[0])));
+        }
+        self.unstretched = CompensatedSum::from_parts(x[0], 0.0);
+        Ok(())
+    }
+
+    fn get_derivatives(&self, dx: &mut [f64]) -> FmiResult {
+        dx[0] = self.unstretched_rate();
+        Ok(())
+    }
+
+    /// The span length: the unstretched length is about that big.
+    fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
+        let length = physics::span_length(&self.params, &self.inputs);
+        nominals[0] = if length > 0.0 { length } else { 1.0 };
+        Ok(())
+    }
+
+    /// The bracket of [5] for a slack web (it crosses zero where the web goes
+    /// slack or takes up tension again); a constant 1 (never an event) otherwise.
+    fn get_event_indicators(&self, z: &mut [f64]) -> FmiResult {
+        z[0] = if self.params.prevent_negative_tension {
+            let length = physics::span_length(&self.params, &self.inputs);
+            self.effective_strain(length, self.unstretched, &self.inputs, 0.0)
+        } else {
+            1.0
+        };
+        Ok(())
     }
 }
 

@@ -302,67 +302,89 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     unsupported::<M>(c, Call::GetDirectionalDerivative, "providesDirectionalDerivative is false")
 }
 
-// ---- Model Exchange: this FMU is Co-Simulation only (no <ModelExchange>).
-
-const NO_ME: &str = "this FMU implements Co-Simulation only";
+// ---- Model Exchange
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-    unsupported::<M>(c, Call::EnterEventMode, NO_ME)
+    enter::<M>(c, Call::EnterEventMode, |h| h.instance.enter_event_mode().and(OK))
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn fmi2NewDiscreteStates(c: fmi2Component, _info: *mut fmi2EventInfo) -> fmi2Status {
-    unsupported::<M>(c, Call::NewDiscreteStates, NO_ME)
+pub unsafe extern "C" fn fmi2NewDiscreteStates(c: fmi2Component, info: *mut fmi2EventInfo) -> fmi2Status {
+    let call = Call::NewDiscreteStates;
+    enter::<M>(c, call, |h| {
+        let info = out_ref(call, info, "fmi2eventInfo")?;
+        let update = h.instance.new_discrete_states();
+        *info = fmi2EventInfo {
+            newDiscreteStatesNeeded: update.new_discrete_states_needed as fmi2Boolean,
+            terminateSimulation: update.terminate_simulation as fmi2Boolean,
+            nominalsOfContinuousStatesChanged: 0,
+            valuesOfContinuousStatesChanged: 0,
+            nextEventTimeDefined: update.next_event_time.is_some() as fmi2Boolean,
+            nextEventTime: update.next_event_time.unwrap_or(0.0),
+        };
+        OK
+    })
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-    unsupported::<M>(c, Call::EnterContinuousTimeMode, NO_ME)
+    enter::<M>(c, Call::EnterContinuousTimeMode, |h| h.instance.enter_continuous_time_mode().and(OK))
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
     c: fmi2Component,
     _no_set_prior: fmi2Boolean,
-    _enter_event_mode: *mut fmi2Boolean,
-    _terminate_simulation: *mut fmi2Boolean,
+    enter_event_mode: *mut fmi2Boolean,
+    terminate_simulation: *mut fmi2Boolean,
 ) -> fmi2Status {
-    unsupported::<M>(c, Call::CompletedIntegratorStep, NO_ME)
+    let call = Call::CompletedIntegratorStep;
+    enter::<M>(c, call, |_| {
+        // No step events: the model never asks for event mode or a stop here.
+        *out_ref(call, enter_event_mode, "enterEventMode")? = 0;
+        *out_ref(call, terminate_simulation, "terminateSimulation")? = 0;
+        OK
+    })
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, _time: fmi2Real) -> fmi2Status {
-    unsupported::<M>(c, Call::SetTime, NO_ME)
+pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+    enter::<M>(c, Call::SetTime, |h| h.instance.set_time(time).and(OK))
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, _x: *const fmi2Real, _nx: usize) -> fmi2Status {
-    unsupported::<M>(c, Call::SetContinuousStates, NO_ME)
+pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status {
+    let call = Call::SetContinuousStates;
+    enter::<M>(c, call, |h| h.instance.set_continuous_states(slice(call, x, nx, "x")?).and(OK))
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, _dx: *mut fmi2Real, _nx: usize) -> fmi2Status {
-    unsupported::<M>(c, Call::GetDerivatives, NO_ME)
+pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, dx: *mut fmi2Real, nx: usize) -> fmi2Status {
+    let call = Call::GetDerivatives;
+    enter::<M>(c, call, |h| h.instance.get_derivatives(slice_mut(call, dx, nx, "derivatives")?).and(OK))
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, _z: *mut fmi2Real, _ni: usize) -> fmi2Status {
-    unsupported::<M>(c, Call::GetEventIndicators, NO_ME)
+pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, z: *mut fmi2Real, ni: usize) -> fmi2Status {
+    let call = Call::GetEventIndicators;
+    enter::<M>(c, call, |h| h.instance.get_event_indicators(slice_mut(call, z, ni, "eventIndicators")?).and(OK))
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, _x: *mut fmi2Real, _nx: usize) -> fmi2Status {
-    unsupported::<M>(c, Call::GetContinuousStates, NO_ME)
+pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status {
+    let call = Call::GetContinuousStates;
+    enter::<M>(c, call, |h| h.instance.get_continuous_states(slice_mut(call, x, nx, "x")?).and(OK))
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
     c: fmi2Component,
-    _x_nominal: *mut fmi2Real,
-    _nx: usize,
+    x_nominal: *mut fmi2Real,
+    nx: usize,
 ) -> fmi2Status {
-    unsupported::<M>(c, Call::GetNominalsOfContinuousStates, NO_ME)
+    let call = Call::GetNominalsOfContinuousStates;
+    enter::<M>(c, call, |h| h.instance.get_nominals(slice_mut(call, x_nominal, nx, "x_nominal")?).and(OK))
 }
 
 // ---- Co-Simulation

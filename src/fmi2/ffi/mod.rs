@@ -39,6 +39,7 @@ pub type fmi2Status = c_int;
 pub type fmi2Type = c_int;
 pub type fmi2StatusKind = c_int;
 
+pub const fmi2ModelExchange: fmi2Type = 0;
 pub const fmi2CoSimulation: fmi2Type = 1;
 const fmi2Error: fmi2Status = Status::Error as fmi2Status;
 
@@ -204,12 +205,14 @@ unsafe fn instantiate<M: Model>(
         logger.log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {message}"));
         std::ptr::null_mut()
     };
-    if fmu_type != fmi2CoSimulation {
-        return refuse(format!(
-            "fmuType = {fmu_type} requested, but {} supports only Co-Simulation (fmi2CoSimulation = 1)",
-            description.model_identifier
-        ));
-    }
+    let model_exchange = match fmu_type {
+        fmi2CoSimulation => false,
+        fmi2ModelExchange if description.model_exchange => true,
+        _ => {
+            let offered = if description.model_exchange { "Model Exchange (0) and Co-Simulation (1)" } else { "only Co-Simulation (1)" };
+            return refuse(format!("fmuType = {fmu_type} requested, but {} offers {offered}", description.model_identifier));
+        }
+    };
     match text(guid) {
         Some(g) if g == description.guid => {}
         other => {
@@ -220,7 +223,7 @@ unsafe fn instantiate<M: Model>(
             ));
         }
     }
-    let instance = Instance::<M>::new(logger, logging_on != 0, text(resource_location));
+    let instance = Instance::<M>::new(logger, logging_on != 0, text(resource_location), model_exchange);
     Box::into_raw(Box::new(Handle { tag: TAG, instance, states: Vec::new(), poisoned: false })) as fmi2Component
 }
 
