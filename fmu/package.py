@@ -1,12 +1,15 @@
 #!/usr/bin/env python3
-"""Build the release library and write the FMU.
+"""Build the release libraries and write the FMUs: ConvertingSpan and Roller.
 
     python3 fmu/package.py [--out out/ConvertingSpan.fmu] [--no-build]
 
-The FMU holds modelDescription.xml, binaries/linux64/<modelIdentifier>.so and
-documentation/index.html. The documentation's variable and unit tables are
-rendered from modelDescription.xml, so they never disagree with the FMU.
-Only the Python standard library is used.
+Both come from the same crate: ConvertingSpan as `cargo build --release --lib`,
+Roller with the feature `roller` into target/roller; Roller.fmu is written
+next to ConvertingSpan.fmu. Each FMU holds its modelDescription.xml,
+binaries/linux64/<modelIdentifier>.so and documentation/index.html. The
+documentation's variable and unit tables are rendered from the model
+description, so they never disagree with the FMU. Only the Python standard
+library is used.
 """
 
 import argparse
@@ -18,16 +21,42 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-MODEL_DESCRIPTION = ROOT / "modelDescription.xml"
-TEMPLATE = ROOT / "fmu" / "documentation" / "index.html"
-LIBRARY = ROOT / "target" / "release" / "libconverting_span.so"
 RANGE_TOOL = "ConvertingSpan.range"
 # Fixed timestamp: the same inputs give the same archive bytes.
 ZIP_TIME = (2026, 1, 1, 0, 0, 0)
 
 
-def build_library():
-    subprocess.run(["cargo", "build", "--release", "--lib", "--quiet"], cwd=ROOT, check=True)
+class Model:
+    """One FMU of the crate: its interface, documentation and how to build its library."""
+
+    def __init__(self, name, description, template, features=(), target_dir=None):
+        self.name = name
+        self.description = description
+        self.template = template
+        self.features = list(features)
+        self.target_dir = target_dir  # None: cargo's default target/
+        self.library = (target_dir or ROOT / "target") / "release" / "libconverting_span.so"
+
+
+MODELS = [
+    Model("ConvertingSpan", ROOT / "modelDescription.xml", ROOT / "fmu" / "documentation" / "index.html"),
+    Model(
+        "Roller",
+        ROOT / "fmu" / "roller" / "modelDescription.xml",
+        ROOT / "fmu" / "roller" / "documentation" / "index.html",
+        features=["roller"],
+        target_dir=ROOT / "target" / "roller",
+    ),
+]
+
+
+def build_library(model):
+    command = ["cargo", "build", "--release", "--lib", "--quiet"]
+    if model.features:
+        command += ["--features", ",".join(model.features)]
+    if model.target_dir is not None:
+        command += ["--target-dir", str(model.target_dir)]
+    subprocess.run(command, cwd=ROOT, check=True)
 
 
 def allowed_range(var, t):
@@ -88,29 +117,33 @@ def unit_rows(root):
     return "\n".join(rows)
 
 
-def documentation(root):
-    text = TEMPLATE.read_text(encoding="utf-8")
+def documentation(root, template):
+    text = template.read_text(encoding="utf-8")
     replacements = {
         "<!-- VARIABLES -->": variable_rows(root),
-        "<!-- UNIT_CHOICES -->": unit_rows(root),
         "<!-- GUID -->": html.escape(root.get("guid")),
         "<!-- VERSION -->": html.escape(root.get("version", "")),
     }
+    # A model with enumerations (unit choices) documents them.
+    if root.find("TypeDefinitions") is not None:
+        replacements["<!-- UNIT_CHOICES -->"] = unit_rows(root)
     for key, value in replacements.items():
         if key not in text:
-            sys.exit(f"package.py: {TEMPLATE} lacks the placeholder {key}")
+            sys.exit(f"package.py: {template} lacks the placeholder {key}")
         text = text.replace(key, value)
     return text
 
 
-def write_fmu(out, library):
-    root = ET.parse(MODEL_DESCRIPTION).getroot()
+def write_fmu(out, model):
+    root = ET.parse(model.description).getroot()
     identifier = root.find("CoSimulation").get("modelIdentifier")
+    if identifier != model.name:
+        sys.exit(f"package.py: {model.description} names the model {identifier}, expected {model.name}")
     out.parent.mkdir(parents=True, exist_ok=True)
     entries = [
-        ("modelDescription.xml", MODEL_DESCRIPTION.read_bytes()),
-        (f"binaries/linux64/{identifier}.so", library.read_bytes()),
-        ("documentation/index.html", documentation(root).encode("utf-8")),
+        ("modelDescription.xml", model.description.read_bytes()),
+        (f"binaries/linux64/{identifier}.so", model.library.read_bytes()),
+        ("documentation/index.html", documentation(root, model.template).encode("utf-8")),
     ]
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
         for name, data in entries:
@@ -123,15 +156,23 @@ def write_fmu(out, library):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, default=ROOT / "out" / "ConvertingSpan.fmu", help="where to write the FMU")
-    parser.add_argument("--no-build", action="store_true", help="package the library as it is")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=ROOT / "out" / "ConvertingSpan.fmu",
+        help="where to write ConvertingSpan.fmu (Roller.fmu goes into the same folder)",
+    )
+    parser.add_argument("--no-build", action="store_true", help="package the libraries as they are")
     args = parser.parse_args()
-    if not args.no_build:
-        build_library()
-    if not LIBRARY.exists():
-        sys.exit(f"package.py: {LIBRARY} is missing; run without --no-build")
-    out = write_fmu(args.out.resolve(), LIBRARY)
-    print(f"wrote {out} ({out.stat().st_size} bytes; library {LIBRARY.stat().st_size} bytes)")
+    span_out = args.out.resolve()
+    for model in MODELS:
+        if not args.no_build:
+            build_library(model)
+        if not model.library.exists():
+            sys.exit(f"package.py: {model.library} is missing; run without --no-build")
+        out = span_out if model.name == "ConvertingSpan" else span_out.parent / f"{model.name}.fmu"
+        write_fmu(out, model)
+        print(f"wrote {out} ({out.stat().st_size} bytes; library {model.library.stat().st_size} bytes)")
 
 
 if __name__ == "__main__":
