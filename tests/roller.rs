@@ -166,7 +166,7 @@ fn save_and_load_continue_bit_identically() {
     set_inputs(&mut m, 800.0, 650.0, 3.0);
     m.do_step(0.123).unwrap();
     // Through the FMU-state format the layer serializes (magic, version, GUID, checksum).
-    let snapshot = Snapshot { phase: Phase::StepComplete, time: 0.123, model: m.clone() };
+    let snapshot = Snapshot { phase: Phase::StepComplete, time: 0.123, experiment: Default::default(), model: m.clone() };
     let bytes = snapshot.to_bytes(&DESCRIPTION);
     let back = Snapshot::<Roller>::from_bytes(&bytes, &DESCRIPTION).unwrap();
     assert_eq!(back, snapshot);
@@ -176,7 +176,7 @@ fn save_and_load_continue_bit_identically() {
     assert_eq!(copy.omega().to_bits(), m.omega().to_bits());
     // A span's state is refused by the roller (another GUID), and vice versa.
     let span = converting_span::span::ConvertingSpan::at_start_values();
-    let span_bytes = Snapshot { phase: Phase::StepComplete, time: 0.0, model: span }
+    let span_bytes = Snapshot { phase: Phase::StepComplete, time: 0.0, experiment: Default::default(), model: span }
         .to_bytes(&converting_span::span::description::DESCRIPTION);
     let err = Snapshot::<Roller>::from_bytes(&span_bytes, &DESCRIPTION).unwrap_err();
     assert!(err.contains("another model"), "{err}");

@@ -322,10 +322,15 @@ fn saved_fields_load_back_identically() {
     m.params.force_unit = 6;
     m.initialize(&Experiment::default()).unwrap();
     m.do_step(0.123).unwrap();
-    let snapshot = converting_span::fmi2::snapshot::Snapshot { phase: converting_span::fmi2::phase::Phase::StepComplete, time: 0.123, model: m.clone() };
+    let snapshot = converting_span::fmi2::snapshot::Snapshot {
+        phase: converting_span::fmi2::phase::Phase::StepComplete,
+        time: 0.123,
+        experiment: Experiment { tolerance: Some(1e-9), ..Experiment::default() },
+        model: m.clone(),
+    };
     let bytes = snapshot.to_bytes(ConvertingSpan::description());
     let back = converting_span::fmi2::snapshot::Snapshot::<ConvertingSpan>::from_bytes(&bytes, ConvertingSpan::description()).unwrap();
-    assert_eq!(back.model, m, "every field survives save and load");
+    assert_eq!(back, snapshot, "every field survives save and load");
 }
 
 #[test]

@@ -63,7 +63,6 @@ const CONTINUOUS: u8 = Phase::ContinuousTimeMode.bit();
 const ANY: u8 = INSTANTIATED | INIT | COMPLETE | FAILED | TERMINATED | ERROR | EVENT | CONTINUOUS;
 /// Where values may be read: after initialization started, for diagnosis also after errors.
 const READABLE: u8 = INIT | COMPLETE | FAILED | TERMINATED | ERROR | EVENT | CONTINUOUS;
-const NONE: u8 = 0;
 
 /// Every fmi2 function that takes an instance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -135,8 +134,9 @@ impl Call {
             SetRealInputDerivatives => INSTANTIATED | INIT | COMPLETE,
             GetRealOutputDerivatives => COMPLETE | FAILED | TERMINATED | ERROR,
             DoStep => COMPLETE,
-            // Steps are synchronous, so there is never a step in progress to cancel.
-            CancelStep => NONE,
+            // Steps are synchronous, so there is never a step in progress to
+            // cancel; accepted where a step could be, to say "not supported".
+            CancelStep => COMPLETE | FAILED,
             GetStatus | GetRealStatus | GetIntegerStatus | GetBooleanStatus | GetStringStatus => {
                 COMPLETE | FAILED | TERMINATED
             }

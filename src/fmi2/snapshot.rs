@@ -8,17 +8,19 @@
 //! | 8..12        | format version (u32)                                 |
 //! | 12..20       | FNV-1a hash of the model's GUID (u64): foreign states|
 //! | 20..24       | payload length n (u32)                               |
-//! | 24..24+n     | payload: phase (u8), time (f64), model fields        |
+//! | 24..24+n     | payload: phase (u8), time (f64), experiment, model   |
 //! | 24+n..32+n   | FNV-1a checksum of bytes 0..24+n (u64)               |
 //!
 //! Reals are stored as their bit patterns, so a restored state continues
 //! bit-identically.
 
 use super::description::ModelDescription;
+use super::model::Experiment;
 use super::phase::Phase;
 
 const MAGIC: &[u8; 8] = b"FMI2SNAP";
-const FORMAT_VERSION: u32 = 1;
+/// 2: the experiment (interface, tolerance, start and stop time) is saved too.
+const FORMAT_VERSION: u32 = 2;
 const HEADER: usize = 24;
 const TRAILER: usize = 8;
 
@@ -27,6 +29,7 @@ const TRAILER: usize = 8;
 pub struct Snapshot<M> {
     pub phase: Phase,
     pub time: f64,
+    pub experiment: Experiment,
     pub model: M,
 }
 
@@ -103,6 +106,13 @@ impl<M: Persist> Snapshot<M> {
         let mut payload = StateWriter::default();
         payload.bytes.push(self.phase as u8);
         payload.f64(self.time);
+        let e = &self.experiment;
+        payload.bool(e.model_exchange);
+        payload.bool(e.tolerance.is_some());
+        payload.f64(e.tolerance.unwrap_or(0.0));
+        payload.f64(e.start_time);
+        payload.bool(e.stop_time.is_some());
+        payload.f64(e.stop_time.unwrap_or(0.0));
         self.model.save(&mut payload);
         let n = payload.bytes.len();
         let mut out = Vec::with_capacity(HEADER + n + TRAILER);
@@ -144,10 +154,17 @@ impl<M: Persist> Snapshot<M> {
         let phase_byte = reader.take::<1>("phase")?[0];
         let phase = Phase::from_u8(phase_byte).ok_or_else(|| format!("phase {phase_byte} is unknown"))?;
         let time = reader.finite("time")?;
+        let model_exchange = reader.bool("interface")?;
+        let tolerance_given = reader.bool("tolerance given")?;
+        let tolerance = Some(reader.finite("tolerance")?).filter(|_| tolerance_given);
+        let start_time = reader.finite("start time")?;
+        let stop_given = reader.bool("stop time given")?;
+        let stop_time = Some(reader.finite("stop time")?).filter(|_| stop_given);
+        let experiment = Experiment { model_exchange, tolerance, start_time, stop_time };
         let model = M::load(&mut reader)?;
         if !reader.bytes.is_empty() {
             return Err(format!("{} bytes left over after the model's fields", reader.bytes.len()));
         }
-        Ok(Snapshot { phase, time, model })
+        Ok(Snapshot { phase, time, experiment, model })
     }
 }

@@ -224,7 +224,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
     let call = Call::SetFMUstate;
     enter::<M>(c, call, |h| {
         let snapshot = h.own_state(call, state)?.clone();
-        h.instance.restore(&snapshot);
+        h.instance.restore(call, &snapshot)?;
         OK
     })
 }
@@ -283,6 +283,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     enter::<M>(c, call, |h| {
         let bytes = slice(call, serialized as *const u8, size, "serializedState")?;
         let snapshot = Snapshot::<M>::from_bytes(bytes, M::description())
+            .and_then(|s| Instance::<M>::check_snapshot(&s).map(|()| s))
             .map_err(|why| FmiError::error(format!("{}: rejected: {why}", call.name())))?;
         h.keep_state(call, state, snapshot)?;
         OK
