@@ -98,7 +98,7 @@ impl ConvertingSpan {
         let x = self.unstretched.value();
         // Effects that are off are not computed at all.
         let rates = if p.include_damping || p.include_mass { self.input_rates() } else { Rates::default() };
-        let tension = physics::tension(p, self.effective_strain(length, self.unstretched, u, rates.length));
+        let tension = physics::tension(p, self.effective_strain(length, strain, x, u, rates.length));
         let exit_force = if p.include_mass {
             tension + physics::momentum_difference(p, u, strain, x, rates.speed_b)
         } else {
@@ -114,15 +114,20 @@ impl ConvertingSpan {
     }
 
     /// The bracket of [5]: the strain, plus d_r2 times its rate with damping.
-    fn effective_strain(&self, length: f64, x: CompensatedSum, u: &Inputs, length_rate: f64) -> f64 {
+    fn effective_strain(&self, length: f64, strain: f64, x: f64, u: &Inputs, length_rate: f64) -> f64 {
         let p = &self.params;
-        let strain = physics::strain(length, x, 0.0);
         if p.include_damping {
             let rate = physics::unstretched_rate(u, strain);
-            strain + p.span_web.retardation_time * physics::strain_rate(length, length_rate, x.value(), strain, rate)
+            strain + p.span_web.retardation_time * physics::strain_rate(length, length_rate, x, strain, rate)
         } else {
             strain
         }
+    }
+
+    /// The bracket of [5] for a state x and inputs u.
+    fn effective_strain_at(&self, x: CompensatedSum, u: &Inputs, length_rate: f64) -> f64 {
+        let length = physics::span_length(&self.params, u);
+        self.effective_strain(length, physics::strain(length, x, 0.0), x.value(), u, length_rate)
     }
 
     /// With a slack web, where inside the step [0, h] the tension crossed
@@ -134,10 +139,7 @@ impl ConvertingSpan {
         let zero_rates = Inputs::default();
         let r = rates.unwrap_or(&zero_rates);
         let length_rate = physics::length_rate(p, start, r);
-        let tension_at = |tau: f64, x: CompensatedSum| {
-            let u = start.advanced(r, tau);
-            self.effective_strain(physics::span_length(p, &u), x, &u, length_rate)
-        };
+        let tension_at = |tau: f64, x: CompensatedSum| self.effective_strain_at(x, &start.advanced(r, tau), length_rate);
         let (g0, g1) = (tension_at(0.0, x0), tension_at(h, next));
         if (g0 > 0.0) == (g1 > 0.0) {
             return None;
@@ -523,8 +525,7 @@ impl Model for ConvertingSpan {
     /// slack or takes up tension again); a constant 1 (never an event) otherwise.
     fn get_event_indicators(&self, z: &mut [f64]) -> FmiResult {
         z[0] = if self.params.prevent_negative_tension {
-            let length = physics::span_length(&self.params, &self.inputs);
-            self.effective_strain(length, self.unstretched, &self.inputs, 0.0)
+            self.effective_strain_at(self.unstretched, &self.inputs, 0.0)
         } else {
             1.0
         };
