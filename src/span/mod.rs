@@ -6,19 +6,25 @@
 //! * `stepping` — one communication step: the choice of method, the balance
 //!   written for the integrators;
 //! * `sensor` — unit conversion of the sensor outputs;
+//! * `slack` — where inside a step a slack web's tension crosses zero;
+//! * `variables` — which field each variable of the model description is;
+//! * `persist` — the fields in an FMU state;
 //! * `description` — the interface generated from modelDescription.xml;
-//! * this file — the mapping of variables to fields, and the FMI model hooks.
+//! * this file — the model's data, its outputs, one step, and the FMI hooks.
 
 pub mod description;
 pub mod parameters;
+mod persist;
 pub mod physics;
 pub mod sensor;
+mod slack;
 pub mod stepping;
+mod variables;
 
-use crate::fmi2::{Event, Experiment, FmiError, FmiResult, Model, Persist, StateReader, StateWriter};
+use crate::fmi2::{Event, Experiment, FmiError, FmiResult, Model};
 use crate::solver::CompensatedSum;
 use description::{Boolean, Integer, Real, DESCRIPTION};
-use parameters::{Inputs, Parameters, SolverChoice, WebProperties};
+use parameters::{Inputs, Parameters, SolverChoice};
 use sensor::SensorScale;
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -130,170 +136,6 @@ impl ConvertingSpan {
         self.effective_strain(length, physics::strain(length, x, 0.0), x.value(), u, length_rate)
     }
 
-    /// With a slack web, where inside the step [0, h] the tension crossed
-    /// zero: bisection on the step's trajectory (exact for held inputs, a
-    /// cubic Hermite interpolant of the integrator's end points otherwise).
-    fn slack_crossing(&self, start: &Inputs, rates: Option<&Inputs>, next: CompensatedSum, h: f64) -> Option<Event> {
-        let p = &self.params;
-        let x0 = self.unstretched;
-        let zero_rates = Inputs::default();
-        let r = rates.unwrap_or(&zero_rates);
-        let length_rate = physics::length_rate(p, start, r);
-        let tension_at = |tau: f64, x: CompensatedSum| self.effective_strain_at(x, &start.advanced(r, tau), length_rate);
-        let (g0, g1) = (tension_at(0.0, x0), tension_at(h, next));
-        if (g0 > 0.0) == (g1 > 0.0) {
-            return None;
-        }
-        let change = (next.hi() - x0.hi()) + (next.lo() - x0.lo());
-        let (f0, f1) = (
-            physics::unstretched_rate(start, physics::strain(physics::span_length(p, start), x0, 0.0)),
-            {
-                let u = start.advanced(r, h);
-                physics::unstretched_rate(&u, physics::strain(physics::span_length(p, &u), next, 0.0))
-            },
-        );
-        let trajectory = |tau: f64| -> CompensatedSum {
-            if rates.is_none() {
-                physics::exact_step(physics::span_length(p, start), start, x0, tau)
-            } else {
-                // Cubic Hermite on [0, h] through (x0, f0) and (x1, f1).
-                let s = tau / h;
-                let (h10, h01, h11) = (s.powi(3) - 2.0 * s * s + s, -2.0 * s.powi(3) + 3.0 * s * s, s.powi(3) - s * s);
-                x0.plus(h10 * h * f0 + h01 * change + h11 * h * f1)
-            }
-        };
-        let (mut lo, mut hi) = (0.0, h);
-        for _ in 0..64 {
-            let mid = 0.5 * (lo + hi);
-            if (tension_at(mid, trajectory(mid)) > 0.0) == (g0 > 0.0) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        let what = if g0 > 0.0 { "the web goes slack (tension reaches 0)" } else { "the web takes up tension again" };
-        Some(Event { offset: 0.5 * (lo + hi), what })
-    }
-
-    /// The value of a Real variable.
-    #[inline]
-    pub fn real(&self, var: Real) -> f64 {
-        let p = &self.params;
-        let u = &self.inputs;
-        let sensor_on = |x: f64| if p.use_sensor { x } else { 0.0 };
-        match var {
-            Real::L => p.span_length,
-            Real::wp1_E => p.incoming.modulus,
-            Real::wp1_thickness => p.incoming.thickness,
-            Real::wp1_width => p.incoming.width,
-            Real::wp1_density => p.incoming.density,
-            Real::wp1_d_r => p.incoming.retardation_time,
-            Real::wp2_E => p.span_web.modulus,
-            Real::wp2_thickness => p.span_web.thickness,
-            Real::wp2_width => p.span_web.width,
-            Real::wp2_density => p.span_web.density,
-            Real::wp2_d_r => p.span_web.retardation_time,
-            Real::eps_start => p.strain_start,
-            Real::tolerance => p.tolerance,
-            Real::web_a_v => u.speed_a,
-            Real::web_a_eps => u.strain_a,
-            Real::web_b_v => u.speed_b,
-            Real::frame_a_x => u.frame_a[0],
-            Real::frame_a_y => u.frame_a[1],
-            Real::frame_b_x => u.frame_b[0],
-            Real::frame_b_y => u.frame_b[1],
-            Real::v => sensor_on(u.speed_b * self.sensor.speed),
-            Real::T => sensor_on(self.outputs().tension * self.sensor.force),
-            Real::web_a_F | Real::summary_Tension => self.outputs().tension,
-            Real::web_b_F => self.outputs().exit_force,
-            Real::web_b_eps | Real::summary_Strain => self.outputs().strain,
-            Real::summary_Length => self.outputs().length,
-            // [8] stress on the unstrained cross-section of wp2
-            Real::summary_Stress => self.outputs().tension / p.span_web.area(),
-            Real::unstretchedLength => self.unstretched.value(),
-            Real::m_web => physics::web_mass(&p.span_web, self.unstretched.value()),
-            Real::der_unstretchedLength => self.unstretched_rate(),
-        }
-    }
-
-    /// The field behind a Real parameter or input; `None` for outputs.
-    #[inline]
-    fn real_field(&mut self, var: Real) -> Option<&mut f64> {
-        let p = &mut self.params;
-        let u = &mut self.inputs;
-        fn web(w: &mut WebProperties, field: Real) -> Option<&mut f64> {
-            Some(match field {
-                Real::wp1_E | Real::wp2_E => &mut w.modulus,
-                Real::wp1_thickness | Real::wp2_thickness => &mut w.thickness,
-                Real::wp1_width | Real::wp2_width => &mut w.width,
-                Real::wp1_density | Real::wp2_density => &mut w.density,
-                _ => &mut w.retardation_time,
-            })
-        }
-        Some(match var {
-            Real::L => &mut p.span_length,
-            Real::wp1_E | Real::wp1_thickness | Real::wp1_width | Real::wp1_density | Real::wp1_d_r => {
-                return web(&mut p.incoming, var)
-            }
-            Real::wp2_E | Real::wp2_thickness | Real::wp2_width | Real::wp2_density | Real::wp2_d_r => {
-                return web(&mut p.span_web, var)
-            }
-            Real::eps_start => &mut p.strain_start,
-            Real::tolerance => &mut p.tolerance,
-            Real::web_a_v => &mut u.speed_a,
-            Real::web_a_eps => &mut u.strain_a,
-            Real::web_b_v => &mut u.speed_b,
-            Real::frame_a_x => &mut u.frame_a[0],
-            Real::frame_a_y => &mut u.frame_a[1],
-            Real::frame_b_x => &mut u.frame_b[0],
-            Real::frame_b_y => &mut u.frame_b[1],
-            Real::v
-            | Real::T
-            | Real::web_a_F
-            | Real::web_b_F
-            | Real::web_b_eps
-            | Real::summary_Tension
-            | Real::summary_Length
-            | Real::summary_Strain
-            | Real::summary_Stress
-            | Real::unstretchedLength
-            | Real::m_web
-            | Real::der_unstretchedLength => return None,
-        })
-    }
-
-    /// Sets a parameter or input; `Err` for variables that cannot be set.
-    #[inline]
-    pub fn set_real_var(&mut self, var: Real, x: f64) -> FmiResult {
-        match self.real_field(var) {
-            Some(field) => {
-                *field = x;
-                Ok(())
-            }
-            None => Err(not_settable(var)),
-        }
-    }
-
-    fn boolean_field(p: &mut Parameters, var: Boolean) -> &mut bool {
-        match var {
-            Boolean::includeDamping => &mut p.include_damping,
-            Boolean::preventNegativeTension => &mut p.prevent_negative_tension,
-            Boolean::includeMass => &mut p.include_mass,
-            Boolean::variableLength => &mut p.variable_length,
-            Boolean::startAtEquilibrium => &mut p.start_at_equilibrium,
-            Boolean::useSensor => &mut p.use_sensor,
-        }
-    }
-
-    fn integer_field(p: &mut Parameters, var: Integer) -> &mut i32 {
-        match var {
-            Integer::toUnitV => &mut p.speed_unit,
-            Integer::toUnitF => &mut p.force_unit,
-            Integer::solver => &mut p.solver,
-            Integer::substeps => &mut p.substeps,
-        }
-    }
-
     /// Advances over one communication step of length h [3].
     fn advance(&mut self, h: f64) -> FmiResult {
         let start = self.inputs;
@@ -369,11 +211,6 @@ fn check_length(length: f64) -> FmiResult {
             "the span length |frame_b - frame_a| reaches {length} m within the step: the rollers meet"
         )))
     }
-}
-
-#[cold]
-fn not_settable(var: Real) -> FmiError {
-    FmiError::error(format!("{} cannot be set", var.name()))
 }
 
 #[cold]
@@ -545,119 +382,4 @@ pub fn effective_tolerance(parameter: f64, experiment: Option<f64>) -> f64 {
         Some(t) if parameter == default => t,
         _ => parameter,
     }
-}
-
-impl Persist for ConvertingSpan {
-    fn save(&self, out: &mut StateWriter) {
-        let p = &self.params;
-        out.f64(p.span_length);
-        for web in [&p.incoming, &p.span_web] {
-            for x in [web.modulus, web.thickness, web.width, web.density, web.retardation_time] {
-                out.f64(x);
-            }
-        }
-        for b in [
-            p.include_damping,
-            p.prevent_negative_tension,
-            p.include_mass,
-            p.variable_length,
-            p.start_at_equilibrium,
-            p.use_sensor,
-        ] {
-            out.bool(b);
-        }
-        out.f64(p.strain_start);
-        for i in [p.speed_unit, p.force_unit, p.solver, p.substeps] {
-            out.i32(i);
-        }
-        out.f64(p.tolerance);
-        save_inputs(out, &self.inputs);
-        out.bool(self.input_rates.is_some());
-        save_inputs(out, &self.input_rates.unwrap_or_default());
-        out.f64(self.unstretched.hi());
-        out.f64(self.unstretched.lo());
-        for x in [self.rates.speed_b, self.rates.length, self.previous.speed_b, self.previous.length, self.previous.step] {
-            out.f64(x);
-        }
-        out.f64(self.adaptive_step);
-        out.f64(self.tolerance);
-    }
-
-    fn load(r: &mut StateReader) -> Result<Self, String> {
-        let span_length = r.finite("L")?;
-        let mut web = |prefix: &str| -> Result<WebProperties, String> {
-            Ok(WebProperties {
-                modulus: r.finite(&format!("{prefix}.E"))?,
-                thickness: r.finite(&format!("{prefix}.thickness"))?,
-                width: r.finite(&format!("{prefix}.width"))?,
-                density: r.finite(&format!("{prefix}.density"))?,
-                retardation_time: r.finite(&format!("{prefix}.d_r"))?,
-            })
-        };
-        let incoming = web("wp1")?;
-        let span_web = web("wp2")?;
-        let params = Parameters {
-            span_length,
-            incoming,
-            span_web,
-            include_damping: r.bool("includeDamping")?,
-            prevent_negative_tension: r.bool("preventNegativeTension")?,
-            include_mass: r.bool("includeMass")?,
-            variable_length: r.bool("variableLength")?,
-            start_at_equilibrium: r.bool("startAtEquilibrium")?,
-            use_sensor: r.bool("useSensor")?,
-            strain_start: r.finite("eps_start")?,
-            speed_unit: r.i32("toUnitV")?,
-            force_unit: r.i32("toUnitF")?,
-            solver: r.i32("solver")?,
-            substeps: r.i32("substeps")?,
-            tolerance: r.finite("tolerance")?,
-        };
-        let inputs = load_inputs(r)?;
-        let has_rates = r.bool("input derivatives given")?;
-        let rates = load_inputs(r)?;
-        let unstretched = CompensatedSum::from_parts(r.finite("unstretched length")?, r.finite("unstretched length carry")?);
-        let rates_out = Rates { speed_b: r.finite("dv_b/dt")?, length: r.finite("dL/dt")? };
-        let previous = Previous {
-            speed_b: r.finite("previous web_b.v")?,
-            length: r.finite("previous length")?,
-            step: r.finite("previous step")?,
-        };
-        let adaptive_step = r.finite("adaptive step")?;
-        let tolerance = r.finite("effective tolerance")?;
-        // Derived from the parameters; a state saved before initialization
-        // ended has none yet, and that is kept so.
-        let sensor = SensorScale::new(&params).unwrap_or_default();
-        let solver = SolverChoice::from_i32(params.solver).unwrap_or_default();
-        Ok(ConvertingSpan {
-            params,
-            inputs,
-            input_rates: has_rates.then_some(rates),
-            unstretched,
-            rates: rates_out,
-            previous,
-            adaptive_step,
-            sensor,
-            tolerance,
-            solver,
-            // Transient: what happened inside the last step, not state.
-            slack_event: None,
-        })
-    }
-}
-
-fn save_inputs(out: &mut StateWriter, u: &Inputs) {
-    for x in [u.speed_a, u.strain_a, u.speed_b, u.frame_a[0], u.frame_a[1], u.frame_b[0], u.frame_b[1]] {
-        out.f64(x);
-    }
-}
-
-fn load_inputs(r: &mut StateReader) -> Result<Inputs, String> {
-    Ok(Inputs {
-        speed_a: r.finite("web_a.v")?,
-        strain_a: r.finite("web_a.eps")?,
-        speed_b: r.finite("web_b.v")?,
-        frame_a: [r.finite("frame_a.x")?, r.finite("frame_a.y")?],
-        frame_b: [r.finite("frame_b.x")?, r.finite("frame_b.y")?],
-    })
 }
