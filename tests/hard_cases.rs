@@ -550,9 +550,6 @@ fn explicit_solvers_refuse_just_beyond_their_limit_and_dopri5_beyond_its_work_bo
 }
 
 #[test]
-#[ignore = "BUG: rk4/euler check lambda*h/substeps only at the step's ends; with moving rollers L (and so \
-            lambda) peaks inside the step and the step returns Ok with a wrong state \
-            (see tests/python/test_hard_cases.py::test_explicit_solvers_refuse_when_lambda_peaks_inside_the_step)"]
 fn explicit_solvers_refuse_when_lambda_peaks_inside_the_step() {
     // frame_b crosses the span's line in one step: L = 0.583 m at both ends,
     // 0.3 m in the middle; lambda*h/substeps at the ends 0.72 (rk4) / 0.74

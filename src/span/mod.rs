@@ -161,9 +161,14 @@ impl ConvertingSpan {
         };
         let x = next.value();
         if !(x.is_finite() && x > 0.0) {
+            let why = if start.speed_b < start.speed_a.min(0.0) {
+                "web fed in from both ends grows without bound"
+            } else {
+                "the method could not follow the span over this step"
+            };
             return Err(FmiError::discard(format!(
                 "the unstretched length of web in the span would become {x} m (web_a.v = {}, web_b.v = {}): \
-                 web fed in from both ends grows without bound; take a shorter step",
+                 {why}; take a shorter step",
                 start.speed_a, start.speed_b
             )));
         }

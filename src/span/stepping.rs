@@ -109,8 +109,7 @@ pub fn integrate(
     let length = physics::span_length(p, &balance.start);
     let explicit = |method: Method| -> FmiResult<(CompensatedSum, f64)> {
         let n = substeps.max(1) as usize;
-        let lambda = physics::decay_rate(length, &balance.start)
-            .max(physics::decay_rate(physics::span_length(p, &balance.inputs_at(h)), &balance.inputs_at(h)));
+        let lambda = largest_decay_rate(balance);
         let limit = method.stability_limit();
         if lambda * h / n as f64 > limit {
             let needed = (lambda * h / limit).ceil();
@@ -148,6 +147,17 @@ pub fn integrate(
             Ok((balance.x0.plus(solved.y[0]), solved.next_step))
         }
     }
+}
+
+/// An upper bound of lambda = (v_b - min(v_a, 0)) / L over the step: with
+/// linear inputs the numerator is convex and piecewise linear, so largest
+/// at an end; L is smallest where `shortest_length` says, possibly inside
+/// the step (a moving roller passing closest).
+fn largest_decay_rate(balance: &Balance) -> f64 {
+    let numerator = |u: &Inputs| u.speed_b - u.speed_a.min(0.0);
+    let end = balance.inputs_at(balance.step);
+    let largest = numerator(&balance.start).max(numerator(&end));
+    largest / shortest_length(balance.params, &balance.start, &balance.rates, balance.step)
 }
 
 fn failure(choice: SolverChoice, f: Failure) -> FmiError {

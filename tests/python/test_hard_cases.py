@@ -226,10 +226,6 @@ def test_explicit_solvers_refuse_rather_than_return_garbage(span, solver):
 CROSSING = {"rk4": 0.72, "euler": 0.74}  # lambda*h/substeps at the ends, as a fraction of the limit
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "BUG: the rk4/euler stability check (stepping::integrate) takes lambda at the two ends of the step only; "
-    "with moving rollers L has its minimum inside the step, lambda*h/substeps exceeds the limit there, and the "
-    "step returns fmi2OK with a wrong state (rk4: strain 0.515, exact 0.0734; euler: strain 0.726, exact 0.0976)"))
 @pytest.mark.parametrize("solver", ["rk4", "euler"])
 def test_explicit_solvers_refuse_when_lambda_peaks_inside_the_step(span, solver):
     """variableLength, 30 m/s, frame_a = (0, 0), frame_b from (0.3, -0.5) to
