@@ -17,9 +17,17 @@ apt_install() {
 command -v cargo >/dev/null || { echo "env.sh: cargo (the Rust toolchain) is needed" >&2; exit 1; }
 command -v gcc >/dev/null || apt_install gcc libc6-dev
 
-if ! "$PY" -c "import fmpy, pytest, mpmath, numpy, matplotlib" 2>/dev/null; then
+# The venv is (re)filled whenever fmu/requirements.txt changes: a stamp in
+# the venv holds the checksum of the requirements it was installed from.
+STAMP="$VENV/.requirements.sha256"
+WANT="$(sha256sum "$ROOT/fmu/requirements.txt" | cut -d' ' -f1)"
+if [ ! -x "$PY" ]; then
     echo "env.sh: creating $VENV"
     python3 -m venv "$VENV" 2>/dev/null || { apt_install python3-venv && python3 -m venv "$VENV"; }
-    "$PY" -m pip install --quiet --disable-pip-version-check -r "$ROOT/fmu/requirements.txt"
+fi
+if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ]; then
+    echo "env.sh: installing the Python tools into $VENV (fmu/requirements.txt)"
+    (cd "$ROOT/fmu" && "$PY" -m pip install --quiet --disable-pip-version-check -r requirements.txt)
+    echo "$WANT" > "$STAMP"
 fi
 export MPLBACKEND=Agg
