@@ -1,0 +1,13 @@
+"""webline: web lines of ConvertingSpan and Roller FMUs, co-simulated with FMPy.
+
+    webline run fmu/scenes/lamination.json      # CSV, PNG and a summary in out/
+    python -m webline --help
+
+Modules: `scene` (the JSON format, read strictly), `master` (the
+co-simulation), `reference` (the monolithic SciPy reference), `container`
+(the same line as an FMPy container FMU), `sweep` (parameter grids on Dask).
+"""
+
+from .scene import SceneError, load_scene, parse_scene  # noqa: F401
+
+__all__ = ["load_scene", "parse_scene", "SceneError"]
