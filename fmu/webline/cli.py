@@ -1,0 +1,253 @@
+"""The `webline` command.
+
+    webline run SCENE.json [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
+    webline check SCENE.json ...
+    webline reference SCENE.json
+    webline convergence SCENE.json [--steps 2ms,1ms,0.5ms]
+    webline container SCENE.json
+    webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import units
+from .fmus import DEFAULT_FMU_DIR, FmuError
+from .master import ALGORITHMS, COUPLINGS, CoSimulation, CoSimulationError, Options
+from .result import Result
+from .scene import Dancer, SceneError, Span, load_scene
+
+OUT = DEFAULT_FMU_DIR  # <repo>/out
+
+
+def time_arg(text: str) -> float:
+    """A time on the command line: "1ms", "1 ms", "0.001" (seconds)."""
+    t = text.strip()
+    try:
+        return float(t)
+    except ValueError:
+        pass
+    for unit in ("ms", "us", "min", "s"):
+        if t.endswith(unit):
+            return units.parse_quantity(f"{t[: -len(unit)].strip()} {unit}", units.TIME)
+    raise argparse.ArgumentTypeError(f"{text!r} is not a time (e.g. 1ms, 0.5 ms, 0.001)")
+
+
+def add_master_options(p):
+    p.add_argument("--step", type=time_arg, help="communication step (default: the scene's)")
+    p.add_argument("--algorithm", choices=ALGORITHMS, default="gauss-seidel")
+    p.add_argument("--coupling", choices=COUPLINGS, default="extrapolate",
+                   help="extrapolate: input extrapolation, input derivatives for the spans (default); hold: zero-order hold")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR, help="where ConvertingSpan.fmu and Roller.fmu are (default: out/)")
+    p.add_argument("--no-rollback", action="store_true", help="do not save FMU states; a discarded step is an error")
+
+
+def options_of(args, progress=False) -> Options:
+    return Options(
+        algorithm=args.algorithm,
+        coupling=args.coupling,
+        step=args.step,
+        rollback=not args.no_rollback,
+        fmu_dir=args.fmu_dir,
+        progress=progress,
+    )
+
+
+def summary(scene, result: Result) -> str:
+    info = result.info
+    lines = [
+        f"{scene.name}: {info['method']}, step {info['step'] * 1e3:g} ms, {info['steps']} steps, "
+        f"{info['rollbacks']} rollbacks, {info['instances']} FMU instances"
+        + (f" ({info['replaced']} replaced by events)" if info.get("replaced") else "")
+        + f", {info['wall_time']:.2f} s wall time",
+    ]
+    keys = result.keys()
+    spans = [c for c in scene.line if isinstance(c, Span) and f"{c.name}.T" in keys]
+    if spans:
+        lines.append(f"  {'span':<14}{'T start':>10}{'T min':>10}{'T max':>10}{'T end':>10}  [N]  slack")
+        for sp in spans:
+            T = result.column(f"{sp.name}.T")
+            slack = ""
+            if "preventNegativeTension" in sp.effects:
+                dt = np.diff(result.time)
+                slack_time = float(np.sum(dt[(T[1:] <= 0.0)]))
+                slack = f"{slack_time:.3f} s"
+            lines.append(f"  {sp.name:<14}{T[0]:>10.1f}{T.min():>10.1f}{T.max():>10.1f}{T[-1]:>10.1f}       {slack}")
+    nodes = [c for c in scene.line if not isinstance(c, Span) and f"{c.name}.v" in keys]
+    if nodes:
+        lines.append(f"  {'roller':<14}{'v start':>10}{'v min':>10}{'v max':>10}{'v end':>10}  [m/s]")
+        for n in nodes:
+            v = result.column(f"{n.name}.v")
+            lines.append(f"  {n.name:<14}{v[0]:>10.4f}{v.min():>10.4f}{v.max():>10.4f}{v[-1]:>10.4f}")
+    for d in [c for c in scene.line if isinstance(c, Dancer) and f"{c.name}.y" in keys]:
+        y = result.column(f"{d.name}.y")
+        lines.append(f"  dancer {d.name}: position {y[0]:.4f} m at start, {y.min():.4f} .. {y.max():.4f} m, {y[-1]:.4f} m at the end")
+    for t, name, what in info.get("events", []):
+        lines.append(f"  event at t = {t:g} s: {name} changed {what}")
+    return "\n".join(lines)
+
+
+def cmd_run(args):
+    scene = load_scene(args.scene)
+    progress = sys.stderr.isatty() if args.progress is None else args.progress
+    cs = CoSimulation(scene, options_of(args, progress=progress))
+    result = cs.run()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path = out / f"{scene.name}.csv"
+    result.write_csv(csv_path)
+    ref = None
+    if args.reference:
+        from .reference import reference
+        from .study import errors
+
+        ref = reference(scene, times=result.time)
+        errs = errors(result, ref)
+    print(summary(scene, result))
+    if ref is not None:
+        worst = max(errs.items(), key=lambda kv: kv[1])
+        print(f"  against the monolithic reference ({ref.info['method']}, {ref.info['wall_time']:.1f} s): "
+              f"largest error {worst[1]:.2e} of the column's range ({worst[0]}); "
+              + ", ".join(f"{k} {e:.1e}" for k, e in errs.items()))
+    written = [str(csv_path)]
+    if not args.no_plot:
+        from .plot import plot
+
+        png = out / f"{scene.name}.png"
+        plot(result, png, title=f"{scene.name}: {scene.description.split('.')[0]}" if scene.description else None, reference=ref)
+        written.append(str(png))
+    print("wrote " + ", ".join(written))
+    return 0
+
+
+def cmd_check(args):
+    for path in args.scenes:
+        scene = load_scene(path)
+        chain = " -> ".join(f"{c.name} ({c.type})" for c in scene.line)
+        effects = sorted({e for c in scene.spans for e in c.effects})
+        print(f"{path}: {scene.name}: {chain}; effects: {', '.join(effects) or 'none'}; "
+              f"{len(scene.events)} events; step {scene.step * 1e3:g} ms, stop {scene.stop_time:g} s")
+    return 0
+
+
+def cmd_reference(args):
+    from .reference import reference
+
+    scene = load_scene(args.scene)
+    ref = reference(scene, times=CoSimulation.grid_of(scene, args.step or scene.step)[0])
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / f"{scene.name}_reference.csv"
+    ref.write_csv(path)
+    print(f"{scene.name}: {ref.info['method']}, {ref.info['rhs_evaluations']} right-hand sides, {ref.info['wall_time']:.1f} s; wrote {path}")
+    return 0
+
+
+def cmd_convergence(args):
+    from .study import convergence, observed_orders
+
+    scene = load_scene(args.scene)
+    steps = [time_arg(s) for s in args.steps.split(",")]
+    rows, _ = convergence(scene, steps, algorithm=args.algorithm, coupling=args.coupling, fmu_dir=args.fmu_dir)
+    orders = observed_orders(rows)
+    print(f"{scene.name}: co-simulation ({args.algorithm}, {args.coupling}) against the monolithic reference")
+    print(f"  {'step':>10}{'tension error':>15}{'speed error':>13}{'order':>7}{'wall time':>11}")
+    for i, r in enumerate(rows):
+        order = f"{orders[i - 1]:.2f}" if i > 0 and not math.isnan(orders[i - 1]) else ""
+        if r.failed:
+            print(f"  {r.step * 1e3:>8g}ms   unstable: {r.failed}")
+        else:
+            print(f"  {r.step * 1e3:>8g}ms{r.error:>15.3e}{r.speed_error:>13.3e}{order:>7}{r.wall_time:>10.2f}s")
+    return 0
+
+
+def cmd_container(args):
+    from .container import compare_container
+
+    scene = load_scene(args.scene)
+    report = compare_container(scene, step=args.step, fmu_dir=args.fmu_dir, out=Path(args.out))
+    print(report)
+    return 0
+
+
+def cmd_sweep(args):
+    from .sweep import parse_grid, run_sweep
+
+    grid = parse_grid(args.grid)
+    table = run_sweep(args.scene, grid, scheduler=args.scheduler, workers=args.workers, step=args.step,
+                      fmu_dir=args.fmu_dir, progress=sys.stderr.isatty())
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    table.write(out)
+    print(table.format())
+    print(f"wrote {out}")
+    return 0
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="webline", description="Co-simulate web lines of ConvertingSpan and Roller FMUs.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("run", help="co-simulate a scene: CSV, PNG and a summary")
+    p.add_argument("scene")
+    add_master_options(p)
+    p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
+    p.add_argument("--no-plot", action="store_true")
+    p.add_argument("--reference", action="store_true", help="also compute the monolithic reference and print the error")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--progress", dest="progress", action="store_true", default=None, help="show a progress bar")
+    g.add_argument("--no-progress", dest="progress", action="store_false")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("check", help="read scenes strictly and describe them")
+    p.add_argument("scenes", nargs="+")
+    p.set_defaults(func=cmd_check)
+
+    p = sub.add_parser("reference", help="the monolithic SciPy reference of a scene, as CSV")
+    p.add_argument("scene")
+    p.add_argument("--step", type=time_arg)
+    p.add_argument("--out", default=str(OUT))
+    p.set_defaults(func=cmd_reference)
+
+    p = sub.add_parser("convergence", help="error against the reference as the communication step shrinks")
+    p.add_argument("scene")
+    p.add_argument("--steps", default="2ms,1ms,0.5ms,0.25ms")
+    p.add_argument("--algorithm", choices=ALGORITHMS, default="gauss-seidel")
+    p.add_argument("--coupling", choices=COUPLINGS, default="extrapolate")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
+    p.set_defaults(func=cmd_convergence)
+
+    p = sub.add_parser("container", help="the same line as an FMPy container FMU, simulated by FMPy and compared")
+    p.add_argument("scene")
+    p.add_argument("--step", type=time_arg)
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
+    p.add_argument("--out", default=str(OUT))
+    p.set_defaults(func=cmd_container)
+
+    p = sub.add_parser("sweep", help="run a scene over a grid of parameters on Dask")
+    p.add_argument("scene")
+    p.add_argument("--grid", action="append", required=True, metavar="KEY=V1,V2,...",
+                   help='a scene value and its values, e.g. "line.film.L=1 m,2 m" (repeat for more dimensions)')
+    p.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
+    p.add_argument("--workers", type=int, default=2, help="workers of the local cluster")
+    p.add_argument("--step", type=time_arg)
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
+    p.add_argument("--out", default=str(OUT / "sweep.csv"))
+    p.set_defaults(func=cmd_sweep)
+
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except (SceneError, CoSimulationError, FmuError, FileNotFoundError) as e:
+        print(f"webline: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

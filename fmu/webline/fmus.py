@@ -1,0 +1,183 @@
+"""The two FMUs of a line, loaded with FMPy: one `Instance` per component.
+
+`FmuFile` extracts an FMU once and reads its model description; `Instance`
+is one FMPy `FMU2Slave` with preallocated ctypes buffers for the calls made
+every communication step, an FMU state slot for rollbacks, and the FMU's log
+messages kept so that a failed call can say why.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from ctypes import byref
+from pathlib import Path
+
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+    fmi2FMUstate,
+    fmi2Integer,
+    fmi2Real,
+    fmi2ValueReference,
+)
+from fmpy import calloc, free
+
+ROOT = Path(__file__).resolve().parents[2]
+DEFAULT_FMU_DIR = ROOT / "out"
+SPAN_FMU = "ConvertingSpan.fmu"
+ROLLER_FMU = "Roller.fmu"
+
+OK, WARNING, DISCARD = 0, 1, 2
+
+
+class FmuError(RuntimeError):
+    """An FMU call failed with fmi2Error or fmi2Fatal; the message carries the FMU's log."""
+
+
+class FmuFile:
+    """An extracted FMU and its variables."""
+
+    _cache: dict = {}
+
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        if not self.path.exists():
+            raise FileNotFoundError(
+                f"{self.path} is missing: build the FMUs first with `python3 fmu/package.py`"
+            )
+        self.md = read_model_description(str(self.path))
+        self.unzipdir = extract(str(self.path), unzipdir=tempfile.mkdtemp(prefix=f"webline-{self.path.stem}-"))
+        self.variables = {v.name: v for v in self.md.modelVariables}
+
+    @classmethod
+    def load(cls, path) -> "FmuFile":
+        key = (str(Path(path).resolve()), os.path.getmtime(path) if os.path.exists(path) else 0)
+        if key not in cls._cache:
+            cls._cache[key] = cls(Path(path))
+        return cls._cache[key]
+
+    def vr(self, name: str) -> int:
+        return self.variables[name].valueReference
+
+    def can_interpolate_inputs(self) -> bool:
+        return bool(self.md.coSimulation.canInterpolateInputs)
+
+
+class Instance:
+    """One FMU instance, initialized in `begin`/`end_initialization`."""
+
+    def __init__(self, fmu: FmuFile, name: str, inputs, outputs):
+        self.file = fmu
+        self.name = name
+        self.messages: list[str] = []
+        self.slave = FMU2Slave(
+            guid=fmu.md.guid,
+            unzipDirectory=fmu.unzipdir,
+            modelIdentifier=fmu.md.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self.slave.instantiate(callbacks=self._callbacks)
+        self.component = self.slave.component
+        self.n_in = len(inputs)
+        self.n_out = len(outputs)
+        self.in_vr = (fmi2ValueReference * self.n_in)(*[fmu.vr(n) for n in inputs])
+        self.out_vr = (fmi2ValueReference * self.n_out)(*[fmu.vr(n) for n in outputs])
+        self.in_val = (fmi2Real * self.n_in)()
+        self.in_der = (fmi2Real * self.n_in)()
+        self.orders = (fmi2Integer * self.n_in)(*([1] * self.n_in))
+        self.out_val = (fmi2Real * self.n_out)()
+        self.state = None
+        self.freed = False
+
+    def _log(self, env, instance, status, category, message):
+        self.messages.append(message.decode("utf-8", "replace"))
+
+    def _check(self, what, call):
+        try:
+            return call()
+        except FMICallException as e:
+            if e.status == DISCARD:
+                return DISCARD
+            last = self.messages[-1] if self.messages else "(no message)"
+            raise FmuError(f"{self.name}: {what} failed: {last}") from None
+
+    def begin(self, start_values: dict, tolerance, start_time, stop_time):
+        """fmi2SetupExperiment, start values, fmi2EnterInitializationMode."""
+        s = self.slave
+        self._check("fmi2SetupExperiment", lambda: s.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time))
+        reals, ints, bools = [], [], []
+        for name, value in start_values.items():
+            if name not in self.file.variables:
+                raise FmuError(f"{self.name}: the FMU has no variable {name!r}")
+            v = self.file.variables[name]
+            if v.type == "Real":
+                reals.append((v.valueReference, float(value)))
+            elif v.type == "Boolean":
+                bools.append((v.valueReference, bool(value)))
+            else:
+                ints.append((v.valueReference, int(value)))
+        if reals:
+            self._check("setting parameters", lambda: s.setReal([r[0] for r in reals], [r[1] for r in reals]))
+        if ints:
+            self._check("setting parameters", lambda: s.setInteger([r[0] for r in ints], [r[1] for r in ints]))
+        if bools:
+            self._check("setting parameters", lambda: s.setBoolean([r[0] for r in bools], [r[1] for r in bools]))
+        self._check("fmi2EnterInitializationMode", s.enterInitializationMode)
+
+    def end_initialization(self):
+        self._check("fmi2ExitInitializationMode", self.slave.exitInitializationMode)
+
+    def set_inputs(self, values):
+        for i, x in enumerate(values):
+            self.in_val[i] = x
+        self._check("fmi2SetReal", lambda: self.slave.fmi2SetReal(self.component, self.in_vr, self.n_in, self.in_val))
+
+    def set_input_derivatives(self, values):
+        for i, x in enumerate(values):
+            self.in_der[i] = x
+        self._check(
+            "fmi2SetRealInputDerivatives",
+            lambda: self.slave.fmi2SetRealInputDerivatives(self.component, self.in_vr, self.n_in, self.orders, self.in_der),
+        )
+
+    def outputs(self):
+        self._check("fmi2GetReal", lambda: self.slave.fmi2GetReal(self.component, self.out_vr, self.n_out, self.out_val))
+        return list(self.out_val)
+
+    def get(self, name) -> float:
+        return self.slave.getReal([self.file.vr(name)])[0]
+
+    def do_step(self, t, h) -> bool:
+        """True when the step succeeded, False when the FMU discarded it."""
+        status = self._check("fmi2DoStep", lambda: self.slave.fmi2DoStep(self.component, t, h, 0))
+        return status != DISCARD
+
+    def save(self):
+        if self.state is None:
+            self.state = fmi2FMUstate()
+        self._check("fmi2GetFMUstate", lambda: self.slave.fmi2GetFMUstate(self.component, byref(self.state)))
+
+    def restore(self):
+        self._check("fmi2SetFMUstate", lambda: self.slave.fmi2SetFMUstate(self.component, self.state))
+
+    def free(self):
+        if self.freed:
+            return
+        self.freed = True
+        try:
+            if self.state is not None:
+                self.slave.fmi2FreeFMUstate(self.component, byref(self.state))
+            self.slave.terminate()
+        except FMICallException:
+            pass
+        self.slave.freeInstance()

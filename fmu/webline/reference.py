@@ -1,0 +1,269 @@
+"""The monolithic reference: the whole line as one ODE, integrated by SciPy's Radau.
+
+An independent implementation of the line equations of the physics
+documentation (docs "The rollers around a span", the span's [1]-[10]); it
+shares nothing with the FMUs or the co-simulation master but the parsed
+scene. States:
+
+* each span's strain eps (the FMU carries the unstretched length
+  x = L/(1+eps); here the strain itself, so that the tolerance acts on the
+  quantity the tension is made of):
+      d(eps)/dt = (1+eps)/L * (dL/dt + v_b - (1+eps) * q_a),
+      q_a = v_a/(1+eps_a) for v_a >= 0, v_a/(1+eps) for v_a < 0;
+* each roller's angular speed (roller, unwinder, winder, dancer):
+      (J + m_up*R^2) * d(omega)/dt = R*(F_down - T_up - p_up) + tau - b*omega,
+  where the web mass of the span before it (with includeMass) adds
+  m_up*R^2: F_b = T + p + m*dv_b/dt and v_b = R*omega;
+* each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0).
+
+Tension: T = EA*(eps + d_r*deps/dt) (damping), clamped at 0 for a slack web.
+Profiles are integrated piece by piece between their breakpoints and the
+events, where parameters change (a splice) with the state kept (strain;
+a roller's surface speed).
+"""
+
+from __future__ import annotations
+
+import time as clock
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from .result import Result
+from .scene import Dancer, Prescribed, Roller, Scene, Span
+
+RTOL = 1e-11
+
+
+class LineODE:
+    def __init__(self, scene: Scene):
+        self.s = scene
+        self.spans = scene.spans
+        self.movers = [c for c in scene.nodes if isinstance(c, (Roller, Dancer)) and c.has_fmu]
+        self.dancers = [c for c in scene.nodes if isinstance(c, Dancer)]
+        n_s, n_m = len(self.spans), len(self.movers)
+        self.i_eps = {sp.name: i for i, sp in enumerate(self.spans)}
+        self.i_omega = {m.name: n_s + i for i, m in enumerate(self.movers)}
+        self.i_y = {d.name: n_s + n_m + 2 * i for i, d in enumerate(self.dancers)}
+        self.n = n_s + n_m + 2 * len(self.dancers)
+        # Mutable parameters (events change them).
+        self.web = {sp.name: (sp.wp1, sp.wp2) for sp in self.spans}
+        self.inertia = {m.name: [m.J, m.R, m.b] for m in self.movers}
+        self.segment = (0.0, scene.stop_time)
+
+    # profile values inside the current segment [a, b]: the left limit at b
+    def pv(self, profile, t):
+        a, b = self.segment
+        return profile.value_left(t) if t >= b and b > a else profile.value(t)
+
+    def pslope(self, profile):
+        return profile.slope(self.segment[0])
+
+    def torque(self, node, t):
+        d = node.drive
+        if d.kind == "torque":
+            return self.pv(d.profile, t)
+        if d.kind == "tension":
+            R = self.inertia[node.name][1]
+            return (-R if node.type == "unwinder" else R) * self.pv(d.profile, t)
+        return 0.0
+
+    def speed(self, node, t, z):
+        if isinstance(node, Prescribed):
+            return self.pv(node.speed, t)
+        if isinstance(node, Roller) and node.drive.kind == "speed":
+            return self.pv(node.drive.profile, t)
+        J, R, b = self.inertia[node.name]
+        return R * z[self.i_omega[node.name]]
+
+    def evaluate(self, t, z):
+        """Rates and every quantity of the line at (t, z)."""
+        s = self.s
+        dz = np.zeros(self.n)
+        q = {}
+        v = {node.name: self.speed(node, t, z) for node in s.nodes}
+        for sp in self.spans:
+            up, down = s.upstream(sp), s.downstream(sp)
+            w1, w2 = self.web[sp.name]
+            dancer = up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
+            if dancer is not None:
+                L = z[self.i_y[dancer.name]]
+                dL = z[self.i_y[dancer.name] + 1]
+            else:
+                L, dL = sp.length, 0.0
+            eps = z[self.i_eps[sp.name]]
+            if sp.index == 1:
+                src = up.strain
+                eps_in = self.pv(src, t)
+            else:
+                eps_in = z[self.i_eps[s.line[sp.index - 2].name]]
+            va, vb = v[up.name], v[down.name]
+            if va >= 0:
+                qa = va / (1.0 + eps_in)
+            else:
+                qa = va / (1.0 + eps)
+            deps = (1.0 + eps) / L * (dL + vb - (1.0 + eps) * qa)
+            dz[self.i_eps[sp.name]] = deps
+            bracket = eps + (w2.d_r * deps if "includeDamping" in sp.effects else 0.0)
+            T = w2.EA * bracket
+            if "preventNegativeTension" in sp.effects:
+                T = max(T, 0.0)
+            x = L / (1.0 + eps)
+            if "includeMass" in sp.effects:
+                rho_in = w1.rho_l if va >= 0 else w2.rho_l
+                p = qa * (w2.rho_l * vb - rho_in * va)
+                m = w2.rho_l * x
+            else:
+                p, m = 0.0, 0.0
+            q[sp.name] = {"T": T, "eps": eps, "L": L, "F_a": T, "p": p, "m": m, "x": x}
+        accel = {}
+        for node in self.movers:
+            J, R, b = self.inertia[node.name]
+            before, after = s.span_before(node), s.span_after(node)
+            omega = z[self.i_omega[node.name]]
+            F_down = q[after.name]["T"] if after is not None else 0.0
+            if before is not None:
+                qb = q[before.name]
+                num = R * (F_down - qb["T"] - qb["p"]) + self.torque(node, t) - b * omega
+                domega = num / (J + qb["m"] * R * R)
+            else:
+                domega = (R * F_down + self.torque(node, t) - b * omega) / J
+            dz[self.i_omega[node.name]] = domega
+            accel[node.name] = R * domega
+        for sp in self.spans:
+            down = s.downstream(sp)
+            if down.name in accel:
+                dvb = accel[down.name]
+            else:
+                prof = s.speed_profile(down)
+                dvb = self.pslope(prof) if prof is not None else 0.0
+            qs = q[sp.name]
+            qs["F_b"] = qs["T"] + qs["p"] + qs["m"] * dvb
+        for d in self.dancers:
+            i = self.i_y[d.name]
+            y, ydot = z[i], z[i + 1]
+            F = self.pv(d.load, t) - q[s.span_before(d).name]["F_b"] - q[s.span_after(d).name]["F_a"]
+            dz[i] = ydot
+            dz[i + 1] = (F - d.damping * ydot - d.stiffness * (y - d.y_start)) / d.mass
+        return dz, q, v
+
+    def rhs(self, t, z):
+        return self.evaluate(t, z)[0]
+
+    def initial_state(self):
+        s = self.s
+        z = np.zeros(self.n)
+        for node in self.movers:
+            z[self.i_omega[node.name]] = s.initial_speed(node) / node.R
+        for d in self.dancers:
+            z[self.i_y[d.name]] = d.y_start
+        for sp in self.spans:
+            if sp.eps_start is not None:
+                eps = sp.eps_start
+            else:
+                # equilibrium of the initial inputs: (1+eps) = (v_b/v_a)(1+eps_a), eps_a if v_a = 0
+                up, down = s.upstream(sp), s.downstream(sp)
+                va, vb = s.initial_speed(up), s.initial_speed(down)
+                eps_a = up.strain.value(0.0) if sp.index == 1 else z[self.i_eps[s.line[sp.index - 2].name]]
+                eps = eps_a if va == 0 else (vb - va + vb * eps_a) / va
+            z[self.i_eps[sp.name]] = eps
+        return z
+
+    def apply_event(self, ev, z):
+        comp = self.s.component(ev.component)
+        if isinstance(comp, Span):
+            w1, w2 = self.web[comp.name]
+            ch = dict(ev.changes)
+            if "web" in ch:
+                w1 = w2 = ch["web"]
+            w1 = ch.get("wp1", w1)
+            w2 = ch.get("wp2", w2)
+            self.web[comp.name] = (w1, w2)
+        else:
+            J, R, b = self.inertia[comp.name]
+            i = self.i_omega[comp.name]
+            v = R * z[i]
+            J = ev.changes.get("J", J)
+            R = ev.changes.get("R", R)
+            b = ev.changes.get("b", b)
+            self.inertia[comp.name] = [J, R, b]
+            z[i] = v / R  # the same surface speed
+        return z
+
+    def record(self, t, z):
+        dz, q, v = self.evaluate(t, z)
+        row = []
+        for cname, quantity in self.s.record:
+            c = self.s.component(cname)
+            if isinstance(c, Span):
+                row.append(q[cname][quantity])
+            elif quantity == "v":
+                row.append(v[cname])
+            elif quantity == "eps":
+                row.append(self.pv(c.strain, t))
+            elif quantity == "omega":
+                row.append(z[self.i_omega[cname]])
+            elif quantity == "tau":
+                row.append(self.torque(c, t))
+            elif quantity == "y":
+                row.append(z[self.i_y[cname]])
+            elif quantity == "y_dot":
+                row.append(z[self.i_y[cname] + 1])
+        return row
+
+
+def atol_of(ode: LineODE, z0):
+    a = np.empty(ode.n)
+    a[: len(ode.spans)] = 1e-15
+    for name, i in ode.i_omega.items():
+        a[i] = 1e-11 * max(1.0, 1.0 / ode.inertia[name][1])
+    for name, i in ode.i_y.items():
+        a[i] = 1e-13
+        a[i + 1] = 1e-12
+    return a
+
+
+def reference(scene: Scene, times=None, rtol=RTOL) -> Result:
+    """The line integrated by Radau, sampled at `times` (default: the scene's
+    communication points, breakpoints included)."""
+    start = clock.perf_counter()
+    ode = LineODE(scene)
+    if times is None:
+        from .master import CoSimulation
+
+        times, _ = CoSimulation.grid_of(scene, scene.step)
+    times = np.asarray(times, dtype=float)
+    cuts = sorted(set([0.0, scene.stop_time] + scene.breakpoints()))
+    events = {}
+    for ev in scene.events:
+        events.setdefault(ev.time, []).append(ev)
+    z = ode.initial_state()
+    atol = atol_of(ode, z)
+    rows = []
+    nfev = 0
+    recorded = np.zeros(len(times), dtype=bool)
+    out = [None] * len(times)
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        if a in events:
+            for ev in events[a]:
+                z = ode.apply_event(ev, z)
+        ode.segment = (a, b)
+        inside = np.nonzero((times >= a - 1e-12) & (times <= b + 1e-12) & ~recorded)[0]
+        sol = solve_ivp(ode.rhs, (a, b), z, method="Radau", rtol=rtol, atol=atol, dense_output=True)
+        if not sol.success:
+            raise RuntimeError(f"Radau failed on [{a}, {b}]: {sol.message}")
+        nfev += sol.nfev
+        for k in inside:
+            t = times[k]
+            zt = sol.sol(t) if t < b else sol.y[:, -1]
+            out[k] = ode.record(t, zt)
+            recorded[k] = True
+        z = sol.y[:, -1].copy()
+    rows = np.array(out, dtype=float)
+    return Result(
+        scene=scene.name,
+        columns=scene.columns(),
+        time=times,
+        data=rows,
+        info={"method": f"monolithic reference (Radau, rtol {rtol:g})", "rhs_evaluations": nfev, "wall_time": clock.perf_counter() - start},
+    )
