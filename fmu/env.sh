@@ -30,4 +30,9 @@ if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ]; then
     (cd "$ROOT/fmu" && "$PY" -m pip install --quiet --disable-pip-version-check -r requirements.txt)
     echo "$WANT" > "$STAMP"
 fi
+# The webline runner (fmu/webline) and its `webline` command, installed editable.
+if ! "$PY" -c "import webline" 2>/dev/null || [ ! -x "$VENV/bin/webline" ]; then
+    echo "env.sh: installing the webline runner into $VENV (pip install -e fmu)"
+    "$PY" -m pip install --quiet --disable-pip-version-check -e "$ROOT/fmu"
+fi
 export MPLBACKEND=Agg

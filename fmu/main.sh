@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
-# Main job: build ConvertingSpan.fmu and simulate the default scene with FMPy.
-# Writes out/ConvertingSpan.fmu, out/default_scene.csv and out/default_scene.png.
+# Main job: build ConvertingSpan.fmu and Roller.fmu, simulate the default scene
+# with FMPy, and co-simulate the lamination line with the webline runner.
+# Writes out/ConvertingSpan.fmu, out/Roller.fmu, out/default_scene.csv/png and
+# out/lamination.csv/png.
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 cd "$ROOT"
 python3 fmu/package.py
 "$PY" fmu/demo.py out/ConvertingSpan.fmu --out out
+"$VENV/bin/webline" run fmu/scenes/lamination.json --out out
