@@ -202,7 +202,6 @@ fn outcome(api: Api) -> Outcome {
     match api {
         Api::GetStatus | Api::GetIntegerStatus | Api::GetStringStatus => Outcome::Discard,
         Api::GetDirectionalDerivative | Api::GetRealOutputDerivatives | Api::CancelStep => Outcome::Unsupported,
-        a if a.is_model_exchange() => Outcome::Unsupported,
         _ => Outcome::Ok,
     }
 }
@@ -231,7 +230,9 @@ fn state_machine_rejects_illegal_calls_and_recovers_by_reset() {
     let fresh = init_and_run(&Fmu::new());
     let mut illegal = 0;
     for phase in PHASES {
-        for api in Api::ALL {
+        // The Model Exchange functions on a co-simulation instance: see
+        // `co_simulation_instance_refuses_model_exchange_functions`.
+        for api in Api::ALL.into_iter().filter(|a| !a.is_model_exchange()) {
             let fmu = drive(phase);
             let status = fmu.call(api);
             let lines = fmu.take_logs();
@@ -260,9 +261,8 @@ fn state_machine_rejects_illegal_calls_and_recovers_by_reset() {
             illegal += 1;
             assert_eq!(status, ERROR, "{what}: {lines:?}");
             if outcome(api) == Outcome::Unsupported && !PHASES.iter().any(|&p| allowed(api, p)) {
-                // Never allowed: either reason is a correct explanation
-                // (test `model_exchange_functions_and_cancel_step_say_not_supported`
-                // asks for "not supported").
+                // Never allowed (fmi2CancelStep): either reason is a correct
+                // explanation (`cancel_step_says_not_supported` asks for the latter).
                 assert_one_error(&lines, &[&api.c_name()]);
                 let m = &lines[0].message;
                 assert!(m.contains("illegal call sequence") || m.contains("not supported"), "{what}: {m}");
@@ -276,7 +276,8 @@ fn state_machine_rejects_illegal_calls_and_recovers_by_reset() {
             assert!(fmu.logs().is_empty(), "{what}: {:?}", fmu.logs());
         }
     }
-    assert!(illegal > 100, "the table must exercise many illegal calls, found {illegal}");
+    // 30 functions in 6 phases; the standard allows 113 of these 180 calls.
+    assert_eq!(illegal, 180 - 113);
 }
 
 /// Proves that fmi2Reset works from every phase (not only after an error)
@@ -585,8 +586,9 @@ fn wrong_type_is_refused() {
 }
 
 /// Proves that fmi2Instantiate refuses a wrong or NULL GUID and every
-/// fmuType other than fmi2CoSimulation by returning NULL and logging one
-/// fmi2Error line that says why (under the given instance name).
+/// fmuType other than fmi2ModelExchange (0) and fmi2CoSimulation (1), which
+/// the description offers, by returning NULL and logging one fmi2Error line
+/// that says why (under the given instance name).
 #[test]
 fn instantiate_refuses_wrong_guid_and_fmu_type() {
     let cases: Vec<(Setup, Vec<String>)> = vec![
@@ -596,8 +598,9 @@ fn instantiate_refuses_wrong_guid_and_fmu_type() {
         ),
         (Setup { guid: Some(String::new()), ..Setup::default() }, vec!["GUID".into(), DESCRIPTION.guid.into()]),
         (Setup { guid: None, ..Setup::default() }, vec!["GUID".into(), DESCRIPTION.guid.into()]),
-        (Setup { fmu_type: ME, ..Setup::default() }, vec!["fmuType = 0".into(), "Co-Simulation".into()]),
+        (Setup { fmu_type: 2, ..Setup::default() }, vec!["fmuType = 2".into(), "Co-Simulation (1)".into()]),
         (Setup { fmu_type: 7, ..Setup::default() }, vec!["fmuType = 7".into()]),
+        (Setup { fmu_type: -1, ..Setup::default() }, vec!["fmuType = -1".into()]),
     ];
     for (setup, needles) in cases {
         let Err(lines) = instantiate(&Setup { name: Some("refused".into()), ..setup.clone() }) else {
@@ -611,6 +614,7 @@ fn instantiate_refuses_wrong_guid_and_fmu_type() {
     // The control: the right GUID in upper case is a different string, and refused too.
     assert!(instantiate(&Setup { guid: Some(DESCRIPTION.guid.to_uppercase()), ..Setup::default() }).is_err());
     assert!(instantiate(&Setup::default()).is_ok());
+    assert!(instantiate(&Setup { fmu_type: ME, ..Setup::default() }).is_ok());
 }
 
 /// Proves that odd but legal arguments are tolerated: a NULL resource
@@ -949,6 +953,23 @@ fn serialized_state_continues_bit_identically_in_any_instance() {
     assert!(a.logs().is_empty() && b.logs().is_empty());
 }
 
+/// Proves that a state saved by a Co-Simulation instance is refused by
+/// fmi2SetFMUstate of a Model Exchange instance (the phases do not carry
+/// over) with fmi2Error and one line naming both interfaces, and that the
+/// Model Exchange instance is not changed by the attempt.
+#[test]
+fn state_of_the_other_interface_is_refused() {
+    let (a, _) = running(3);
+    let bytes = a.serialize(a.get_state().unwrap()).unwrap();
+    let me = Fmu::with(&Setup { fmu_type: ME, ..Setup::default() });
+    me.init(0.0);
+    let before = all_values(&me);
+    let s = me.deserialize(&bytes).expect("the bytes themselves are a valid state");
+    assert_eq!(me.set_state(s), ERROR);
+    assert_one_error(&me.take_logs(), &["fmi2SetFMUstate", "Co-Simulation", "Model Exchange"]);
+    assert_eq!(all_values(&me), before);
+}
+
 /// Proves that fmi2SerializeFMUstate refuses a buffer one byte too small (and
 /// an empty one) with one line giving both sizes and without writing to the
 /// buffer, and writes exactly `size` bytes into a larger one.
@@ -1008,17 +1029,27 @@ fn deserialize_refuses_truncated_padded_and_corrupted_bytes() {
 }
 
 /// Proves that states with a valid checksum but a wrong magic number, an
-/// unknown format version, another model's GUID hash, a length field that
-/// disagrees, an unknown phase, a non-finite time or a non-Boolean byte are
-/// refused with a message giving the reason; the control (checksum
-/// recomputed, nothing else changed) is accepted, so each refusal is for
-/// the reason stated and not a checksum mismatch.
+/// unknown format version (0, and the current one + 1), another model's
+/// GUID hash, a length field that disagrees, an unknown phase, a non-finite
+/// time or L, or a non-Boolean byte are refused with a message giving the
+/// reason; the control (checksum recomputed, nothing else changed) is
+/// accepted, so each refusal is for the reason stated and not a checksum
+/// mismatch. Header, phase and time are at the offsets snapshot.rs
+/// documents; the model fields are located by their values (L by a
+/// distinctive bit pattern, includeDamping as the one byte that differs
+/// between states with it off and on).
 #[test]
 fn deserialize_refuses_wrong_magic_version_model_and_payload() {
-    let (a, _) = running(3);
-    let s = a.get_state().unwrap();
-    let bytes = a.serialize(s).unwrap();
+    const L0: f64 = 1.2345678901234567;
+    let bytes = state_bytes(&[("L", L0), ("includeDamping", 0.0)]);
     let b = Fmu::new();
+    let version = u32::from_le_bytes(bytes[8..12].try_into().unwrap());
+    let l_at = bytes.windows(8).position(|w| w == L0.to_le_bytes()).expect("L in the state");
+    let damping_on = state_bytes(&[("L", L0), ("includeDamping", 1.0)]);
+    let differing: Vec<usize> = (0..bytes.len() - 8).filter(|&i| bytes[i] != damping_on[i]).collect();
+    assert_eq!(differing.len(), 1, "includeDamping is one byte: {differing:?}");
+    let damping_at = differing[0];
+    let (newer, older) = (format!("format version {}", version + 1), "format version 0".to_string());
 
     let mut control = bytes.clone();
     fix_checksum(&mut control);
@@ -1029,8 +1060,8 @@ fn deserialize_refuses_wrong_magic_version_model_and_payload() {
     let cases: Vec<(Patch, &str)> = vec![
         (Box::new(|x| x[..8].copy_from_slice(b"FMI2SNAQ")), "wrong magic"),
         (Box::new(|x| x[..8].copy_from_slice(b"FMI3SNAP")), "wrong magic"),
-        (Box::new(|x| x[8..12].copy_from_slice(&2u32.to_le_bytes())), "format version 2"),
-        (Box::new(|x| x[8..12].copy_from_slice(&0u32.to_le_bytes())), "format version 0"),
+        (Box::new(move |x| x[8..12].copy_from_slice(&(version + 1).to_le_bytes())), newer.as_str()),
+        (Box::new(|x| x[8..12].copy_from_slice(&0u32.to_le_bytes())), older.as_str()),
         (
             Box::new(|x| x[12..20].copy_from_slice(&fnv1a(b"{00000000-0000-0000-0000-000000000000}").to_le_bytes())),
             "another model",
@@ -1042,14 +1073,12 @@ fn deserialize_refuses_wrong_magic_version_model_and_payload() {
             }),
             "truncated or padded",
         ),
-        (Box::new(|x| x[24] = 6), "phase 6"),
+        (Box::new(|x| x[24] = 8), "phase 8"),
         (Box::new(|x| x[24] = 255), "phase 255"),
         (Box::new(|x| x[25..33].copy_from_slice(&f64::NAN.to_bits().to_le_bytes())), "time is NaN"),
         (Box::new(|x| x[25..33].copy_from_slice(&f64::INFINITY.to_bits().to_le_bytes())), "time is inf"),
-        // L, the first model field.
-        (Box::new(|x| x[33..41].copy_from_slice(&f64::NAN.to_bits().to_le_bytes())), "L is NaN"),
-        // The four Booleans follow L and the ten web properties.
-        (Box::new(|x| x[24 + 1 + 8 + 8 + 80] = 2), "includeDamping is 2"),
+        (Box::new(move |x| x[l_at..l_at + 8].copy_from_slice(&f64::NAN.to_bits().to_le_bytes())), "L is NaN"),
+        (Box::new(move |x| x[damping_at] = 2), "includeDamping is 2"),
     ];
     for (patch, needle) in cases {
         let mut data = bytes.clone();
@@ -1128,17 +1157,15 @@ fn set_fmu_state_recovers_from_the_error_state() {
     assert_eq!(run(&a, t, 10, 20).0, reference);
 }
 
-/// Proves (fails today, see the report) that an FMU state saved in
+/// Proves that an FMU state saved in
 /// initialization mode carries everything needed to continue, including
 /// the tolerance given to fmi2SetupExperiment: with solver = rosenbrock
 /// (whose result depends on the tolerance), restoring such a state into
 /// another instance, or into the same instance after fmi2Reset, and
-/// continuing must give exactly what the original run gave. Today the
-/// snapshot holds phase, time and model but not the experiment
-/// (instance.rs `snapshot`/`restore`), so the restored run integrates with
-/// the default tolerance instead (the control shows it is that run).
+/// continuing must give exactly what the original run gave (before
+/// 848d16f the experiment was not saved and the restored run integrated
+/// with the default tolerance, which the control identifies).
 #[test]
-#[ignore = "product defect: an FMU state saved before initialization ends loses the fmi2SetupExperiment tolerance"]
 fn fmu_state_saved_in_initialization_mode_keeps_the_experiment_tolerance() {
     let prepare = |fmu: &Fmu, tolerance: Option<f64>| {
         fmu.set_all(&[("solver", 3.0), ("startAtEquilibrium", 0.0), ("eps_start", 2e-3)]);
@@ -1192,16 +1219,14 @@ fn state_bytes(values: &[(&str, f64)]) -> Vec<u8> {
     fmu.serialize(s).unwrap()
 }
 
-/// Proves (fails today, see the report) that fmi2DeSerializeFMUstate
-/// refuses a state whose checksum is valid but whose values the FMU would
-/// refuse through fmi2SetInteger/fmi2SetReal and fmi2ExitInitializationMode
-/// (toUnitF = 99, solver = 42, substeps = 0, L = -1). The field is located
-/// by comparing two serializations that differ only in it. Today such
-/// states are accepted: with toUnitF = 99 the tension sensor T silently
-/// reads 0, and with solver = 42 fmi2GetInteger reports 42 while the step
-/// silently uses "auto" (span/mod.rs `load`: `unwrap_or_default`).
+/// Proves that fmi2DeSerializeFMUstate refuses a state whose checksum is
+/// valid but whose values the FMU would refuse through fmi2SetInteger /
+/// fmi2SetReal and fmi2ExitInitializationMode (toUnitF = 99, solver = 42,
+/// substeps = 0, L = -1). The field is located by comparing two
+/// serializations that differ only in it. (Before 848d16f such states were
+/// accepted: with toUnitF = 99 the tension sensor T read 0, and with
+/// solver = 42 the step silently used "auto".)
 #[test]
-#[ignore = "product defect: fmi2DeSerializeFMUstate accepts checksum-valid states with values outside the declared ranges"]
 fn deserialize_refuses_values_outside_the_declared_ranges() {
     let cases: [(&str, f64, f64, [u8; 8], usize); 4] = [
         ("toUnitF", 1.0, 2.0, [99, 0, 0, 0, 0, 0, 0, 0], 4),
@@ -1219,8 +1244,12 @@ fn deserialize_refuses_values_outside_the_declared_ranges() {
         z[at..at + width].copy_from_slice(&bad[..width]);
         fix_checksum(&mut z);
         let fmu = Fmu::new();
-        if fmu.deserialize(&z).is_ok() {
-            accepted.push(name);
+        match fmu.deserialize(&z) {
+            Ok(_) => accepted.push(name),
+            Err(status) => {
+                assert_eq!(status, ERROR);
+                assert_one_error(&fmu.take_logs(), &["fmi2DeSerializeFMUstate", name]);
+            }
         }
     }
     assert!(accepted.is_empty(), "accepted crafted states with out-of-range {accepted:?}");
@@ -1363,9 +1392,12 @@ fn perturbed(v: &Variable, x: f64) -> f64 {
 /// initialization mode) in at least one of 64 configurations (start at
 /// equilibrium or not, damping, web mass and variable length on or off,
 /// tension in N or N/m, taut or slack web), and no unlisted parameter or
-/// input changes it in any of them by more than rounding (1e-13 relative:
-/// e.g. the strain L/x - 1 computed for a perturbed L may differ in its
-/// last bit). Each perturbation is a fresh instance.
+/// input changes it in any of them by more than rounding. Changes are
+/// measured against the unknown's largest magnitude over all
+/// configurations; rounding is 1e-13 of that (e.g. the strain L/x - 1
+/// computed for a perturbed L may differ in its last bit, and the
+/// derivative at equilibrium is 0 up to rounding noise). Each perturbation
+/// is a fresh instance. SHOW_DEPENDENCY_MARGINS=1 prints the margins.
 #[test]
 fn initial_dependencies_are_exact() {
     let unknowns = DESCRIPTION.initial_dependencies;
@@ -1374,7 +1406,9 @@ fn initial_dependencies_are_exact() {
         .iter()
         .filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input))
         .collect();
+    // Largest absolute change per (unknown, known), and largest magnitude per unknown.
     let mut largest = vec![vec![0.0f64; knowns.len()]; unknowns.len()];
+    let mut scale = vec![f64::MIN_POSITIVE; unknowns.len()];
     let mut configurations = 0;
     for sae in [1.0, 0.0] {
         for damping in [1.0, 0.0] {
@@ -1410,11 +1444,14 @@ fn initial_dependencies_are_exact() {
                             };
                             let probe = in_init(None);
                             let baseline = read(&probe);
+                            for (i, y) in baseline.iter().enumerate() {
+                                scale[i] = scale[i].max(y.abs());
+                            }
                             for (j, known) in knowns.iter().enumerate() {
                                 let x = perturbed(known, probe.real(known.name));
                                 let after = read(&in_init(Some((known.name, x))));
                                 for i in 0..unknowns.len() {
-                                    largest[i][j] = largest[i][j].max(relative_change(baseline[i], after[i]));
+                                    largest[i][j] = largest[i][j].max((after[i] - baseline[i]).abs());
                                 }
                             }
                             configurations += 1;
@@ -1425,7 +1462,24 @@ fn initial_dependencies_are_exact() {
         }
     }
     assert_eq!(configurations, 64);
-    let problems = dependency_problems(unknowns, &knowns, &largest, 1e-10, 1e-13);
+    for (row, s) in largest.iter_mut().zip(&scale) {
+        row.iter_mut().for_each(|c| *c /= s);
+    }
+    if std::env::var_os("SHOW_DEPENDENCY_MARGINS").is_some() {
+        for (i, u) in unknowns.iter().enumerate() {
+            let name = DESCRIPTION.variable(u.vr).unwrap().name;
+            let (mut listed, mut unlisted) = (f64::INFINITY, 0.0f64);
+            for (j, k) in knowns.iter().enumerate() {
+                if u.on.map_or(true, |on| on.contains(&k.vr)) {
+                    listed = listed.min(largest[i][j])
+                } else {
+                    unlisted = unlisted.max(largest[i][j])
+                }
+            }
+            eprintln!("{name}: smallest listed {listed:e}, largest unlisted {unlisted:e}");
+        }
+    }
+    let problems = dependency_problems(unknowns, &knowns, &largest, 1e-11, 1e-13);
     assert!(problems.is_empty(), "{problems:#?}");
 }
 
@@ -1485,24 +1539,102 @@ fn set_real_input_derivatives_validates_its_arguments() {
     assert!(relative_change(x_held, x_moving) < 1e-3, "a small rate changes the state a little");
 }
 
-/// Proves (fails today, see the report) that the ten Model Exchange
-/// functions and fmi2CancelStep, which this FMU does not offer, say "not
-/// supported": exports.rs hands them a reason ("this FMU implements
-/// Co-Simulation only", "steps are synchronous ..."), but phase.rs allows
-/// them in no phase, so `enter` refuses them first with "illegal call
-/// sequence" and the reason never reaches the importer.
+/// Proves that fmi2CancelStep, which this FMU does not offer (steps are
+/// synchronous, so no step is ever in progress), returns fmi2Error with one
+/// line saying "not supported" where a step could be (step complete, step
+/// failed); elsewhere it is an illegal call sequence (see the state-machine
+/// test).
 #[test]
-#[ignore = "product defect: Model Exchange functions and fmi2CancelStep log 'illegal call sequence', not 'not supported'"]
-fn model_exchange_functions_and_cancel_step_say_not_supported() {
-    let apis: Vec<Api> = Api::ALL.iter().copied().filter(|a| a.is_model_exchange() || *a == Api::CancelStep).collect();
-    assert_eq!(apis.len(), 11);
+fn cancel_step_says_not_supported() {
+    for phase in [Phase::Complete, Phase::Failed] {
+        let fmu = drive(phase);
+        assert_eq!(fmu.call(Api::CancelStep), ERROR);
+        assert_one_error(&fmu.take_logs(), &["fmi2CancelStep", "not supported"]);
+        assert_eq!(phase_of(&fmu), Phase::Error);
+    }
+}
+
+/// Proves (fails today, see the report) that an instance created as
+/// fmi2CoSimulation refuses the Model Exchange functions in every phase of
+/// the co-simulation state machine (FMI 2.0, 4.2.4: they are not part of
+/// it) with fmi2Error and one line. Today phase.rs has one table for both
+/// interfaces, so in the phases they share (instantiated, initialization
+/// mode, terminated, error) a co-simulation instance accepts e.g.
+/// fmi2GetContinuousStates and fmi2GetNominalsOfContinuousStates.
+#[test]
+#[ignore = "product defect: a Co-Simulation instance accepts Model Exchange functions in the phases both interfaces share"]
+fn co_simulation_instance_refuses_model_exchange_functions() {
+    let mut accepted = Vec::new();
     for phase in PHASES {
-        for &api in &apis {
+        for api in Api::ALL.into_iter().filter(|a| a.is_model_exchange()) {
             let fmu = drive(phase);
-            assert_eq!(fmu.call(api), ERROR, "{}", api.c_name());
-            assert_one_error(&fmu.take_logs(), &[&api.c_name(), "not supported"]);
+            let status = fmu.call(api);
+            let lines = fmu.take_logs();
+            if status != ERROR {
+                accepted.push(format!("{} in {phase:?} -> {status}", api.c_name()));
+            } else {
+                assert_one_error(&lines, &[&api.c_name(), "illegal call sequence"]);
+            }
         }
     }
+    assert!(accepted.is_empty(), "{accepted:#?}");
+}
+
+/// Proves (fails today, see the report) the mirror image: an instance
+/// created as fmi2ModelExchange refuses the Co-Simulation-only functions
+/// (fmi2DoStep, fmi2CancelStep, fmi2SetRealInputDerivatives,
+/// fmi2GetRealOutputDerivatives and the five status functions) in every
+/// phase of the model-exchange state machine (FMI 2.0, 3.2.3). Today it
+/// accepts fmi2SetRealInputDerivatives while instantiated or initializing,
+/// and the status functions once terminated.
+#[test]
+#[ignore = "product defect: a Model Exchange instance accepts Co-Simulation functions in the phases both interfaces share"]
+fn model_exchange_instance_refuses_co_simulation_functions() {
+    let me = || Fmu::with(&Setup { fmu_type: ME, ..Setup::default() });
+    let phases: [(&str, fn(&Fmu)); 6] = [
+        ("instantiated", |_| {}),
+        ("initialization mode", |f| {
+            assert_eq!(f.setup_experiment(0.0), OK);
+            assert_eq!(f.enter_init(), OK);
+        }),
+        ("event mode", |f| f.init(0.0)),
+        ("continuous-time mode", |f| {
+            f.init(0.0);
+            assert_eq!(f.call(Api::EnterContinuousTimeMode), OK);
+        }),
+        ("terminated", |f| {
+            f.init(0.0);
+            assert_eq!(f.terminate(), OK);
+        }),
+        ("error", |f| assert_eq!(f.exit_init(), ERROR)),
+    ];
+    let co_simulation_only = [
+        Api::DoStep(0.0, 0.01),
+        Api::CancelStep,
+        Api::SetRealInputDerivatives,
+        Api::GetRealOutputDerivatives,
+        Api::GetStatus,
+        Api::GetRealStatus,
+        Api::GetIntegerStatus,
+        Api::GetBooleanStatus,
+        Api::GetStringStatus,
+    ];
+    let mut accepted = Vec::new();
+    for (phase, reach) in phases {
+        for api in co_simulation_only {
+            let fmu = me();
+            reach(&fmu);
+            fmu.take_logs();
+            let status = fmu.call(api);
+            let lines = fmu.take_logs();
+            if status != ERROR {
+                accepted.push(format!("{} in {phase} -> {status}", api.c_name()));
+            } else {
+                assert_one_error(&lines, &[&api.c_name()]);
+            }
+        }
+    }
+    assert!(accepted.is_empty(), "{accepted:#?}");
 }
 
 /// Proves the status functions: fmi2GetRealStatus(fmi2LastSuccessfulTime)

@@ -431,6 +431,9 @@ unsafe fn raw_call(c: fmi2Component, api: Api, state: fmi2FMUstate, bytes: &[u8]
     let integer = [vr("toUnitF")];
     let boolean = [vr("useSensor")];
     let mut real = [0.0f64; 4];
+    // Model Exchange arrays sized as the description declares.
+    let nx = DESCRIPTION.states.len().min(4);
+    let ni = DESCRIPTION.number_of_event_indicators.min(4);
     let mut int = [0 as c_int; 4];
     let mut strings: [fmi2String; 4] = [std::ptr::null(); 4];
     let order = [1 as c_int];
@@ -494,11 +497,14 @@ unsafe fn raw_call(c: fmi2Component, api: Api, state: fmi2FMUstate, bytes: &[u8]
             fmi2CompletedIntegratorStep(c, 1, &mut a, &mut b)
         }
         Api::SetTime => fmi2SetTime(c, 0.0),
-        Api::SetContinuousStates => fmi2SetContinuousStates(c, real.as_ptr(), 1),
-        Api::GetDerivatives => fmi2GetDerivatives(c, real.as_mut_ptr(), 1),
-        Api::GetEventIndicators => fmi2GetEventIndicators(c, real.as_mut_ptr(), 0),
-        Api::GetContinuousStates => fmi2GetContinuousStates(c, real.as_mut_ptr(), 1),
-        Api::GetNominalsOfContinuousStates => fmi2GetNominalsOfContinuousStates(c, real.as_mut_ptr(), 1),
+        Api::SetContinuousStates => {
+            let x = [1.0f64; 4];
+            fmi2SetContinuousStates(c, x.as_ptr(), nx)
+        }
+        Api::GetDerivatives => fmi2GetDerivatives(c, real.as_mut_ptr(), nx),
+        Api::GetEventIndicators => fmi2GetEventIndicators(c, real.as_mut_ptr(), ni),
+        Api::GetContinuousStates => fmi2GetContinuousStates(c, real.as_mut_ptr(), nx),
+        Api::GetNominalsOfContinuousStates => fmi2GetNominalsOfContinuousStates(c, real.as_mut_ptr(), nx),
         Api::SetRealInputDerivatives => {
             fmi2SetRealInputDerivatives(c, input.as_ptr(), 1, order.as_ptr(), [0.0].as_ptr())
         }
