@@ -1562,7 +1562,6 @@ fn cancel_step_says_not_supported() {
 /// mode, terminated, error) a co-simulation instance accepts e.g.
 /// fmi2GetContinuousStates and fmi2GetNominalsOfContinuousStates.
 #[test]
-#[ignore = "product defect: a Co-Simulation instance accepts Model Exchange functions in the phases both interfaces share"]
 fn co_simulation_instance_refuses_model_exchange_functions() {
     let mut accepted = Vec::new();
     for phase in PHASES {
@@ -1588,7 +1587,6 @@ fn co_simulation_instance_refuses_model_exchange_functions() {
 /// accepts fmi2SetRealInputDerivatives while instantiated or initializing,
 /// and the status functions once terminated.
 #[test]
-#[ignore = "product defect: a Model Exchange instance accepts Co-Simulation functions in the phases both interfaces share"]
 fn model_exchange_instance_refuses_co_simulation_functions() {
     let me = || Fmu::with(&Setup { fmu_type: ME, ..Setup::default() });
     let phases: [(&str, fn(&Fmu)); 6] = [

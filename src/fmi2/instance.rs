@@ -114,10 +114,19 @@ impl<M: Model> Instance<M> {
         self.log(Status::Ok, "logEvents", message);
     }
 
-    /// Entry check of every call: is it allowed in the current phase?
+    /// Entry check of every call: does it belong to this instance's
+    /// interface, and is it allowed in the current phase?
     pub fn begin(&mut self, call: Call) -> FmiResult {
         if self.log.traces_calls() {
             self.log(Status::Ok, "logAll", call.name());
+        }
+        let model_exchange = self.experiment.model_exchange;
+        if call.model_exchange_only().is_some_and(|me| me != model_exchange) {
+            let (this, other) = if model_exchange { ("Model Exchange", "Co-Simulation") } else { ("Co-Simulation", "Model Exchange") };
+            return Err(FmiError::error(format!(
+                "{}: illegal call sequence: a {other} function, and this is a {this} instance",
+                call.name()
+            )));
         }
         if call.is_allowed_in(self.phase) {
             Ok(())

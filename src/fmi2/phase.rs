@@ -147,6 +147,20 @@ impl Call {
         self.allowed() & phase.bit() != 0
     }
 
+    /// `Some(true)` for functions of Model Exchange only, `Some(false)` for
+    /// functions of Co-Simulation only, `None` for the common ones.
+    pub fn model_exchange_only(self) -> Option<bool> {
+        use Call::*;
+        match self {
+            EnterEventMode | NewDiscreteStates | EnterContinuousTimeMode | CompletedIntegratorStep | SetTime
+            | SetContinuousStates | GetDerivatives | GetEventIndicators | GetContinuousStates
+            | GetNominalsOfContinuousStates => Some(true),
+            SetRealInputDerivatives | GetRealOutputDerivatives | DoStep | CancelStep | GetStatus | GetRealStatus
+            | GetIntegerStatus | GetBooleanStatus | GetStringStatus => Some(false),
+            _ => None,
+        }
+    }
+
     /// After a panic was caught inside a call, the instance's data may be
     /// half updated: it is poisoned, and only these calls are accepted
     /// (`fmi2Reset` rebuilds it from the start values and clears the poison).

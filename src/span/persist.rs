@@ -86,7 +86,7 @@ impl Persist for ConvertingSpan {
         let adaptive_step = r.finite("adaptive step")?;
         let tolerance = r.finite("effective tolerance")?;
         // Derived from the parameters; a state saved before initialization
-        // ended has none yet, and that is kept so.
+        // ended gets the scale of its parameters, which initialization recomputes.
         let sensor = SensorScale::new(&params).unwrap_or_default();
         let solver = SolverChoice::from_i32(params.solver).unwrap_or_default();
         Ok(ConvertingSpan {
