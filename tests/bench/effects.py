@@ -9,11 +9,15 @@ default the last commit before the effects and solvers were added), and
 measures both side by side in one run with tests/bench/step_cost.c: set the
 three inputs, fmi2DoStep, get v and T, as an importer does. Prints the median
 ns per step over the repeats, the spread, and the ratio to the baseline's
-elastic scene. Numbers, not assertions: timing is for people to read.
+elastic scene; and, with valgrind installed, the instructions per step counted
+by callgrind, which do not depend on what else the machine is doing.
+Numbers, not assertions: timing is for people to read.
 """
 
 import argparse
 import os
+import re
+import shutil
 import platform
 import subprocess
 import sys
@@ -52,14 +56,32 @@ def interface(model_description: Path):
     return root.get("guid"), vrs
 
 
-def run(harness, lib, md, steps, repeats, settings):
+def command(harness, lib, md, steps, repeats, settings):
     guid, vrs = interface(md)
     inputs = ",".join(vrs[n] for n in ["web_a.v", "web_a.eps", "web_b.v"])
     outputs = ",".join(vrs[n] for n in ["v", "T"])
     args = [f"{kind}:{vrs[name]}={value}" for kind, name, value in settings]
-    line = subprocess.run([str(harness), str(lib), guid, str(steps), str(repeats), inputs, outputs, *args],
+    return [str(harness), str(lib), guid, str(steps), str(repeats), inputs, outputs, *args]
+
+
+def run(harness, lib, md, steps, repeats, settings):
+    line = subprocess.run(command(harness, lib, md, steps, repeats, settings),
                           check=True, capture_output=True, text=True).stdout.split()
     return float(line[0]), float(line[1]), float(line[2]), float(line[4])
+
+
+def instructions_per_step(harness, lib, md, settings, steps=100_000):
+    """Instructions per step from callgrind: two runs of different length,
+    so that loading, instantiation and initialization cancel out."""
+    if not shutil.which("valgrind"):
+        return float("nan")
+    counts = []
+    for n in (steps, 2 * steps):
+        err = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+                              *command(harness, lib, md, n, 1, settings)],
+                             check=True, capture_output=True, text=True).stderr
+        counts.append(int(re.search(r"Collected : (\d+)", err).group(1)))
+    return (counts[1] - counts[0]) / steps
 
 
 def main():
@@ -89,12 +111,15 @@ def main():
     ]
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, {platform.platform()}")
     print(f"{args.steps} steps x {args.repeats} repeats per scene; baseline = {args.baseline}\n")
-    print(f"{'scene':40s} {'ns/step':>9s} {'min':>7s} {'max':>7s} {'vs baseline':>12s}")
-    reference = None
+    print(f"{'scene':40s} {'ns/step':>9s} {'min':>7s} {'max':>7s} {'vs baseline':>12s} {'instr/step':>11s} {'vs baseline':>12s}")
+    reference = reference_instructions = None
     for name, lib, md, settings in scenes:
         median, low, high, tension = run(harness, lib, md, args.steps, args.repeats, settings)
+        instructions = instructions_per_step(harness, lib, md, settings)
         reference = reference or median
-        print(f"{name:40s} {median:9.2f} {low:7.2f} {high:7.2f} {median / reference:11.3f}x   (T = {tension:.6g} N)")
+        reference_instructions = reference_instructions or instructions
+        print(f"{name:40s} {median:9.2f} {low:7.2f} {high:7.2f} {median / reference:11.3f}x "
+              f"{instructions:11.0f} {instructions / reference_instructions:11.3f}x   (T = {tension:.6g} N)")
 
 
 if __name__ == "__main__":
