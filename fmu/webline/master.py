@@ -115,19 +115,32 @@ def span_start_values(span: Span, length_default=1.0):
 
 class Carriage:
     """A dancer's carriage, m*y'' = F - c*y' - k*(y - y0), stepped exactly
-    (matrix exponential) with the force held over the step."""
+    with the force held over the step: s(t+h) = Phi*s + Gamma*g, where
+    Phi = exp(A h) and Gamma = integral of exp(A s) ds, cached per step size."""
 
     def __init__(self, d: Dancer):
         self.d = d
         self.y = d.y_start
         self.ydot = 0.0
+        self.A = np.array([[0.0, 1.0], [-d.stiffness / d.mass, -d.damping / d.mass]])
+        self._cache = {}
+
+    def _matrices(self, h):
+        if h not in self._cache:
+            M = np.zeros((4, 4))
+            M[:2, :2] = self.A * h
+            M[:2, 2:] = np.eye(2) * h
+            E = expm(M)
+            if len(self._cache) > 64:
+                self._cache.clear()
+            self._cache[h] = (E[:2, :2], E[:2, 2:])
+        return self._cache[h]
 
     def step(self, force: float, h: float):
         d = self.d
-        A = np.array(
-            [[0.0, 1.0, 0.0], [-d.stiffness / d.mass, -d.damping / d.mass, (force + d.stiffness * d.y_start) / d.mass], [0.0, 0.0, 0.0]]
-        )
-        s = expm(A * h) @ np.array([self.y, self.ydot, 1.0])
+        phi, gamma = self._matrices(h)
+        g = np.array([0.0, (force + d.stiffness * d.y_start) / d.mass])
+        s = phi @ np.array([self.y, self.ydot]) + gamma @ g
         self.y, self.ydot = float(s[0]), float(s[1])
 
 
@@ -181,6 +194,17 @@ class CoSimulation:
     def node_speed_profile(self, node):
         return self.scene.speed_profile(node)
 
+    def torque_profile(self, node):
+        """The motor torque of a Roller-FMU node; a tension drive's torque uses
+        the radius in force now (a splice may have changed it)."""
+        if not isinstance(node, Roller):
+            return None
+        d = node.drive
+        if d.kind == "tension":
+            R = self.params.get(node.name, {}).get("R", node.R)
+            return d.profile.scaled((-1.0 if node.type == "unwinder" else 1.0) * R)
+        return self.scene.torque_profile(node)
+
     def strain_profile(self, span):
         up = self.scene.upstream(span)
         if isinstance(up, Prescribed):
@@ -214,16 +238,16 @@ class CoSimulation:
 
     # ------------------------------------------------------------ set-up
 
-    def _new_span_instance(self, span: Span, values: dict, inputs: list):
+    def _new_span_instance(self, span: Span, values: dict, inputs: list, t: float):
         inst = Instance(self.span_file, span.name, SPAN_INPUTS, SPAN_OUTPUTS)
-        inst.begin(values, self.opt.fmu_tolerance, self.t0, self.scene.stop_time)
+        inst.begin(values, self.opt.fmu_tolerance, t, self.scene.stop_time)
         inst.set_inputs(inputs)
         self.stats.instances += 1
         return inst
 
-    def _new_roller_instance(self, node, values: dict, inputs: list):
+    def _new_roller_instance(self, node, values: dict, inputs: list, t: float):
         inst = Instance(self.roller_file, node.name, ROLLER_INPUTS, ROLLER_OUTPUTS)
-        inst.begin(values, self.opt.fmu_tolerance, self.t0, self.scene.stop_time)
+        inst.begin(values, self.opt.fmu_tolerance, t, self.scene.stop_time)
         inst.set_inputs(inputs)
         self.stats.instances += 1
         return inst
@@ -244,14 +268,14 @@ class CoSimulation:
             values = span_start_values(span)
             self.params[span.name] = values
             inputs = self.span_inputs_at(span, t)
-            self.inst[span.name] = self._new_span_instance(span, values, inputs)
+            self.inst[span.name] = self._new_span_instance(span, values, inputs, t)
             out = self.inst[span.name].outputs()
             self._store_span(span, t, out, reset=True)
         for node in self.nodes_with_fmu():
             values = {"J": node.J, "R": node.R, "b": node.b, "omega_start": s.initial_speed(node) / node.R}
             self.params[node.name] = values
             inputs = self.roller_inputs_at(node, t, t)
-            self.inst[node.name] = self._new_roller_instance(node, values, inputs)
+            self.inst[node.name] = self._new_roller_instance(node, values, inputs, t)
         for inst in self.inst.values():
             inst.end_initialization()
         for span in s.spans:
@@ -314,7 +338,7 @@ class CoSimulation:
 
         F_up = force(before, "F_b")
         F_down = force(after, "F_a")
-        tau_profile = s.torque_profile(node) if isinstance(node, Roller) else None
+        tau_profile = self.torque_profile(node)
         if tau_profile is None:
             tau = 0.0
         elif mid and t1 > t0:
@@ -492,7 +516,7 @@ class CoSimulation:
                 values["eps_start"] = self.sig[(comp.name, "eps")].now
                 inputs = self.span_inputs_at(comp, t)
                 old.free()
-                new = self._new_span_instance(comp, values, inputs)
+                new = self._new_span_instance(comp, values, inputs, t)
                 new.end_initialization()
                 self.inst[comp.name] = new
                 self._store_span(comp, t, new.outputs(), reset=True)
@@ -502,14 +526,10 @@ class CoSimulation:
                 values.update(ev.changes)
                 # A new roll or roller at the same surface speed.
                 values["omega_start"] = v / values["R"]
-                # The tension drive's torque follows the new radius.
-                if "R" in ev.changes:
-                    comp.R = values["R"]
-                if "J" in ev.changes:
-                    comp.J = values["J"]
+                self.params[comp.name] = values  # the tension drive's torque follows the new radius
                 inputs = self.roller_inputs_at(comp, t, t)
                 old.free()
-                new = self._new_roller_instance(comp, values, inputs)
+                new = self._new_roller_instance(comp, values, inputs, t)
                 new.end_initialization()
                 self.inst[comp.name] = new
                 vnew, omega = new.outputs()
@@ -537,7 +557,7 @@ class CoSimulation:
             elif q == "omega":
                 row.append(self.sig[(cname, "omega")].now)
             elif q == "tau":
-                p = s.torque_profile(c)
+                p = self.torque_profile(c)
                 row.append(p.value_left(t) if t > 0 else p.value(t))
             elif q == "y":
                 row.append(self.carriage[cname].y)

@@ -60,7 +60,9 @@ class LineODE:
         return profile.slope(self.segment[0])
 
     def torque(self, node, t):
-        d = node.drive
+        d = getattr(node, "drive", None)
+        if d is None:  # a dancer's roller is an idler
+            return 0.0
         if d.kind == "torque":
             return self.pv(d.profile, t)
         if d.kind == "tension":
