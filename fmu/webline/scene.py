@@ -668,25 +668,31 @@ def load_scene(path, overrides=None) -> Scene:
 
 def set_path(data, key: str, value):
     """Sets a value by a dotted path. Components of the line are named by
-    their name: "line.film.L", "line.nip.drive.speed.ramp.to", "stop_time"."""
+    their name, list entries by their index: "line.film.L",
+    "line.nip.drive.speed.ramp.to", "events.0.time", "stop_time"."""
     parts = key.split(".")
     target = data
-    i = 0
-    while i < len(parts) - 1:
-        p = parts[i]
-        if isinstance(target, list) and p not in ("",):
+    for p in parts[:-1]:
+        if isinstance(target, list):
+            if p.isdigit() and int(p) < len(target):
+                target = target[int(p)]
+                continue
             match = [c for c in target if isinstance(c, dict) and c.get("name") == p]
             if not match:
-                raise SceneError(f"override {key!r}: no component named {p!r}")
+                raise SceneError(f"override {key!r}: no component named {p!r} (or index out of range)")
             target = match[0]
         elif isinstance(target, dict) and p in target:
             target = target[p]
         else:
             raise SceneError(f"override {key!r}: {p!r} is not in the scene")
-        i += 1
     last = parts[-1]
+    if isinstance(target, list):
+        if not (last.isdigit() and int(last) < len(target)):
+            raise SceneError(f"override {key!r}: {last!r} is not an index of the list there")
+        target[int(last)] = value
+        return
     if not isinstance(target, dict):
-        raise SceneError(f"override {key!r}: {parts[-2] if len(parts) > 1 else key!r} is not an object")
+        raise SceneError(f"override {key!r}: the path does not lead to an object")
     if last not in target:
         raise SceneError(f"override {key!r}: the scene has no {last!r} there (an override replaces a value, it adds none)")
     target[last] = value
