@@ -5,5 +5,7 @@ set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
 cd "$ROOT"
 cargo test --release --quiet
+# The Roller's C API: the same library built with the feature that exports it.
+cargo test --release --quiet --features roller --target-dir target/roller --test roller
 python3 fmu/package.py
 "$PY" -m pytest tests/python -q
