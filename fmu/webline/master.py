@@ -194,6 +194,11 @@ class CoSimulation:
     def node_speed_profile(self, node):
         return self.scene.speed_profile(node)
 
+    def accepts_derivatives(self, span):
+        """The span FMU takes input derivatives (canInterpolateInputs), unless
+        its solver is `exact`, which holds the inputs over a step."""
+        return self.span_file.can_interpolate_inputs() and span.solver != "exact"
+
     def torque_profile(self, node):
         """The motor torque of a Roller-FMU node; a tension drive's torque uses
         the radius in force now (a splice may have changed it)."""
@@ -463,6 +468,10 @@ class CoSimulation:
                 values += [0.0, 0.0, 1.0, 0.0]
                 slopes += [0.0, 0.0, 0.0, 0.0]
             inst = self.inst[span.name]
+            if not self.accepts_derivatives(span):
+                # Held inputs only (solver exact): the midpoint of the linear input.
+                values = [x + 0.5 * h * dx for x, dx in zip(values, slopes)]
+                slopes = [0.0] * len(slopes)
             inst.set_inputs(values)
             if any(slopes):
                 inst.set_input_derivatives(slopes)

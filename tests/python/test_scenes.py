@@ -1,0 +1,205 @@
+"""Scenes and the runner: the shipped scenes, strict parsing (every error names
+the key and the file position), the README's complete example, and the
+`webline` command (CSV, PNG, summary, Jacobi, rollback on a discarded step).
+"""
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "fmu"))
+
+from webline.master import CoSimulation, Options  # noqa: E402
+from webline.scene import SceneError, load_scene, parse_scene  # noqa: E402
+
+SCENES = ROOT / "fmu" / "scenes"
+OUT = ROOT / "out"
+
+
+@pytest.fixture(scope="module")
+def fmus():
+    if not (OUT / "Roller.fmu").exists() or not (OUT / "ConvertingSpan.fmu").exists():
+        subprocess.run(["python3", "fmu/package.py"], cwd=ROOT, check=True)
+    return OUT
+
+
+# A small valid scene the error tests start from (line numbers below refer to it).
+BASE = """{
+  "name": "small",
+  "stop_time": "0.2 s",
+  "step": "1 ms",
+  "webs": {"PET": {"E": "4.5 GPa", "thickness": "50 um", "width": "1 m", "density": "1390 kg/m3"}},
+  "line": [
+    {"type": "source", "name": "in", "speed": "5 m/s", "strain": 0.001},
+    {"type": "span", "name": "a", "L": "1 m", "web": "PET"},
+    {"type": "roller", "name": "idler", "J": "0.02 kg.m2", "R": "0.05 m"},
+    {"type": "span", "name": "b", "L": "1 m", "web": "PET"},
+    {"type": "sink", "name": "out", "speed": {"step": {"time": "0.1 s", "from": "5 m/s", "to": "5.005 m/s"}}}
+  ]
+}
+"""
+
+
+def test_shipped_scenes_parse_and_use_only_their_effects():
+    expected = {
+        "lamination": {"includeDamping"},
+        "emergency_stop": {"preventNegativeTension"},
+        "dancer": {"variableLength"},
+        "splice": set(),
+    }
+    found = {p.stem for p in SCENES.glob("*.json")}
+    assert set(expected) <= found
+    for name, effects in expected.items():
+        s = load_scene(SCENES / f"{name}.json")
+        used = {e for sp in s.spans for e in sp.effects}
+        assert used == effects, (name, used)
+        assert s.description
+    lam = load_scene(SCENES / "lamination.json")
+    conv = [sp for sp in lam.spans if sp.wp1 != sp.wp2]
+    assert conv and conv[0].wp1.name == "PET" and conv[0].wp2.name == "PET/Al", "the film meets the laminate"
+    assert len(load_scene(SCENES / "splice.json").events) == 5
+
+
+def test_base_scene_is_valid():
+    s = parse_scene(BASE, "base.json")
+    assert [c.type for c in s.line] == ["source", "span", "roller", "span", "sink"]
+    assert s.breakpoints() == [0.1]
+
+
+def _error(text):
+    with pytest.raises(SceneError) as e:
+        parse_scene(text, "base.json")
+    return str(e.value)
+
+
+@pytest.mark.parametrize(
+    "old,new,position,words",
+    [
+        # an unknown key, at the key
+        ('"L": "1 m", "web": "PET"}', '"L": "1 m", "web": "PET", "lenght": "2 m"}', "8:", ["unknown key 'lenght'", "span 'a'"]),
+        # a wrong unit, at the value
+        ('"L": "1 m", "web": "PET"}', '"L": "1 s", "web": "PET"}', "8:40", ["'1 s' is a time", "a length"]),
+        # a bare number where a unit is needed
+        ('"J": "0.02 kg.m2"', '"J": 0.02', "9:46", ["has no unit", "kg.m2"]),
+        # an unknown unit
+        ('"R": "0.05 m"', '"R": "0.05 furlong"', "9:", ["unknown unit 'furlong'"]),
+        # a missing value
+        ('"speed": "5 m/s", "strain": 0.001', '"speed": "5 m/s"', "7:5", ["needs the key 'strain'"]),
+        # a missing web property
+        ('"density": "1390 kg/m3"', '"d_r": "1 ms"', "5:", ["needs the key 'density'"]),
+        # an unknown effect
+        ('"L": "1 m", "web": "PET"}', '"L": "1 m", "web": "PET", "effects": ["includeInk"]}', "8:", ["unknown effect 'includeInk'"]),
+        # a chain that is not a line
+        ('{"type": "roller", "name": "idler"', '{"type": "span", "name": "idler"', "9:", ["must be one of: roller, dancer"]),
+        # a decreasing table
+        ('"speed": "5 m/s", "strain"', '"speed": {"table": [["1 s", "5 m/s"], ["0.5 s", "4 m/s"]]}, "strain"', "7:", ["times must not decrease"]),
+        # a duplicate key
+        ('"name": "small",', '"name": "small", "name": "big",', "2:", ["appears twice"]),
+        # a syntax error
+        ('"stop_time": "0.2 s",', '"stop_time": "0.2 s"', "4:", ["expected"]),
+        # a negative length
+        ('"L": "1 m", "web": "PET"}', '"L": "-1 m", "web": "PET"}', "8:", ["must be > 0"]),
+    ],
+)
+def test_errors_name_the_key_and_the_position(old, new, position, words):
+    assert old in BASE
+    msg = _error(BASE.replace(old, new, 1))
+    assert msg.startswith(f"base.json:{position}"), msg
+    for w in words:
+        assert w in msg, msg
+
+
+def test_more_scene_errors():
+    assert "no web 'PE'" in _error(BASE.replace('"web": "PET"}', '"web": "PE"}', 1))
+    assert "record: a span records" in _error(BASE.replace('"line": [', '"record": ["a.v"],\n  "line": [', 1))
+    assert "variableLength needs a dancer" in _error(BASE.replace('"web": "PET"}', '"web": "PET", "effects": ["variableLength"]}', 1))
+    assert "time must be inside the run" in _error(
+        BASE.replace('"line": [', '"events": [{"time": "5 s", "component": "a", "set": {"web": "PET"}}],\n  "line": [', 1)
+    )
+    assert "has no properties to change" in _error(
+        BASE.replace('"line": [', '"events": [{"time": "0.1 s", "component": "in", "set": {"J": "1 kg.m2"}}],\n  "line": [', 1)
+    )
+    # Overrides (the sweep's) must name something that is there.
+    path = SCENES / "lamination.json"
+    with pytest.raises(SceneError, match="no 'Lx'"):
+        load_scene(path, {"line.film.Lx": "2 m"})
+    assert load_scene(path, {"line.film.L": "2 m"}).component("film").length == 2.0
+
+
+def test_the_readme_example_is_a_valid_scene(tmp_path):
+    readme = (ROOT / "README.md").read_text()
+    m = re.search(r"<!-- scene example -->\s*```json\n(.*?)```", readme, re.S)
+    assert m, "the README's complete scene example (marked <!-- scene example -->) is missing"
+    s = parse_scene(m.group(1), "README example")
+    assert s.spans and s.nodes
+
+
+def test_runner_writes_csv_png_and_a_summary(fmus, tmp_path):
+    scene = tmp_path / "small.json"
+    scene.write_text(BASE)
+    cmd = [sys.executable, "-m", "webline", "run", str(scene), "--out", str(tmp_path), "--no-progress"]
+    p = subprocess.run(cmd, cwd=ROOT / "fmu", capture_output=True, text=True, check=True)
+    assert "small: co-simulation (gauss-seidel, extrapolate), step 1 ms, 200 steps" in p.stdout
+    assert re.search(r"^\s+a\s+[\d.]+", p.stdout, re.M), p.stdout
+    header = (tmp_path / "small.csv").read_text().splitlines()[0]
+    assert header == "time [s],a.T [N],b.T [N],in.v [m/s],idler.v [m/s],out.v [m/s]"
+    assert (tmp_path / "small.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # A bad scene: exit code 2 and the position.
+    scene.write_text(BASE.replace('"1 m", "web"', '"1 s", "web"', 1))
+    p = subprocess.run(cmd, cwd=ROOT / "fmu", capture_output=True, text=True)
+    assert p.returncode == 2 and "small.json:8:" in p.stderr, p.stderr
+
+
+def test_jacobi_and_gauss_seidel_agree_on_a_gentle_line(fmus):
+    s = parse_scene(BASE, "base.json")
+    gs = CoSimulation(s, Options(fmu_dir=fmus, step=2.5e-4)).run()
+    jac = CoSimulation(s, Options(fmu_dir=fmus, step=2.5e-4, algorithm="jacobi")).run()
+    for k in ("a.T", "b.T"):
+        scale = np.max(np.abs(gs.column(k)))
+        assert np.max(np.abs(gs.column(k) - jac.column(k))) / scale < 1e-3
+
+
+ONE_SPAN = """{
+  "name": "short", "stop_time": "0.05 s", "step": "1 ms",
+  "webs": {"PET": {"E": "4.5 GPa", "thickness": "50 um", "width": "1 m", "density": "1390 kg/m3"}},
+  "line": [
+    {"type": "source", "name": "in", "speed": "5 m/s", "strain": 0.001},
+    {"type": "span", "name": "s", "L": "2 mm", "web": "PET", SOLVER},
+    {"type": "sink", "name": "out", "speed": {"step": {"time": "0.01 s", "from": "5 m/s", "to": "5.005 m/s"}}}
+  ]
+}"""
+
+
+def test_a_discarded_step_is_rolled_back_and_halved(fmus):
+    """An explicit Euler span with one substep discards steps beyond its
+    stability limit (lambda*h = v/L*h = 2.5 at h = 1 ms, above 2); the master
+    restores every FMU and retries with half steps until they pass."""
+    euler = parse_scene(ONE_SPAN.replace("SOLVER", '"solver": "euler", "substeps": 1'), "euler.json")
+    exact = parse_scene(ONE_SPAN.replace("SOLVER", '"solver": "exact"'), "exact.json")
+    r = CoSimulation(euler, Options(fmu_dir=fmus)).run()
+    assert r.info["rollbacks"] > 0
+    e = CoSimulation(exact, Options(fmu_dir=fmus)).run()
+    assert e.info["rollbacks"] == 0
+    # Euler on the halved steps (lambda*h = 1.25) is first order: near the exact step, not on it.
+    scale = np.max(np.abs(e.column("s.T")))
+    err = np.max(np.abs(r.column("s.T") - e.column("s.T"))) / scale
+    assert 1e-6 < err < 0.05, err
+    with pytest.raises(Exception, match="rollback is off"):
+        CoSimulation(euler, Options(fmu_dir=fmus, rollback=False)).run()
+
+
+def test_events_replace_instances(fmus):
+    s = load_scene(SCENES / "splice.json", {"stop_time": "1.6 s"})
+    r = CoSimulation(s, Options(fmu_dir=fmus)).run()
+    assert r.info["replaced"] == 5
+    # The roll's surface speed is continuous through the roll change at 1 s.
+    v = r.column("unwind.v")
+    i = int(np.argmin(np.abs(r.time - 1.0)))
+    assert abs(v[i + 1] - v[i]) < 1e-3
+    assert r.column("unwind.omega")[i + 1] == pytest.approx(v[i + 1] / 0.3, rel=1e-9)
