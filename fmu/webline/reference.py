@@ -32,7 +32,7 @@ from scipy.integrate import solve_ivp
 from .result import Result
 from .scene import Dancer, Prescribed, Roller, Scene, Span
 
-RTOL = 1e-11
+RTOL = 1e-10
 
 
 class LineODE:
