@@ -5,6 +5,7 @@
     webline reference SCENE.json
     webline convergence SCENE.json [--steps 2ms,1ms,0.5ms]
     webline container SCENE.json
+    webline study [SCENE.json] [--stiff STIFF.json]
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
 """
 
@@ -167,6 +168,31 @@ def cmd_convergence(args):
     return 0
 
 
+def cmd_study(args):
+    from .study import line_study, stability_limit
+
+    scene = load_scene(args.scene)
+    stiff = load_scene(args.stiff)
+    steps = [time_arg(x) for x in args.steps.split(",")]
+    stiff_steps = [time_arg(x) for x in args.stiff_steps.split(",")]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    png = out / "line_study.png"
+    accuracy, stiff_rows = line_study(scene, stiff, steps, stiff_steps, args.fmu_dir, png)
+    print(f"{scene.name}: largest tension error (and wall time) by communication step")
+    print("  " + f"{'variant':<28}" + "".join(f"{h * 1e3:>16g}ms" for h in steps))
+    for (alg, coupling), rows in accuracy.items():
+        cells = "".join(f"{'diverged':>18}" if not r.error < 0.1 else f"{r.error:>10.2e} ({r.wall_time:.2f}s)" for r in rows)
+        print(f"  {alg + ', ' + coupling:<28}{cells}")
+    print(f"{stiff.name}: stability limit of the communication step")
+    for coupling, rows in stiff_rows.items():
+        ok, bad = stability_limit(rows)
+        what = "with input derivatives and extrapolation" if coupling == "extrapolate" else "with inputs held"
+        print(f"  {what}: stable at {ok * 1e3 if ok else '-'} ms, diverges at {bad * 1e3 if bad else '-'} ms")
+    print(f"wrote {png}")
+    return 0
+
+
 def cmd_container(args):
     from .container import compare_container
 
@@ -222,6 +248,15 @@ def main(argv=None):
     p.add_argument("--coupling", choices=COUPLINGS, default="extrapolate")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.set_defaults(func=cmd_convergence)
+
+    p = sub.add_parser("study", help="line-level accuracy-cost study and the stability limit of a stiff line (PNG)")
+    p.add_argument("scene", nargs="?", default=str(Path(__file__).resolve().parents[1] / "scenes" / "lamination.json"))
+    p.add_argument("--stiff", default=str(Path(__file__).resolve().parents[1] / "scenes" / "stiff_line.json"))
+    p.add_argument("--steps", default="2ms,1ms,0.5ms,0.25ms")
+    p.add_argument("--stiff-steps", default="1ms,0.5ms,0.35ms,0.25ms,0.18ms,0.125ms,0.0625ms")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
+    p.add_argument("--out", default=str(OUT))
+    p.set_defaults(func=cmd_study)
 
     p = sub.add_parser("container", help="the same line as an FMPy container FMU, simulated by FMPy and compared")
     p.add_argument("scene")
