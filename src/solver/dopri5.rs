@@ -3,7 +3,7 @@
 //! last. On a stiff span its step shrinks to the stability limit (about
 //! 3.3/lambda), so the work bound in `Control` decides when it gives up.
 
-use super::ode::{all_finite, error_norm, step_factor, too_small, Control, Failure, Ode, Solution};
+use super::ode::{drive, Control, Failure, Ode, Solution, Stepper};
 
 const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [
@@ -26,57 +26,44 @@ const E: [f64; 7] = [
     -1.0 / 40.0,
 ];
 
-pub fn integrate<const N: usize>(ode: &impl Ode<N>, t_end: f64, y0: [f64; N], c: &Control<N>) -> Result<Solution<N>, Failure> {
-    let mut t = 0.0;
-    let mut y = y0;
-    let mut h = c.initial_step.min(t_end);
-    let (mut accepted, mut rejected) = (0, 0);
-    let mut k = [[0.0; N]; 7];
-    k[0] = ode.rhs(t, &y);
-    while t < t_end {
-        if accepted + rejected >= c.max_steps {
-            return Err(Failure::TooMuchWork { reached: t, steps: accepted + rejected });
-        }
-        let last = t + h >= t_end * (1.0 - 4.0 * f64::EPSILON);
-        let h_try = if last { t_end - t } else { h };
-        if too_small(t, h_try, t_end) && !last {
-            return Err(Failure::StepTooSmall { reached: t, step: h_try });
-        }
-        let mut stage_y = y;
+struct DormandPrince<'a, O, const N: usize> {
+    ode: &'a O,
+    /// Stage derivatives; k[0] is f at the current point.
+    k: [[f64; N]; 7],
+}
+
+impl<O: Ode<N>, const N: usize> Stepper<N> for DormandPrince<'_, O, N> {
+    const ESTIMATE_ORDER: f64 = 5.0;
+
+    fn try_step(&mut self, t: f64, y: &[f64; N], h: f64) -> Result<([f64; N], [f64; N]), Failure> {
+        let k = &mut self.k;
+        let mut stage_y = *y;
         for s in 1..7 {
             for i in 0..N {
-                stage_y[i] = y[i] + h_try * (0..s).map(|j| A[s][j] * k[j][i]).sum::<f64>();
+                stage_y[i] = y[i] + h * (0..s).map(|j| A[s][j] * k[j][i]).sum::<f64>();
             }
-            k[s] = ode.rhs(t + C[s] * h_try, &stage_y);
+            k[s] = self.ode.rhs(t + C[s] * h, &stage_y);
         }
-        // Stage 7 is evaluated at the new solution (FSAL).
-        let y_new = stage_y;
+        // The last stage is evaluated at the new solution (FSAL).
         let mut err = [0.0; N];
         for i in 0..N {
-            err[i] = h_try * (0..7).map(|j| E[j] * k[j][i]).sum::<f64>();
+            err[i] = h * (0..7).map(|j| E[j] * k[j][i]).sum::<f64>();
         }
-        let norm = error_norm(&err, &y, &y_new, c);
-        if !(all_finite(&y_new) && norm.is_finite()) {
-            rejected += 1;
-            h = 0.2 * h_try;
-            continue;
-        }
-        if norm <= 1.0 {
-            t = if last { t_end } else { t + h_try };
-            y = y_new;
-            k[0] = k[6];
-            accepted += 1;
-            // A clipped last step says nothing about larger steps: keep h then.
-            if !(last && h_try < h) {
-                h = h_try * step_factor(norm, 5.0);
-            }
-        } else {
-            rejected += 1;
-            h = h_try * step_factor(norm, 5.0).min(0.9);
-        }
+        Ok((stage_y, err))
     }
-    if !all_finite(&y) {
-        return Err(Failure::NotFinite { reached: t });
+
+    fn accept(&mut self) {
+        self.k[0] = self.k[6];
     }
-    Ok(Solution { y, accepted, rejected, next_step: h })
+}
+
+pub fn integrate<const N: usize>(ode: &impl Ode<N>, t_end: f64, y0: [f64; N], c: &Control<N>) -> Result<Solution<N>, Failure> {
+    let mut k = [[0.0; N]; 7];
+    k[0] = ode.rhs(0.0, &y0);
+    let solution = drive(&mut DormandPrince { ode, k }, t_end, y0, c)?;
+    if solution.y.iter().all(|v| v.is_finite()) {
+        Ok(solution)
+    } else {
+        Err(Failure::NotFinite { reached: t_end })
+    }
 }

@@ -46,8 +46,64 @@ pub enum Failure {
     NotFinite { reached: f64 },
 }
 
+/// One adaptive method: a trial step and what it keeps when the step is
+/// accepted (e.g. the derivative at the new point, first same as last).
+pub trait Stepper<const N: usize> {
+    /// Order of the error estimate, for the step-size controller.
+    const ESTIMATE_ORDER: f64;
+
+    /// Attempts a step of size h from (t, y): the new solution and the
+    /// error estimate.
+    fn try_step(&mut self, t: f64, y: &[f64; N], h: f64) -> Result<([f64; N], [f64; N]), Failure>;
+
+    /// The step to (t + h, y_new) was accepted.
+    fn accept(&mut self);
+}
+
+/// The adaptive loop shared by the methods: error control, step-size
+/// control (kept between calls), the last step clipped to `t_end`, and a
+/// bound on the work.
+pub fn drive<S: Stepper<N>, const N: usize>(stepper: &mut S, t_end: f64, y0: [f64; N], c: &Control<N>) -> Result<Solution<N>, Failure> {
+    let q = S::ESTIMATE_ORDER;
+    let mut t = 0.0;
+    let mut y = y0;
+    let mut h = c.initial_step.min(t_end);
+    let (mut accepted, mut rejected) = (0, 0);
+    while t < t_end {
+        if accepted + rejected >= c.max_steps {
+            return Err(Failure::TooMuchWork { reached: t, steps: accepted + rejected });
+        }
+        let last = t + h >= t_end * (1.0 - 4.0 * f64::EPSILON);
+        let h_try = if last { t_end - t } else { h };
+        if too_small(t, h_try, t_end) && !last {
+            return Err(Failure::StepTooSmall { reached: t, step: h_try });
+        }
+        let (y_new, err) = stepper.try_step(t, &y, h_try)?;
+        let norm = error_norm(&err, &y, &y_new, c);
+        if !(all_finite(&y_new) && norm.is_finite()) {
+            rejected += 1;
+            h = 0.2 * h_try;
+            continue;
+        }
+        if norm <= 1.0 {
+            t = if last { t_end } else { t + h_try };
+            y = y_new;
+            stepper.accept();
+            accepted += 1;
+            // A clipped last step says nothing about larger steps: keep h then.
+            if !(last && h_try < h) {
+                h = h_try * step_factor(norm, q);
+            }
+        } else {
+            rejected += 1;
+            h = h_try * step_factor(norm, q).min(0.9);
+        }
+    }
+    Ok(Solution { y, accepted, rejected, next_step: h })
+}
+
 /// Weighted RMS norm of an error estimate (Hairer–Wanner II, IV.8).
-pub fn error_norm<const N: usize>(err: &[f64; N], y0: &[f64; N], y1: &[f64; N], c: &Control<N>) -> f64 {
+fn error_norm<const N: usize>(err: &[f64; N], y0: &[f64; N], y1: &[f64; N], c: &Control<N>) -> f64 {
     let mut sum = 0.0;
     for i in 0..N {
         let scale = c.atol[i] + c.rtol * y0[i].abs().max(y1[i].abs());
@@ -70,7 +126,7 @@ pub(crate) fn all_finite<const N: usize>(y: &[f64; N]) -> bool {
 
 /// Step-size factor from an error norm for a method whose error estimate
 /// has order `q` (safety 0.9, growth limited to 5, shrink to 0.2).
-pub(crate) fn step_factor(norm: f64, q: f64) -> f64 {
+fn step_factor(norm: f64, q: f64) -> f64 {
     if norm == 0.0 {
         5.0
     } else {
@@ -79,6 +135,6 @@ pub(crate) fn step_factor(norm: f64, q: f64) -> f64 {
 }
 
 /// Time resolution: a step below this cannot advance t.
-pub(crate) fn too_small(t: f64, h: f64, t_end: f64) -> bool {
+fn too_small(t: f64, h: f64, t_end: f64) -> bool {
     h <= 16.0 * f64::EPSILON * t.abs().max(t_end.abs())
 }
