@@ -8,7 +8,9 @@ messages kept so that a failed call can say why.
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import tempfile
 from ctypes import byref
 from pathlib import Path
@@ -53,6 +55,7 @@ class FmuFile:
             )
         self.md = read_model_description(str(self.path))
         self.unzipdir = extract(str(self.path), unzipdir=tempfile.mkdtemp(prefix=f"webline-{self.path.stem}-"))
+        atexit.register(shutil.rmtree, self.unzipdir, True)
         self.variables = {v.name: v for v in self.md.modelVariables}
 
     @classmethod

@@ -112,13 +112,30 @@ def test_simulate_fmu_follows_the_exact_solution(roller_path, b):
     assert np.allclose(res["v"], R * res["omega"], rtol=1e-15, atol=0)
 
 
+def _callbacks(logged):
+    """Callbacks of our own, kept alive by the caller. Not FMPy's defaults: FMPy
+    0.3.32 routes them through a process-wide logger proxy that any earlier
+    simulate_fmu(..., logger=f) re-points at f, so once f is freed an instance
+    with the default callbacks crashes the process when it logs."""
+    from fmpy import calloc, free
+    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                           fmi2CallbackLoggerTYPE)
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: logged.append(msg.decode()))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    return callbacks
+
+
 def _slave(path, name="roller"):
     from fmpy import extract
 
     md = read_model_description(str(path))
     d = extract(str(path))
     s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-    s.instantiate()
+    s.logged = []
+    s.instantiate(callbacks=_callbacks(s.logged))
     return s, md
 
 
@@ -149,20 +166,11 @@ def test_fmu_state_round_trip_continues_bit_identically(roller_path):
      ("b", -1.0, "b = -1 N.m.s is outside its allowed range [0, inf)")],
 )
 def test_bad_parameters_are_refused_with_the_range(roller_path, name, value, message):
-    # Through FMU2Slave with a logger kept alive and the instance freed: a
-    # failing simulate_fmu(..., logger=...) leaves its instance behind (FMPy
-    # 0.3.32 frees it only on success), and a later instance that logs then
-    # crashed the process here (reported, not worked around in the FMU).
-    from fmpy import calloc, free
+    # Through FMU2Slave with callbacks of our own (see _callbacks).
     from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
-                           fmi2CallbackLoggerTYPE)
 
     logged = []
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: logged.append(msg.decode()))
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    callbacks = _callbacks(logged)
     from fmpy import extract
 
     md = read_model_description(str(roller_path))
@@ -209,8 +217,10 @@ def test_roller_and_span_in_one_process(roller_path):
     span_md = read_model_description(str(SPAN))
     d = extract(str(roller_path))
     wrong = FMU2Slave(guid=span_md.guid, unzipDirectory=d, modelIdentifier="Roller", instanceName="wrong")
+    logged = []
     with pytest.raises(Exception):
-        wrong.instantiate()
+        wrong.instantiate(callbacks=_callbacks(logged))
+    assert any("does not match" in m for m in logged), logged
     res = simulate_fmu(str(SPAN), stop_time=0.01, output_interval=1e-3, output=["T"])
     assert np.isfinite(res["T"]).all()
     r.setupExperiment(startTime=0.0)
