@@ -36,3 +36,5 @@ if ! "$PY" -c "import webline" 2>/dev/null || [ ! -x "$VENV/bin/webline" ]; then
     "$PY" -m pip install --quiet --disable-pip-version-check -e "$ROOT/fmu"
 fi
 export MPLBACKEND=Agg
+# zig and cargo-zigbuild for the portable FMU binary (cached; see the file).
+source "$ROOT/fmu/toolchain.sh"

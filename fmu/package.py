@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Build the release libraries and write the FMUs: ConvertingSpan and Roller.
 
-    python3 fmu/package.py [--out out/ConvertingSpan.fmu] [--no-build]
+    python3 fmu/package.py [--out out/ConvertingSpan.fmu] [--no-build] [--host-build]
 
 Both come from the same crate: ConvertingSpan as `cargo build --release --lib`,
 Roller with the feature `roller` into target/roller; Roller.fmu is written
@@ -10,10 +10,20 @@ binaries/linux64/<modelIdentifier>.so and documentation/index.html. The
 documentation's variable and unit tables are rendered from the model
 description, so they never disagree with the FMU. Only the Python standard
 library is used.
+
+The shipped binaries are portable: they are built with cargo-zigbuild (zig as
+the linker) for the target x86_64-unknown-linux-gnu.2.17, so they need no
+glibc symbol newer than 2.17 and load on any x86-64 Linux since 2012 (CentOS
+7); fmu/env.sh installs zig and cargo-zigbuild (fmu/toolchain.sh), and
+tests/hardening/test_portable_so.py checks the result. `--host-build` packages
+plain `cargo build --release` libraries instead: for development only, they
+need the glibc of the machine that built them.
 """
 
 import argparse
 import html
+import os
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -24,6 +34,10 @@ ROOT = Path(__file__).resolve().parent.parent
 RANGE_TOOL = "ConvertingSpan.range"
 # Fixed timestamp: the same inputs give the same archive bytes.
 ZIP_TIME = (2026, 1, 1, 0, 0, 0)
+# The oldest glibc the binaries support is part of the target name.
+PORTABLE_TARGET = "x86_64-unknown-linux-gnu.2.17"
+# Present only in a library built with the test-only feature `test-hooks`.
+TEST_HOOK_MARKER = b"testHook.panicInNextDoStep"
 
 
 class Model:
@@ -36,6 +50,9 @@ class Model:
         self.features = list(features)
         self.target_dir = target_dir  # None: cargo's default target/
         self.library = (target_dir or ROOT / "target") / "release" / "libconverting_span.so"
+        # The portable build: its own target directory per model.
+        self.portable_dir = ROOT / "target" / ("portable" if not self.features else f"portable-{name.lower()}")
+        self.portable_library = self.portable_dir / "x86_64-unknown-linux-gnu" / "release" / "libconverting_span.so"
 
 
 MODELS = [
@@ -57,6 +74,28 @@ def build_library(model):
     if model.target_dir is not None:
         command += ["--target-dir", str(model.target_dir)]
     subprocess.run(command, cwd=ROOT, check=True)
+
+
+def tools_path():
+    """PATH with the cached zig and cargo-zigbuild of fmu/toolchain.sh."""
+    cache = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    tools = os.environ.get("CONVERTING_SPAN_TOOLS") or os.path.join(cache, "converting-span-tools")
+    return os.pathsep.join([os.path.join(tools, "bin"), os.environ.get("PATH", "")])
+
+
+def build_portable_library(model):
+    env = dict(os.environ, PATH=tools_path())
+    missing = [tool for tool in ("cargo-zigbuild", "zig") if shutil.which(tool, path=env["PATH"]) is None]
+    if missing:
+        sys.exit(
+            f"package.py: {' and '.join(missing)} not found: `source fmu/env.sh` installs them "
+            "(or use --host-build for development FMUs that are not portable)"
+        )
+    command = ["cargo", "zigbuild", "--release", "--lib", "--quiet", "--target", PORTABLE_TARGET]
+    if model.features:
+        command += ["--features", ",".join(model.features)]
+    command += ["--target-dir", str(model.portable_dir)]
+    subprocess.run(command, cwd=ROOT, check=True, env=env)
 
 
 def allowed_range(var, t):
@@ -134,7 +173,7 @@ def documentation(root, template):
     return text
 
 
-def write_fmu(out, model):
+def write_fmu(out, model, library):
     root = ET.parse(model.description).getroot()
     identifier = root.find("CoSimulation").get("modelIdentifier")
     if identifier != model.name:
@@ -142,7 +181,7 @@ def write_fmu(out, model):
     out.parent.mkdir(parents=True, exist_ok=True)
     entries = [
         ("modelDescription.xml", model.description.read_bytes()),
-        (f"binaries/linux64/{identifier}.so", model.library.read_bytes()),
+        (f"binaries/linux64/{identifier}.so", library.read_bytes()),
         ("documentation/index.html", documentation(root, model.template).encode("utf-8")),
     ]
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
@@ -163,16 +202,23 @@ def main():
         help="where to write ConvertingSpan.fmu (Roller.fmu goes into the same folder)",
     )
     parser.add_argument("--no-build", action="store_true", help="package the libraries as they are")
+    parser.add_argument(
+        "--host-build", action="store_true", help="plain cargo build against this machine's glibc (development only)"
+    )
     args = parser.parse_args()
     span_out = args.out.resolve()
     for model in MODELS:
+        library = model.library if args.host_build else model.portable_library
         if not args.no_build:
-            build_library(model)
-        if not model.library.exists():
-            sys.exit(f"package.py: {model.library} is missing; run without --no-build")
+            build_library(model) if args.host_build else build_portable_library(model)
+        if not library.exists():
+            sys.exit(f"package.py: {library} is missing; run without --no-build")
+        if TEST_HOOK_MARKER in library.read_bytes():
+            sys.exit(f"package.py: {library} was built with the test-only feature test-hooks; it must not ship")
         out = span_out if model.name == "ConvertingSpan" else span_out.parent / f"{model.name}.fmu"
-        write_fmu(out, model)
-        print(f"wrote {out} ({out.stat().st_size} bytes; library {model.library.stat().st_size} bytes)")
+        write_fmu(out, model, library)
+        kind = "host build, not portable" if args.host_build else f"portable, {PORTABLE_TARGET}"
+        print(f"wrote {out} ({out.stat().st_size} bytes; library {library.stat().st_size} bytes, {kind})")
 
 
 if __name__ == "__main__":

@@ -1,0 +1,126 @@
+"""The FMU's binary loads on old Linux systems: the .so in the packaged FMU
+needs no glibc symbol version newer than 2.17 and links nothing but glibc's
+own libraries and libgcc_s (read with objdump -T and readelf -d, binutils).
+It exports the 44 fmi2 functions and does not contain the test-only hook.
+
+    .venv/bin/python -m pytest tests/hardening -q     (after python3 fmu/package.py)
+
+FMU=path overrides out/ConvertingSpan.fmu. The parser is checked on a
+fabricated listing and on the plain host build (which needs a newer glibc),
+so a check that could not fail would itself fail.
+"""
+
+import os
+import re
+import subprocess
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+FMU = Path(os.environ.get("FMU", ROOT / "out" / "ConvertingSpan.fmu"))
+NEWEST_ALLOWED = (2, 17)
+ALLOWED_NEEDED = {
+    "libc.so.6",
+    "libm.so.6",
+    "libpthread.so.0",
+    "libdl.so.2",
+    "ld-linux-x86-64.so.2",
+    "libgcc_s.so.1",
+}
+# Version namespaces of those libraries: glibc's and libgcc_s's.
+ALLOWED_NAMESPACES = ("GLIBC_", "GCC_")
+FMI2_FUNCTIONS = 44
+
+
+def version_refs(objdump_t):
+    """Symbol versions an `objdump -T` listing refers to, e.g. {'GLIBC_2.14', ...}."""
+    return set(re.findall(r"\b((?:GLIBC|GCC|GLIBCXX|CXXABI)_[0-9A-Z_.]+)\b", objdump_t))
+
+
+def glibc_versions(refs):
+    out = []
+    for ref in refs:
+        m = re.fullmatch(r"GLIBC_(\d+)\.(\d+)(?:\.(\d+))?", ref)
+        if m:
+            out.append(tuple(int(x) for x in m.groups() if x is not None))
+    return sorted(out)
+
+
+def problems(objdump_t, readelf_d):
+    """Everything that makes a library non-portable, as readable lines."""
+    found = []
+    refs = version_refs(objdump_t)
+    for ref in sorted(refs):
+        if not ref.startswith(ALLOWED_NAMESPACES) or ref == "GLIBC_PRIVATE":
+            found.append(f"needs symbol version {ref}")
+    for v in glibc_versions(refs):
+        if v[:2] > NEWEST_ALLOWED:
+            found.append("needs GLIBC_" + ".".join(map(str, v)))
+    for lib in re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", readelf_d):
+        if lib not in ALLOWED_NEEDED:
+            found.append(f"links {lib}")
+    return found
+
+
+def tool(*args):
+    return subprocess.run(args, check=True, capture_output=True, text=True).stdout
+
+
+@pytest.fixture(scope="module")
+def shipped_so(tmp_path_factory):
+    if not FMU.exists():
+        pytest.fail(f"{FMU} is missing: run python3 fmu/package.py first")
+    with zipfile.ZipFile(FMU) as zf:
+        names = [n for n in zf.namelist() if n.startswith("binaries/linux64/") and n.endswith(".so")]
+        assert len(names) == 1, names
+        path = tmp_path_factory.mktemp("fmu") / Path(names[0]).name
+        path.write_bytes(zf.read(names[0]))
+    return path
+
+
+def test_needs_no_glibc_newer_than_2_17_and_links_only_glibc_and_libgcc(shipped_so):
+    objdump_t = tool("objdump", "-T", str(shipped_so))
+    readelf_d = tool("readelf", "-d", str(shipped_so))
+    assert problems(objdump_t, readelf_d) == []
+    newest = glibc_versions(version_refs(objdump_t))[-1]
+    needed = re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", readelf_d)
+    print(f"\nshipped .so: newest symbol version GLIBC_{'.'.join(map(str, newest))}; NEEDED {needed}")
+
+
+def test_exports_the_fmi2_functions(shipped_so):
+    exported = set(re.findall(r"\.text\s+\S+\s+(?:Base\s+)?(fmi2\w+)", tool("objdump", "-T", str(shipped_so))))
+    assert len(exported) == FMI2_FUNCTIONS, sorted(exported)
+
+
+def test_the_test_only_hook_is_not_shipped(shipped_so):
+    assert b"testHook." not in shipped_so.read_bytes()
+
+
+def test_the_check_flags_a_newer_glibc_a_foreign_library_and_glibc_private():
+    objdump_t = """
+0000000000000000      DF *UND*  0000000000000000 (GLIBC_2.2.5) malloc
+0000000000000000      DF *UND*  0000000000000000 (GLIBC_2.34) __libc_start_main
+0000000000000000      DF *UND*  0000000000000000 (GLIBC_PRIVATE) _dl_find_object
+0000000000000000      DF *UND*  0000000000000000 (GLIBCXX_3.4.29) _ZNSt6chrono
+"""
+    readelf_d = """
+ 0x0000000000000001 (NEEDED)             Shared library: [libstdc++.so.6]
+ 0x0000000000000001 (NEEDED)             Shared library: [libc.so.6]
+"""
+    found = problems(objdump_t, readelf_d)
+    assert "needs GLIBC_2.34" in found
+    assert "needs symbol version GLIBC_PRIVATE" in found
+    assert "needs symbol version GLIBCXX_3.4.29" in found
+    assert "links libstdc++.so.6" in found
+    assert not any("2.2.5" in f or "libc.so.6" in f for f in found)
+
+
+def test_the_check_flags_the_plain_host_build():
+    host = ROOT / "target" / "release" / "libconverting_span.so"
+    if not host.exists():
+        pytest.skip("no host build (cargo build --release) to compare with")
+    found = problems(tool("objdump", "-T", str(host)), tool("readelf", "-d", str(host)))
+    # Built against this machine's glibc (2.36 on Debian 12): newer than 2.17.
+    assert any(f.startswith("needs GLIBC_2.") for f in found), found
