@@ -131,42 +131,50 @@ fn main() {
     };
     let mut totals = Totals::default();
     let mut violations = Vec::new();
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|t| {
-                let (indices, stop, failed_dir) = (&indices, &stop, &failed_dir);
-                scope.spawn(move || {
-                    let mut totals = Totals::default();
-                    let mut violations = Vec::new();
-                    for &k in indices.iter().skip(t as usize).step_by(threads as usize) {
-                        if stop.load(Ordering::Relaxed) {
-                            break;
-                        }
-                        let bytes = sequence(seed, k);
-                        match run(&bytes) {
-                            Ok(o) => totals.add(o, k),
-                            Err(v) => {
-                                std::fs::create_dir_all(failed_dir).ok();
-                                let file = format!("{failed_dir}/seed{seed}-seq{k}.bin");
-                                std::fs::write(&file, &bytes).ok();
-                                violations.push(format!(
-                                    "sequence {k} (seed {seed}, saved as {file}): {}",
-                                    v.0
-                                ));
-                                stop.store(true, Ordering::Relaxed);
-                            }
-                        }
-                    }
-                    (totals, violations)
-                })
-            })
-            .collect();
-        for w in workers {
-            let (t, v) = w.join().expect("worker");
-            totals.merge(t);
-            violations.extend(v);
+    let work = |t: u64, threads: u64| {
+        let mut totals = Totals::default();
+        let mut violations = Vec::new();
+        for &k in indices.iter().skip(t as usize).step_by(threads as usize) {
+            if stop.load(Ordering::Relaxed) {
+                break;
+            }
+            let bytes = sequence(seed, k);
+            match run(&bytes) {
+                Ok(o) => totals.add(o, k),
+                Err(v) => {
+                    std::fs::create_dir_all(&failed_dir).ok();
+                    let file = format!("{failed_dir}/seed{seed}-seq{k}.bin");
+                    std::fs::write(&file, &bytes).ok();
+                    violations.push(format!(
+                        "sequence {k} (seed {seed}, saved as {file}): {}",
+                        v.0
+                    ));
+                    stop.store(true, Ordering::Relaxed);
+                }
+            }
         }
-    });
+        (totals, violations)
+    };
+    if threads == 1 {
+        // On the main thread (no thread handles for valgrind to report).
+        let (t, v) = work(0, 1);
+        totals.merge(t);
+        violations.extend(v);
+    } else {
+        std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads)
+                .map(|t| {
+                    let work = &work;
+                    scope.spawn(move || work(t, threads))
+                })
+                .collect();
+            for w in workers {
+                let (t, v) = w.join().expect("worker");
+                totals.merge(t);
+                violations.extend(v);
+            }
+        });
+    }
     let secs = start.elapsed().as_secs_f64();
     let t = &totals;
     println!(

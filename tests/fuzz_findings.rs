@@ -1,0 +1,114 @@
+//! Product issues the fuzz harness (tests/fuzz) found, each as a small test
+//! that fails today. They are `#[ignore]`d so that CI stays green until the
+//! model's owner fixes them; run them with
+//!
+//!     cargo test --release --test fuzz_findings -- --ignored
+//!
+//! The harness counts them as "findings" (not violations) so that it keeps
+//! looking for new problems; `fuzz_sequences --strict` fails on them too.
+
+mod harden;
+
+use harden::*;
+
+fn output_vrs() -> Vec<u32> {
+    use converting_span::fmi2::description::{Causality, Kind};
+    use converting_span::fmi2::Model;
+    <converting_span::ExportedModel as Model>::description()
+        .variables
+        .iter()
+        .filter(|v| v.causality == Causality::Output && v.kind == Kind::Real)
+        .map(|v| v.vr)
+        .collect()
+}
+
+fn non_finite(fmu: &Fmu) -> Vec<(u32, f64)> {
+    let vrs = output_vrs();
+    let (status, values) = fmu.get_reals(&vrs);
+    if status != OK {
+        return Vec::new(); // refusing to answer is fine
+    }
+    vrs.into_iter().zip(values).filter(|(_, x)| !x.is_finite()).collect()
+}
+
+/// fmi2GetReal is legal in the error state. An instance that got there
+/// before its initialization ended answers with outputs computed from an
+/// unset state: web_a.F, T, summary_Stress ... are inf or NaN. Fix: answer
+/// fmi2Error (or start values) for outputs that were never computed.
+#[test]
+#[ignore = "known product issue: outputs of an uninitialized instance in the error state are inf/NaN"]
+fn outputs_read_in_the_error_state_before_initialization_are_finite() {
+    let fmu = Fmu::new("uninitialized");
+    assert_eq!(fmu.do_step(0.0, 0.1), ERROR, "a step before initialization is illegal");
+    let bad = non_finite(&fmu);
+    assert!(bad.is_empty(), "non-finite outputs (value reference, value): {bad:?}");
+}
+
+/// Parameters inside their declared ranges (E, thickness, width > 0) but
+/// extreme: E*A overflows and the tension is inf. Fix: refuse at the end of
+/// initialization when a derived quantity is not finite, or bound the ranges.
+#[test]
+#[ignore = "known product issue: in-range extreme parameters give infinite outputs"]
+fn extreme_but_accepted_parameters_are_refused_or_give_finite_outputs() {
+    let fmu = Fmu::new("extreme");
+    for (name, x) in [("wp2.E", 1e300), ("wp2.width", 1e300), ("wp2.thickness", 1e300)] {
+        assert_eq!(fmu.set_real(name, x), OK, "{name} = {x} is inside its range");
+    }
+    assert_eq!(fmu.set_real("web_b.v", 5.1), OK); // a draw: non-zero strain
+    if fmu.initialize() != OK {
+        return; // refused: fine
+    }
+    assert_eq!(fmu.do_step(0.0, 0.1), OK);
+    let bad = non_finite(&fmu);
+    assert!(bad.is_empty(), "non-finite outputs (value reference, value): {bad:?}");
+}
+
+/// The end time of a step, t + h, can overflow to inf with finite t and h;
+/// the FMU accepts the step and fmi2GetRealStatus(fmi2LastSuccessfulTime)
+/// then answers inf. Fix: refuse a step whose end time is not finite.
+#[test]
+#[ignore = "known product issue: a step whose end time overflows is accepted"]
+fn a_step_whose_end_time_overflows_is_refused() {
+    let fmu = Fmu::new("time");
+    unsafe {
+        assert_eq!(fmi2SetupExperiment(fmu.c, 0, 0.0, 1e308, 0, 0.0), OK);
+        assert_eq!(fmi2EnterInitializationMode(fmu.c), OK);
+        assert_eq!(fmi2ExitInitializationMode(fmu.c), OK);
+    }
+    let status = fmu.do_step(1e308, 1e308);
+    let mut last = 0.0;
+    let s = unsafe { fmi2GetRealStatus(fmu.c, 2, &mut last) };
+    assert!(status != OK || (s == OK && last.is_finite()), "step accepted, last successful time {last}");
+}
+
+/// A serialized state is checked for its magic number, version, GUID hash,
+/// length and FNV-1a checksum, and each Real for finiteness, but not against
+/// the variables' ranges. The checksum is no signature: bytes changed by
+/// hand (checksum recomputed, as the harness does) with L = -1 m are
+/// accepted, and such forged states lead to infinite outputs in the fuzz
+/// runs. Fix: check the loaded parameters like fmi2ExitInitializationMode does.
+#[test]
+#[ignore = "known product issue: a forged FMU state with out-of-range parameters is accepted"]
+fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
+    let fmu = Fmu::new("forged");
+    assert_eq!(fmu.initialize(), OK);
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    let mut size = 0usize;
+    unsafe {
+        assert_eq!(fmi2GetFMUstate(fmu.c, &mut state), OK);
+        assert_eq!(fmi2SerializedFMUstateSize(fmu.c, state, &mut size), OK);
+    }
+    let mut bytes = vec![0u8; size];
+    assert_eq!(unsafe { fmi2SerializeFMUstate(fmu.c, state, bytes.as_mut_ptr() as *mut _, size) }, OK);
+    // Layout (src/fmi2/snapshot.rs): 24-byte header, payload = phase (1),
+    // time (8), then the model's fields, the first of which is L.
+    let l_at = 24 + 1 + 8;
+    assert_eq!(f64::from_le_bytes(bytes[l_at..l_at + 8].try_into().unwrap()), fmu.get_real("L").1);
+    bytes[l_at..l_at + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
+    let n = bytes.len() - 8;
+    let sum = bytes[..n].iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3));
+    bytes[n..].copy_from_slice(&sum.to_le_bytes());
+    let mut forged: fmi2FMUstate = std::ptr::null_mut();
+    let status = unsafe { fmi2DeSerializeFMUstate(fmu.c, bytes.as_ptr() as *const _, size, &mut forged) };
+    assert_eq!(status, ERROR, "a state with L = -1 m (allowed: > 0) was accepted");
+}

@@ -1,0 +1,202 @@
+#!/usr/bin/env bash
+# Hardening checks of the FMU binary: fuzzed C API, memory checks, panic
+# boundary, portable binary. Threads and global state are in tests/threads.rs
+# (cargo test).
+#
+#   bash tests/hardening.sh            CI size (tests/run.sh runs this), a few minutes
+#   bash tests/hardening.sh --full     the long runs: 1,000,000 fuzzed sequences,
+#                                      1,000 dlopen/dlclose cycles under valgrind, ...
+#   bash tests/hardening.sh --afl S    coverage-guided fuzzing with cargo-afl (AFL++)
+#                                      for S seconds, then its queue and crashes are
+#                                      replayed through the oracle
+#
+# What runs (sizes: CI / --full):
+#   1. the packaged FMU's .so: glibc <= 2.17, only glibc + libgcc_s, no test hook
+#      (pytest tests/hardening)
+#   2. panic boundary through the C API (cargo test --features test-hooks)
+#   3. fuzz harness tests/fuzz, property-based: 50,000 / 1,000,000 sequences
+#   4. the same harness built with AddressSanitizer (LeakSanitizer included):
+#      10,000 / 200,000 sequences
+#   5. the same harness under valgrind memcheck: 200 / 5,000 sequences
+#   6. tests/hardening/dlopen_cycles.c on the shipped .so, with ASan+UBSan:
+#      1,000 / 1,000 cycles; under valgrind: 100 / 1,000 cycles
+#   7. the same with a panic caught in every cycle, on a portable build with the
+#      test-only hook: ASan 1,000 / 1,000, valgrind 20 / 200 cycles
+#   8. (--full) the C importer of tests/c_importer under valgrind, if present
+# A summary is printed at the end and written to target/hardening/summary.txt.
+set -euo pipefail
+source "$(dirname "$0")/../fmu/env.sh"
+cd "$ROOT"
+# A panic the FMU catches still goes through Rust's default panic hook, which
+# prints it (and, with RUST_BACKTRACE set, symbolizes a backtrace: very slow
+# under valgrind). Section 7 panics on purpose: one line each, into a log.
+export RUST_BACKTRACE=0
+
+MODE=ci
+AFL_SECONDS=0
+case "${1:-}" in
+    --full) MODE=full ;;
+    --afl) MODE=afl; AFL_SECONDS="${2:?--afl needs a number of seconds}" ;;
+    "") ;;
+    *) echo "usage: $0 [--full | --afl SECONDS]" >&2; exit 2 ;;
+esac
+if [ "$MODE" = full ]; then
+    SEQ=1000000 SEQ_ASAN=200000 SEQ_VALGRIND=5000 CYCLES_VALGRIND=1000 PANIC_VALGRIND=200
+else
+    SEQ=50000 SEQ_ASAN=10000 SEQ_VALGRIND=200 CYCLES_VALGRIND=100 PANIC_VALGRIND=20
+fi
+CYCLES_ASAN=1000
+
+command -v valgrind >/dev/null || apt_install valgrind
+command -v objdump >/dev/null || apt_install binutils
+
+OUT=target/hardening
+mkdir -p "$OUT"
+SUMMARY="$OUT/summary.txt"
+: > "$SUMMARY"
+note() { echo "$*" | tee -a "$SUMMARY"; }
+step() { echo; echo "== $*"; }
+START=$SECONDS
+
+FUZZ_DIR=target/fuzz
+FUZZ="$FUZZ_DIR/release/fuzz_sequences"
+build_fuzz() {
+    cargo build --release --quiet --manifest-path tests/fuzz/Cargo.toml --target-dir "$FUZZ_DIR"
+}
+
+if [ "$MODE" = afl ]; then
+    # cargo-afl from crates.io builds AFL++ itself and runs on stable Rust.
+    if ! command -v cargo-afl >/dev/null; then
+        cargo install --quiet --locked --root "$CONVERTING_SPAN_TOOLS" cargo-afl@0.18.2
+    fi
+    cargo afl config --build 2>/dev/null || true # "already built" is fine
+    step "AFL++ (cargo-afl), $AFL_SECONDS s"
+    cargo afl build --release --quiet --features afl --manifest-path tests/fuzz/Cargo.toml --target-dir target/fuzz-afl
+    build_fuzz
+    mkdir -p "$OUT/afl-seeds"
+    # Seeds: a few sequences of the property driver's generator.
+    "$PY" - "$OUT/afl-seeds" <<'EOF'
+import os, random, sys
+rng = random.Random(1)
+for k in range(16):
+    with open(os.path.join(sys.argv[1], f"seed{k}"), "wb") as f:
+        f.write(bytes(rng.randrange(256) for _ in range(64 + 32 * k)))
+EOF
+    rm -rf "$OUT/afl-out"
+    AFL_SKIP_CPUFREQ=1 AFL_I_DONT_CARE_ABOUT_MISSING_CRASHES=1 AFL_NO_UI=1 AFL_QUIET=1 \
+        timeout --preserve-status $((AFL_SECONDS + 60)) \
+        cargo afl fuzz -V "$AFL_SECONDS" -i "$OUT/afl-seeds" -o "$OUT/afl-out" \
+        target/fuzz-afl/release/afl_target > "$OUT/afl.log" 2>&1 || true
+    STATS="$OUT/afl-out/default/fuzzer_stats"
+    [ -f "$STATS" ] || { echo "AFL++ did not run; see $OUT/afl.log"; tail -20 "$OUT/afl.log"; exit 1; }
+    execs=$(awk -F': *' '/^execs_done/ {print $2}' "$STATS")
+    corpus=$(awk -F': *' '/^corpus_count/ {print $2}' "$STATS")
+    crashes=$(awk -F': *' '/^saved_crashes/ {print $2}' "$STATS")
+    edges=$(awk -F': *' '/^bitmap_cvg/ {print $2}' "$STATS")
+    note "AFL++: $execs sequences executed in $AFL_SECONDS s, corpus $corpus, map coverage $edges, crashes $crashes"
+    # Replay the queue and any crash through the oracle (with messages).
+    "$FUZZ" --replay "$OUT"/afl-out/default/queue/id* > "$OUT/afl-replay.log" || true
+    if [ "$crashes" != 0 ]; then
+        "$FUZZ" --replay "$OUT"/afl-out/default/crashes/id* || true
+        note "AFL++ found $crashes crashing sequences: $OUT/afl-out/default/crashes"
+        exit 1
+    fi
+    note "$((corpus)) passed, 0 failed"
+    exit 0
+fi
+
+step "1. portable binary (packaged FMU)"
+python3 fmu/package.py
+"$PY" -m pytest tests/hardening -q -s -p no:cacheprovider | tee "$OUT/portable.log"
+SO_GLIBC=$(grep -o "newest symbol version GLIBC_[0-9.]*" "$OUT/portable.log" | awk '{print $4}')
+note "shipped .so: newest glibc symbol version $SO_GLIBC (allowed: GLIBC_2.17)"
+
+step "2. panic boundary (test-only hook, separate target directory)"
+cargo test --release --quiet --features test-hooks --target-dir target/test-hooks --test panic_boundary
+
+step "3. fuzz harness: $SEQ sequences"
+build_fuzz
+"$FUZZ" --sequences "$SEQ" | tee "$OUT/fuzz.log"
+note "fuzz: $(grep '^fuzzed' "$OUT/fuzz.log")"
+
+step "4. fuzz harness with AddressSanitizer: $SEQ_ASAN sequences"
+# -Zsanitizer needs a nightly flag: RUSTC_BOOTSTRAP=1 lets this stable toolchain take it.
+RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" \
+    cargo build --release --quiet --target x86_64-unknown-linux-gnu \
+    --manifest-path tests/fuzz/Cargo.toml --target-dir target/fuzz-asan
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 \
+    target/fuzz-asan/x86_64-unknown-linux-gnu/release/fuzz_sequences --sequences "$SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan.log"
+note "fuzz under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan.log"), no ASan/LSan report"
+
+VALGRIND=(valgrind --tool=memcheck --leak-check=full --show-leak-kinds=definite,indirect,possible
+    --errors-for-leak-kinds=definite,indirect,possible --error-exitcode=99)
+valgrind_summary() { # log file -> one line
+    local errors lost
+    errors=$(grep -o "ERROR SUMMARY: [0-9,]* errors" "$1" | tail -1)
+    lost=$(grep -E "definitely lost|indirectly lost|possibly lost|All heap blocks were freed" "$1" |
+        sed 's/^==[0-9]*== *//' | tr '\n' ';' | sed 's/;$//')
+    echo "$errors; ${lost:-no leak summary}"
+}
+
+step "5. fuzz harness under valgrind: $SEQ_VALGRIND sequences"
+"${VALGRIND[@]}" --log-file="$OUT/valgrind-fuzz.log" "$FUZZ" --sequences "$SEQ_VALGRIND" --threads 1 --seed 11
+note "fuzz under valgrind ($SEQ_VALGRIND sequences): $(valgrind_summary "$OUT/valgrind-fuzz.log")"
+
+step "6. dlopen/dlclose cycles of the shipped .so"
+rm -rf "$OUT/fmu" && mkdir -p "$OUT/fmu"
+"$PY" -c "import zipfile,sys; zipfile.ZipFile(sys.argv[1]).extractall(sys.argv[2])" out/ConvertingSpan.fmu "$OUT/fmu"
+SHIPPED="$OUT/fmu/binaries/linux64/ConvertingSpan.so"
+# GUID and value references from the model description.
+read -r GUID VR_A VR_B OUTPUTS < <("$PY" - <<'EOF'
+import xml.etree.ElementTree as ET
+root = ET.parse("modelDescription.xml").getroot()
+vr = {v.get("name"): v.get("valueReference") for v in root.iter("ScalarVariable")}
+outs = [v.get("valueReference") for v in root.iter("ScalarVariable")
+        if v.get("causality") == "output" and v.find("Real") is not None]
+print(root.get("guid"), vr["web_a.v"], vr["web_b.v"], ",".join(outs))
+EOF
+)
+gcc -O1 -g -Wall -Wextra -Werror -o "$OUT/dlopen_cycles" tests/hardening/dlopen_cycles.c -ldl -lm
+gcc -O1 -g -Wall -Wextra -Werror -fsanitize=address,undefined -fno-omit-frame-pointer \
+    -o "$OUT/dlopen_cycles_asan" tests/hardening/dlopen_cycles.c -ldl -lm
+CYCLE_ARGS=("$GUID" "$VR_A" "$VR_B" "$OUTPUTS")
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+    "$OUT/dlopen_cycles_asan" "$SHIPPED" "${CYCLE_ARGS[0]}" "$CYCLES_ASAN" "${CYCLE_ARGS[@]:1}" | tee "$OUT/cycles-asan.log"
+note "dlopen cycles under ASan+UBSan: $(head -1 "$OUT/cycles-asan.log"); no report"
+"${VALGRIND[@]}" --log-file="$OUT/valgrind-cycles.log" \
+    "$OUT/dlopen_cycles" "$SHIPPED" "${CYCLE_ARGS[0]}" "$CYCLES_VALGRIND" "${CYCLE_ARGS[@]:1}"
+note "dlopen cycles under valgrind ($CYCLES_VALGRIND cycles): $(valgrind_summary "$OUT/valgrind-cycles.log")"
+
+step "7. a caught panic in every cycle (portable build with the test-only hook)"
+cargo zigbuild --release --quiet --lib --features test-hooks --target x86_64-unknown-linux-gnu.2.17 \
+    --target-dir target/portable-hooks
+HOOKED=target/portable-hooks/x86_64-unknown-linux-gnu/release/libconverting_span.so
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+    "$OUT/dlopen_cycles_asan" "$HOOKED" "${CYCLE_ARGS[0]}" "$CYCLES_ASAN" "${CYCLE_ARGS[@]:1}" --panic \
+    2> "$OUT/panic-asan.stderr" | tee "$OUT/panic-asan.log" || { tail -30 "$OUT/panic-asan.stderr"; exit 1; }
+note "panic cycles under ASan+UBSan: $(head -1 "$OUT/panic-asan.log"); no report"
+"${VALGRIND[@]}" --log-file="$OUT/valgrind-panic.log" \
+    "$OUT/dlopen_cycles" "$HOOKED" "${CYCLE_ARGS[0]}" "$PANIC_VALGRIND" "${CYCLE_ARGS[@]:1}" --panic 2> "$OUT/panic-valgrind.stderr"
+note "panic cycles under valgrind ($PANIC_VALGRIND cycles): $(valgrind_summary "$OUT/valgrind-panic.log")"
+
+if [ "$MODE" = full ] && [ -f tests/c_importer/importer.c ]; then
+    step "8. the C importer of tests/c_importer under valgrind"
+    HEADERS=$("$PY" -c "import fmpy, pathlib; print(pathlib.Path(fmpy.__file__).parent / 'c-code')")
+    gcc -O1 -g -Wall -I "$HEADERS" tests/c_importer/importer.c -o "$OUT/importer" -ldl
+    ARGS=$("$PY" - <<'EOF'
+import xml.etree.ElementTree as ET
+root = ET.parse("modelDescription.xml").getroot()
+vr = {v.get("name"): v.get("valueReference") for v in root.iter("ScalarVariable")}
+names = ["L", "wp2.width", "wp2.d_r", "includeDamping", "toUnitV", "web_a.v", "web_a.eps", "web_b.v",
+         "T", "summary_Strain", "unstretchedLength", "v"]
+print(" ".join(f"{n}={vr[n]}" for n in names))
+EOF
+)
+    # shellcheck disable=SC2086
+    "${VALGRIND[@]}" --log-file="$OUT/valgrind-importer.log" "$OUT/importer" "$SHIPPED" "$GUID" $ARGS > "$OUT/importer.out"
+    note "tests/c_importer under valgrind: $(valgrind_summary "$OUT/valgrind-importer.log")"
+fi
+
+note "hardening ($MODE) took $((SECONDS - START)) s"
+echo
+cat "$SUMMARY"
