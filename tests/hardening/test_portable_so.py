@@ -1,11 +1,11 @@
-"""The FMU's binary loads on old Linux systems: the .so in the packaged FMU
+"""The FMUs' binaries load on old Linux systems: the .so in each packaged FMU
 needs no glibc symbol version newer than 2.17 and links nothing but glibc's
 own libraries and libgcc_s (read with objdump -T and readelf -d, binutils).
 It exports the 44 fmi2 functions and does not contain the test-only hook.
 
     .venv/bin/python -m pytest tests/hardening -q     (after python3 fmu/package.py)
 
-FMU=path overrides out/ConvertingSpan.fmu. The parser is checked on a
+Checks out/ConvertingSpan.fmu and out/Roller.fmu (FMU=path checks that one). The parser is checked on a
 fabricated listing and on the plain host build (which needs a newer glibc),
 so a check that could not fail would itself fail.
 """
@@ -19,7 +19,11 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-FMU = Path(os.environ.get("FMU", ROOT / "out" / "ConvertingSpan.fmu"))
+FMUS = (
+    [Path(os.environ["FMU"])]
+    if "FMU" in os.environ
+    else [ROOT / "out" / name for name in ("ConvertingSpan.fmu", "Roller.fmu") if name == "ConvertingSpan.fmu" or (ROOT / "out" / name).exists()]
+)
 NEWEST_ALLOWED = (2, 17)
 ALLOWED_NEEDED = {
     "libc.so.6",
@@ -68,11 +72,12 @@ def tool(*args):
     return subprocess.run(args, check=True, capture_output=True, text=True).stdout
 
 
-@pytest.fixture(scope="module")
-def shipped_so(tmp_path_factory):
-    if not FMU.exists():
-        pytest.fail(f"{FMU} is missing: run python3 fmu/package.py first")
-    with zipfile.ZipFile(FMU) as zf:
+@pytest.fixture(scope="module", params=FMUS, ids=lambda p: p.name)
+def shipped_so(request, tmp_path_factory):
+    fmu = request.param
+    if not fmu.exists():
+        pytest.fail(f"{fmu} is missing: run python3 fmu/package.py first")
+    with zipfile.ZipFile(fmu) as zf:
         names = [n for n in zf.namelist() if n.startswith("binaries/linux64/") and n.endswith(".so")]
         assert len(names) == 1, names
         path = tmp_path_factory.mktemp("fmu") / Path(names[0]).name
@@ -86,7 +91,7 @@ def test_needs_no_glibc_newer_than_2_17_and_links_only_glibc_and_libgcc(shipped_
     assert problems(objdump_t, readelf_d) == []
     newest = glibc_versions(version_refs(objdump_t))[-1]
     needed = re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", readelf_d)
-    print(f"\nshipped .so: newest symbol version GLIBC_{'.'.join(map(str, newest))}; NEEDED {needed}")
+    print(f"\n{shipped_so.name}: newest symbol version GLIBC_{'.'.join(map(str, newest))}; NEEDED {needed}")
 
 
 def test_exports_the_fmi2_functions(shipped_so):

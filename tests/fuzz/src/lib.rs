@@ -195,6 +195,9 @@ pub enum St {
     StepFailed,
     Terminated,
     Error,
+    /// Model Exchange only (the oracle does not predict the ME state machine).
+    Event,
+    Continuous,
 }
 
 impl St {
@@ -207,6 +210,8 @@ impl St {
             St::StepFailed,
             St::Terminated,
             St::Error,
+            St::Event,
+            St::Continuous,
         ]
         .get(b as usize)
         .copied()
@@ -246,7 +251,9 @@ fn allowed(f: Fn, s: St) -> bool {
         Fn::Set | Fn::SetRealInputDerivatives => matches!(s, Instantiated | Init | StepComplete),
         Fn::GetRealOutputDerivatives => matches!(s, StepComplete | StepFailed | Terminated | Error),
         Fn::DoStep => s == StepComplete,
-        Fn::ModelExchange | Fn::CancelStep => false,
+        // Model Exchange functions: decided per call in op_unsupported.
+        Fn::ModelExchange => true,
+        Fn::CancelStep => false,
         Fn::GetStatus => matches!(s, StepComplete | StepFailed | Terminated),
     }
 }
@@ -297,6 +304,8 @@ struct StateInfo {
     /// Values of the instance when it was saved, as far as the oracle knows.
     values: Values,
     initialized: bool,
+    /// Saved by a Model Exchange instance.
+    me: bool,
 }
 
 /// How far the oracle can predict model-dependent outcomes.
@@ -344,6 +353,9 @@ struct Slot {
     values: Values,
     /// Initialization ended since the instance was created or reset.
     initialized: bool,
+    /// A Model Exchange instance: the oracle checks arguments, statuses,
+    /// log lines, finiteness and memory, but not the ME state machine.
+    me: bool,
     poisoned: bool,
     armed: bool,
     /// Which of logStatusWarning/Discard/Error and logAll are on.
@@ -371,6 +383,14 @@ pub enum Finding {
     /// fmi2GetReal in the error state of an instance whose initialization
     /// never ended returns outputs computed from the unset state (inf).
     OutputsOfUninitializedInstance,
+    /// A co-simulation instance answers fmi2OK to the Model Exchange
+    /// getters (derivatives, event indicators, states, nominals) in some
+    /// states; the co-simulation state machine has no place for them.
+    ModelExchangeGetterOnCoSimulationInstance,
+    /// A state the FMU serialized itself is refused by fmi2DeSerializeFMUstate
+    /// when it was saved while a parameter held an out-of-range value (legal
+    /// until initialization ends): its own bytes do not round-trip.
+    OwnStateRefusedOnDeserialize,
 }
 
 /// What one sequence did.
@@ -383,8 +403,9 @@ pub struct Outcome {
     pub panics_caught: u64,
     pub deserialized_ok: u64,
     pub findings: Vec<(Finding, String)>,
-    /// Calls made on an instance, per state it was in (St order).
-    pub by_state: [u64; 6],
+    /// Calls made on an instance, per state it was in (St order; the last
+    /// counts the Model Exchange states).
+    pub by_state: [u64; 7],
 }
 
 struct Run {
@@ -539,6 +560,7 @@ fn new_slot(
         time: 0.0,
         values: Values::Pristine,
         initialized: false,
+        me: false,
         poisoned: false,
         armed: false,
         status_log: [true; 3],
@@ -611,14 +633,20 @@ where
         }
     };
     let (st, poisoned) = (r.slot(i).st, r.slot(i).poisoned);
-    r.out.by_state[st as usize] += 1;
-    r.what = format!(
-        "{name} [state {st:?}{}]",
-        if poisoned { ", poisoned" } else { "" }
-    );
+    r.out.by_state[(st as usize).min(6)] += 1;
+    let me = if r.slot(i).me { "ME " } else { "" };
+    r.what = format!("{name} [{me}state {st:?}{}]", if poisoned { ", poisoned" } else { "" });
     let slot = r.slot(i);
     let expected = if slot.poisoned && f != Fn::Reset {
         vec![ERROR]
+    } else if slot.me {
+        // Model Exchange: invalid arguments must still give fmi2Error; a
+        // valid call may be refused for the (unpredicted) state it is in.
+        let mut e = expect(slot);
+        if !e.contains(&ERROR) {
+            e.push(ERROR);
+        }
+        e
     } else if !allowed(f, slot.st) {
         vec![ERROR]
     } else {
@@ -691,12 +719,13 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     }
     let log = Box::<Log>::default();
     let functions = Box::new(callbacks(&log));
-    let right_type = !src.chance(16);
-    let fmu_type = if right_type {
-        1
-    } else {
-        [0, 2, -1, i32::MAX][src.pick(4)]
+    let me_offered = desc().model_exchange;
+    let fmu_type = match src.pick(16) {
+        0 => [0, 2, -1, i32::MAX][src.pick(4)],
+        1..=4 if me_offered => 0,
+        _ => 1,
     };
+    let right_type = fmu_type == 1 || (fmu_type == 0 && me_offered);
     let guid_kind = src.pick(24);
     let name = format!("fuzz{}", src.u8());
     let name_c = CString::new(name.clone()).unwrap();
@@ -758,7 +787,12 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         return Ok(());
     }
     let name = if null_name { String::new() } else { name };
-    r.slots[i] = Some(new_slot(name, c, log, functions, logging_on != 0));
+    if r.trace {
+        eprintln!("{} -> slot {i} = {c:?}", r.what);
+    }
+    let mut slot = new_slot(name, c, log, functions, logging_on != 0);
+    slot.me = fmu_type == 0;
+    r.slots[i] = Some(slot);
     Ok(())
 }
 
@@ -1230,6 +1264,9 @@ fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         if got == 0 || (initial != 0 && got != initial) {
             return fail(format!("{}: returned state {got:#x}", r.what));
         }
+        if r.trace {
+            eprintln!("  state {got:#x} to slot {i}");
+        }
         let slot = r.slot_mut(i);
         let info = StateInfo {
             ptr: got,
@@ -1237,6 +1274,7 @@ fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             time: slot.time,
             values: slot.values,
             initialized: slot.initialized,
+            me: slot.me,
         };
         match owned {
             Some(k) => slot.states[k] = info,
@@ -1259,7 +1297,13 @@ fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         t,
         Fn::StateOp,
         &format!("fmi2SetFMUstate({p:#x})"),
-        |_| vec![if owned.is_some() { OK } else { ERROR }],
+        // A state of the other interface (ME/CS) is refused.
+        |slot| match owned.map(|k| &slot.states[k]) {
+            // A forged state may have any interface byte: either answer.
+            Some(state) if state.values == Values::Forged => vec![OK, ERROR],
+            Some(state) if state.me == slot.me => vec![OK],
+            _ => vec![ERROR],
+        },
         |c| unsafe { fmi2SetFMUstate(c, p as fmi2FMUstate) },
     )?;
     if let (Some((i, OK)), Some(k)) = (res, owned) {
@@ -1269,8 +1313,9 @@ fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         slot.time = info.time;
         slot.values = info.values;
         slot.initialized = info.initialized;
+        // (fmi2OK means the interface matched.)
         // A restored state continues where it was saved.
-        if allowed(Fn::GetStatus, info.st) {
+        if !info.me && allowed(Fn::GetStatus, info.st) {
             let mut t = f64::NAN;
             let s = unsafe { fmi2GetRealStatus(slot.c, 2, &mut t) };
             slot.log.take();
@@ -1389,7 +1434,7 @@ fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     if s == OK {
         buf.truncate(size);
         let info = r.slot(i).states[owned.expect("owned")].clone();
-        if buf[24] > 5 {
+        if St::from_byte(buf[24]).is_none() {
             return fail(format!("{}: phase byte {}", r.what, buf[24]));
         }
         r.blobs.push(Blob { bytes: buf, info });
@@ -1481,6 +1526,10 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             }
         }
     }
+    // Flips that cancel out (the same bit twice) leave genuine bytes.
+    if kind != Bytes::Random && r.blobs.iter().any(|b| b.bytes == bytes) {
+        kind = Bytes::Genuine;
+    }
     let t = target(r, src);
     let i = slot_of(&t);
     let initial = if src.chance(200) {
@@ -1504,6 +1553,13 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     };
     let args_ok =
         !null_slot && (initial == 0 || owned.is_some()) && (!null_bytes || bytes.is_empty());
+    let slot_me = i.is_some_and(|i| r.slot(i).me);
+    let genuine_pristine = info.as_ref().is_some_and(|info| info.values == Values::Pristine);
+    let genuine_ok_args = kind == Bytes::Genuine && args_ok;
+    // A state of a Model Exchange instance does not fit a co-simulation one
+    // (and back): the state carries its interface, and the FMU may refuse it
+    // here or when it is set.
+    let foreign_interface = info.as_ref().is_some_and(|info| info.me != slot_me);
     let res = call_on(
         r,
         t,
@@ -1514,13 +1570,20 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         ),
         |_| match (&kind, args_ok) {
             (_, false) | (Bytes::Corrupt, _) => vec![ERROR],
-            (Bytes::Genuine, true) => vec![OK],
+            (Bytes::Genuine, true) if foreign_interface => vec![OK, ERROR],
+            (Bytes::Genuine, true) if genuine_pristine => vec![OK],
+            // Should be fmi2OK; fmi2Error is a known finding (below).
+            (Bytes::Genuine, true) => vec![OK, ERROR],
             _ => vec![OK, ERROR],
         },
         |c| unsafe { fmi2DeSerializeFMUstate(c, bytes_ptr, bytes.len(), slot_ptr) },
     )?;
     let Some((i, s)) = res else { return Ok(()) };
     let got = slot_value as usize;
+    if s == ERROR && genuine_ok_args && !r.slot(i).poisoned && !foreign_interface {
+        let what = r.what.clone();
+        r.out.findings.push((Finding::OwnStateRefusedOnDeserialize, what));
+    }
     if s != OK {
         if got != initial {
             return fail(format!("{}: failed but changed *state", r.what));
@@ -1528,6 +1591,9 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         return Ok(());
     }
     r.out.deserialized_ok += 1;
+    if r.trace {
+        eprintln!("  state {got:#x} to slot {i} (deserialized)");
+    }
     // Bytes that were accepted: a known phase and a finite time.
     let st = St::from_byte(bytes[24]);
     let time = f64::from_le_bytes(bytes[25..33].try_into().unwrap());
@@ -1538,6 +1604,8 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         ));
     };
     let genuine = kind == Bytes::Genuine;
+    // Forged bytes keep the interface of the state they were made from.
+    let source_me = info.as_ref().map_or(slot_me, |info| info.me);
     let info = match (kind, info) {
         (Bytes::Genuine, Some(info)) => StateInfo { ptr: got, ..info },
         _ => StateInfo {
@@ -1546,6 +1614,7 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             time,
             values: Values::Forged,
             initialized: true,
+            me: source_me,
         },
     };
     if got == 0 || (initial != 0 && got != initial) {
@@ -1647,6 +1716,11 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     match s {
         OK => {
             slot.time = tc + h;
+            // A step of extreme length (inputs extrapolated with their
+            // derivatives over 1e308 s...) counts as an extreme value.
+            if magnitude(h) == Values::Extreme || magnitude(tc + h) == Values::Extreme {
+                slot.values = slot.values.worsen(Values::Extreme);
+            }
             r.out.steps_ok += 1;
             let c = r.slot(i).c;
             let mut last = f64::NAN;
@@ -1693,7 +1767,7 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             slot.st = St::StepFailed;
         }
         ERROR => {
-            if slot.armed && h_ok && t_ok && st_before == St::StepComplete && !poisoned_before {
+            if slot.armed && !slot.me && h_ok && t_ok && st_before == St::StepComplete && !poisoned_before {
                 slot.armed = false;
                 slot.poisoned = true;
                 r.out.panics_caught += 1;
@@ -1788,6 +1862,11 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let n = src.pick(4);
     let vrs: Vec<u32> = (0..n).map(|_| vr(src, |_| true)).collect();
     let mut buf = vec![0.0f64; 8];
+    // Values for fmi2SetContinuousStates: nasty ones, or near the start.
+    for x in buf.iter_mut() {
+        *x = if src.chance(128) { 1.0 - (src.u8() as f64) * 1e-5 } else { real(src) };
+    }
+    let set_states = buf.clone();
     let mut flags = [0i32; 2];
     let mut info = fmi2EventInfo {
         newDiscreteStatesNeeded: 0,
@@ -1812,10 +1891,20 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         r,
         t,
         f,
-        &format!("{name} (#{which})"),
-        |_| {
+        &format!("{name} (#{which}, n = {n}{})", if null { ", NULL array" } else { "" }),
+        |slot| {
+            let nx = desc().states.len();
+            let sized = !null || n == 0;
             if f == Fn::GetRealOutputDerivatives {
                 vec![OK, ERROR]
+            } else if slot.me && f == Fn::ModelExchange && (which <= 5 || (sized && n == nx) || (which == 8 && sized)) {
+                // Model Exchange calls with arrays of the right size (nx
+                // states, any number of event indicators checked by the FMU);
+                // a state that is no length of web is discarded.
+                vec![OK, DISCARD, ERROR]
+            } else if !slot.me && f == Fn::ModelExchange && (7..=10).contains(&which) {
+                // Should be fmi2Error; fmi2OK is a known finding (below).
+                vec![ERROR, OK]
             } else {
                 vec![ERROR]
             }
@@ -1841,8 +1930,38 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         },
     )?;
     if let Some((i, OK)) = res {
-        for &v in &buf[..n_out] {
-            r.finite(i, v, "an output derivative")?;
+        if !r.slot(i).me && f == Fn::ModelExchange {
+            let what = r.what.clone();
+            r.out.findings.push((Finding::ModelExchangeGetterOnCoSimulationInstance, what));
+        }
+        let what = match which {
+            6 => {
+                // Continuous states were accepted: they must have been finite.
+                if let Some(x) = set_states.iter().take(n).find(|x| !x.is_finite()) {
+                    return fail(format!("{}: accepted the continuous state {x}", r.what));
+                }
+                let slot = r.slot_mut(i);
+                for &x in set_states.iter().take(n) {
+                    slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
+                }
+                return Ok(());
+            }
+            5 => {
+                let slot = r.slot_mut(i);
+                slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
+                return Ok(());
+            }
+            7 => "a derivative",
+            8 => "an event indicator",
+            9 => "a continuous state",
+            10 => "a nominal",
+            12 | 13 => "an output derivative",
+            _ => return Ok(()),
+        };
+        if !null {
+            for &v in &buf[..n_out] {
+                r.finite(i, v, what)?;
+            }
         }
     }
     Ok(())
@@ -2025,6 +2144,9 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         r.slots[i] = Some(new_slot(format!("fuzz{i}"), c, log, functions, false));
         return Ok(());
     };
+    if slot.me && slot.st == St::StepComplete && !slot.poisoned {
+        return me_integration(r, i);
+    }
     let (c, st, time, poisoned, pristine) = (
         slot.c,
         slot.st,
@@ -2095,5 +2217,53 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             r.out.panics_caught += 1;
         }
     }
+    Ok(())
+}
+
+/// A Model Exchange instance after initialization: the calls an integrator
+/// makes for one explicit Euler step of 1 ms. Every answer OK or Error (the
+/// oracle does not predict the ME state machine); states, derivatives and
+/// event indicators that come back with OK must be finite.
+fn me_integration(r: &mut Run, i: usize) -> Result<(), Violation> {
+    let c = r.slot(i).c;
+    let nx = desc().states.len();
+    let nz = desc().number_of_event_indicators;
+    let mut x = vec![f64::NAN; nx];
+    let mut dx = vec![f64::NAN; nx];
+    let mut z = vec![f64::NAN; nz];
+    let t = r.slot(i).time;
+    let mut flags = [0i32; 2];
+    for k in 0..6 {
+        let (name, s) = unsafe {
+            match k {
+                0 => ("fmi2EnterContinuousTimeMode", fmi2EnterContinuousTimeMode(c)),
+                1 => ("fmi2SetTime", fmi2SetTime(c, t + 1e-3)),
+                2 => ("fmi2GetContinuousStates", fmi2GetContinuousStates(c, x.as_mut_ptr(), nx)),
+                3 => ("fmi2GetDerivatives", fmi2GetDerivatives(c, dx.as_mut_ptr(), nx)),
+                4 => ("fmi2GetEventIndicators", fmi2GetEventIndicators(c, z.as_mut_ptr(), nz)),
+                _ => {
+                    let [a, b] = &mut flags;
+                    ("fmi2CompletedIntegratorStep", fmi2CompletedIntegratorStep(c, 1, a, b))
+                }
+            }
+        };
+        r.what = format!("ME integration: {name}");
+        r.check_status(s, &[OK, DISCARD, ERROR])?;
+        r.after(i, s)?;
+        if s != OK {
+            return Ok(());
+        }
+        let values = match k {
+            2 => x.clone(),
+            3 => dx.clone(),
+            4 => z.clone(),
+            _ => Vec::new(),
+        };
+        for v in values {
+            r.finite(i, v, name)?;
+        }
+    }
+    r.slot_mut(i).time = t + 1e-3;
+    r.out.steps_ok += 1;
     Ok(())
 }

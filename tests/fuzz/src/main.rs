@@ -41,7 +41,7 @@ struct Totals {
     steps_ok: u64,
     panics_caught: u64,
     deserialized_ok: u64,
-    by_state: [u64; 6],
+    by_state: [u64; 7],
     findings: BTreeMap<Finding, (u64, String)>,
 }
 
@@ -55,7 +55,7 @@ impl Totals {
         self.steps_ok += o.steps_ok;
         self.panics_caught += o.panics_caught;
         self.deserialized_ok += o.deserialized_ok;
-        for k in 0..6 {
+        for k in 0..7 {
             self.by_state[k] += o.by_state[k];
         }
         let mut seen = std::collections::BTreeSet::new();
@@ -78,7 +78,7 @@ impl Totals {
         self.steps_ok += other.steps_ok;
         self.panics_caught += other.panics_caught;
         self.deserialized_ok += other.deserialized_ok;
-        for k in 0..6 {
+        for k in 0..7 {
             self.by_state[k] += other.by_state[k];
         }
         for (f, (n, example)) in other.findings {
@@ -189,8 +189,8 @@ fn main() {
     );
     let b = t.by_state;
     println!(
-        "  calls on instances by state: {} instantiated, {} initialization mode, {} step complete, {} step failed, {} terminated, {} error",
-        b[0], b[1], b[2], b[3], b[4], b[5]
+        "  calls on instances by state: {} instantiated, {} initialization mode, {} step complete, {} step failed, {} terminated, {} error, {} ME event/continuous-time mode",
+        b[0], b[1], b[2], b[3], b[4], b[5], b[6]
     );
     for (f, (count, example)) in &t.findings {
         println!("  finding {f:?}: in {count} sequences, e.g. {example}");
