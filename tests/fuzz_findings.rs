@@ -81,16 +81,15 @@ fn a_step_whose_end_time_overflows_is_refused() {
     assert!(status != OK || (s == OK && last.is_finite()), "step accepted, last successful time {last}");
 }
 
-/// A serialized state is checked for its magic number, version, GUID hash,
-/// length and FNV-1a checksum, and each Real for finiteness, but not against
-/// the variables' ranges. The checksum is no signature: bytes changed by
-/// hand (checksum recomputed, as the harness does) with L = -1 m are
-/// accepted, and such forged states lead to infinite outputs in the fuzz
-/// runs. Fix: check the loaded parameters like fmi2ExitInitializationMode does.
+/// Fixed (was a finding): the checksum is no signature, so bytes changed by
+/// hand (checksum recomputed, as the harness does) with L = -1 m used to be
+/// accepted. Since format version 2 the loaded values are range-checked.
+/// A regression test now.
 #[test]
-#[ignore = "known product issue: a forged FMU state with out-of-range parameters is accepted"]
 fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
     let fmu = Fmu::new("forged");
+    let marker = 1.234_567_891_011; // a value of L to find in the bytes
+    assert_eq!(fmu.set_real("L", marker), OK);
     assert_eq!(fmu.initialize(), OK);
     let mut state: fmi2FMUstate = std::ptr::null_mut();
     let mut size = 0usize;
@@ -100,10 +99,8 @@ fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
     }
     let mut bytes = vec![0u8; size];
     assert_eq!(unsafe { fmi2SerializeFMUstate(fmu.c, state, bytes.as_mut_ptr() as *mut _, size) }, OK);
-    // Layout (src/fmi2/snapshot.rs): 24-byte header, payload = phase (1),
-    // time (8), then the model's fields, the first of which is L.
-    let l_at = 24 + 1 + 8;
-    assert_eq!(f64::from_le_bytes(bytes[l_at..l_at + 8].try_into().unwrap()), fmu.get_real("L").1);
+    // Reals are stored as their little-endian bits (src/fmi2/snapshot.rs).
+    let l_at = bytes.windows(8).position(|w| w == marker.to_le_bytes()).expect("L in the serialized state");
     bytes[l_at..l_at + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
     let n = bytes.len() - 8;
     let sum = bytes[..n].iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3));
@@ -111,4 +108,44 @@ fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
     let mut forged: fmi2FMUstate = std::ptr::null_mut();
     let status = unsafe { fmi2DeSerializeFMUstate(fmu.c, bytes.as_ptr() as *const _, size, &mut forged) };
     assert_eq!(status, ERROR, "a state with L = -1 m (allowed: > 0) was accepted");
+}
+
+/// The Model Exchange getters share the phase table with co-simulation:
+/// a co-simulation instance in the error (or terminated, initialization)
+/// state answers fmi2GetDerivatives with fmi2OK, although the co-simulation
+/// state machine has no place for it. Fix: refuse ME functions on CS instances.
+#[test]
+#[ignore = "known product issue: a co-simulation instance answers fmi2GetDerivatives"]
+fn a_co_simulation_instance_refuses_model_exchange_getters() {
+    let fmu = Fmu::new("cs");
+    assert_eq!(fmu.do_step(0.0, 0.1), ERROR); // now in the error state
+    let mut dx = [0.0f64; 1];
+    let status = unsafe { fmi2GetDerivatives(fmu.c, dx.as_mut_ptr(), 1) };
+    assert_eq!(status, ERROR, "fmi2GetDerivatives on a co-simulation instance answered {}", status_name(status));
+}
+
+/// Before initialization ends a parameter may hold an out-of-range value
+/// (it is checked when initialization ends). If the instance then goes into
+/// the error state (any illegal call) and a state is saved there, it
+/// serializes, but fmi2DeSerializeFMUstate refuses the FMU's own bytes
+/// ("rejected: wp2.density = -1, allowed (0, inf)": the check takes every
+/// phase after initialization mode, the error state included, as
+/// initialized): serialization does not round-trip.
+#[test]
+#[ignore = "known product issue: the FMU's own serialized state is refused"]
+fn a_state_saved_before_initialization_round_trips() {
+    let fmu = Fmu::new("roundtrip");
+    assert_eq!(fmu.set_real("wp2.density", -1.0), OK, "checked when initialization ends");
+    assert_eq!(fmu.do_step(0.0, 0.1), ERROR, "illegal before initialization: now in the error state");
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    let mut size = 0usize;
+    unsafe {
+        assert_eq!(fmi2GetFMUstate(fmu.c, &mut state), OK);
+        assert_eq!(fmi2SerializedFMUstateSize(fmu.c, state, &mut size), OK);
+    }
+    let mut bytes = vec![0u8; size];
+    assert_eq!(unsafe { fmi2SerializeFMUstate(fmu.c, state, bytes.as_mut_ptr() as *mut _, size) }, OK);
+    let mut copy: fmi2FMUstate = std::ptr::null_mut();
+    let status = unsafe { fmi2DeSerializeFMUstate(fmu.c, bytes.as_ptr() as *const _, size, &mut copy) };
+    assert_eq!(status, OK, "the FMU refused its own serialized state: {:?}", fmu.messages());
 }

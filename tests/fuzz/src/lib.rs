@@ -316,7 +316,7 @@ enum Values {
     Pristine,
     /// Changed, all with moderate magnitudes.
     Moderate,
-    /// Some value of magnitude above 1e100 or below 1e-100 was accepted.
+    /// Some value of magnitude above 1e13 or below 1e-12 was accepted.
     Extreme,
     /// Restored from bytes forged by the harness (checksum recomputed).
     Forged,
@@ -335,7 +335,9 @@ impl Values {
 
 fn magnitude(x: f64) -> Values {
     let a = x.abs();
-    if a == 0.0 || (1e-100..=1e100).contains(&a) {
+    // Physical values of this kind of model lie well inside: E up to 1e12
+    // Pa, thicknesses down to 1e-9 m, speeds below 1e3 m/s.
+    if a == 0.0 || (1e-12..=1e13).contains(&a) {
         Values::Moderate
     } else {
         Values::Extreme
@@ -420,6 +422,8 @@ struct Run {
     what: String,
     /// FUZZ_TRACE set: print every call (for replaying one sequence).
     trace: bool,
+    /// The messages the FMU logged in the last call checked by `after`.
+    last_log: Vec<String>,
 }
 
 const STEP_TOLERANCE: f64 = 1e-13;
@@ -454,6 +458,7 @@ impl Run {
         let what = self.what.clone();
         let slot = self.slots[i].as_mut().expect("slot");
         let lines = slot.log.take();
+        self.last_log = lines.iter().map(|l| l.message.clone()).collect();
         let malformed = std::mem::take(&mut *slot.log.malformed.lock().unwrap());
         if !malformed.is_empty() {
             return fail(format!("{what}: malformed logger calls {malformed:?}"));
@@ -525,6 +530,7 @@ pub fn run(bytes: &[u8]) -> Result<Outcome, Violation> {
         out: Outcome::default(),
         what: String::new(),
         trace: std::env::var_os("FUZZ_TRACE").is_some(),
+        last_log: Vec::new(),
     };
     let mut src = Source::new(bytes);
     let result = (|| {
@@ -635,7 +641,7 @@ where
     let (st, poisoned) = (r.slot(i).st, r.slot(i).poisoned);
     r.out.by_state[(st as usize).min(6)] += 1;
     let me = if r.slot(i).me { "ME " } else { "" };
-    r.what = format!("{name} [{me}state {st:?}{}]", if poisoned { ", poisoned" } else { "" });
+    r.what = format!("{name} [slot {i}, {me}state {st:?}{}]", if poisoned { ", poisoned" } else { "" });
     let slot = r.slot(i);
     let expected = if slot.poisoned && f != Fn::Reset {
         vec![ERROR]
@@ -1581,7 +1587,7 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let Some((i, s)) = res else { return Ok(()) };
     let got = slot_value as usize;
     if s == ERROR && genuine_ok_args && !r.slot(i).poisoned && !foreign_interface {
-        let what = r.what.clone();
+        let what = format!("{}: {:?}", r.what, r.last_log);
         r.out.findings.push((Finding::OwnStateRefusedOnDeserialize, what));
     }
     if s != OK {
@@ -2154,7 +2160,7 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         slot.poisoned,
         slot.values == Values::Pristine,
     );
-    r.what = format!("lifecycle move in state {st:?}");
+    r.what = format!("lifecycle move [slot {i}, state {st:?}]");
     let (s, expected, next): (i32, Vec<i32>, Option<St>) = unsafe {
         if poisoned || matches!(st, St::Error | St::Terminated | St::StepFailed) {
             (fmi2Reset(c), vec![OK], Some(St::Instantiated))
