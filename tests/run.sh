@@ -9,3 +9,7 @@ cargo test --release --quiet
 cargo test --release --quiet --features roller --target-dir target/roller --test roller
 python3 fmu/package.py
 "$PY" -m pytest tests/python -q
+# Hardening, CI size (tests/hardening.sh --full for the long runs): the
+# portable .so, the panic boundary, the fuzzed C API, AddressSanitizer and
+# valgrind, dlopen/dlclose cycles.
+bash tests/hardening.sh
