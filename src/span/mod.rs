@@ -160,7 +160,8 @@ impl ConvertingSpan {
             stepping::integrate(&balance, choice, self.tolerance, p.substeps, self.adaptive_step)?
         };
         let x = next.value();
-        if !(x.is_finite() && x > 0.0) {
+        let length_after = physics::span_length(&self.params, &start.advanced(&rates.unwrap_or_default(), h));
+        if !physics::representable(length_after, x) {
             let why = if start.speed_b < start.speed_a.min(0.0) {
                 "web fed in from both ends grows without bound"
             } else {
@@ -343,9 +344,12 @@ impl Model for ConvertingSpan {
     }
 
     fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
-        if !(x[0] > 0.0) {
+        if !physics::representable(physics::span_length(&self.params, &self.inputs), x[0]) {
             // An integrator's trial value, not a web: ask for a smaller step.
-            return Err(FmiError::discard(format!("unstretchedLength = {} m is not a length of web (must be > 0)", x[0])));
+            return Err(FmiError::discard(format!(
+                "unstretchedLength = {} m is not a length of web this span can hold (0 < x < L/2^-52)",
+                x[0]
+            )));
         }
         self.unstretched = CompensatedSum::from_parts(x[0], 0.0);
         Ok(())

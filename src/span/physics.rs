@@ -33,6 +33,14 @@ pub fn strain(length: f64, x0: CompensatedSum, y: f64) -> f64 {
     (((length - x0.hi()) - x0.lo()) - y) / (x0.value() + y)
 }
 
+/// Whether x is a state the equations can evaluate: positive, and short
+/// enough that 1 + eps_b = L/x is not lost to rounding (x < L/2^-52). Beyond
+/// that the strain is -1 to double precision and the rates divide by zero:
+/// web fed in from both ends for too long.
+pub fn representable(length: f64, x: f64) -> bool {
+    x > 0.0 && x.is_finite() && length / x > f64::EPSILON
+}
+
 /// The unstretched length that holds strain `eps` in a span of length L [1]:
 /// L/(1+eps) = L - L*eps/(1+eps), split so that no digit of eps is lost.
 pub fn unstretched_length(length: f64, eps: f64) -> CompensatedSum {
