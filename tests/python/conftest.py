@@ -17,6 +17,26 @@ import numpy as np
 import pytest
 from mpmath import mpf
 
+
+# FMPy 0.3.32 routes every logger through one process-wide C proxy that
+# simulate_fmu(..., logger=f) and instantiate_fmu(..., logger=f) re-point at a
+# ctypes thunk they create and then drop; once it is freed, the next FMU that
+# logs through FMPy's default callbacks crashes the process. Keep every thunk
+# alive for the test session.
+import fmpy.simulation as _fmpy_simulation
+
+_KEPT_LOGGERS = []
+_make_logger = _fmpy_simulation.fmi2CallbackLoggerTYPE
+
+
+def _kept_logger(function):
+    thunk = _make_logger(function)
+    _KEPT_LOGGERS.append(thunk)
+    return thunk
+
+
+_fmpy_simulation.fmi2CallbackLoggerTYPE = _kept_logger
+
 ROOT = Path(__file__).resolve().parents[2]
 FMU = ROOT / "out" / "ConvertingSpan.fmu"
 
