@@ -38,7 +38,7 @@ pub fn strain(length: f64, x0: CompensatedSum, y: f64) -> f64 {
 /// that the strain is -1 to double precision and the rates divide by zero:
 /// web fed in from both ends for too long.
 pub fn representable(length: f64, x: f64) -> bool {
-    x > 0.0 && x.is_finite() && length / x > f64::EPSILON
+    x > 0.0 && x.is_finite() && length > f64::EPSILON * x
 }
 
 /// The unstretched length that holds strain `eps` in a span of length L [1]:
