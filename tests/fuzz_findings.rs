@@ -1,11 +1,6 @@
-//! Product issues the fuzz harness (tests/fuzz) found, each as a small test
-//! that fails today. They are `#[ignore]`d so that CI stays green until the
-//! model's owner fixes them; run them with
-//!
-//!     cargo test --release --test fuzz_findings -- --ignored
-//!
-//! The harness counts them as "findings" (not violations) so that it keeps
-//! looking for new problems; `fuzz_sequences --strict` fails on them too.
+//! Product issues the fuzz harness (tests/fuzz) found, each as a small test.
+//! They failed until the product was fixed; now they guard against the
+//! same faults coming back.
 
 mod harden;
 
@@ -36,7 +31,6 @@ fn non_finite(fmu: &Fmu) -> Vec<(u32, f64)> {
 /// unset state: web_a.F, T, summary_Stress ... are inf or NaN. Fix: answer
 /// fmi2Error (or start values) for outputs that were never computed.
 #[test]
-#[ignore = "known product issue: outputs of an uninitialized instance in the error state are inf/NaN"]
 fn outputs_read_in_the_error_state_before_initialization_are_finite() {
     let fmu = Fmu::new("uninitialized");
     assert_eq!(fmu.do_step(0.0, 0.1), ERROR, "a step before initialization is illegal");
@@ -48,7 +42,6 @@ fn outputs_read_in_the_error_state_before_initialization_are_finite() {
 /// extreme: E*A overflows and the tension is inf. Fix: refuse at the end of
 /// initialization when a derived quantity is not finite, or bound the ranges.
 #[test]
-#[ignore = "known product issue: in-range extreme parameters give infinite outputs"]
 fn extreme_but_accepted_parameters_are_refused_or_give_finite_outputs() {
     let fmu = Fmu::new("extreme");
     for (name, x) in [("wp2.E", 1e300), ("wp2.width", 1e300), ("wp2.thickness", 1e300)] {
@@ -67,7 +60,6 @@ fn extreme_but_accepted_parameters_are_refused_or_give_finite_outputs() {
 /// the FMU accepts the step and fmi2GetRealStatus(fmi2LastSuccessfulTime)
 /// then answers inf. Fix: refuse a step whose end time is not finite.
 #[test]
-#[ignore = "known product issue: a step whose end time overflows is accepted"]
 fn a_step_whose_end_time_overflows_is_refused() {
     let fmu = Fmu::new("time");
     unsafe {
@@ -115,7 +107,6 @@ fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
 /// state answers fmi2GetDerivatives with fmi2OK, although the co-simulation
 /// state machine has no place for it. Fix: refuse ME functions on CS instances.
 #[test]
-#[ignore = "known product issue: a co-simulation instance answers fmi2GetDerivatives"]
 fn a_co_simulation_instance_refuses_model_exchange_getters() {
     let fmu = Fmu::new("cs");
     assert_eq!(fmu.do_step(0.0, 0.1), ERROR); // now in the error state
@@ -132,7 +123,6 @@ fn a_co_simulation_instance_refuses_model_exchange_getters() {
 /// phase after initialization mode, the error state included, as
 /// initialized): serialization does not round-trip.
 #[test]
-#[ignore = "known product issue: the FMU's own serialized state is refused"]
 fn a_state_saved_before_initialization_round_trips() {
     let fmu = Fmu::new("roundtrip");
     assert_eq!(fmu.set_real("wp2.density", -1.0), OK, "checked when initialization ends");

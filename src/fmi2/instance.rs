@@ -414,6 +414,9 @@ impl<M: Model> Instance<M> {
         if !(h.is_finite() && h > 0.0) {
             return Err(FmiError::error(format!("{name}: communicationStepSize = {h} must be finite and > 0")));
         }
+        if !(current + h).is_finite() {
+            return Err(FmiError::error(format!("{name}: the step's end time {current} + {h} overflows")));
+        }
         let tolerance = TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0);
         if !current.is_finite() || (current - self.time).abs() > tolerance {
             return Err(FmiError::error(format!(
@@ -559,7 +562,12 @@ impl<M: Model> Instance<M> {
     /// would have: Booleans and enumerations always, inputs against their
     /// ranges, parameters against theirs once initialization has ended.
     pub fn check_snapshot(snapshot: &Snapshot<M>) -> Result<(), String> {
-        let initialized = !matches!(snapshot.phase, Phase::Instantiated | Phase::InitializationMode);
+        // Phases reached only through a finished initialization; the error
+        // state may have been entered before it.
+        let initialized = matches!(
+            snapshot.phase,
+            Phase::StepComplete | Phase::StepFailed | Phase::Terminated | Phase::EventMode | Phase::ContinuousTimeMode
+        );
         for v in Self::description().variables {
             let checked_range = v.causality == Causality::Input || (v.causality == Causality::Parameter && initialized);
             let wrong = match v.kind {

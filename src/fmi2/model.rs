@@ -88,6 +88,11 @@ pub trait Model: Clone + Default + Persist + 'static {
         Err(no_model_exchange())
     }
 
+    /// After the start values are set: a provisional state, so that outputs
+    /// read before initialization (in the error state, for diagnosis) are
+    /// defined. Initialization replaces it.
+    fn provisional_state(&mut self) {}
+
     /// The model with every parameter and input at its start value.
     fn at_start_values() -> Self {
         let mut model = Self::default();
@@ -104,6 +109,7 @@ pub trait Model: Clone + Default + Persist + 'static {
                 Start::None => Ok(()),
             };
         }
+        model.provisional_state();
         model
     }
 }

@@ -209,6 +209,23 @@ impl ConvertingSpan {
     }
 }
 
+/// Products of parameters that are each in range but together overflow
+/// (E*A, rho*A of a web of 1e300 m width) would make every output infinite.
+fn check_derived(p: &Parameters) -> FmiResult {
+    let webs = [("wp1", &p.incoming), ("wp2", &p.span_web)];
+    for (name, web) in webs {
+        for (what, value) in [("E*width*thickness", web.stiffness()), ("density*width*thickness", web.linear_density())] {
+            if !value.is_finite() {
+                return Err(FmiError::error(format!(
+                    "{name}: {what} = {value} overflows; E = {}, width = {}, thickness = {}, density = {}",
+                    web.modulus, web.width, web.thickness, web.density
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_length(length: f64) -> FmiResult {
     if length > 0.0 {
         Ok(())
@@ -284,6 +301,7 @@ impl Model for ConvertingSpan {
                 "variableLength: the span length |frame_b - frame_a| = {length} m must be > 0 (the rollers coincide)"
             )));
         }
+        check_derived(p)?;
         let strain = if p.start_at_equilibrium {
             physics::equilibrium_strain(&self.inputs).ok_or_else(|| {
                 FmiError::error(format!(
@@ -330,6 +348,11 @@ impl Model for ConvertingSpan {
 
     fn do_step(&mut self, h: f64) -> FmiResult {
         self.advance(h)
+    }
+
+    /// Unstrained web in the span until initialization computes the start.
+    fn provisional_state(&mut self) {
+        self.unstretched = physics::unstretched_length(self.params.span_length, 0.0);
     }
 
     fn step_events(&self) -> &[Event] {
