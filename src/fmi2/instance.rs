@@ -414,15 +414,15 @@ impl<M: Model> Instance<M> {
         if !(h.is_finite() && h > 0.0) {
             return Err(FmiError::error(format!("{name}: communicationStepSize = {h} must be finite and > 0")));
         }
-        if !(current + h).is_finite() {
-            return Err(FmiError::error(format!("{name}: the step's end time {current} + {h} overflows")));
-        }
         let tolerance = TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0);
         if !current.is_finite() || (current - self.time).abs() > tolerance {
             return Err(FmiError::error(format!(
                 "{name}: currentCommunicationPoint = {current} is not the current time {} of the instance",
                 self.time
             )));
+        }
+        if !(current + h).is_finite() {
+            return Err(FmiError::error(format!("{name}: the step's end time {current} + {h} overflows")));
         }
         match self.model.do_step(h) {
             Ok(()) => {
