@@ -102,10 +102,9 @@ fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
     assert_eq!(status, ERROR, "a state with L = -1 m (allowed: > 0) was accepted");
 }
 
-/// The Model Exchange getters share the phase table with co-simulation:
-/// a co-simulation instance in the error (or terminated, initialization)
-/// state answers fmi2GetDerivatives with fmi2OK, although the co-simulation
-/// state machine has no place for it. Fix: refuse ME functions on CS instances.
+/// Fixed (was a finding): the Model Exchange getters shared the phase
+/// table with co-simulation, so a co-simulation instance in the error state
+/// answered fmi2GetDerivatives with fmi2OK. A regression test now.
 #[test]
 fn a_co_simulation_instance_refuses_model_exchange_getters() {
     let fmu = Fmu::new("cs");

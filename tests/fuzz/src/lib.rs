@@ -385,10 +385,6 @@ pub enum Finding {
     /// fmi2GetReal in the error state of an instance whose initialization
     /// never ended returns outputs computed from the unset state (inf).
     OutputsOfUninitializedInstance,
-    /// A co-simulation instance answers fmi2OK to the Model Exchange
-    /// getters (derivatives, event indicators, states, nominals) in some
-    /// states; the co-simulation state machine has no place for them.
-    ModelExchangeGetterOnCoSimulationInstance,
     /// A state the FMU serialized itself is refused by fmi2DeSerializeFMUstate
     /// when it was saved while a parameter held an out-of-range value (legal
     /// until initialization ends): its own bytes do not round-trip.
@@ -931,6 +927,11 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
             } else if slot.st == St::Init && slot.values != Values::Pristine {
                 // In initialization mode the outputs are computed first,
                 // which fails if the values set so far are inconsistent.
+                vec![OK, ERROR]
+            } else if slot.st == St::Error && fam == Family::Real && slot.values != Values::Pristine {
+                // In the error state computed values are answered only where
+                // the model can compute them (values set before a failed
+                // initialization may not allow it); the FMU says why.
                 vec![OK, ERROR]
             } else {
                 vec![OK]
@@ -1908,9 +1909,6 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 // states, any number of event indicators checked by the FMU);
                 // a state that is no length of web is discarded.
                 vec![OK, DISCARD, ERROR]
-            } else if !slot.me && f == Fn::ModelExchange && (7..=10).contains(&which) {
-                // Should be fmi2Error; fmi2OK is a known finding (below).
-                vec![ERROR, OK]
             } else {
                 vec![ERROR]
             }
@@ -1936,10 +1934,6 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         },
     )?;
     if let Some((i, OK)) = res {
-        if !r.slot(i).me && f == Fn::ModelExchange {
-            let what = r.what.clone();
-            r.out.findings.push((Finding::ModelExchangeGetterOnCoSimulationInstance, what));
-        }
         let what = match which {
             6 => {
                 // Continuous states were accepted: they must have been finite.

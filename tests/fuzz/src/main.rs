@@ -89,6 +89,9 @@ impl Totals {
 }
 
 fn main() {
+    // The FMU catches the panics of its test hook; the default hook would
+    // print each one. The harness reports violations itself.
+    std::panic::set_hook(Box::new(|_| {}));
     let args: Vec<String> = std::env::args().skip(1).collect();
     let value = |name: &str| {
         args.iter()
@@ -120,9 +123,6 @@ fn main() {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get() as u64));
     let failed_dir = value("--failures").unwrap_or_else(|| "target/fuzz/failures".into());
 
-    // The FMU catches the panics of its test hook; the default hook would
-    // print each one. The harness reports violations itself.
-    std::panic::set_hook(Box::new(|_| {}));
     let start = Instant::now();
     let stop = AtomicBool::new(false);
     let indices: Vec<u64> = match only {
