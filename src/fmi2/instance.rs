@@ -247,10 +247,21 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// Diagnosis after an error: parameters and inputs are always there, but
+    /// computed values only where the model can compute them (the parameters
+    /// may never have passed initialization).
+    fn check_computable(&self, call: Call, computed: bool) -> FmiResult {
+        if computed && self.phase == Phase::Error {
+            self.model.outputs_defined().map_err(|e| prefixed(call, e))?;
+        }
+        Ok(())
+    }
+
     pub fn get_reals(&mut self, vrs: &[u32], values: &mut [f64]) -> FmiResult {
         self.prepare_get(Call::GetReal)?;
         for (vr, value) in vrs.iter().zip(values.iter_mut()) {
-            self.variable(Call::GetReal, *vr, Family::Real)?;
+            let v = self.variable(Call::GetReal, *vr, Family::Real)?;
+            self.check_computable(Call::GetReal, !matches!(v.causality, Causality::Parameter | Causality::Input))?;
             *value = self.model.get_real(*vr)?;
         }
         Ok(())
@@ -480,6 +491,7 @@ impl<M: Model> Instance<M> {
         let call = Call::GetContinuousStates;
         Self::check_count(call, "states", x.len(), Self::description().states.len())?;
         self.prepare_get(call)?;
+        self.check_computable(call, true)?;
         self.model.get_continuous_states(x).map_err(|e| prefixed(call, e))
     }
 
@@ -487,6 +499,7 @@ impl<M: Model> Instance<M> {
         let call = Call::GetDerivatives;
         Self::check_count(call, "derivatives", dx.len(), Self::description().states.len())?;
         self.prepare_get(call)?;
+        self.check_computable(call, true)?;
         self.model.get_derivatives(dx).map_err(|e| prefixed(call, e))
     }
 
@@ -494,6 +507,7 @@ impl<M: Model> Instance<M> {
         let call = Call::GetEventIndicators;
         Self::check_count(call, "event indicators", z.len(), Self::description().number_of_event_indicators)?;
         self.prepare_get(call)?;
+        self.check_computable(call, true)?;
         self.model.get_event_indicators(z).map_err(|e| prefixed(call, e))
     }
 

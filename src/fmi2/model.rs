@@ -88,6 +88,13 @@ pub trait Model: Clone + Default + Persist + 'static {
         Err(no_model_exchange())
     }
 
+    /// Whether the outputs can be computed from what the model holds now. The
+    /// layer asks only in the error state, where parameters may never have
+    /// passed initialization; a failure answers the get with fmi2Error.
+    fn outputs_defined(&self) -> FmiResult {
+        Ok(())
+    }
+
     /// After the start values are set: a provisional state, so that outputs
     /// read before initialization (in the error state, for diagnosis) are
     /// defined. Initialization replaces it.

@@ -349,6 +349,19 @@ impl Model for ConvertingSpan {
         self.advance(h)
     }
 
+    fn outputs_defined(&self) -> FmiResult {
+        check_derived(&self.params)?;
+        let length = physics::span_length(&self.params, &self.inputs);
+        if length > 0.0 && physics::representable(length, self.unstretched.value()) {
+            Ok(())
+        } else {
+            Err(FmiError::error(format!(
+                "outputs are not defined for a span length of {length} m with {} m of unstretched web",
+                self.unstretched.value()
+            )))
+        }
+    }
+
     /// Unstrained web in the span until initialization computes the start.
     fn provisional_state(&mut self) {
         self.unstretched = physics::unstretched_length(self.params.span_length, 0.0);
