@@ -499,9 +499,9 @@ impl Run {
         }
         let (values, initialized) = (self.slot(i).values, self.slot(i).initialized);
         let finding = match values {
-            _ if !initialized => Finding::OutputsOfUninitializedInstance,
             Values::Forged => Finding::ForgedState,
             Values::Extreme => Finding::OverflowAfterExtremeValues,
+            _ if !initialized => Finding::OutputsOfUninitializedInstance,
             _ => {
                 return fail(format!(
                     "{}: {name} = {x} is not finite (values: {values:?})",
