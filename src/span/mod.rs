@@ -160,7 +160,10 @@ impl ConvertingSpan {
             stepping::integrate(&balance, choice, self.tolerance, p.substeps, self.adaptive_step)?
         };
         let x = next.value();
-        let length_after = physics::span_length(&self.params, &start.advanced(&rates.unwrap_or_default(), h));
+        let length_after = match &rates {
+            Some(r) => physics::span_length(&self.params, &start.advanced(r, h)),
+            None => physics::span_length(&self.params, &start),
+        };
         if !physics::representable(length_after, x) {
             let why = if start.speed_b < start.speed_a.min(0.0) {
                 "web fed in from both ends grows without bound"
