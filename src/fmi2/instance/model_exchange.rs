@@ -1,0 +1,77 @@
+//! The Model Exchange functions: time, continuous states, derivatives,
+//! event indicators and the event-mode transitions.
+
+use super::*;
+
+impl<M: Model> Instance<M> {
+    pub fn set_time(&mut self, time: f64) -> FmiResult {
+        if !time.is_finite() {
+            return Err(FmiError::error(format!("{}: time = {time} must be finite", Call::SetTime.name())));
+        }
+        self.time = time;
+        Ok(())
+    }
+
+    fn check_count(call: Call, what: &str, given: usize, declared: usize) -> FmiResult {
+        if given == declared {
+            Ok(())
+        } else {
+            Err(FmiError::error(format!("{}: {given} {what} given, the model has {declared}", call.name())))
+        }
+    }
+
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
+        let call = Call::SetContinuousStates;
+        Self::check_count(call, "states", x.len(), Self::description().states.len())?;
+        if let Some(bad) = x.iter().find(|v| !v.is_finite()) {
+            return Err(FmiError::error(format!("{}: a state value is {bad}", call.name())));
+        }
+        self.model.set_continuous_states(x).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> FmiResult {
+        let call = Call::GetContinuousStates;
+        Self::check_count(call, "states", x.len(), Self::description().states.len())?;
+        self.prepare_get(call)?;
+        self.check_computable(call, true)?;
+        self.model.get_continuous_states(x).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> FmiResult {
+        let call = Call::GetDerivatives;
+        Self::check_count(call, "derivatives", dx.len(), Self::description().states.len())?;
+        self.prepare_get(call)?;
+        self.check_computable(call, true)?;
+        self.model.get_derivatives(dx).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn get_event_indicators(&mut self, z: &mut [f64]) -> FmiResult {
+        let call = Call::GetEventIndicators;
+        Self::check_count(call, "event indicators", z.len(), Self::description().number_of_event_indicators)?;
+        self.prepare_get(call)?;
+        self.check_computable(call, true)?;
+        self.model.get_event_indicators(z).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn get_nominals(&mut self, nominals: &mut [f64]) -> FmiResult {
+        let call = Call::GetNominalsOfContinuousStates;
+        Self::check_count(call, "nominals", nominals.len(), Self::description().states.len())?;
+        self.model.get_nominals(nominals).map_err(|e| prefixed(call, e))
+    }
+
+    pub fn enter_event_mode(&mut self) -> FmiResult {
+        self.phase = Phase::EventMode;
+        Ok(())
+    }
+
+    /// The model has no discrete states and no time events; the slack
+    /// event indicator only marks a kink in the tension.
+    pub fn new_discrete_states(&mut self) -> DiscreteUpdate {
+        DiscreteUpdate::default()
+    }
+
+    pub fn enter_continuous_time_mode(&mut self) -> FmiResult {
+        self.phase = Phase::ContinuousTimeMode;
+        Ok(())
+    }
+}

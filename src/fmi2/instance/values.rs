@@ -1,0 +1,226 @@
+//! Getting and setting variables: value reference, type, causality, phase
+//! and value are checked against the model description; a rejected set
+//! changes nothing.
+
+use super::*;
+
+impl<M: Model> Instance<M> {
+    /// Looks up a value reference and checks that it is of the family the
+    /// function handles.
+    #[inline]
+    fn variable(&self, call: Call, vr: u32, family: Family) -> FmiResult<&'static Variable> {
+        match Self::description().variable(vr) {
+            Some(v) if Family::of(v.kind) == family => Ok(v),
+            found => Err(wrong_variable(call, vr, found, family)),
+        }
+    }
+
+    /// In initialization mode the outputs follow the parameters and inputs
+    /// set so far, so they are computed before they are read.
+    pub(super) fn prepare_get(&mut self, call: Call) -> FmiResult {
+        if self.phase == Phase::InitializationMode {
+            self.settle_initial_values().map_err(|e| prefixed(call, e))?;
+        }
+        Ok(())
+    }
+
+    /// Diagnosis after an error: parameters and inputs are always there, but
+    /// computed values only where the model can compute them (the parameters
+    /// may never have passed initialization).
+    pub(super) fn check_computable(&self, call: Call, computed: bool) -> FmiResult {
+        if computed && self.phase == Phase::Error {
+            self.model.outputs_defined().map_err(|e| prefixed(call, e))?;
+        }
+        Ok(())
+    }
+
+    pub fn get_reals(&mut self, vrs: &[u32], values: &mut [f64]) -> FmiResult {
+        self.prepare_get(Call::GetReal)?;
+        for (vr, value) in vrs.iter().zip(values.iter_mut()) {
+            let v = self.variable(Call::GetReal, *vr, Family::Real)?;
+            self.check_computable(Call::GetReal, !matches!(v.causality, Causality::Parameter | Causality::Input))?;
+            *value = self.model.get_real(*vr)?;
+        }
+        Ok(())
+    }
+
+    pub fn get_integers(&mut self, vrs: &[u32], values: &mut [i32]) -> FmiResult {
+        self.prepare_get(Call::GetInteger)?;
+        for (vr, value) in vrs.iter().zip(values.iter_mut()) {
+            self.variable(Call::GetInteger, *vr, Family::Integer)?;
+            *value = self.model.get_integer(*vr)?;
+        }
+        Ok(())
+    }
+
+    pub fn get_booleans(&mut self, vrs: &[u32], values: &mut [i32]) -> FmiResult {
+        self.prepare_get(Call::GetBoolean)?;
+        for (vr, value) in vrs.iter().zip(values.iter_mut()) {
+            self.variable(Call::GetBoolean, *vr, Family::Boolean)?;
+            *value = self.model.get_boolean(*vr)? as i32;
+        }
+        Ok(())
+    }
+
+    /// The model has no String variables, so only an empty request succeeds.
+    pub fn check_strings(&self, call: Call, vrs: &[u32]) -> FmiResult {
+        vrs.iter().try_for_each(|&vr| self.variable(call, vr, Family::String).map(|_| ()))
+    }
+
+    /// May `v` be set now? FMI 2.0, section 2.2.7 (the table of when a
+    /// variable may be set) for co-simulation.
+    #[inline]
+    fn check_settable(&self, call: Call, v: &Variable) -> FmiResult {
+        let ok = match v.causality {
+            Causality::Input => true,
+            Causality::Parameter => match self.phase {
+                Phase::Instantiated => matches!(v.initial, Initial::Exact | Initial::Approx),
+                Phase::InitializationMode => v.initial == Initial::Exact,
+                _ => v.variability == Variability::Tunable,
+            },
+            _ => false,
+        } && v.variability != Variability::Constant;
+        if ok {
+            Ok(())
+        } else {
+            Err(not_settable(call, v, self.phase))
+        }
+    }
+
+    /// Validates every value before it applies any, so a rejected call
+    /// changes nothing.
+    #[inline]
+    fn set_all<T: Copy>(
+        &mut self,
+        call: Call,
+        family: Family,
+        vrs: &[u32],
+        values: &[T],
+        check: impl Fn(&Variable, T) -> FmiResult,
+        apply: impl Fn(&mut M, u32, T) -> FmiResult,
+    ) -> FmiResult {
+        for (&vr, &value) in vrs.iter().zip(values) {
+            let v = self.variable(call, vr, family)?;
+            self.check_settable(call, v)?;
+            check(v, value).map_err(|e| prefixed(call, e))?;
+        }
+        for (&vr, &value) in vrs.iter().zip(values) {
+            apply(&mut self.model, vr, value)?;
+        }
+        Ok(())
+    }
+
+    pub fn set_reals(&mut self, vrs: &[u32], values: &[f64]) -> FmiResult {
+        self.set_all(
+            Call::SetReal,
+            Family::Real,
+            vrs,
+            values,
+            |v, x| {
+                // Parameters are range-checked when initialization ends (they
+                // may pass through odd values while a user sets them one by
+                // one); inputs take effect at once, so they are checked now.
+                let checked = !x.is_finite() || v.causality == Causality::Input;
+                if checked && !(x.is_finite() && v.range.contains(x)) {
+                    Err(out_of_range(v, x))
+                } else {
+                    Ok(())
+                }
+            },
+            |m, vr, x| m.set_real(vr, x),
+        )
+    }
+
+    pub fn set_integers(&mut self, vrs: &[u32], values: &[i32]) -> FmiResult {
+        self.set_all(
+            Call::SetInteger,
+            Family::Integer,
+            vrs,
+            values,
+            |v, x| match v.kind {
+                Kind::Enumeration { type_name, values } if !values.contains(&x) => Err(FmiError::error(format!(
+                    "{} = {x} is not a value of the enumeration {type_name} (allowed {}..{})",
+                    v.name,
+                    values.iter().min().unwrap_or(&0),
+                    values.iter().max().unwrap_or(&0)
+                ))),
+                _ => Ok(()),
+            },
+            |m, vr, x| m.set_integer(vr, x),
+        )
+    }
+
+    pub fn set_booleans(&mut self, vrs: &[u32], values: &[i32]) -> FmiResult {
+        self.set_all(
+            Call::SetBoolean,
+            Family::Boolean,
+            vrs,
+            values,
+            |v, x| {
+                if x == 0 || x == 1 {
+                    Ok(())
+                } else {
+                    Err(FmiError::error(format!("{} = {x} is not a Boolean (allowed 0 = false, 1 = true)", v.name)))
+                }
+            },
+            |m, vr, x| m.set_boolean(vr, x != 0),
+        )
+    }
+
+    /// `fmi2SetRealInputDerivatives`: first derivatives of Real inputs.
+    pub fn set_input_derivatives(&mut self, vrs: &[u32], orders: &[i32], values: &[f64]) -> FmiResult {
+        let call = Call::SetRealInputDerivatives;
+        if !Self::description().can_interpolate_inputs {
+            return Err(FmiError::error(format!("{}: canInterpolateInputs is false", call.name())));
+        }
+        for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(values) {
+            let v = self.variable(call, vr, Family::Real)?;
+            if v.causality != Causality::Input {
+                return Err(FmiError::error(format!("{}: {} is not an input", call.name(), v.name)));
+            }
+            if order != 1 {
+                return Err(FmiError::error(format!(
+                    "{}: order {order} for {}: only first derivatives (order 1) are supported",
+                    call.name(),
+                    v.name
+                )));
+            }
+            if !value.is_finite() {
+                return Err(FmiError::error(format!("{}: derivative of {} = {value} must be finite", call.name(), v.name)));
+            }
+        }
+        let mut model = self.model.clone();
+        for (&vr, &value) in vrs.iter().zip(values) {
+            model.set_input_derivative(vr, value).map_err(|e| FmiError::error(format!("{}: {}", call.name(), e.message)))?;
+        }
+        self.model = model;
+        Ok(())
+    }
+}
+
+#[cold]
+fn wrong_variable(call: Call, vr: u32, found: Option<&Variable>, family: Family) -> FmiError {
+    FmiError::error(match found {
+        None => format!("{}: unknown value reference {vr}", call.name()),
+        Some(v) => format!(
+            "{}: {} (value reference {vr}) is of type {}, not {}",
+            call.name(),
+            v.name,
+            Family::of(v.kind).name(),
+            family.name()
+        ),
+    })
+}
+
+#[cold]
+fn not_settable(call: Call, v: &Variable, phase: Phase) -> FmiError {
+    let why = match v.causality {
+        Causality::Parameter => format!(
+            "it is a {} parameter and cannot be set in the state \"{}\" (only before initialization ends)",
+            if v.variability == Variability::Fixed { "fixed" } else { "tunable" },
+            phase.name()
+        ),
+        other => format!("its causality is {other:?}; only parameters and inputs can be set"),
+    };
+    FmiError::error(format!("{}: cannot set {}: {why}", call.name(), v.name))
+}
