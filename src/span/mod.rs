@@ -218,11 +218,12 @@ impl ConvertingSpan {
 /// density, and the arriving web's linear density with web mass.
 fn check_derived(p: &Parameters) -> FmiResult {
     let w = &p.span_web;
-    let mut used = vec![("wp2: E*width*thickness", w.stiffness()), ("wp2: density*width*thickness", w.linear_density())];
-    if p.include_mass {
-        used.push(("wp1: density*width*thickness", p.incoming.linear_density()));
-    }
-    match used.iter().find(|(_, value)| !value.is_finite()) {
+    let used = [
+        Some(("wp2: E*width*thickness", w.stiffness())),
+        Some(("wp2: density*width*thickness", w.linear_density())),
+        p.include_mass.then(|| ("wp1: density*width*thickness", p.incoming.linear_density())),
+    ];
+    match used.into_iter().flatten().find(|(_, value)| !value.is_finite()) {
         Some((what, value)) => Err(FmiError::error(format!("{what} = {value} overflows: the parameters are each in range, not together"))),
         None => Ok(()),
     }
@@ -288,9 +289,8 @@ impl Model for ConvertingSpan {
             )));
         }
         let mut rates = self.input_rates.unwrap_or_default();
-        let mut target = Self { inputs: rates, ..Self::default() };
-        *target.real_field(var).ok_or_else(|| FmiError::error(format!("{} is not an input", var.name())))? = value;
-        rates = target.inputs;
+        *variables::input_field(&mut rates, var).ok_or_else(|| FmiError::error(format!("{} is not an input", var.name())))? =
+            value;
         self.input_rates = Some(rates);
         Ok(())
     }

@@ -4,7 +4,7 @@
 //! here stops the build.
 
 use super::description::{Boolean, Integer, Real};
-use super::parameters::{Parameters, WebProperties};
+use super::parameters::{Inputs, Parameters, WebProperties};
 use super::{physics, ConvertingSpan};
 use crate::fmi2::{FmiError, FmiResult};
 
@@ -74,13 +74,13 @@ impl ConvertingSpan {
             }
             Real::eps_start => &mut p.strain_start,
             Real::tolerance => &mut p.tolerance,
-            Real::web_a_v => &mut u.speed_a,
-            Real::web_a_eps => &mut u.strain_a,
-            Real::web_b_v => &mut u.speed_b,
-            Real::frame_a_x => &mut u.frame_a[0],
-            Real::frame_a_y => &mut u.frame_a[1],
-            Real::frame_b_x => &mut u.frame_b[0],
-            Real::frame_b_y => &mut u.frame_b[1],
+            Real::web_a_v
+            | Real::web_a_eps
+            | Real::web_b_v
+            | Real::frame_a_x
+            | Real::frame_a_y
+            | Real::frame_b_x
+            | Real::frame_b_y => return input_field(u, var),
             Real::v
             | Real::T
             | Real::web_a_F
@@ -132,4 +132,19 @@ impl ConvertingSpan {
 #[cold]
 fn not_settable(var: Real) -> FmiError {
     FmiError::error(format!("{} cannot be set", var.name()))
+}
+
+/// The field of an input (in a set of input values, or of their rates);
+/// `None` for variables that are not inputs.
+pub(super) fn input_field(u: &mut Inputs, var: Real) -> Option<&mut f64> {
+    Some(match var {
+        Real::web_a_v => &mut u.speed_a,
+        Real::web_a_eps => &mut u.strain_a,
+        Real::web_b_v => &mut u.speed_b,
+        Real::frame_a_x => &mut u.frame_a[0],
+        Real::frame_a_y => &mut u.frame_a[1],
+        Real::frame_b_x => &mut u.frame_b[0],
+        Real::frame_b_y => &mut u.frame_b[1],
+        _ => return None,
+    })
 }

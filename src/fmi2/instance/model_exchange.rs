@@ -20,6 +20,14 @@ impl<M: Model> Instance<M> {
         }
     }
 
+    /// Before a computed vector is read: the length the importer gives, the
+    /// initial values during initialization, computability after an error.
+    fn prepare_computed(&mut self, call: Call, what: &str, given: usize, declared: usize) -> FmiResult {
+        Self::check_count(call, what, given, declared)?;
+        self.prepare_get(call)?;
+        self.check_computable(call, true)
+    }
+
     pub fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
         let call = Call::SetContinuousStates;
         Self::check_count(call, "states", x.len(), Self::description().states.len())?;
@@ -31,25 +39,19 @@ impl<M: Model> Instance<M> {
 
     pub fn get_continuous_states(&mut self, x: &mut [f64]) -> FmiResult {
         let call = Call::GetContinuousStates;
-        Self::check_count(call, "states", x.len(), Self::description().states.len())?;
-        self.prepare_get(call)?;
-        self.check_computable(call, true)?;
+        self.prepare_computed(call, "states", x.len(), Self::description().states.len())?;
         self.model.get_continuous_states(x).map_err(|e| prefixed(call, e))
     }
 
     pub fn get_derivatives(&mut self, dx: &mut [f64]) -> FmiResult {
         let call = Call::GetDerivatives;
-        Self::check_count(call, "derivatives", dx.len(), Self::description().states.len())?;
-        self.prepare_get(call)?;
-        self.check_computable(call, true)?;
+        self.prepare_computed(call, "derivatives", dx.len(), Self::description().states.len())?;
         self.model.get_derivatives(dx).map_err(|e| prefixed(call, e))
     }
 
     pub fn get_event_indicators(&mut self, z: &mut [f64]) -> FmiResult {
         let call = Call::GetEventIndicators;
-        Self::check_count(call, "event indicators", z.len(), Self::description().number_of_event_indicators)?;
-        self.prepare_get(call)?;
-        self.check_computable(call, true)?;
+        self.prepare_computed(call, "event indicators", z.len(), Self::description().number_of_event_indicators)?;
         self.model.get_event_indicators(z).map_err(|e| prefixed(call, e))
     }
 
