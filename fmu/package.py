@@ -31,6 +31,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+# One stylesheet for every FMU's documentation page (inlined: a page stays one file).
+STYLE = ROOT / "fmu" / "documentation" / "style.css"
 RANGE_TOOL = "ConvertingSpan.range"
 # Fixed timestamp: the same inputs give the same archive bytes.
 ZIP_TIME = (2026, 1, 1, 0, 0, 0)
@@ -159,6 +161,7 @@ def unit_rows(root):
 def documentation(root, template):
     text = template.read_text(encoding="utf-8")
     replacements = {
+        "<!-- STYLE -->": STYLE.read_text(encoding="utf-8"),
         "<!-- VARIABLES -->": variable_rows(root),
         "<!-- GUID -->": html.escape(root.get("guid")),
         "<!-- VERSION -->": html.escape(root.get("version", "")),
