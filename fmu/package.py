@@ -3,9 +3,9 @@
 
     python3 fmu/package.py [--out out/ConvertingSpan.fmu] [--no-build] [--host-build]
 
-Both come from the same crate: ConvertingSpan as `cargo build --release --lib`,
-Roller with the feature `roller` into target/roller; Roller.fmu is written
-next to ConvertingSpan.fmu. Each FMU holds its modelDescription.xml,
+Each FMU is one package of the cargo workspace: ConvertingSpan the root
+package, Roller the one in fmu/roller; Roller.fmu is written next to
+ConvertingSpan.fmu. Each FMU holds its modelDescription.xml,
 binaries/linux64/<modelIdentifier>.so and documentation/index.html. The
 documentation's variable and unit tables are rendered from the model
 description, so they never disagree with the FMU. Only the Python standard
@@ -43,39 +43,27 @@ TEST_HOOK_MARKER = b"testHook.panicInNextDoStep"
 
 
 class Model:
-    """One FMU of the crate: its interface, documentation and how to build its library."""
+    """One FMU of the workspace: its interface, documentation and how to build its library."""
 
-    def __init__(self, name, description, template, features=(), target_dir=None):
+    def __init__(self, name, package, crate_dir):
         self.name = name
-        self.description = description
-        self.template = template
-        self.features = list(features)
-        self.target_dir = target_dir  # None: cargo's default target/
-        self.library = (target_dir or ROOT / "target") / "release" / "libconverting_span.so"
-        # The portable build: its own target directory per model.
-        self.portable_dir = ROOT / "target" / ("portable" if not self.features else f"portable-{name.lower()}")
-        self.portable_library = self.portable_dir / "x86_64-unknown-linux-gnu" / "release" / "libconverting_span.so"
+        self.package = package
+        self.description = crate_dir / "modelDescription.xml"
+        self.template = crate_dir / ("fmu/documentation" if crate_dir == ROOT else "documentation") / "index.html"
+        library = f"lib{package.replace('-', '_')}.so"
+        self.library = ROOT / "target" / "release" / library
+        # The portable build: one target directory for the workspace.
+        self.portable_library = ROOT / "target" / "portable" / "x86_64-unknown-linux-gnu" / "release" / library
 
 
 MODELS = [
-    Model("ConvertingSpan", ROOT / "modelDescription.xml", ROOT / "fmu" / "documentation" / "index.html"),
-    Model(
-        "Roller",
-        ROOT / "fmu" / "roller" / "modelDescription.xml",
-        ROOT / "fmu" / "roller" / "documentation" / "index.html",
-        features=["roller"],
-        target_dir=ROOT / "target" / "roller",
-    ),
+    Model("ConvertingSpan", "converting-span", ROOT),
+    Model("Roller", "roller", ROOT / "fmu" / "roller"),
 ]
 
 
 def build_library(model):
-    command = ["cargo", "build", "--release", "--lib", "--quiet"]
-    if model.features:
-        command += ["--features", ",".join(model.features)]
-    if model.target_dir is not None:
-        command += ["--target-dir", str(model.target_dir)]
-    subprocess.run(command, cwd=ROOT, check=True)
+    subprocess.run(["cargo", "build", "--release", "--lib", "--quiet", "-p", model.package], cwd=ROOT, check=True)
 
 
 def tools_path():
@@ -93,10 +81,8 @@ def build_portable_library(model):
             f"package.py: {' and '.join(missing)} not found: `source fmu/env.sh` installs them "
             "(or use --host-build for development FMUs that are not portable)"
         )
-    command = ["cargo", "zigbuild", "--release", "--lib", "--quiet", "--target", PORTABLE_TARGET]
-    if model.features:
-        command += ["--features", ",".join(model.features)]
-    command += ["--target-dir", str(model.portable_dir)]
+    command = ["cargo", "zigbuild", "--release", "--lib", "--quiet", "-p", model.package, "--target", PORTABLE_TARGET]
+    command += ["--target-dir", str(ROOT / "target" / "portable")]
     subprocess.run(command, cwd=ROOT, check=True, env=env)
 
 

@@ -1,22 +1,33 @@
-//! ConvertingSpan: an FMI 2.0 co-simulation FMU of a converting web span.
+//! ConvertingSpan: an FMI 2.0 FMU of a converting web span, the free web
+//! between two rollers where the web's properties change from wp1
+//! (arriving) to wp2 (in the span).
 //!
-//! * `fmi2`  — the FMI layer, generic over the model; its `ffi` module holds
-//!   all unsafe code and the exported C API.
-//! * `span`  — the converting-span model: parameters, equations, outputs.
-//! * `roller` — the roller model of the companion Roller FMU.
-//! * `solver` — numerical building blocks (exact linear steps, compensated sums).
+//! * `parameters` — what the user sets, in SI units;
+//! * `physics` — the equations, numbered as in the model documentation,
+//!   every output's equation among them;
+//! * `stepping` — one communication step: the choice of method, the
+//!   balance written for the integrators;
+//! * `sensor` — unit conversion of the sensor outputs;
+//! * `slack` — where inside a step a slack web's tension crosses zero;
+//! * `variables` — each variable of modelDescription.xml bound to its field;
+//! * `description` — the interface generated from modelDescription.xml;
+//! * `model` — the model's data, one step, and the FMI hooks.
+//!
+//! The FMI layer (crate `fmi2`) holds all unsafe code; this crate has none.
 
 #![deny(unsafe_code)]
 
-pub mod fmi2;
-pub mod roller;
-pub mod solver;
-pub mod span;
+pub mod description;
+mod model;
+pub mod parameters;
+pub mod physics;
+pub mod sensor;
+mod slack;
+pub mod stepping;
+mod variables;
 
-/// The model this library's `fmi2*` functions serve: ConvertingSpan, or the
-/// Roller with the cargo feature `roller` (both models are always compiled,
-/// so the Rust tests can use either).
-#[cfg(not(feature = "roller"))]
-pub type ExportedModel = span::ConvertingSpan;
-#[cfg(feature = "roller")]
-pub type ExportedModel = roller::Roller;
+pub use model::{effective_tolerance, ConvertingSpan};
+pub use parameters::Rates;
+pub use physics::Outputs;
+
+fmi2::export_fmi2!(crate::ConvertingSpan);

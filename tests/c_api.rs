@@ -5,11 +5,21 @@
 //! defect of the product: they fail today and pass once it is fixed
 //! (`cargo test --release --test c_api -- --ignored`).
 
-mod common;
+type Fmu = fmi2_harness::Fmu<ConvertingSpan>;
+type Setup = fmi2_harness::Setup<ConvertingSpan>;
 
-use common::*;
-use converting_span::fmi2::description::{Causality, Kind, Variable};
-use converting_span::span::description::DESCRIPTION;
+use fmi2_harness::*;
+use fmi2::description::{Causality, Kind, Variable};
+use converting_span::description::{Real, DESCRIPTION};
+use converting_span::ConvertingSpan;
+
+fn vr(name: &str) -> u32 {
+    fmi2_harness::vr::<ConvertingSpan>(name)
+}
+
+fn var(name: &str) -> &'static Variable {
+    fmi2_harness::var::<ConvertingSpan>(name)
+}
 
 // ====================================================================== helpers
 
@@ -652,7 +662,7 @@ fn instantiate_tolerates_odd_names_and_null_resources() {
     assert_eq!(fmu.do_step(0.0, 0.01), ERROR, "errors without a logger are returned, not crashed on");
     assert_eq!(fmu.reset(), OK);
     fmu.init(0.0);
-    assert!(!instantiate_without_callbacks(), "NULL functions: nothing to report with, so NULL");
+    assert!(!instantiate_without_callbacks::<ConvertingSpan>(), "NULL functions: nothing to report with, so NULL");
 }
 
 /// Proves that fmi2DoStep refuses h = 0, -0, h < 0, NaN and inf, and a
@@ -1283,7 +1293,7 @@ const FRAMES: [(&str, f64); 4] = [("frame_a.x", 0.1), ("frame_a.y", 0.2), ("fram
 /// more than `significant` in some configuration; an unlisted one must
 /// never change it by more than `rounding`.
 fn dependency_problems(
-    unknowns: &[converting_span::fmi2::description::Dependency],
+    unknowns: &[fmi2::description::Dependency],
     knowns: &[&Variable],
     largest: &[Vec<f64>],
     significant: f64,
@@ -1691,7 +1701,7 @@ fn types_platform_and_version() {
 #[test]
 fn null_component_is_refused_everywhere() {
     for api in Api::ALL {
-        assert_eq!(call_with_null_component(api), ERROR, "{}", api.c_name());
+        assert_eq!(call_with_null_component::<ConvertingSpan>(api), ERROR, "{}", api.c_name());
     }
     free_null_instance();
     // A real instance still works afterwards.

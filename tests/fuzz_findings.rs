@@ -2,14 +2,14 @@
 //! They failed until the product was fixed; now they guard against the
 //! same faults coming back.
 
-mod harden;
+type Fmu = fmi2_harness::Fmu<converting_span::ConvertingSpan>;
 
-use harden::*;
+use fmi2_harness::*;
 
 fn output_vrs() -> Vec<u32> {
-    use converting_span::fmi2::description::{Causality, Kind};
-    use converting_span::fmi2::Model;
-    <converting_span::ExportedModel as Model>::description()
+    use fmi2::description::{Causality, Kind};
+    use fmi2::Model;
+    <converting_span::ConvertingSpan as Model>::description()
         .variables
         .iter()
         .filter(|v| v.causality == Causality::Output && v.kind == Kind::Real)
@@ -32,7 +32,7 @@ fn non_finite(fmu: &Fmu) -> Vec<(u32, f64)> {
 /// fmi2Error (or start values) for outputs that were never computed.
 #[test]
 fn outputs_read_in_the_error_state_before_initialization_are_finite() {
-    let fmu = Fmu::new("uninitialized");
+    let fmu = Fmu::named("uninitialized");
     assert_eq!(fmu.do_step(0.0, 0.1), ERROR, "a step before initialization is illegal");
     let bad = non_finite(&fmu);
     assert!(bad.is_empty(), "non-finite outputs (value reference, value): {bad:?}");
@@ -43,7 +43,7 @@ fn outputs_read_in_the_error_state_before_initialization_are_finite() {
 /// initialization when a derived quantity is not finite, or bound the ranges.
 #[test]
 fn extreme_but_accepted_parameters_are_refused_or_give_finite_outputs() {
-    let fmu = Fmu::new("extreme");
+    let fmu = Fmu::named("extreme");
     for (name, x) in [("wp2.E", 1e300), ("wp2.width", 1e300), ("wp2.thickness", 1e300)] {
         assert_eq!(fmu.set_real(name, x), OK, "{name} = {x} is inside its range");
     }
@@ -61,7 +61,7 @@ fn extreme_but_accepted_parameters_are_refused_or_give_finite_outputs() {
 /// then answers inf. Fix: refuse a step whose end time is not finite.
 #[test]
 fn a_step_whose_end_time_overflows_is_refused() {
-    let fmu = Fmu::new("time");
+    let fmu = Fmu::named("time");
     unsafe {
         assert_eq!(fmi2SetupExperiment(fmu.c, 0, 0.0, 1e308, 0, 0.0), OK);
         assert_eq!(fmi2EnterInitializationMode(fmu.c), OK);
@@ -79,7 +79,7 @@ fn a_step_whose_end_time_overflows_is_refused() {
 /// A regression test now.
 #[test]
 fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
-    let fmu = Fmu::new("forged");
+    let fmu = Fmu::named("forged");
     let marker = 1.234_567_891_011; // a value of L to find in the bytes
     assert_eq!(fmu.set_real("L", marker), OK);
     assert_eq!(fmu.initialize(), OK);
@@ -107,7 +107,7 @@ fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
 /// answered fmi2GetDerivatives with fmi2OK. A regression test now.
 #[test]
 fn a_co_simulation_instance_refuses_model_exchange_getters() {
-    let fmu = Fmu::new("cs");
+    let fmu = Fmu::named("cs");
     assert_eq!(fmu.do_step(0.0, 0.1), ERROR); // now in the error state
     let mut dx = [0.0f64; 1];
     let status = unsafe { fmi2GetDerivatives(fmu.c, dx.as_mut_ptr(), 1) };
@@ -123,7 +123,7 @@ fn a_co_simulation_instance_refuses_model_exchange_getters() {
 /// initialized): serialization does not round-trip.
 #[test]
 fn a_state_saved_before_initialization_round_trips() {
-    let fmu = Fmu::new("roundtrip");
+    let fmu = Fmu::named("roundtrip");
     assert_eq!(fmu.set_real("wp2.density", -1.0), OK, "checked when initialization ends");
     assert_eq!(fmu.do_step(0.0, 0.1), ERROR, "illegal before initialization: now in the error state");
     let mut state: fmi2FMUstate = std::ptr::null_mut();

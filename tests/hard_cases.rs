@@ -28,9 +28,9 @@
 //!   rk4 with moving inputs: 1e-9 (lambda h/n <= 0.01 there).
 //! with tol = 1e-10 (the `tolerance` parameter) throughout.
 
-use converting_span::fmi2::{Experiment, Model, Status};
-use converting_span::span::description::Real;
-use converting_span::span::ConvertingSpan;
+use fmi2::{Experiment, Model, Status};
+use converting_span::description::Real;
+use converting_span::ConvertingSpan;
 
 const TOL: f64 = 1e-10;
 const AUTO: i32 = 1;
@@ -127,7 +127,7 @@ fn ramp(u0: U, rate: U, n: usize, h: f64) -> Vec<Step> {
 
 fn model(solver: i32, setup: impl FnOnce(&mut ConvertingSpan)) -> ConvertingSpan {
     let mut m = ConvertingSpan::at_start_values();
-    m.params.solver = solver;
+    m.params.solver = fmi2::IntegerValue::from_i32(solver).expect("a solver");
     m.params.tolerance = TOL;
     setup(&mut m);
     m

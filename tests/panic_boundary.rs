@@ -10,10 +10,10 @@
 //! (tests/run.sh uses a separate target directory, so that the feature never
 //! reaches the library that fmu/package.py ships).
 
-mod harden;
+type Fmu = fmi2_harness::Fmu<converting_span::ConvertingSpan>;
 
-use converting_span::fmi2::instance::TEST_PANIC_CATEGORY;
-use harden::*;
+use fmi2::instance::TEST_PANIC_CATEGORY;
+use fmi2_harness::*;
 use std::ffi::CString;
 
 fn arm(fmu: &Fmu) -> i32 {
@@ -22,7 +22,7 @@ fn arm(fmu: &Fmu) -> i32 {
 }
 
 fn running() -> Fmu {
-    let fmu = Fmu::new("panicky");
+    let fmu = Fmu::named("panicky");
     assert_eq!(fmu.initialize(), OK, "{:?}", fmu.messages());
     fmu
 }
@@ -51,7 +51,7 @@ fn a_poisoned_instance_refuses_everything_but_reset_and_free() {
     assert_eq!(fmu.do_step(0.0, 0.1), ERROR);
     fmu.log.take();
 
-    let vr = vr_of("T");
+    let vr = vr::<converting_span::ConvertingSpan>("T");
     let mut x = 0.0;
     let mut size = 0usize;
     let mut other: fmi2FMUstate = std::ptr::null_mut();
@@ -67,7 +67,7 @@ fn a_poisoned_instance_refuses_everything_but_reset_and_free() {
             ("fmi2SetDebugLogging", fmi2SetDebugLogging(fmu.c, 0, 0, all_off.as_ptr())),
             // Illegal in the error state anyway:
             ("fmi2DoStep", fmi2DoStep(fmu.c, 0.0, 0.1, 1)),
-            ("fmi2SetReal", fmi2SetReal(fmu.c, &vr_of("web_b.v"), 1, &5.0)),
+            ("fmi2SetReal", fmi2SetReal(fmu.c, &fmi2_harness::vr::<converting_span::ConvertingSpan>("web_b.v"), 1, &5.0)),
             ("fmi2Terminate", fmi2Terminate(fmu.c)),
             ("fmi2GetBooleanStatus", fmi2GetBooleanStatus(fmu.c, 3, &mut flag)),
         ]

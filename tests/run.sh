@@ -4,9 +4,9 @@
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
 cd "$ROOT"
-cargo test --release --quiet
-# The Roller's C API: the same library built with the feature that exports it.
-cargo test --release --quiet --features roller --target-dir target/roller --test roller
+# Every package of the workspace: the span and the Roller (model and C API),
+# the FMI layer, the generator, the solvers.
+cargo test --release --quiet --workspace
 python3 fmu/package.py
 "$PY" -m pytest tests/python -q
 # Hardening, CI size (tests/hardening.sh --full for the long runs): the

@@ -6,11 +6,11 @@
 //! control that shows the binary check does catch a static Atomic, a
 //! `static mut` and a thread-local).
 
-mod harden;
+type Fmu = fmi2_harness::Fmu<converting_span::ConvertingSpan>;
 
-use converting_span::fmi2::description::{Kind, Start};
-use converting_span::fmi2::Model;
-use harden::*;
+use fmi2::description::{Kind, Start};
+use fmi2::Model;
+use fmi2_harness::*;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Barrier;
@@ -18,15 +18,15 @@ use std::sync::Barrier;
 const THREADS: usize = 8;
 const STEPS: usize = 3000;
 
-fn description() -> &'static converting_span::fmi2::description::ModelDescription {
-    <converting_span::ExportedModel as Model>::description()
+fn description() -> &'static fmi2::description::ModelDescription {
+    <converting_span::ConvertingSpan as Model>::description()
 }
 
 /// Run `k`: its own span length, speeds and (if the model has one) solver,
 /// with a speed ramp and a draw step, returning the bits of every Real after
 /// every step.
 fn scenario(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
-    let fmu = Fmu::new(&format!("thread{k}"));
+    let fmu = Fmu::named(&format!("thread{k}"));
     assert_eq!(fmu.set_real("L", 0.5 + 0.25 * k as f64), OK);
     if let Some(v) = description().variable_by_name("solver") {
         if let Kind::Enumeration { values, .. } = v.kind {
@@ -85,11 +85,11 @@ fn eight_instances_on_eight_threads_match_the_same_runs_one_after_another() {
 #[test]
 fn start_values_do_not_depend_on_other_instances() {
     // An instance changed and stepped must not change what a new one starts with.
-    let a = Fmu::new("a");
+    let a = Fmu::named("a");
     assert_eq!(a.set_real("L", 3.0), OK);
     assert_eq!(a.initialize(), OK);
     assert_eq!(a.do_step(0.0, 0.1), OK);
-    let b = Fmu::new("b");
+    let b = Fmu::named("b");
     assert_eq!(b.initialize(), OK);
     let Start::Real(start) = description().variable_by_name("L").unwrap().start else { panic!("L has a Real start") };
     assert_eq!(b.get_real("L"), (OK, start));

@@ -39,22 +39,20 @@
 
 #![allow(clippy::missing_safety_doc)]
 
-#[path = "../../harden/mod.rs"]
-pub mod harden;
 
-use converting_span::fmi2::description::{
+use fmi2::description::{
     Causality, Initial, Kind, ModelDescription, Variability, Variable,
 };
-use converting_span::fmi2::instance::TEST_PANIC_CATEGORY;
-use converting_span::fmi2::Model;
-use harden::*;
+use fmi2::instance::TEST_PANIC_CATEGORY;
+use fmi2::Model;
+use fmi2_harness::*;
 use std::ffi::{c_char, CString};
 use std::ptr::null_mut;
 
 type Desc = &'static ModelDescription;
 
 fn desc() -> Desc {
-    <converting_span::ExportedModel as Model>::description()
+    <converting_span::ConvertingSpan as Model>::description()
 }
 
 // ---------------------------------------------------------------- input
@@ -136,7 +134,7 @@ fn real(src: &mut Source) -> f64 {
 /// A value near a variable's start value (or 1), inside its range when it
 /// has one: keeps sequences on the paths where the model really computes.
 fn sane_real(src: &mut Source, v: &Variable) -> f64 {
-    use converting_span::fmi2::description::Start;
+    use fmi2::description::Start;
     let base = match v.start {
         Start::Real(x) if x != 0.0 => x,
         _ => 1e-3,
@@ -734,7 +732,7 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let guid_c = CString::new(match guid_kind {
         0 => "{00000000-0000-0000-0000-000000000000}".to_string(),
         1 => String::new(),
-        _ => guid().to_string(),
+        _ => guid::<converting_span::ConvertingSpan>().to_string(),
     })
     .unwrap();
     let guid_ptr = if guid_kind == 2 && src.chance(128) {
@@ -2121,7 +2119,7 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         let log = Box::<Log>::default();
         let functions = Box::new(callbacks(&log));
         let name = CString::new(format!("fuzz{i}")).unwrap();
-        let g = CString::new(guid()).unwrap();
+        let g = CString::new(guid::<converting_span::ConvertingSpan>()).unwrap();
         let c = unsafe {
             fmi2Instantiate(
                 name.as_ptr(),

@@ -1,0 +1,145 @@
+//! [`bind_variables!`](crate::bind_variables): each variable of a model
+//! description bound to its field once, beside the XML. Get, set, the
+//! variables' part of an FMU state and the fields of input derivatives all
+//! follow from that one binding. The matches are over the enums the
+//! generator emits, so a variable added to or removed from the XML without
+//! its binding stops the build.
+//!
+//! A binding is one of
+//! * `param(path)` — a parameter stored at `self.path`;
+//! * `input(path)` — an input stored at `self.inputs.path`; input
+//!   derivatives land at the same path in a value of the `inputs` type;
+//! * `computed(expr)` — a value computed as `self.expr` (outputs, locals).
+//!
+//! The caller has the generated `Real`, `Integer` and `Boolean` in scope.
+
+/// Writes the `Variables` impl and the inherent `real`, `integer`,
+/// `boolean` and `input_field` functions of a model from its bindings.
+#[macro_export]
+macro_rules! bind_variables {
+    (
+        model: $model:ty,
+        inputs: $inputs:ty,
+        real { $($r:ident: $rk:ident($($rf:tt)+)),* $(,)? }
+        integer { $($i:ident: $ik:ident($($if:tt)+)),* $(,)? }
+        boolean { $($b:ident: $bk:ident($($bf:tt)+)),* $(,)? }
+    ) => {
+        impl $model {
+            /// The value of a Real variable.
+            #[inline]
+            pub fn real(&self, var: Real) -> f64 {
+                match var { $(Real::$r => $crate::__bound!(self, $rk, $($rf)+),)* }
+            }
+
+            /// The value of an Integer or enumeration variable.
+            pub fn integer(&self, var: Integer) -> i32 {
+                match var { $(Integer::$i => $crate::IntegerValue::to_i32($crate::__bound!(self, $ik, $($if)+)),)* }
+            }
+
+            /// Sets a parameter or input; `Err` for computed variables.
+            #[inline]
+            pub fn set_real_var(&mut self, var: Real, value: f64) -> $crate::FmiResult {
+                match var { $(Real::$r => $crate::__bound_set!(self, var, value, $rk, $($rf)+),)* }
+            }
+
+            pub fn boolean(&self, var: Boolean) -> bool {
+                match var { $(Boolean::$b => $crate::__bound!(self, $bk, $($bf)+),)* }
+            }
+
+            /// The field of an input in a set of input values or of their
+            /// rates; `None` for variables that are not inputs.
+            #[allow(unused_variables)]
+            pub fn input_field(u: &mut $inputs, var: Real) -> Option<&mut f64> {
+                match var { $(Real::$r => $crate::__bound_input!(u, $rk, $($rf)+),)* }
+            }
+        }
+
+        impl $crate::Variables for $model {
+            #[inline]
+            fn get_real(&self, vr: u32) -> $crate::FmiResult<f64> {
+                match Real::from_vr(vr) {
+                    Some(var) => Ok(self.real(var)),
+                    None => Err($crate::model::unknown_vr(vr)),
+                }
+            }
+
+            #[inline]
+            fn set_real(&mut self, vr: u32, value: f64) -> $crate::FmiResult {
+                self.set_real_var(Real::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))?, value)
+            }
+
+            fn get_integer(&self, vr: u32) -> $crate::FmiResult<i32> {
+                Ok(self.integer(Integer::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))?))
+            }
+
+            fn set_integer(&mut self, vr: u32, value: i32) -> $crate::FmiResult {
+                let var = Integer::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))?;
+                match var {
+                    $(Integer::$i => $crate::__bound_set!(self, var, $crate::model::integer_value(var.name(), value)?, $ik, $($if)+),)*
+                }
+            }
+
+            fn get_boolean(&self, vr: u32) -> $crate::FmiResult<bool> {
+                Ok(self.boolean(Boolean::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))?))
+            }
+
+            fn set_boolean(&mut self, vr: u32, value: bool) -> $crate::FmiResult {
+                let var = Boolean::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))?;
+                match var { $(Boolean::$b => $crate::__bound_set!(self, var, value, $bk, $($bf)+),)* }
+            }
+
+            fn save_variables(&self, out: &mut $crate::StateWriter) {
+                $($crate::__bound_save!(out.f64, self, $rk, ::core::convert::identity, $($rf)+);)*
+                $($crate::__bound_save!(out.i32, self, $ik, $crate::IntegerValue::to_i32, $($if)+);)*
+                $($crate::__bound_save!(out.bool, self, $bk, ::core::convert::identity, $($bf)+);)*
+            }
+
+            fn load_variables(&mut self, input: &mut $crate::StateReader) -> $crate::FmiResult {
+                $($crate::__bound_load!(self, $rk, input.finite(Real::$r.name())?, $($rf)+);)*
+                $($crate::__bound_load!(self, $ik,
+                    $crate::model::integer_value(Integer::$i.name(), input.i32(Integer::$i.name())?)?, $($if)+);)*
+                $($crate::__bound_load!(self, $bk, input.bool(Boolean::$b.name())?, $($bf)+);)*
+                Ok(())
+            }
+        }
+    };
+}
+
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bound {
+    ($s:tt, param, $($f:tt)+) => { $s.$($f)+ };
+    ($s:tt, input, $($f:tt)+) => { $s.inputs.$($f)+ };
+    ($s:tt, computed, $($f:tt)+) => { $s.$($f)+ };
+}
+
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bound_set {
+    ($s:tt, $var:ident, $value:expr, param, $($f:tt)+) => {{ $s.$($f)+ = $value; Ok(()) }};
+    ($s:tt, $var:ident, $value:expr, input, $($f:tt)+) => {{ $s.inputs.$($f)+ = $value; Ok(()) }};
+    ($s:tt, $var:ident, $value:expr, computed, $($f:tt)+) => { Err($crate::model::not_settable($var.name())) };
+}
+
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bound_input {
+    ($u:ident, input, $($f:tt)+) => { Some(&mut $u.$($f)+) };
+    ($u:ident, $kind:ident, $($f:tt)+) => { None };
+}
+
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bound_save {
+    ($out:ident.$put:ident, $s:tt, param, $conv:path, $($f:tt)+) => { $out.$put($conv($s.$($f)+)) };
+    ($out:ident.$put:ident, $s:tt, input, $conv:path, $($f:tt)+) => { $out.$put($conv($s.inputs.$($f)+)) };
+    ($out:ident.$put:ident, $s:tt, computed, $conv:path, $($f:tt)+) => { () };
+}
+
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bound_load {
+    ($s:tt, param, $value:expr, $($f:tt)+) => { $s.$($f)+ = $value };
+    ($s:tt, input, $value:expr, $($f:tt)+) => { $s.inputs.$($f)+ = $value };
+    ($s:tt, computed, $value:expr, $($f:tt)+) => { () };
+}

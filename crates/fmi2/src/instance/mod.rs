@@ -1,0 +1,309 @@
+//! One FMU instance: the state machine, the checks every get and set goes
+//! through (value reference, type, causality, phase, value), time keeping
+//! for `fmi2DoStep`, and FMU states. Plain safe Rust over a generic model;
+//! the FFI module calls it and turns its errors into statuses and log lines.
+//!
+//! * this file — the instance, its lifecycle, `fmi2DoStep` and the status queries;
+//! * `values` — getting and setting variables, with every check;
+//! * `model_exchange` — the Model Exchange functions;
+//! * `states` — FMU states: save, restore, check a deserialized one.
+
+mod model_exchange;
+mod states;
+mod values;
+
+use super::description::{Causality, Initial, Kind, ModelDescription, Variability, Variable};
+use super::logging::{Log, LogFilter};
+use super::model::{Experiment, Model};
+use super::phase::{Call, Phase};
+use super::snapshot::Snapshot;
+use super::status::{FmiError, FmiResult, Status};
+
+/// `fmi2StatusKind` values (FMI 2.0 headers).
+pub const DO_STEP_STATUS: i32 = 0;
+pub const PENDING_STATUS: i32 = 1;
+pub const LAST_SUCCESSFUL_TIME: i32 = 2;
+pub const TERMINATED: i32 = 3;
+
+/// Test-only (feature `test-hooks`): `fmi2SetDebugLogging(c, fmi2True, 1,
+/// {TEST_PANIC_CATEGORY})` arms the instance so that its next `fmi2DoStep`
+/// panics inside the step, after the model has advanced and before the time
+/// has: the half-done update that poisoning guards against.
+#[cfg(feature = "test-hooks")]
+pub const TEST_PANIC_CATEGORY: &str = "testHook.panicInNextDoStep";
+
+/// Relative tolerance when the communication point is compared with the
+/// instance's time: importers compute time in their own ways (t + h, or
+/// t0 + n*h), which may differ by a few ulps, never by 1e-13 of the time.
+const TIME_TOLERANCE: f64 = 1e-13;
+
+/// What `fmi2NewDiscreteStates` reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DiscreteUpdate {
+    pub new_discrete_states_needed: bool,
+    pub terminate_simulation: bool,
+    pub next_event_time: Option<f64>,
+}
+
+/// The type family of a get/set function.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Family {
+    Real,
+    Integer,
+    Boolean,
+    String,
+}
+
+impl Family {
+    fn of(kind: Kind) -> Family {
+        match kind {
+            Kind::Real => Family::Real,
+            Kind::Integer | Kind::Enumeration { .. } => Family::Integer,
+            Kind::Boolean => Family::Boolean,
+            Kind::String => Family::String,
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            Family::Real => "Real",
+            Family::Integer => "Integer",
+            Family::Boolean => "Boolean",
+            Family::String => "String",
+        }
+    }
+}
+
+pub struct Instance<M: Model> {
+    logger: Box<dyn Log>,
+    log: LogFilter,
+    phase: Phase,
+    time: f64,
+    experiment: Experiment,
+    model: M,
+    #[cfg(feature = "test-hooks")]
+    panic_in_next_step: bool,
+}
+
+impl<M: Model> Instance<M> {
+    pub fn new(logger: Box<dyn Log>, logging_on: bool, model_exchange: bool) -> Self {
+        let instance = Instance {
+            logger,
+            log: LogFilter::new(Self::description().log_categories, logging_on),
+            phase: Phase::Instantiated,
+            time: 0.0,
+            experiment: Experiment { model_exchange, ..Experiment::default() },
+            model: M::at_start_values(),
+            #[cfg(feature = "test-hooks")]
+            panic_in_next_step: false,
+        };
+        instance.log_event("instantiated");
+        instance
+    }
+
+    fn description() -> &'static ModelDescription {
+        M::description()
+    }
+
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    pub fn log(&self, status: Status, category: &str, message: &str) {
+        if self.log.allows(category) {
+            self.logger.log(status, category, message);
+        }
+    }
+
+    fn log_event(&self, message: &str) {
+        self.log(Status::Ok, "logEvents", message);
+    }
+
+    /// Entry check of every call: does it belong to this instance's
+    /// interface, and is it allowed in the current phase?
+    pub fn begin(&mut self, call: Call) -> FmiResult {
+        if self.log.traces_calls() {
+            self.log(Status::Ok, "logAll", call.name());
+        }
+        let model_exchange = self.experiment.model_exchange;
+        if call.model_exchange_only().is_some_and(|me| me != model_exchange) {
+            let (this, other) = if model_exchange { ("Model Exchange", "Co-Simulation") } else { ("Co-Simulation", "Model Exchange") };
+            return Err(FmiError::error(format!(
+                "{}: illegal call sequence: a {other} function, and this is a {this} instance",
+                call.name()
+            )));
+        }
+        if call.is_allowed_in(self.phase) {
+            Ok(())
+        } else {
+            Err(FmiError::error(format!(
+                "{}: illegal call sequence: not allowed in the state \"{}\"",
+                call.name(),
+                self.phase.name()
+            )))
+        }
+    }
+
+    /// Reports a failed call; an `Error` puts the instance into the error
+    /// state, from which `fmi2Reset` or `fmi2SetFMUstate` bring it back.
+    pub fn fail(&mut self, error: FmiError) -> Status {
+        self.log(error.status, error.status.log_category(), &error.message);
+        if error.status >= Status::Error {
+            self.phase = Phase::Error;
+        }
+        error.status
+    }
+
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[String]) -> FmiResult {
+        #[cfg(feature = "test-hooks")]
+        if on && categories.len() == 1 && categories[0] == TEST_PANIC_CATEGORY {
+            self.panic_in_next_step = true;
+            return Ok(());
+        }
+        self.log.set(on, categories).map_err(|e| prefixed(Call::SetDebugLogging, e))
+    }
+
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> FmiResult {
+        let name = "fmi2SetupExperiment";
+        if !start.is_finite() {
+            return Err(FmiError::error(format!("{name}: startTime = {start} must be finite")));
+        }
+        if let Some(stop) = stop {
+            if !(stop.is_finite() && stop >= start) {
+                return Err(FmiError::error(format!("{name}: stopTime = {stop} must be finite and >= startTime = {start}")));
+            }
+        }
+        if let Some(tol) = tolerance {
+            if !(tol.is_finite() && tol > 0.0) {
+                return Err(FmiError::error(format!("{name}: tolerance = {tol} must be finite and > 0")));
+            }
+        }
+        self.experiment = Experiment { tolerance, start_time: start, stop_time: stop, ..self.experiment };
+        self.time = start;
+        Ok(())
+    }
+
+    pub fn enter_initialization_mode(&mut self) -> FmiResult {
+        self.phase = Phase::InitializationMode;
+        self.log_event("entered initialization mode");
+        Ok(())
+    }
+
+    pub fn exit_initialization_mode(&mut self) -> FmiResult {
+        self.settle_initial_values().map_err(|e| prefixed(Call::ExitInitializationMode, e))?;
+        self.phase = if self.experiment.model_exchange { Phase::EventMode } else { Phase::StepComplete };
+        self.log_event("initialization done");
+        Ok(())
+    }
+
+    /// Checks every parameter against its allowed range, then lets the model
+    /// compute its initial state. Nothing changes when a check fails.
+    fn settle_initial_values(&mut self) -> FmiResult {
+        for v in Self::description().variables {
+            if v.causality != Causality::Parameter || v.range.is_unbounded() {
+                continue;
+            }
+            let value = match v.kind {
+                Kind::Real => self.model.get_real(v.vr)?,
+                Kind::Integer => self.model.get_integer(v.vr)? as f64,
+                _ => continue,
+            };
+            if !v.range.contains(value) {
+                return Err(out_of_range(v, value));
+            }
+        }
+        let mut model = self.model.clone();
+        model.initialize(&self.experiment)?;
+        self.model = model;
+        Ok(())
+    }
+
+    pub fn terminate(&mut self) -> FmiResult {
+        self.phase = Phase::Terminated;
+        self.log_event("terminated");
+        Ok(())
+    }
+
+    pub fn reset(&mut self) -> FmiResult {
+        self.model = M::at_start_values();
+        self.phase = Phase::Instantiated;
+        self.time = 0.0;
+        self.experiment = Experiment { model_exchange: self.experiment.model_exchange, ..Experiment::default() };
+        self.log_event("reset to the start values");
+        Ok(())
+    }
+
+    pub fn do_step(&mut self, current: f64, h: f64) -> FmiResult {
+        let name = Call::DoStep.name();
+        if !(h.is_finite() && h > 0.0) {
+            return Err(FmiError::error(format!("{name}: communicationStepSize = {h} must be finite and > 0")));
+        }
+        let tolerance = TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0);
+        if !current.is_finite() || (current - self.time).abs() > tolerance {
+            return Err(FmiError::error(format!(
+                "{name}: currentCommunicationPoint = {current} is not the current time {} of the instance",
+                self.time
+            )));
+        }
+        if !(current + h).is_finite() {
+            return Err(FmiError::error(format!("{name}: the step's end time {current} + {h} overflows")));
+        }
+        match self.model.do_step(h) {
+            Ok(()) => {
+                #[cfg(feature = "test-hooks")]
+                if std::mem::take(&mut self.panic_in_next_step) {
+                    panic!("test hook: forced panic inside the model's step (state advanced, time not)");
+                }
+                // Take the importer's time so that rounding never accumulates.
+                self.time = current + h;
+                let events = self.model.step_events();
+                if !events.is_empty() && self.log.allows("logEvents") {
+                    for e in events {
+                        self.log(Status::Ok, "logEvents", &format!("t = {}: {}", current + e.offset, e.what));
+                    }
+                }
+                Ok(())
+            }
+            Err(e) => {
+                if e.status == Status::Discard {
+                    self.phase = Phase::StepFailed;
+                }
+                Err(FmiError { status: e.status, message: format!("{name} at t = {current} with h = {h}: {}", e.message) })
+            }
+        }
+    }
+
+    pub fn real_status(&self, kind: i32) -> FmiResult<f64> {
+        match kind {
+            LAST_SUCCESSFUL_TIME => Ok(self.time),
+            _ => Err(unavailable_status(Call::GetRealStatus, kind)),
+        }
+    }
+
+    pub fn boolean_status(&self, kind: i32) -> FmiResult<bool> {
+        match kind {
+            // The model never asks the importer to stop.
+            TERMINATED => Ok(false),
+            _ => Err(unavailable_status(Call::GetBooleanStatus, kind)),
+        }
+    }
+}
+
+#[cold]
+fn out_of_range(v: &Variable, value: f64) -> FmiError {
+    let unit = if v.unit.is_empty() || v.unit == "1" { String::new() } else { format!(" {}", v.unit) };
+    FmiError::error(format!("{} = {value}{unit} is outside its allowed range {}", v.name, v.range))
+}
+
+#[cold]
+fn prefixed(call: Call, e: FmiError) -> FmiError {
+    FmiError { status: e.status, message: format!("{}: {}", call.name(), e.message) }
+}
+
+/// FMI 2.0: a status kind the FMU does not provide answers fmi2Discard.
+pub fn unavailable_status(call: Call, kind: i32) -> FmiError {
+    let what = match kind {
+        DO_STEP_STATUS | PENDING_STATUS => "steps are synchronous, so there is no pending step".to_string(),
+        _ => format!("status kind {kind} is not provided by {}", call.name()),
+    };
+    FmiError::discard(format!("{}: {what}", call.name()))
+}

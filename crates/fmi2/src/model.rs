@@ -1,0 +1,170 @@
+//! What a model provides to the FMI layer. The layer owns the state machine,
+//! the checks against the model description, logging and FMU states; a model
+//! only stores values, computes outputs and advances in time.
+
+use super::description::{Causality, ModelDescription, Start};
+use super::persist::{StateReader, StateWriter};
+use super::status::{FmiError, FmiResult};
+
+fn no_model_exchange() -> FmiError {
+    FmiError::error("this model does not implement Model Exchange")
+}
+
+/// What the importer said in `fmi2Instantiate` and `fmi2SetupExperiment`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Experiment {
+    /// The instance is a Model Exchange instance (the importer integrates).
+    pub model_exchange: bool,
+    pub tolerance: Option<f64>,
+    pub start_time: f64,
+    pub stop_time: Option<f64>,
+}
+
+/// Something that happened inside a communication step, `offset` seconds
+/// after its start. Static text: reporting costs nothing unless logged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Event {
+    pub offset: f64,
+    pub what: &'static str,
+}
+
+/// A type an Integer variable can be bound to: `i32`, or an enumeration
+/// type the generator emits from the model description.
+pub trait IntegerValue: Copy {
+    fn from_i32(x: i32) -> Option<Self>;
+    fn to_i32(self) -> i32;
+}
+
+impl IntegerValue for i32 {
+    fn from_i32(x: i32) -> Option<Self> {
+        Some(x)
+    }
+    fn to_i32(self) -> i32 {
+        self
+    }
+}
+
+/// Value access by value reference, and the variables' part of an FMU
+/// state: written by [`crate::bind_variables!`] from one binding per variable.
+/// The layer calls the setters only with value references of the right
+/// type, with values already checked against the description (finite, in
+/// range, a legal Boolean or enumeration value) and only where causality
+/// and phase allow the set.
+pub trait Variables {
+    fn get_real(&self, vr: u32) -> FmiResult<f64>;
+    fn set_real(&mut self, vr: u32, value: f64) -> FmiResult;
+    fn get_integer(&self, vr: u32) -> FmiResult<i32>;
+    fn set_integer(&mut self, vr: u32, value: i32) -> FmiResult;
+    fn get_boolean(&self, vr: u32) -> FmiResult<bool>;
+    fn set_boolean(&mut self, vr: u32, value: bool) -> FmiResult;
+    /// Every parameter and input, in the binding's order.
+    fn save_variables(&self, out: &mut StateWriter);
+    fn load_variables(&mut self, input: &mut StateReader) -> FmiResult;
+}
+
+pub trait Model: Variables + Clone + Default + 'static {
+    /// The table generated from this model's `modelDescription.xml`.
+    fn description() -> &'static ModelDescription;
+
+    /// The model's own state in an FMU state (what is not a variable), after
+    /// the variables; `load_state` runs after `load_variables`.
+    fn save_state(&self, out: &mut StateWriter);
+    fn load_state(&mut self, input: &mut StateReader) -> FmiResult;
+
+    /// First derivative of a continuous Real input over the next
+    /// communication step (`fmi2SetRealInputDerivatives`, order 1). The layer
+    /// has checked that `vr` is a Real input and the value finite.
+    fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult;
+
+    /// Checks what the description's ranges cannot say (relations between
+    /// values) and computes the initial state from parameters and inputs.
+    /// Called when initialization ends, and before outputs are read during
+    /// initialization. Must not change anything when it fails.
+    fn initialize(&mut self, experiment: &Experiment) -> FmiResult;
+
+    /// Advances the model over a communication step of length `h` > 0, the
+    /// inputs held at their current values. On failure the model must be
+    /// left as it was before the step.
+    fn do_step(&mut self, h: f64) -> FmiResult;
+
+    /// What happened inside the last step, for the `logEvents` category.
+    fn step_events(&self) -> &[Event] {
+        &[]
+    }
+
+    // Model Exchange. Slices have the lengths the description declares
+    // (`states`, `number_of_event_indicators`); the layer checks them.
+
+    fn get_continuous_states(&self, _x: &mut [f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    /// Must not change anything when it fails.
+    fn set_continuous_states(&mut self, _x: &[f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    fn get_derivatives(&self, _dx: &mut [f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    fn get_nominals(&self, _nominals: &mut [f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    fn get_event_indicators(&self, _z: &mut [f64]) -> FmiResult {
+        Err(no_model_exchange())
+    }
+
+    /// Whether the outputs can be computed from what the model holds now. The
+    /// layer asks only in the error state, where parameters may never have
+    /// passed initialization; a failure answers the get with fmi2Error.
+    fn outputs_defined(&self) -> FmiResult {
+        Ok(())
+    }
+
+    /// After the start values are set: a provisional state, so that outputs
+    /// read before initialization (in the error state, for diagnosis) are
+    /// defined. Initialization replaces it.
+    fn provisional_state(&mut self) {}
+
+    /// The model with every parameter and input at its start value.
+    fn at_start_values() -> Self {
+        let mut model = Self::default();
+        for v in Self::description().variables {
+            if !matches!(v.causality, Causality::Parameter | Causality::Input) {
+                continue;
+            }
+            // The start values are checked by build.rs and a test covers that
+            // every one is accepted, so a failure here cannot happen.
+            let _ = match v.start {
+                Start::Real(x) => model.set_real(v.vr, x),
+                Start::Integer(x) => model.set_integer(v.vr, x),
+                Start::Boolean(x) => model.set_boolean(v.vr, x),
+                Start::None => Ok(()),
+            };
+        }
+        model.provisional_state();
+        model
+    }
+}
+
+// What `bind_variables!` reports; cold, so that the binding's fast paths stay small.
+
+#[doc(hidden)]
+#[cold]
+pub fn unknown_vr(vr: u32) -> FmiError {
+    FmiError::error(format!("value reference {vr} is not a variable of this type"))
+}
+
+#[doc(hidden)]
+#[cold]
+pub fn not_settable(name: &str) -> FmiError {
+    FmiError::error(format!("{name} cannot be set"))
+}
+
+/// An Integer value for a field of type `T` (an enumeration: one of its items).
+#[doc(hidden)]
+pub fn integer_value<T: IntegerValue>(name: &str, value: i32) -> FmiResult<T> {
+    T::from_i32(value).ok_or_else(|| FmiError::error(format!("{name} = {value} is not a value of its enumeration")))
+}

@@ -1,0 +1,352 @@
+//! The converting span's data, one communication step, and the hooks the
+//! FMI layer calls (initialization, steps, Model Exchange, FMU states).
+
+use crate::description::{Real, DESCRIPTION};
+use crate::parameters::{Inputs, Parameters, Rates};
+use crate::physics::{self, Outputs};
+use crate::sensor::SensorScale;
+use crate::stepping;
+use fmi2::{Event, Experiment, FmiError, FmiResult, Model, StateReader, StateWriter};
+use solver::CompensatedSum;
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ConvertingSpan {
+    pub params: Parameters,
+    pub inputs: Inputs,
+    /// First derivatives of the inputs over the next step, when the importer
+    /// gives them (`fmi2SetRealInputDerivatives`); cleared after each step.
+    input_rates: Option<Inputs>,
+    /// The state: unstretched length of web in the span, m.
+    pub(crate) unstretched: CompensatedSum,
+    /// Rates of inputs that enter the outputs (dv_b/dt, dL/dt): the given
+    /// derivatives, or backward differences over the last step.
+    rates: Rates,
+    /// web_b.v and L at the start of the last step, and its length.
+    previous: Previous,
+    /// The step an adaptive method proposes next, kept between steps.
+    adaptive_step: f64,
+    /// Derived when initialization ends.
+    sensor: SensorScale,
+    tolerance: f64,
+    /// Where the tension crossed zero inside the last step (slack web).
+    slack_event: Option<Event>,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Previous {
+    speed_b: f64,
+    length: f64,
+    step: f64,
+}
+
+impl ConvertingSpan {
+    pub fn unstretched_length(&self) -> f64 {
+        self.unstretched.value()
+    }
+
+    /// m = rho_l2 * x [10].
+    pub fn web_mass(&self) -> f64 {
+        physics::web_mass(&self.params.span_web, self.unstretched.value())
+    }
+
+    /// dv_b/dt and dL/dt as the outputs use them [11]: the importer's input
+    /// derivatives when it gave them for this step, otherwise the backward
+    /// differences over the last communication step.
+    pub fn input_rates(&self) -> Rates {
+        match &self.input_rates {
+            Some(r) => Rates {
+                speed_b: r.speed_b,
+                length: physics::length_rate(&self.params, &self.inputs, r),
+            },
+            None => self.rates,
+        }
+    }
+
+    /// Every output now. Only the effects that read the input rates
+    /// (damping, web mass) pay for them.
+    #[inline]
+    pub fn outputs(&self) -> Outputs {
+        let p = &self.params;
+        let rates = if p.include_damping || p.include_mass { self.input_rates() } else { Rates::default() };
+        physics::outputs(p, &self.inputs, self.unstretched, rates, &self.sensor)
+    }
+
+    /// dx/dt [2] now, with the inputs as they are.
+    pub fn unstretched_rate(&self) -> f64 {
+        let length = physics::span_length(&self.params, &self.inputs);
+        physics::unstretched_rate(&self.inputs, physics::strain(length, self.unstretched, 0.0))
+    }
+
+    /// The bracket of [5] for a state x and inputs u.
+    pub(crate) fn effective_strain_at(&self, x: CompensatedSum, u: &Inputs, length_rate: f64) -> f64 {
+        let length = physics::span_length(&self.params, u);
+        physics::effective_strain(&self.params, u, length, x.value(), physics::strain(length, x, 0.0), length_rate)
+    }
+
+    /// Advances over one communication step of length h [3].
+    fn advance(&mut self, h: f64) -> FmiResult {
+        let start = self.inputs;
+        let rates = self.input_rates.filter(|r| *r != Inputs::default());
+        let step = stepping::Step { params: &self.params, start, rates, x0: self.unstretched, h };
+        let (next, adaptive_step) = step.integrate(self.params.solver, self.tolerance, self.adaptive_step)?;
+        let x = next.value();
+        let length_after = match &rates {
+            Some(r) => physics::span_length(&self.params, &start.advanced(r, h)),
+            None => physics::span_length(&self.params, &start),
+        };
+        if !physics::representable(length_after, x) {
+            let why = if start.speed_b < start.speed_a.min(0.0) {
+                "web fed in from both ends grows without bound"
+            } else {
+                "the method could not follow the span over this step"
+            };
+            return Err(FmiError::discard(format!(
+                "the unstretched length of web in the span would become {x} m (web_a.v = {}, web_b.v = {}): \
+                 {why}; take a shorter step",
+                start.speed_a, start.speed_b
+            )));
+        }
+        // Commit: nothing above changed the model.
+        self.slack_event = if self.params.prevent_negative_tension {
+            self.slack_crossing(&start, rates.as_ref(), next, h)
+        } else {
+            None
+        };
+        if self.params.include_mass || self.params.include_damping {
+            self.update_rates(&start, rates.as_ref(), h);
+        }
+        if let Some(r) = rates {
+            self.inputs = start.advanced(&r, h);
+        }
+        self.input_rates = None;
+        self.unstretched = next;
+        self.adaptive_step = adaptive_step;
+        Ok(())
+    }
+
+    /// The rates the outputs use after a step [11]: the given derivatives,
+    /// or backward differences between the starts of the last two steps.
+    /// Only the effects that read them (damping, web mass) pay for this.
+    fn update_rates(&mut self, start: &Inputs, given: Option<&Inputs>, h: f64) {
+        let p = &self.params;
+        let length = physics::span_length(p, start);
+        self.rates = match given {
+            Some(r) => Rates { speed_b: r.speed_b, length: physics::length_rate(p, &start.advanced(r, h), r) },
+            None if self.previous.step > 0.0 => Rates {
+                speed_b: (start.speed_b - self.previous.speed_b) / self.previous.step,
+                length: (length - self.previous.length) / self.previous.step,
+            },
+            None => Rates::default(),
+        };
+        self.previous = Previous { speed_b: start.speed_b, length, step: h };
+    }
+}
+
+/// Products of parameters that are each in range but together overflow
+/// (E*A, rho*A of a web of 1e300 m width) would make outputs infinite. Only
+/// the products the equations use: the span web's stiffness and linear
+/// density, and the arriving web's linear density with web mass.
+fn check_derived(p: &Parameters) -> FmiResult {
+    let w = &p.span_web;
+    let used = [
+        Some(("wp2: E*width*thickness", w.stiffness())),
+        Some(("wp2: density*width*thickness", w.linear_density())),
+        p.include_mass.then(|| ("wp1: density*width*thickness", p.incoming.linear_density())),
+    ];
+    match used.into_iter().flatten().find(|(_, value)| !value.is_finite()) {
+        Some((what, value)) => Err(FmiError::error(format!("{what} = {value} overflows: the parameters are each in range, not together"))),
+        None => Ok(()),
+    }
+}
+
+impl Model for ConvertingSpan {
+    fn description() -> &'static fmi2::description::ModelDescription {
+        &DESCRIPTION
+    }
+
+    fn save_state(&self, out: &mut StateWriter) {
+        out.bool(self.input_rates.is_some());
+        let mut rates = self.input_rates.unwrap_or_default();
+        for var in Real::ALL {
+            if let Some(rate) = Self::input_field(&mut rates, var) {
+                out.f64(*rate);
+            }
+        }
+        out.f64(self.unstretched.hi());
+        out.f64(self.unstretched.lo());
+        for x in [self.rates.speed_b, self.rates.length, self.previous.speed_b, self.previous.length, self.previous.step] {
+            out.f64(x);
+        }
+        out.f64(self.adaptive_step);
+        out.f64(self.tolerance);
+    }
+
+    fn load_state(&mut self, r: &mut StateReader) -> FmiResult {
+        let given = r.bool("input derivatives given")?;
+        let mut rates = Inputs::default();
+        for var in Real::ALL {
+            if let Some(rate) = Self::input_field(&mut rates, var) {
+                *rate = r.finite(var.name())?;
+            }
+        }
+        self.input_rates = given.then_some(rates);
+        self.unstretched = CompensatedSum::from_parts(r.finite("unstretched length")?, r.finite("unstretched length carry")?);
+        self.rates = Rates { speed_b: r.finite("dv_b/dt")?, length: r.finite("dL/dt")? };
+        self.previous = Previous {
+            speed_b: r.finite("previous web_b.v")?,
+            length: r.finite("previous length")?,
+            step: r.finite("previous step")?,
+        };
+        self.adaptive_step = r.finite("adaptive step")?;
+        self.tolerance = r.finite("effective tolerance")?;
+        // Derived from the parameters; a state saved before initialization
+        // ended gets the scale of its parameters, which initialization recomputes.
+        self.sensor = SensorScale::new(&self.params).unwrap_or_default();
+        Ok(())
+    }
+
+    fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult {
+        let var = Real::from_vr(vr).ok_or_else(|| fmi2::model::unknown_vr(vr))?;
+        if value != 0.0 {
+            stepping::method(self.params.solver, true).map_err(|e| prefixed(&format!("derivative of {} = {value}", var.name()), e))?;
+        }
+        let mut rates = self.input_rates.unwrap_or_default();
+        *Self::input_field(&mut rates, var).ok_or_else(|| FmiError::error(format!("{} is not an input", var.name())))? = value;
+        self.input_rates = Some(rates);
+        Ok(())
+    }
+
+    fn initialize(&mut self, experiment: &Experiment) -> FmiResult {
+        let p = &self.params;
+        let length = physics::span_length(p, &self.inputs);
+        if !(length > 0.0) {
+            return Err(FmiError::error(format!(
+                "variableLength: the span length |frame_b - frame_a| = {length} m must be > 0 (the rollers coincide)"
+            )));
+        }
+        check_derived(p)?;
+        let strain = if p.start_at_equilibrium {
+            physics::equilibrium_strain(&self.inputs).ok_or_else(|| {
+                FmiError::error(format!(
+                    "startAtEquilibrium: the inputs web_a.v = {} m/s, web_b.v = {} m/s, web_a.eps = {} have no steady state \
+                     (1+eps_b) = (v_b/v_a)(1+eps_a) > 0: the speeds must have the same sign, or web_a.v = 0; \
+                     or set startAtEquilibrium = false and eps_start",
+                    self.inputs.speed_a, self.inputs.speed_b, self.inputs.strain_a
+                ))
+            })?
+        } else {
+            p.strain_start
+        };
+        if experiment.model_exchange {
+            // Model Exchange gives the current inputs only, not their rates.
+            if p.include_mass {
+                return Err(FmiError::error(
+                    "includeMass needs dv_b/dt (web_b.v's rate), which Model Exchange does not provide: \
+                     use Co-Simulation (input derivatives or the documented estimate) or set includeMass = false",
+                ));
+            }
+            if p.include_damping && p.variable_length {
+                return Err(FmiError::error(
+                    "includeDamping with variableLength needs dL/dt (the rollers' speeds), which Model Exchange \
+                     does not provide: use Co-Simulation or switch one of them off",
+                ));
+            }
+        }
+        stepping::method(p.solver, self.input_rates.is_some_and(|r| r != Inputs::default()))?;
+        self.sensor = SensorScale::new(p)
+            .ok_or_else(|| FmiError::error(format!("toUnitV = {} or toUnitF = {} has no unit", p.speed_unit, p.force_unit)))?;
+        self.tolerance = effective_tolerance(p.tolerance, experiment.tolerance);
+        self.unstretched = physics::unstretched_length(length, strain);
+        self.rates = Rates::default();
+        self.previous = Previous::default();
+        self.adaptive_step = 0.0;
+        Ok(())
+    }
+
+    fn do_step(&mut self, h: f64) -> FmiResult {
+        self.advance(h)
+    }
+
+    fn outputs_defined(&self) -> FmiResult {
+        check_derived(&self.params)?;
+        let length = physics::span_length(&self.params, &self.inputs);
+        if length > 0.0 && physics::representable(length, self.unstretched.value()) {
+            Ok(())
+        } else {
+            Err(FmiError::error(format!(
+                "outputs are not defined for a span length of {length} m with {} m of unstretched web",
+                self.unstretched.value()
+            )))
+        }
+    }
+
+    /// Unstrained web in the span until initialization computes the start.
+    fn provisional_state(&mut self) {
+        self.unstretched = physics::unstretched_length(self.params.span_length, 0.0);
+    }
+
+    fn step_events(&self) -> &[Event] {
+        self.slack_event.as_slice()
+    }
+
+    // Model Exchange [13]: the importer integrates the unstretched length.
+
+    fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
+        x[0] = self.unstretched.value();
+        Ok(())
+    }
+
+    fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
+        if !physics::representable(physics::span_length(&self.params, &self.inputs), x[0]) {
+            // An integrator's trial value, not a web: ask for a smaller step.
+            return Err(FmiError::discard(format!(
+                "unstretchedLength = {} m is not a length of web this span can hold (0 < x < L/2^-52)",
+                x[0]
+            )));
+        }
+        self.unstretched = CompensatedSum::from_parts(x[0], 0.0);
+        Ok(())
+    }
+
+    fn get_derivatives(&self, dx: &mut [f64]) -> FmiResult {
+        dx[0] = self.unstretched_rate();
+        Ok(())
+    }
+
+    /// The span length: the unstretched length is about that big.
+    fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
+        let length = physics::span_length(&self.params, &self.inputs);
+        nominals[0] = if length > 0.0 { length } else { 1.0 };
+        Ok(())
+    }
+
+    /// The bracket of [5] for a slack web (it crosses zero where the web goes
+    /// slack or takes up tension again); a constant 1 (never an event) otherwise.
+    fn get_event_indicators(&self, z: &mut [f64]) -> FmiResult {
+        z[0] = if self.params.prevent_negative_tension {
+            self.effective_strain_at(self.unstretched, &self.inputs, 0.0)
+        } else {
+            1.0
+        };
+        Ok(())
+    }
+}
+
+/// The tolerance rule [12]: the parameter `tolerance` when the user set it;
+/// left at its start value, the tolerance of fmi2SetupExperiment if the
+/// importer gave one.
+pub fn effective_tolerance(parameter: f64, experiment: Option<f64>) -> f64 {
+    let default = match DESCRIPTION.variable(Real::tolerance.vr()).map(|v| v.start) {
+        Some(fmi2::description::Start::Real(x)) => x,
+        _ => parameter,
+    };
+    match experiment {
+        Some(t) if parameter == default => t,
+        _ => parameter,
+    }
+}
+
+#[cold]
+fn prefixed(what: &str, e: FmiError) -> FmiError {
+    FmiError { status: e.status, message: format!("{what}: {}", e.message) }
+}

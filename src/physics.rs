@@ -1,0 +1,183 @@
+//! The equations of the converting span. Numbers in brackets refer to the
+//! equations of the model documentation (fmu/documentation/index.html).
+//!
+//! The state is the unstretched length of web in the span, x = L/(1+eps_b).
+
+use crate::parameters::{Inputs, Parameters, Rates, WebProperties};
+use crate::sensor::SensorScale;
+use solver::{decay_integral, CompensatedSum};
+
+/// Every output of the span at one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outputs {
+    /// L [9], m.
+    pub length: f64,
+    /// eps_b [1].
+    pub strain: f64,
+    /// T [5], N: the force at the entry end a.
+    pub tension: f64,
+    /// F_b [10], N: the force at the exit end b.
+    pub exit_force: f64,
+    /// Stress on the unstrained cross-section of wp2 [8], Pa.
+    pub stress: f64,
+    /// The sensor outputs v and T in the chosen units [7] (0 with the sensor off).
+    pub sensor_speed: f64,
+    pub sensor_tension: f64,
+}
+
+/// The outputs [1], [5], [7]-[10] for the state x, the inputs u and the
+/// rates of the inputs. Effects that are off are not computed at all.
+#[inline]
+pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sensor: &SensorScale) -> Outputs {
+    let length = span_length(p, u);
+    let strain = strain(length, x, 0.0);
+    let tension = tension(p, effective_strain(p, u, length, x.value(), strain, rates.length));
+    let exit_force =
+        if p.include_mass { tension + momentum_difference(p, u, strain, x.value(), rates.speed_b) } else { tension };
+    let sensor_on = |value: f64| if p.use_sensor { value } else { 0.0 };
+    Outputs {
+        length,
+        strain,
+        tension,
+        exit_force,
+        stress: tension / p.span_web.area(),
+        sensor_speed: sensor_on(u.speed_b * sensor.speed),
+        sensor_tension: sensor_on(tension * sensor.force),
+    }
+}
+
+/// The bracket of [5]: the strain, plus d_r2 times its rate [4] with damping.
+#[inline]
+pub fn effective_strain(p: &Parameters, u: &Inputs, length: f64, x: f64, strain_b: f64, length_rate: f64) -> f64 {
+    if p.include_damping {
+        let rate = unstretched_rate(u, strain_b);
+        strain_b + p.span_web.retardation_time * strain_rate(length, length_rate, x, strain_b, rate)
+    } else {
+        strain_b
+    }
+}
+
+/// Span length [9]: the parameter L, or |r_b - r_a| with `variableLength`.
+pub fn span_length(p: &Parameters, u: &Inputs) -> f64 {
+    if p.variable_length {
+        let [dx, dy] = u.span_vector();
+        dx.hypot(dy)
+    } else {
+        p.span_length
+    }
+}
+
+/// dL/dt [9] when the roller positions move at `rates` (0 for a fixed L).
+pub fn length_rate(p: &Parameters, u: &Inputs, rates: &Inputs) -> f64 {
+    if !p.variable_length {
+        return 0.0;
+    }
+    let [dx, dy] = u.span_vector();
+    let [rx, ry] = rates.span_vector();
+    (dx * rx + dy * ry) / dx.hypot(dy)
+}
+
+/// Span strain, eps_b = L/x - 1 [1], written (L - x)/x with x = x0 + y:
+/// with x0 a compensated sum, `L - hi` is exact near L and the strain keeps
+/// full relative precision even at strains of 1e-6.
+pub fn strain(length: f64, x0: CompensatedSum, y: f64) -> f64 {
+    (((length - x0.hi()) - x0.lo()) - y) / (x0.value() + y)
+}
+
+/// Whether x is a state the equations can evaluate: positive, and short
+/// enough that 1 + eps_b = L/x is not lost to rounding (x < L/2^-52). Beyond
+/// that the strain is -1 to double precision and the rates divide by zero:
+/// web fed in from both ends for too long.
+pub fn representable(length: f64, x: f64) -> bool {
+    x > 0.0 && x.is_finite() && length > f64::EPSILON * x
+}
+
+/// The unstretched length that holds strain `eps` in a span of length L [1]:
+/// L/(1+eps) = L - L*eps/(1+eps), split so that no digit of eps is lost.
+pub fn unstretched_length(length: f64, eps: f64) -> CompensatedSum {
+    CompensatedSum::two_sum(length, -length * eps / (1.0 + eps))
+}
+
+/// The strain of the web entering through a: eps_a for forward flow; web
+/// leaving backwards through a carries the span's strain.
+fn strain_in(u: &Inputs, strain_b: f64) -> f64 {
+    if u.speed_a >= 0.0 {
+        u.strain_a
+    } else {
+        strain_b
+    }
+}
+
+/// Unstretched length entering through a per second, q_a [2].
+pub fn inflow(u: &Inputs, strain_b: f64) -> f64 {
+    u.speed_a / (1.0 + strain_in(u, strain_b))
+}
+
+/// dx/dt = q_a - q_b [2], unstretched length per second. Web leaving
+/// through b carries the span's strain, and so does web entering
+/// backwards at b (v_b < 0).
+///
+/// With eps_in the strain entering at a, the difference
+/// v_a/(1+eps_in) - v_b/(1+eps_b) is formed as
+/// ((v_a - v_b) + (v_a*eps_b - v_b*eps_in)) / ((1+eps_in)(1+eps_b)),
+/// which does not cancel when v_a ~ v_b.
+pub fn unstretched_rate(u: &Inputs, strain_b: f64) -> f64 {
+    let (va, vb, eps_in) = (u.speed_a, u.speed_b, strain_in(u, strain_b));
+    ((va - vb) + (va * strain_b - vb * eps_in)) / ((1.0 + eps_in) * (1.0 + strain_b))
+}
+
+/// lambda = -d(dx/dt)/dx = (v_b - min(v_a, 0)) / L [3]: the inverse time
+/// constant of the span, negative when web is fed in from both ends.
+pub fn decay_rate(length: f64, u: &Inputs) -> f64 {
+    (u.speed_b - u.speed_a.min(0.0)) / length
+}
+
+/// The exact step over h with inputs held and L constant [3]: the balance
+/// is then linear in x with constant coefficients.
+pub fn exact_step(length: f64, u: &Inputs, x: CompensatedSum, h: f64) -> CompensatedSum {
+    let rate = unstretched_rate(u, strain(length, x, 0.0));
+    x.plus(rate * decay_integral(decay_rate(length, u), h))
+}
+
+/// d(eps_b)/dt = dL/dt / x - (1+eps_b)^2 / L * dx/dt [4].
+pub fn strain_rate(length: f64, length_rate: f64, x: f64, strain_b: f64, unstretched_rate: f64) -> f64 {
+    length_rate / x - (1.0 + strain_b) * (1.0 + strain_b) / length * unstretched_rate
+}
+
+/// Span tension [5] from the strain (plus d_r * strain rate with damping),
+/// clamped at 0 for a slack web with `preventNegativeTension`.
+pub fn tension(p: &Parameters, effective_strain: f64) -> f64 {
+    let t = p.span_web.stiffness() * effective_strain;
+    if p.prevent_negative_tension {
+        t.max(0.0)
+    } else {
+        t
+    }
+}
+
+/// Web mass in the span, m = rho_l2 * x [10].
+pub fn web_mass(web: &WebProperties, x: f64) -> f64 {
+    web.linear_density() * x
+}
+
+/// F_b - F_a = q_a (rho_in v_b - rho_in' v_a) + m dv_b/dt [10]: the momentum
+/// the span's web gains per second. Web entering at a is wp1 (rho_l1);
+/// web leaving backwards through a is the span's own (rho_l2).
+pub fn momentum_difference(p: &Parameters, u: &Inputs, strain_b: f64, x: f64, speed_b_rate: f64) -> f64 {
+    let rho_span = p.span_web.linear_density();
+    let rho_in = if u.speed_a >= 0.0 { p.incoming.linear_density() } else { rho_span };
+    inflow(u, strain_b) * (rho_span * u.speed_b - rho_in * u.speed_a) + web_mass(&p.span_web, x) * speed_b_rate
+}
+
+/// Strain at the steady state of the inputs [6]:
+/// 1 + eps_b = (v_b/v_a)(1 + eps_a), formed as (v_b - v_a + v_b*eps_a)/v_a;
+/// eps_b = eps_a when v_a = 0. `None` where no steady state exists
+/// (speeds of opposite signs, or a ratio that overflows).
+pub fn equilibrium_strain(u: &Inputs) -> Option<f64> {
+    let Inputs { speed_a: va, strain_a, speed_b: vb, .. } = *u;
+    if va == 0.0 {
+        return Some(strain_a);
+    }
+    let eps = (vb - va + vb * strain_a) / va;
+    (vb / va > 0.0 && eps.is_finite() && eps > -1.0).then_some(eps)
+}

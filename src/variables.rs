@@ -1,0 +1,61 @@
+//! Each variable of modelDescription.xml bound to its field, once: get,
+//! set, the FMU state and input derivatives follow from this table (see
+//! `fmi2::bind_variables!`). Ranges and types come from the XML; equations
+//! for computed variables live in `physics`.
+
+use crate::description::{Boolean, Integer, Real};
+use crate::parameters::Inputs;
+use crate::ConvertingSpan;
+
+fmi2::bind_variables! {
+    model: ConvertingSpan,
+    inputs: Inputs,
+    real {
+        L: param(params.span_length),
+        wp1_E: param(params.incoming.modulus),
+        wp1_thickness: param(params.incoming.thickness),
+        wp1_width: param(params.incoming.width),
+        wp1_density: param(params.incoming.density),
+        wp1_d_r: param(params.incoming.retardation_time),
+        wp2_E: param(params.span_web.modulus),
+        wp2_thickness: param(params.span_web.thickness),
+        wp2_width: param(params.span_web.width),
+        wp2_density: param(params.span_web.density),
+        wp2_d_r: param(params.span_web.retardation_time),
+        eps_start: param(params.strain_start),
+        tolerance: param(params.tolerance),
+        web_a_v: input(speed_a),
+        web_a_eps: input(strain_a),
+        web_b_v: input(speed_b),
+        frame_a_x: input(frame_a[0]),
+        frame_a_y: input(frame_a[1]),
+        frame_b_x: input(frame_b[0]),
+        frame_b_y: input(frame_b[1]),
+        v: computed(outputs().sensor_speed),
+        T: computed(outputs().sensor_tension),
+        web_a_F: computed(outputs().tension),
+        web_b_F: computed(outputs().exit_force),
+        web_b_eps: computed(outputs().strain),
+        summary_Tension: computed(outputs().tension),
+        summary_Length: computed(outputs().length),
+        summary_Strain: computed(outputs().strain),
+        summary_Stress: computed(outputs().stress),
+        unstretchedLength: computed(unstretched_length()),
+        m_web: computed(web_mass()),
+        der_unstretchedLength: computed(unstretched_rate()),
+    }
+    integer {
+        toUnitV: param(params.speed_unit),
+        toUnitF: param(params.force_unit),
+        solver: param(params.solver),
+        substeps: param(params.substeps),
+    }
+    boolean {
+        includeDamping: param(params.include_damping),
+        preventNegativeTension: param(params.prevent_negative_tension),
+        includeMass: param(params.include_mass),
+        variableLength: param(params.variable_length),
+        startAtEquilibrium: param(params.start_at_equilibrium),
+        useSensor: param(params.use_sensor),
+    }
+}
