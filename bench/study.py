@@ -853,19 +853,56 @@ def save(fig, path):
         pass
 
 
-def plot_pareto(native, scenes, path):
+def variant_panels(scenes, height):
+    """A figure with one panel per scene variant, four to a row."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     variants = [variant_name(s, d) for s in scenes for d in s.derivs]
     cols = 4
     rows = math.ceil(len(variants) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.5 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, height * rows), squeeze=False)
+    return fig, axes, variants
+
+
+def variant_points(native, v, h=None):
+    """The successful runs of a variant (at step h, if given); a "+derivs"
+    variant also shows Model Exchange's runs of its scene."""
+    ok = [p for p in native["grid"] if p["status"] == 0 and (h is None or p["h"] == h)]
+    pts = [p for p in ok if p["variant"] == v]
+    if v.endswith("+derivs"):
+        pts += [p for p in ok if p["variant"] == v.split("+")[0] and p["interface"] == "ME"]
+    return pts
+
+
+def finish_panel(ax, v, scenes, xlabel):
+    ax.set_title(v + ("" if any(s.me for s in scenes if s.name == v.split("+")[0]) else " (Model Exchange refuses includeMass)"),
+                 fontsize=10)
+    ax.set_ylim(1e-16, 1)
+    ax.grid(True, which="major", alpha=0.3)
+    ax.set_xlabel(xlabel, fontsize=8)
+    ax.set_ylabel("max relative error", fontsize=8)
+    ax.tick_params(labelsize=7)
+
+
+def finish_figure(fig, axes, n_panels, ncol, title, bottom, path):
+    """Blanks the unused panels, gives one legend for all panels and the title, and saves."""
+    for ax in list(axes.flat)[n_panels:]:
+        ax.axis("off")
+    labels = {}
+    for ax in axes.flat:
+        for hd, lb in zip(*ax.get_legend_handles_labels()):
+            labels.setdefault(lb, hd)
+    fig.legend(list(labels.values()), list(labels.keys()), loc="lower center", ncol=min(ncol, len(labels)), fontsize=8)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout(rect=(0, bottom, 1, 0.96))
+    save(fig, path)
+
+
+def plot_pareto(native, scenes, path):
+    fig, axes, variants = variant_panels(scenes, 3.5)
     for ax, v in zip(axes.flat, variants):
-        pts = [p for p in native["grid"] if p["variant"] == v and p["status"] == 0 and p["h"] == PARETO_STEP]
-        if v.endswith("+derivs"):
-            pts += [p for p in native["grid"] if p["variant"] == v.split("+")[0] and p["status"] == 0
-                    and p["h"] == PARETO_STEP and p["interface"] == "ME"]
+        pts = variant_points(native, v, PARETO_STEP)
         front, best = [], float("inf")
         for p in sorted(pts, key=lambda p: (p["ns_per_step"], p["error"])):
             if p["error"] < best:
@@ -885,42 +922,21 @@ def plot_pareto(native, scenes, path):
             for p in ps:
                 ax.loglog([p["ns_per_step"]], [max(p["error"], 1e-16)], marker, color="k", ms=9 if marker == "*" else 5,
                           label=m + (" (= rosenbrock 1e-8)" if v.endswith("+derivs") and m == "auto" else ""))
-        ax.set_title(v + ("" if any(s.me for s in scenes if s.name == v.split("+")[0]) else " (Model Exchange refuses includeMass)"),
-                     fontsize=10)
-        ax.set_ylim(1e-16, 1)
+        finish_panel(ax, v, scenes, "ns per communication step (native, h = 1 ms)")
         ax.set_xlim(40, 3e6)
-        ax.grid(True, which="major", alpha=0.3)
-        ax.set_xlabel("ns per communication step (native, h = 1 ms)", fontsize=8)
-        ax.set_ylabel("max relative error", fontsize=8)
-        ax.tick_params(labelsize=7)
-    for ax in list(axes.flat)[len(variants):]:
-        ax.axis("off")
-    labels = {}
-    for ax in axes.flat:
-        for hd, lb in zip(*ax.get_legend_handles_labels()):
-            labels.setdefault(lb, hd)
-    fig.legend(list(labels.values()), list(labels.keys()), loc="lower center", ncol=min(7, len(labels)), fontsize=8)
-    fig.suptitle("Error against cost: every solver at tolerances 1e-3..1e-12 (fixed-step: sub-steps), CVode rtol 1e-4..1e-14", fontsize=11)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.96))
-    save(fig, path)
+    finish_figure(fig, axes, len(variants), 7,
+                  "Error against cost: every solver at tolerances 1e-3..1e-12 (fixed-step: sub-steps), CVode rtol 1e-4..1e-14",
+                  0.05, path)
 
 
 def plot_comm_step(native, scenes, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    variants = [variant_name(s, d) for s in scenes for d in s.derivs]
-    cols = 4
-    rows = math.ceil(len(variants) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.3 * rows), squeeze=False)
+    fig, axes, variants = variant_panels(scenes, 3.3)
     picks = [("auto", None, "k", "s-"), ("exact", None, "k", "*--"), ("rosenbrock", 1e-6, "tab:blue", "o-"),
              ("rosenbrock", 1e-10, "tab:blue", "o--"), ("dopri5", 1e-8, "tab:orange", "o-"), ("rk4", 1, "tab:green", "o-"),
              ("euler", 1, "tab:red", "o-"), ("euler", 256, "tab:red", "o--"), ("cvode", 1e-6, "tab:purple", "o-"),
              ("cvode", 1e-10, "tab:purple", "o--")]
     for ax, v in zip(axes.flat, variants):
-        pts = [p for p in native["grid"] if p["variant"] == v and p["status"] == 0]
-        if v.endswith("+derivs"):
-            pts += [p for p in native["grid"] if p["variant"] == v.split("+")[0] and p["status"] == 0 and p["interface"] == "ME"]
+        pts = variant_points(native, v)
         for m, setting, color, style in picks:
             ps = sorted([p for p in pts if p["method"] == m and (setting is None or p["setting"] == setting)], key=lambda p: p["h"])
             if ps:
@@ -928,23 +944,9 @@ def plot_comm_step(native, scenes, path):
                 if m in ("rk4", "euler"):
                     name = f"{m} {setting} sub-step" + ("s" if setting > 1 else "")
                 ax.loglog([p["h"] for p in ps], [max(p["error"], 1e-16) for p in ps], style, color=color, ms=4, lw=1, label=name)
-        ax.set_title(v + ("" if any(s.me for s in scenes if s.name == v.split("+")[0]) else " (Model Exchange refuses includeMass)"),
-                     fontsize=10)
-        ax.set_ylim(1e-16, 1)
-        ax.grid(True, which="major", alpha=0.3)
-        ax.set_xlabel("communication step h (s)", fontsize=8)
-        ax.set_ylabel("max relative error", fontsize=8)
-        ax.tick_params(labelsize=7)
-    for ax in list(axes.flat)[len(variants):]:
-        ax.axis("off")
-    labels = {}
-    for ax in axes.flat:
-        for hd, lb in zip(*ax.get_legend_handles_labels()):
-            labels.setdefault(lb, hd)
-    fig.legend(list(labels.values()), list(labels.keys()), loc="lower center", ncol=min(6, len(labels)), fontsize=8)
-    fig.suptitle("Error against communication step (a missing point: the method refused the step as unstable)", fontsize=11)
-    fig.tight_layout(rect=(0, 0.07, 1, 0.96))
-    save(fig, path)
+        finish_panel(ax, v, scenes, "communication step h (s)")
+    finish_figure(fig, axes, len(variants), 6,
+                  "Error against communication step (a missing point: the method refused the step as unstable)", 0.07, path)
 
 
 def plot_fmpy(fmpy_results, scenes, path):
