@@ -57,7 +57,7 @@ from collections import defaultdict
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "target" / "bench" / "step_cost"
+OUT = ROOT / "target" / "step_cost"
 SYMBOLS_TARGET = ROOT / "target" / "symbols"
 LIB_NAME = "libconverting_span.so"
 INPUTS, OUTPUTS = ("web_a.v", "web_a.eps", "web_b.v"), ("v", "T")
