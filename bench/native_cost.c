@@ -1,4 +1,4 @@
-/* Native costs for the accuracy-cost study (tests/bench/study.py).
+/* Native costs for the accuracy-cost study (bench/study.py).
  *
  *   native_cost step ROUNDS STEPS  TARGET...
  *   native_cost calls ROUNDS CALLS cs|all TARGET
@@ -9,7 +9,7 @@
  *
  * step: ns per communication step as an importer pays it: set the three
  *   inputs {a, b, c + d*(k mod 1024)/1024}, fmi2DoStep(h = 1e-3), get the two
- *   outputs (the loop of tests/bench/step_cost.c). Several targets are measured
+ *   outputs (the loop of bench/step_cost.c). Several targets are measured
  *   side by side: every round visits every target once (STEPS steps each).
  *   Prints per target: the ns/step of every round, then the final outputs.
  * calls: ns per call of the FMI functions an importer calls per step

@@ -1,4 +1,4 @@
-/* The native side of the accuracy-cost study (tests/bench/study.py): runs one
+/* The native side of the accuracy-cost study (bench/study.py): runs one
  * scene with many methods through the FMU's C API, as an importer does, and
  * times them side by side.
  *

@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """What accuracy costs: every way to integrate ConvertingSpan, error against cost.
 
-    .venv/bin/python tests/bench/study.py [--rounds R] [--quick] [--no-fmpy]
-                                          [--dahlquist LIB.so ...] [--publish]
+    .venv/bin/python bench/study.py [--rounds R] [--quick] [--no-fmpy]
+                                    [--dahlquist LIB.so ...] [--publish]
 
 One command: builds and packages the FMU (fmu/package.py), compiles the native
-drivers (tests/bench/study_driver.c, native_cost.c) with gcc against FMPy's
+drivers (bench/study_driver.c, native_cost.c) with gcc against FMPy's
 FMI 2.0 headers and Debian's SUNDIALS (libsundials-dev, installed with apt-get
 when it is missing), runs the grid and writes into target/study/:
 
@@ -15,7 +15,7 @@ when it is missing), runs the grid and writes into target/study/:
   comm_step.png  error against communication step
   fmpy.png       error against whole-run wall time through FMPy
 
---publish copies study.md, pareto.png and comm_step.png to tests/bench/results/
+--publish copies study.md, pareto.png and comm_step.png to bench/results/
 (the files the README shows).
 
 Scenes (inputs given as functions of time; the FMU sees them at its
@@ -68,8 +68,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-BENCH = ROOT / "tests" / "bench"
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "bench"
 OUT = ROOT / "target" / "study"
 PUBLISH = BENCH / "results"
 
@@ -853,19 +853,56 @@ def save(fig, path):
         pass
 
 
-def plot_pareto(native, scenes, path):
+def variant_panels(scenes, height):
+    """A figure with one panel per scene variant, four to a row."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     variants = [variant_name(s, d) for s in scenes for d in s.derivs]
     cols = 4
     rows = math.ceil(len(variants) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.5 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, height * rows), squeeze=False)
+    return fig, axes, variants
+
+
+def variant_points(native, v, h=None):
+    """The successful runs of a variant (at step h, if given); a "+derivs"
+    variant also shows Model Exchange's runs of its scene."""
+    ok = [p for p in native["grid"] if p["status"] == 0 and (h is None or p["h"] == h)]
+    pts = [p for p in ok if p["variant"] == v]
+    if v.endswith("+derivs"):
+        pts += [p for p in ok if p["variant"] == v.split("+")[0] and p["interface"] == "ME"]
+    return pts
+
+
+def finish_panel(ax, v, scenes, xlabel):
+    ax.set_title(v + ("" if any(s.me for s in scenes if s.name == v.split("+")[0]) else " (Model Exchange refuses includeMass)"),
+                 fontsize=10)
+    ax.set_ylim(1e-16, 1)
+    ax.grid(True, which="major", alpha=0.3)
+    ax.set_xlabel(xlabel, fontsize=8)
+    ax.set_ylabel("max relative error", fontsize=8)
+    ax.tick_params(labelsize=7)
+
+
+def finish_figure(fig, axes, n_panels, ncol, title, bottom, path):
+    """Blanks the unused panels, gives one legend for all panels and the title, and saves."""
+    for ax in list(axes.flat)[n_panels:]:
+        ax.axis("off")
+    labels = {}
+    for ax in axes.flat:
+        for hd, lb in zip(*ax.get_legend_handles_labels()):
+            labels.setdefault(lb, hd)
+    fig.legend(list(labels.values()), list(labels.keys()), loc="lower center", ncol=min(ncol, len(labels)), fontsize=8)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout(rect=(0, bottom, 1, 0.96))
+    save(fig, path)
+
+
+def plot_pareto(native, scenes, path):
+    fig, axes, variants = variant_panels(scenes, 3.5)
     for ax, v in zip(axes.flat, variants):
-        pts = [p for p in native["grid"] if p["variant"] == v and p["status"] == 0 and p["h"] == PARETO_STEP]
-        if v.endswith("+derivs"):
-            pts += [p for p in native["grid"] if p["variant"] == v.split("+")[0] and p["status"] == 0
-                    and p["h"] == PARETO_STEP and p["interface"] == "ME"]
+        pts = variant_points(native, v, PARETO_STEP)
         front, best = [], float("inf")
         for p in sorted(pts, key=lambda p: (p["ns_per_step"], p["error"])):
             if p["error"] < best:
@@ -885,42 +922,21 @@ def plot_pareto(native, scenes, path):
             for p in ps:
                 ax.loglog([p["ns_per_step"]], [max(p["error"], 1e-16)], marker, color="k", ms=9 if marker == "*" else 5,
                           label=m + (" (= rosenbrock 1e-8)" if v.endswith("+derivs") and m == "auto" else ""))
-        ax.set_title(v + ("" if any(s.me for s in scenes if s.name == v.split("+")[0]) else " (Model Exchange refuses includeMass)"),
-                     fontsize=10)
-        ax.set_ylim(1e-16, 1)
+        finish_panel(ax, v, scenes, "ns per communication step (native, h = 1 ms)")
         ax.set_xlim(40, 3e6)
-        ax.grid(True, which="major", alpha=0.3)
-        ax.set_xlabel("ns per communication step (native, h = 1 ms)", fontsize=8)
-        ax.set_ylabel("max relative error", fontsize=8)
-        ax.tick_params(labelsize=7)
-    for ax in list(axes.flat)[len(variants):]:
-        ax.axis("off")
-    labels = {}
-    for ax in axes.flat:
-        for hd, lb in zip(*ax.get_legend_handles_labels()):
-            labels.setdefault(lb, hd)
-    fig.legend(list(labels.values()), list(labels.keys()), loc="lower center", ncol=min(7, len(labels)), fontsize=8)
-    fig.suptitle("Error against cost: every solver at tolerances 1e-3..1e-12 (fixed-step: sub-steps), CVode rtol 1e-4..1e-14", fontsize=11)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.96))
-    save(fig, path)
+    finish_figure(fig, axes, len(variants), 7,
+                  "Error against cost: every solver at tolerances 1e-3..1e-12 (fixed-step: sub-steps), CVode rtol 1e-4..1e-14",
+                  0.05, path)
 
 
 def plot_comm_step(native, scenes, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    variants = [variant_name(s, d) for s in scenes for d in s.derivs]
-    cols = 4
-    rows = math.ceil(len(variants) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.3 * rows), squeeze=False)
+    fig, axes, variants = variant_panels(scenes, 3.3)
     picks = [("auto", None, "k", "s-"), ("exact", None, "k", "*--"), ("rosenbrock", 1e-6, "tab:blue", "o-"),
              ("rosenbrock", 1e-10, "tab:blue", "o--"), ("dopri5", 1e-8, "tab:orange", "o-"), ("rk4", 1, "tab:green", "o-"),
              ("euler", 1, "tab:red", "o-"), ("euler", 256, "tab:red", "o--"), ("cvode", 1e-6, "tab:purple", "o-"),
              ("cvode", 1e-10, "tab:purple", "o--")]
     for ax, v in zip(axes.flat, variants):
-        pts = [p for p in native["grid"] if p["variant"] == v and p["status"] == 0]
-        if v.endswith("+derivs"):
-            pts += [p for p in native["grid"] if p["variant"] == v.split("+")[0] and p["status"] == 0 and p["interface"] == "ME"]
+        pts = variant_points(native, v)
         for m, setting, color, style in picks:
             ps = sorted([p for p in pts if p["method"] == m and (setting is None or p["setting"] == setting)], key=lambda p: p["h"])
             if ps:
@@ -928,23 +944,9 @@ def plot_comm_step(native, scenes, path):
                 if m in ("rk4", "euler"):
                     name = f"{m} {setting} sub-step" + ("s" if setting > 1 else "")
                 ax.loglog([p["h"] for p in ps], [max(p["error"], 1e-16) for p in ps], style, color=color, ms=4, lw=1, label=name)
-        ax.set_title(v + ("" if any(s.me for s in scenes if s.name == v.split("+")[0]) else " (Model Exchange refuses includeMass)"),
-                     fontsize=10)
-        ax.set_ylim(1e-16, 1)
-        ax.grid(True, which="major", alpha=0.3)
-        ax.set_xlabel("communication step h (s)", fontsize=8)
-        ax.set_ylabel("max relative error", fontsize=8)
-        ax.tick_params(labelsize=7)
-    for ax in list(axes.flat)[len(variants):]:
-        ax.axis("off")
-    labels = {}
-    for ax in axes.flat:
-        for hd, lb in zip(*ax.get_legend_handles_labels()):
-            labels.setdefault(lb, hd)
-    fig.legend(list(labels.values()), list(labels.keys()), loc="lower center", ncol=min(6, len(labels)), fontsize=8)
-    fig.suptitle("Error against communication step (a missing point: the method refused the step as unstable)", fontsize=11)
-    fig.tight_layout(rect=(0, 0.07, 1, 0.96))
-    save(fig, path)
+        finish_panel(ax, v, scenes, "communication step h (s)")
+    finish_figure(fig, axes, len(variants), 6,
+                  "Error against communication step (a missing point: the method refused the step as unstable)", 0.07, path)
 
 
 def plot_fmpy(fmpy_results, scenes, path):
@@ -978,13 +980,20 @@ def fmt_ns(x):
     return "–" if x is None else (f"{x:.0f}" if x >= 10 else f"{x:.1f}")
 
 
+def cvode_row(scene, r, with_step=False):
+    """A row of the CVode / co-simulation tables."""
+    step = f"{r['h']:g} | " if with_step else ""
+    return (f"| {scene} | {step}{r['rtol']:.0e} | {r['cvode_error']:.1e} | {fmt_ns(r['cvode_ns'])} | {r['cs_method']} | "
+            f"{r['cs_error']:.1e} | {fmt_ns(r['cs_ns'])} | {r['ratio']:.1f}× |")
+
+
 def report(res, path, full=True):
     """The tables; full=False leaves out the per-run tables (the published summary)."""
     m = res["machine"]
     a = res["analysis"]
     L = []
     L.append("# What accuracy costs — study results\n")
-    L.append(f"Generated by `.venv/bin/python tests/bench/study.py` in {res['run_seconds']:.0f} s on: {m['cpu']}, {m['cores']} cores, "
+    L.append(f"Generated by `.venv/bin/python bench/study.py` in {res['run_seconds']:.0f} s on: {m['cpu']}, {m['cores']} cores, "
              f"{m['memory_gb']} GB, {m['os']}; {m['gcc']}; {m['rustc']}; FMPy {m['fmpy']}; SUNDIALS {m['sundials_native']} (native CVode); "
              f"commit {m['git']}. Load average at start {m['load_average_start'][0]:.1f}, at end {m['load_average_end'][0]:.1f} "
              f"(other processes share the machine: medians of {res['rounds']} interleaved rounds).\n")
@@ -1023,7 +1032,7 @@ def report(res, path, full=True):
     L.append("")
     L.append("## Native cost per communication step (elastic scene)\n")
     L.append("Set the three inputs, `fmi2DoStep` (h = 1 ms), get `v` and `T`, called from C through `dlopen` "
-             f"(`tests/bench/native_cost.c`, the loop of `step_cost.c`); median of {h['step_rounds']} interleaved rounds of "
+             f"(`bench/native_cost.c`, the loop of `step_cost.c`); median of {h['step_rounds']} interleaved rounds of "
              f"{h['step_steps']:,} steps.\n")
     L.append("| FMU | ns/step median | min | max | instructions/step (callgrind) |")
     L.append("|---|---|---|---|---|")
@@ -1095,9 +1104,7 @@ def report(res, path, full=True):
         L.append("| scene | CVode rtol | CVode error | CVode ns/step | co-simulation | its error | its ns/step | CVode / co-simulation |")
         L.append("|---|---|---|---|---|---|---|---|")
         for n, s in a["per_scene"].items():
-            for r in s["cs_vs_cvode"]:
-                L.append(f"| {n} | {r['rtol']:.0e} | {r['cvode_error']:.1e} | {fmt_ns(r['cvode_ns'])} | {r['cs_method']} | "
-                         f"{r['cs_error']:.1e} | {fmt_ns(r['cs_ns'])} | {r['ratio']:.1f}× |")
+            L += [cvode_row(n, r) for r in s["cs_vs_cvode"]]
         L.append("")
     else:
         L.append("At h = 1 ms, CVode / the cheapest co-simulation of equal or smaller error, over CVode's tolerances 1e-4 ... 1e-14: "
@@ -1108,9 +1115,7 @@ def report(res, path, full=True):
     L.append("| scene | h (s) | CVode rtol | CVode error | CVode ns/step | co-simulation | its error | its ns/step | CVode / co-simulation |")
     L.append("|---|---|---|---|---|---|---|---|---|")
     for n, s in a["per_scene"].items():
-        for r in s["cs_vs_best_cvode_by_step"]:
-            L.append(f"| {n} | {r['h']:g} | {r['rtol']:.0e} | {r['cvode_error']:.1e} | {fmt_ns(r['cvode_ns'])} | {r['cs_method']} | "
-                     f"{r['cs_error']:.1e} | {fmt_ns(r['cs_ns'])} | {r['ratio']:.1f}× |")
+        L += [cvode_row(n, r, with_step=True) for r in s["cs_vs_best_cvode_by_step"]]
     L.append("")
     if res.get("fmpy"):
         L.append("## Through FMPy: simulate_fmu, whole-run wall time (h = 1 ms output grid)\n")
@@ -1159,7 +1164,7 @@ def main():
     ap.add_argument("--dahlquist", action="append", default=[], metavar="[LABEL=]LIB.so[:GUID]",
                     help="a build of the Modelica Reference FMUs' Dahlquist, measured beside the span (repeatable; "
                          "the ratio is taken to the last one)")
-    ap.add_argument("--publish", action="store_true", help="copy study.md and the README's PNGs to tests/bench/results/")
+    ap.add_argument("--publish", action="store_true", help="copy study.md and the README's PNGs to bench/results/")
     args = ap.parse_args()
     start = time.time()
     OUT.mkdir(parents=True, exist_ok=True)

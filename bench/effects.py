@@ -2,11 +2,11 @@
 """Benchmark: what each effect costs per fmi2DoStep, and what the code of
 the effects costs when they are off.
 
-    .venv/bin/python tests/bench/effects.py [--baseline REV] [--steps N] [--repeats R]
+    .venv/bin/python bench/effects.py [--baseline REV] [--steps N] [--repeats R]
 
 Builds the current release library and the library of a baseline commit (by
 default the last commit before the effects and solvers were added), and
-measures both side by side in one run with tests/bench/step_cost.c: set the
+measures both side by side in one run with bench/step_cost.c: set the
 three inputs, fmi2DoStep, get v and T, as an importer does. Prints the median
 ns per step over the repeats, the spread, and the ratio to the baseline's
 elastic scene; and, with valgrind installed, the instructions per step counted
@@ -24,7 +24,7 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "target" / "bench"
 # The commit before the issue that added effects and solvers.
 DEFAULT_BASELINE = "c021732"
@@ -92,7 +92,7 @@ def main():
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     harness = OUT / "step_cost"
-    subprocess.run(["gcc", "-O2", "-Wall", "-Werror", f"-I{fmpy_headers()}", str(ROOT / "tests/bench/step_cost.c"),
+    subprocess.run(["gcc", "-O2", "-Wall", "-Werror", f"-I{fmpy_headers()}", str(ROOT / "bench/step_cost.c"),
                     "-o", str(harness), "-ldl"], check=True)
     current = build_library(ROOT, ROOT / "target")
     base_tree = baseline_source(args.baseline)
