@@ -30,7 +30,7 @@ from fmpy.fmi2 import (
 )
 from fmpy import calloc, free
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 DEFAULT_FMU_DIR = ROOT / "out"
 SPAN_FMU = "ConvertingSpan.fmu"
 ROLLER_FMU = "Roller.fmu"

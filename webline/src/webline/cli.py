@@ -250,8 +250,8 @@ def main(argv=None):
     p.set_defaults(func=cmd_convergence)
 
     p = sub.add_parser("study", help="line-level accuracy-cost study and the stability limit of a stiff line (PNG)")
-    p.add_argument("scene", nargs="?", default=str(Path(__file__).resolve().parents[1] / "scenes" / "lamination.json"))
-    p.add_argument("--stiff", default=str(Path(__file__).resolve().parents[1] / "scenes" / "stiff_line.json"))
+    p.add_argument("scene", nargs="?", default=str(Path(__file__).resolve().parents[2] / "scenes" / "lamination.json"))
+    p.add_argument("--stiff", default=str(Path(__file__).resolve().parents[2] / "scenes" / "stiff_line.json"))
     p.add_argument("--steps", default="2ms,1ms,0.5ms,0.25ms")
     p.add_argument("--stiff-steps", default="1ms,0.5ms,0.35ms,0.25ms,0.18ms,0.125ms,0.0625ms")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)

@@ -1,6 +1,6 @@
 """Sweeps: one scene over a grid of parameters, on Dask.
 
-    webline sweep fmu/scenes/lamination.json \\
+    webline sweep webline/scenes/lamination.json \\
         --grid "line.nip.drive.speed.table.22.1=4 m/s,5 m/s" --grid "line.film.L=1 m,2 m"
 
 Each grid key names a value of the scene by its path (components of the
