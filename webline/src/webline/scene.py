@@ -15,8 +15,8 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import jsonpos, units
-from .jsonpos import Node, Obj
+from . import jsontree, units
+from .jsontree import Node, Obj
 from .profiles import Profile
 from .units import UnitError
 
@@ -523,8 +523,8 @@ def _event(r, node, i, scene_line, webs, stop_time) -> Event:
 def parse_scene(text: str, source: str = "<scene>") -> Scene:
     """A scene from JSON text; `source` names it in error messages."""
     try:
-        root = jsonpos.parse(text, source)
-    except jsonpos.JsonError as e:
+        root = jsontree.parse(text, source)
+    except jsontree.JsonError as e:
         raise SceneError(str(e)) from None
     r = _Reader(source)
     o = r.keys(
