@@ -1,100 +1,48 @@
 """Quantities with units in scenes: "1.2 m", "50 um", "4.5 GPa", "300 m/min".
 
-Each unit has a factor to SI and a dimension (exponents of kg, m, s, rad).
-A quantity is checked against the dimension the scene key needs; a unit of
-another dimension, an unknown unit or a bare number for a dimensional value
-is an error that says what was expected.
+Pint knows what the units mean (factors and dimensions); this module only
+says which quantity a scene key needs (a `Kind`) and which spellings a scene
+may use for it, so that a scene stays strict: a unit of another kind, a unit
+outside the list (even one Pint knows, such as furlong) or a bare number for
+a dimensional value is an error that says what was expected. Products are
+written as in FMI model descriptions: "kg.m2", "N.m.s", "kg/m3".
 """
 
 from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass
+from functools import lru_cache
 
-# dimension: (kg, m, s, rad)
-DIMENSIONLESS = (0, 0, 0, 0)
-LENGTH = (0, 1, 0, 0)
-TIME = (0, 0, 1, 0)
-MASS = (1, 0, 0, 0)
-SPEED = (0, 1, -1, 0)
-FORCE = (1, 1, -2, 0)
-PRESSURE = (1, -1, -2, 0)
-DENSITY = (1, -3, 0, 0)
-INERTIA = (1, 2, 0, 0)
-TORQUE = (1, 2, -2, 0)
-ROT_DAMPING = (1, 2, -1, 0)  # N m s
-ANGULAR_SPEED = (0, 0, -1, 1)
-STIFFNESS = (1, 0, -2, 0)  # N/m
-LIN_DAMPING = (1, 0, -1, 0)  # N s/m
 
-DIMENSION_NAMES = {
-    DIMENSIONLESS: "dimensionless (a plain number, or %)",
-    LENGTH: "a length",
-    TIME: "a time",
-    MASS: "a mass",
-    SPEED: "a speed",
-    FORCE: "a force",
-    PRESSURE: "a pressure or modulus",
-    DENSITY: "a density",
-    INERTIA: "a moment of inertia",
-    TORQUE: "a torque",
-    ROT_DAMPING: "a rotational damping",
-    ANGULAR_SPEED: "an angular speed",
-    STIFFNESS: "a stiffness (force per length)",
-    LIN_DAMPING: "a translational damping (force per speed)",
-}
+@dataclass(frozen=True)
+class Kind:
+    """A kind of quantity: its name in messages, its SI unit and the units a scene may give."""
 
-LBF = 4.4482216152605
-UNITS = {
-    # dimensionless
-    "1": (1.0, DIMENSIONLESS),
-    "%": (0.01, DIMENSIONLESS),
-    # length
-    "m": (1.0, LENGTH),
-    "mm": (1e-3, LENGTH),
-    "cm": (1e-2, LENGTH),
-    "um": (1e-6, LENGTH),
-    "µm": (1e-6, LENGTH),
-    "in": (0.0254, LENGTH),
-    "ft": (0.3048, LENGTH),
-    # time
-    "s": (1.0, TIME),
-    "ms": (1e-3, TIME),
-    "us": (1e-6, TIME),
-    "min": (60.0, TIME),
-    # mass
-    "kg": (1.0, MASS),
-    "g": (1e-3, MASS),
-    # speed
-    "m/s": (1.0, SPEED),
-    "m/min": (1.0 / 60.0, SPEED),
-    "mm/s": (1e-3, SPEED),
-    "ft/min": (0.3048 / 60.0, SPEED),
-    "ft/s": (0.3048, SPEED),
-    # force
-    "N": (1.0, FORCE),
-    "kN": (1e3, FORCE),
-    "lbf": (LBF, FORCE),
-    "kgf": (9.80665, FORCE),
-    # pressure, modulus
-    "Pa": (1.0, PRESSURE),
-    "kPa": (1e3, PRESSURE),
-    "MPa": (1e6, PRESSURE),
-    "GPa": (1e9, PRESSURE),
-    # density
-    "kg/m3": (1.0, DENSITY),
-    "g/cm3": (1e3, DENSITY),
-    # rotation
-    "kg.m2": (1.0, INERTIA),
-    "N.m": (1.0, TORQUE),
-    "N.m.s": (1.0, ROT_DAMPING),
-    "rad/s": (1.0, ANGULAR_SPEED),
-    "rpm": (2.0 * math.pi / 60.0, ANGULAR_SPEED),
-    # translation
-    "N/m": (1.0, STIFFNESS),
-    "kN/m": (1e3, STIFFNESS),
-    "N.s/m": (1.0, LIN_DAMPING),
-}
+    name: str
+    si: str
+    units: tuple
+
+
+DIMENSIONLESS = Kind("dimensionless (a plain number, or %)", "1", ("1", "%"))
+LENGTH = Kind("a length", "m", ("m", "mm", "cm", "um", "µm", "in", "ft"))
+TIME = Kind("a time", "s", ("s", "ms", "us", "min"))
+MASS = Kind("a mass", "kg", ("kg", "g"))
+SPEED = Kind("a speed", "m/s", ("m/s", "m/min", "mm/s", "ft/min", "ft/s"))
+FORCE = Kind("a force", "N", ("N", "kN", "lbf", "kgf"))
+PRESSURE = Kind("a pressure or modulus", "Pa", ("Pa", "kPa", "MPa", "GPa"))
+DENSITY = Kind("a density", "kg/m3", ("kg/m3", "g/cm3"))
+INERTIA = Kind("a moment of inertia", "kg.m2", ("kg.m2",))
+TORQUE = Kind("a torque", "N.m", ("N.m",))
+ROT_DAMPING = Kind("a rotational damping", "N.m.s", ("N.m.s",))
+ANGULAR_SPEED = Kind("an angular speed", "rad/s", ("rad/s", "rpm"))
+STIFFNESS = Kind("a stiffness (force per length)", "N/m", ("N/m", "kN/m"))
+LIN_DAMPING = Kind("a translational damping (force per speed)", "N.s/m", ("N.s/m",))
+
+KINDS = (DIMENSIONLESS, LENGTH, TIME, MASS, SPEED, FORCE, PRESSURE, DENSITY, INERTIA, TORQUE,
+         ROT_DAMPING, ANGULAR_SPEED, STIFFNESS, LIN_DAMPING)
+KIND_OF_UNIT = {unit: kind for kind in KINDS for unit in kind.units}
 
 _QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S+)?\s*$")
 
@@ -103,54 +51,53 @@ class UnitError(ValueError):
     """A quantity that cannot be read, or has the wrong unit (message without position)."""
 
 
-def si_unit(dimension) -> str:
-    """The SI unit name of a dimension, for messages."""
-    for name, (factor, dim) in UNITS.items():
-        if dim == dimension and factor == 1.0:
-            return name
-    return "?"
+def _fmi_spelling(text: str) -> str:
+    """"kg.m2" -> "kg*m**2": FMI's product dot and exponent digits, in Pint's syntax."""
+    return re.sub(r"(?<=[A-Za-zµ])(\d+)", r"**\1", text.replace(".", "*"))
 
 
-def parse_quantity(value, dimension) -> float:
-    """`value` (a JSON number or a "number unit" string) in SI, checked against `dimension`."""
-    want = DIMENSION_NAMES.get(dimension, str(dimension))
+@lru_cache(maxsize=1)
+def registry():
+    import pint
+
+    return pint.UnitRegistry(preprocessors=[_fmi_spelling])
+
+
+@lru_cache(maxsize=None)
+def factor(unit: str, kind: Kind) -> float:
+    """The factor from `unit` to the SI unit of `kind` (Pint checks the dimensions agree)."""
+    ureg = registry()
+    name = {"%": "percent", "1": "dimensionless"}
+    return float(ureg.Quantity(1.0, name.get(unit, unit)).to(name.get(kind.si, kind.si)).magnitude)
+
+
+def parse_quantity(value, kind: Kind) -> float:
+    """`value` (a JSON number or a "number unit" string) in SI, checked against `kind`."""
+    want = kind.name
     if isinstance(value, bool) or value is None:
         raise UnitError(f"expected {want}, found {value!r}")
     if isinstance(value, (int, float)):
-        if dimension != DIMENSIONLESS:
-            raise UnitError(f"{value!r} has no unit; give {want} with a unit, e.g. \"{value} {si_unit(dimension)}\"")
+        if kind is not DIMENSIONLESS:
+            raise UnitError(f"{value!r} has no unit; give {want} with a unit, e.g. \"{value} {kind.si}\"")
         x = float(value)
     elif isinstance(value, str):
         m = _QUANTITY.match(value)
         if not m:
-            raise UnitError(f"{value!r} is not a number followed by a unit, e.g. \"1.5 {si_unit(dimension)}\"")
+            raise UnitError(f"{value!r} is not a number followed by a unit, e.g. \"1.5 {kind.si}\"")
         number, unit = m.group(1), m.group(2)
         if unit is None:
-            if dimension != DIMENSIONLESS:
-                raise UnitError(f"{value!r} has no unit; give {want}, e.g. \"{number} {si_unit(dimension)}\"")
+            if kind is not DIMENSIONLESS:
+                raise UnitError(f"{value!r} has no unit; give {want}, e.g. \"{number} {kind.si}\"")
             unit = "1"
-        if unit not in UNITS:
-            raise UnitError(f"unknown unit {unit!r} in {value!r} (known units of {want}: {', '.join(units_of(dimension))})")
-        factor, dim = UNITS[unit]
-        if dim != dimension:
+        if unit not in KIND_OF_UNIT:
+            raise UnitError(f"unknown unit {unit!r} in {value!r} (known units of {want}: {', '.join(kind.units)})")
+        if KIND_OF_UNIT[unit] is not kind:
             raise UnitError(
-                f"{value!r} is {DIMENSION_NAMES.get(dim, dim)}, but {want} is needed "
-                f"(units: {', '.join(units_of(dimension))})"
+                f"{value!r} is {KIND_OF_UNIT[unit].name}, but {want} is needed (units: {', '.join(kind.units)})"
             )
-        x = float(number) * factor
+        x = float(number) * factor(unit, kind)
     else:
         raise UnitError(f"expected {want}, found {type(value).__name__}")
     if not math.isfinite(x):
         raise UnitError(f"{value!r} is not finite")
     return x
-
-
-def units_of(dimension):
-    return [name for name, (_, dim) in UNITS.items() if dim == dimension]
-
-
-def dimension_of_unit(unit: str):
-    """The dimension of a unit named in a model description ("m", "kg.m2", "N.m.s", ...)."""
-    if unit in ("", "1"):
-        return DIMENSIONLESS
-    return UNITS[unit][1]
