@@ -1,4 +1,4 @@
-"""PNG plots of a run: tensions of the spans and speeds of the rollers along the line."""
+"""PNG plots of a run: one panel per unit (tensions, speeds, strains, ...), each curve in line order."""
 
 from __future__ import annotations
 
@@ -10,28 +10,28 @@ import matplotlib.pyplot as plt  # noqa: E402
 from .result import Result  # noqa: E402
 
 
+# What a column's unit measures, for the axis label; a unit not listed is shown alone.
+QUANTITY_OF_UNIT = {"N": "tension", "m/s": "speed", "1": "strain", "rad/s": "angular speed", "m": "length or position", "N.m": "torque"}
+FIRST = ("N", "m/s")  # tensions on top, then speeds, then the rest in recording order
+
+
 def plot(result: Result, path, title=None, reference: Result | None = None):
-    """Tensions (N) on top, speeds (m/s) below, in line order; other recorded
-    quantities (strain, dancer position, torque) in a third panel if any."""
-    groups = {"tension": [], "speed": [], "other": []}
+    """One panel per unit, so that each quantity is read on an axis of its own
+    unit (strains of 1e-3 and angular speeds of 40 rad/s never share one):
+    tensions (N) on top, speeds (m/s) below, then strain, angular speed,
+    position, torque as recorded; each curve in line order."""
+    panels = {}  # unit -> [column key]
     for c in result.columns:
         key, unit = c.split(" [")[0], c.split(" [")[1].rstrip("]")
-        q = key.split(".", 1)[1]
-        if q in ("T", "F_a", "F_b"):
-            groups["tension"].append((c, key))
-        elif q == "v":
-            groups["speed"].append((c, key))
-        else:
-            groups["other"].append((c, key))
-    panels = [g for g in ("tension", "speed", "other") if groups[g]]
-    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.8 * len(panels) + 0.6), sharex=True, squeeze=False)
-    labels = {"tension": "tension [N]", "speed": "speed [m/s]", "other": "value"}
-    for ax, g in zip(axes[:, 0], panels):
-        for col, key in groups[g]:
-            (line,) = ax.plot(result.time, result.column(key), lw=1.3, label=col if g == "other" else key)
+        panels.setdefault(unit, []).append(key)
+    units = [u for u in FIRST if u in panels] + [u for u in panels if u not in FIRST]
+    fig, axes = plt.subplots(len(units), 1, figsize=(9, 2.6 * len(units) + 0.6), sharex=True, squeeze=False)
+    for ax, unit in zip(axes[:, 0], units):
+        for key in panels[unit]:
+            (line,) = ax.plot(result.time, result.column(key), lw=1.3, label=key)
             if reference is not None and key in reference.keys():
                 ax.plot(reference.time, reference.column(key), lw=0.8, ls="--", color=line.get_color())
-        ax.set_ylabel(labels[g])
+        ax.set_ylabel(f"{QUANTITY_OF_UNIT[unit]} [{unit}]" if unit in QUANTITY_OF_UNIT else f"[{unit}]")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best", fontsize=8, ncol=2)
     axes[-1, 0].set_xlabel("time [s]")
