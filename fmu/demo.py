@@ -15,13 +15,20 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from fmpy import simulate_fmu
+from fmpy import read_model_description, simulate_fmu
 from fmpy.util import write_csv
 
 OUTPUTS = ["web_a.v", "v", "T", "web_a.F", "web_b.F", "web_b.eps", "summary_Strain", "summary_Stress"]
 
 
-def scene_inputs():
+# The inputs the scene drives; every other input of the FMU (the frame
+# positions, used only with variableLength) is fed as a constant column at its
+# start value from the model description: FMPy warns about any input that is
+# missing from the input table.
+DRIVEN = ["web_a.v", "web_a.eps", "web_b.v"]
+
+
+def scene_inputs(fmu):
     """Piecewise-constant inputs; a repeated time is a step change."""
     rows = [
         # time, web_a.v, web_a.eps, web_b.v
@@ -34,8 +41,10 @@ def scene_inputs():
         (1.5, 2.0, 1e-3, 2.0),
         (3.0, 2.0, 1e-3, 2.0),
     ]
-    dtype = [("time", np.float64), ("web_a.v", np.float64), ("web_a.eps", np.float64), ("web_b.v", np.float64)]
-    return np.array(rows, dtype=dtype)
+    held = {v.name: float(v.start) for v in read_model_description(fmu).modelVariables
+            if v.causality == "input" and v.name not in DRIVEN}
+    dtype = [("time", np.float64)] + [(name, np.float64) for name in DRIVEN + list(held)]
+    return np.array([row + tuple(held.values()) for row in rows], dtype=dtype)
 
 
 def simulate(fmu, step=1e-3, stop=3.0):
@@ -44,7 +53,7 @@ def simulate(fmu, step=1e-3, stop=3.0):
         fmi_type="CoSimulation",
         stop_time=stop,
         output_interval=step,
-        input=scene_inputs(),
+        input=scene_inputs(fmu),
         output=OUTPUTS,
     )
 

@@ -1,5 +1,5 @@
 # Sourced by fmu/main.sh and tests/run.sh: makes sure the tools are there.
-# Creates .venv (FMPy, pytest, mpmath, numpy, matplotlib) on first use and
+# Creates .venv (FMPy, pytest, mpmath, numpy, matplotlib, the webline runner) on first use and
 # installs the Debian packages the tests compile with, if they are missing.
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="$ROOT/.venv"
@@ -30,10 +30,12 @@ if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ]; then
     (cd "$ROOT/fmu" && "$PY" -m pip install --quiet --disable-pip-version-check -r requirements.txt)
     echo "$WANT" > "$STAMP"
 fi
-# The webline runner (fmu/webline) and its `webline` command, installed editable.
-if ! "$PY" -c "import webline" 2>/dev/null || [ ! -x "$VENV/bin/webline" ]; then
-    echo "env.sh: installing the webline runner into $VENV (pip install -e fmu)"
-    "$PY" -m pip install --quiet --disable-pip-version-check -e "$ROOT/fmu"
+# The webline runner (webline/) and its `webline` command, installed editable;
+# again when the installed one is not this folder's (e.g. after a move).
+if [ "$("$PY" -c 'import webline, os; print(os.path.dirname(os.path.dirname(webline.__file__)))' 2>/dev/null)" != "$ROOT/webline/src" ] \
+    || [ ! -x "$VENV/bin/webline" ]; then
+    echo "env.sh: installing the webline runner into $VENV (pip install -e webline)"
+    "$PY" -m pip install --quiet --disable-pip-version-check -e "$ROOT/webline"
 fi
 export MPLBACKEND=Agg
 # zig and cargo-zigbuild for the portable FMU binary (cached; see the file).

@@ -8,4 +8,4 @@ source "$(dirname "$0")/env.sh"
 cd "$ROOT"
 python3 fmu/package.py
 "$PY" fmu/demo.py out/ConvertingSpan.fmu --out out
-"$VENV/bin/webline" run fmu/scenes/lamination.json --out out
+"$VENV/bin/webline" run webline/scenes/lamination.json --out out

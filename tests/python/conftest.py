@@ -39,6 +39,8 @@ _fmpy_simulation.fmi2CallbackLoggerTYPE = _kept_logger
 
 ROOT = Path(__file__).resolve().parents[2]
 FMU = ROOT / "out" / "ConvertingSpan.fmu"
+# The web-line scenes of the webline runner (webline/, installed by fmu/env.sh).
+SCENES = ROOT / "webline" / "scenes"
 
 INPUTS = ("web_a.v", "web_a.eps", "web_b.v")
 DPS = 40
@@ -47,13 +49,25 @@ DPS = 40
 # Fixtures
 
 
+def _packaged(path):
+    """`path` (an FMU in out/), written by fmu/package.py if it is not there yet."""
+    if not path.exists():
+        subprocess.run(["python3", "fmu/package.py"], cwd=ROOT, check=True)
+    assert path.exists(), f"{path} was not written by fmu/package.py"
+    return path
+
+
 @pytest.fixture(scope="session")
 def fmu_path():
-    """The packaged FMU, written by fmu/package.py if it is not there yet."""
-    if not FMU.exists():
-        subprocess.run(["python3", "fmu/package.py"], cwd=ROOT, check=True)
-    assert FMU.exists(), f"{FMU} was not written by fmu/package.py"
-    return FMU
+    """The packaged FMU."""
+    return _packaged(FMU)
+
+
+@pytest.fixture(scope="session")
+def fmus():
+    """The folder with both FMUs of a web line (ConvertingSpan.fmu, Roller.fmu), for webline."""
+    _packaged(FMU)
+    return _packaged(FMU.parent / "Roller.fmu").parent
 
 
 @pytest.fixture(scope="session")

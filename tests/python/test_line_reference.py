@@ -1,4 +1,4 @@
-"""Co-simulation against the monolithic reference (fmu/webline/reference.py:
+"""Co-simulation against the monolithic reference (webline/src/webline/reference.py:
 the whole line as one ODE, SciPy's Radau at rtol 1e-10).
 
 * The reference itself against a closed form (a span between two prescribed
@@ -18,33 +18,18 @@ the whole line as one ODE, SciPy's Radau at rtol 1e-10).
 """
 
 import math
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SCENES
+from webline.container import simulate_container
+from webline.master import CoSimulation, Options
+from webline.reference import reference
+from webline.scene import load_scene, parse_scene
+from webline.study import convergence, errors, observed_orders, tension_error, union_grid
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "fmu"))
-
-from webline.container import simulate_container  # noqa: E402
-from webline.master import CoSimulation, Options  # noqa: E402
-from webline.reference import reference  # noqa: E402
-from webline.scene import load_scene, parse_scene  # noqa: E402
-from webline.study import convergence, errors, observed_orders, tension_error, union_grid  # noqa: E402
-
-SCENES = ROOT / "fmu" / "scenes"
-OUT = ROOT / "out"
 
 DEFAULT_STEP_TOLERANCE = {"lamination": 1e-3, "emergency_stop": 3e-3, "dancer": 5e-3, "splice": 2.5e-2}
-
-
-@pytest.fixture(scope="module")
-def fmus():
-    if not (OUT / "Roller.fmu").exists() or not (OUT / "ConvertingSpan.fmu").exists():
-        subprocess.run(["python3", "fmu/package.py"], cwd=ROOT, check=True)
-    return OUT
 
 
 @pytest.fixture(scope="module")

@@ -3,30 +3,16 @@ the key and the file position), the README's complete example, and the
 `webline` command (CSV, PNG, summary, Jacobi, rollback on a discarded step).
 """
 
-import json
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ROOT, SCENES
+from webline.master import CoSimulation, Options
+from webline.scene import SceneError, load_scene, parse_scene
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "fmu"))
-
-from webline.master import CoSimulation, Options  # noqa: E402
-from webline.scene import SceneError, load_scene, parse_scene  # noqa: E402
-
-SCENES = ROOT / "fmu" / "scenes"
-OUT = ROOT / "out"
-
-
-@pytest.fixture(scope="module")
-def fmus():
-    if not (OUT / "Roller.fmu").exists() or not (OUT / "ConvertingSpan.fmu").exists():
-        subprocess.run(["python3", "fmu/package.py"], cwd=ROOT, check=True)
-    return OUT
 
 
 # A small valid scene the error tests start from (line numbers below refer to it).
@@ -144,7 +130,7 @@ def test_runner_writes_csv_png_and_a_summary(fmus, tmp_path):
     scene = tmp_path / "small.json"
     scene.write_text(BASE)
     cmd = [sys.executable, "-m", "webline", "run", str(scene), "--out", str(tmp_path), "--no-progress"]
-    p = subprocess.run(cmd, cwd=ROOT / "fmu", capture_output=True, text=True, check=True)
+    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=True)
     assert "small: co-simulation (gauss-seidel, extrapolate), step 1 ms, 200 steps" in p.stdout
     assert re.search(r"^\s+a\s+[\d.]+", p.stdout, re.M), p.stdout
     header = (tmp_path / "small.csv").read_text().splitlines()[0]
@@ -152,7 +138,7 @@ def test_runner_writes_csv_png_and_a_summary(fmus, tmp_path):
     assert (tmp_path / "small.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # A bad scene: exit code 2 and the position.
     scene.write_text(BASE.replace('"1 m", "web"', '"1 s", "web"', 1))
-    p = subprocess.run(cmd, cwd=ROOT / "fmu", capture_output=True, text=True)
+    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     assert p.returncode == 2 and "small.json:8:" in p.stderr, p.stderr
 
 

@@ -1,29 +1,14 @@
 """Sweeps on Dask: a small grid on a local cluster, the same grid through an
 existing scheduler's address, and each row equal to the same point run alone."""
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
+from conftest import SCENES
+from webline.master import CoSimulation, Options
+from webline.scene import SceneError, load_scene
+from webline.sweep import Table, parse_grid, run_sweep
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "fmu"))
-
-from webline.master import CoSimulation, Options  # noqa: E402
-from webline.scene import SceneError, load_scene  # noqa: E402
-from webline.sweep import Table, parse_grid, run_sweep  # noqa: E402
-
-SCENE = ROOT / "fmu" / "scenes" / "lamination.json"
-OUT = ROOT / "out"
+SCENE = SCENES / "lamination.json"
 GRID = ["stop_time=0.4 s", "line.rewind.drive.tension=250 N,300 N", "line.to_rewind.L=1 m,2 m"]
-
-
-@pytest.fixture(scope="module")
-def fmus():
-    if not (OUT / "Roller.fmu").exists() or not (OUT / "ConvertingSpan.fmu").exists():
-        subprocess.run(["python3", "fmu/package.py"], cwd=ROOT, check=True)
-    return OUT
 
 
 def test_parse_grid():

@@ -1,6 +1,6 @@
 """Sweeps: one scene over a grid of parameters, on Dask.
 
-    webline sweep fmu/scenes/lamination.json \\
+    webline sweep webline/scenes/lamination.json \\
         --grid "line.nip.drive.speed.table.22.1=4 m/s,5 m/s" --grid "line.film.L=1 m,2 m"
 
 Each grid key names a value of the scene by its path (components of the
@@ -75,8 +75,9 @@ def run_point(scene_text: str, source: str, overrides: dict, files: dict, step=N
         for k, v in overrides.items():
             set_path(data, k, v)
         label = f"{source} (with {', '.join(f'{k}={v}' for k, v in overrides.items())})"
-        scene = parse_scene(json.dumps(data, indent=2), label)
-        result = CoSimulation(scene, Options(step=step, fmu_dir=_fmu_dir_on_worker(files))).run()
+        fmu_dir = _fmu_dir_on_worker(files)
+        scene = parse_scene(json.dumps(data, indent=2), label, fmu_dir)
+        result = CoSimulation(scene, Options(step=step, fmu_dir=fmu_dir)).run()
         for c in scene.line:
             key = f"{c.name}.T" if isinstance(c, Span) else f"{c.name}.v"
             if key not in result.keys():
@@ -146,7 +147,7 @@ def run_sweep(scene_path, grid, scheduler=None, workers=2, step=None, fmu_dir=DE
 
     # Fail early, here, on a bad scene or a bad key.
     for key, values in grid:
-        load_scene(scene_path, {key: values[0]})
+        load_scene(scene_path, {key: values[0]}, fmu_dir)
     text = Path(scene_path).read_text(encoding="utf-8")
     files = {n: (Path(fmu_dir) / n).read_bytes() for n in (SPAN_FMU, ROLLER_FMU)}
     keys = [k for k, _ in grid]

@@ -39,7 +39,7 @@ from scipy.linalg import expm
 
 from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuError, FmuFile, Instance
 from .result import Result
-from .scene import SOLVERS, Dancer, Prescribed, Roller, Scene, Span
+from .scene import Dancer, Prescribed, Roller, Scene, Span
 
 ALGORITHMS = ("gauss-seidel", "jacobi")
 COUPLINGS = ("extrapolate", "hold")
@@ -91,7 +91,9 @@ def span_frames(scene: Scene, span: Span, y: float, R_dancer: float):
     return (0.0, 0.0, 1.0, 0.0)
 
 
-def span_start_values(span: Span, length_default=1.0):
+def span_start_values(span: Span, solvers: dict, length_default=1.0):
+    """The span FMU's parameters for `span`; `solvers` maps solver names to the
+    values of the FMU's Enumeration `solver` (`FmuFile.enumeration`)."""
     w1, w2 = span.wp1, span.wp2
     values = {
         "L": span.length if span.length is not None else length_default,
@@ -102,7 +104,7 @@ def span_start_values(span: Span, length_default=1.0):
         "includeMass": "includeMass" in span.effects,
         "variableLength": "variableLength" in span.effects,
         "startAtEquilibrium": span.eps_start is None,
-        "solver": SOLVERS[span.solver],
+        "solver": solvers[span.solver],
     }
     if span.eps_start is not None:
         values["eps_start"] = span.eps_start
@@ -270,7 +272,7 @@ class CoSimulation:
                 self.sig[(node.name, "y")] = Signal(now=node.y_start, t_now=t)
         # Spans in line order: each one's start strain feeds the next.
         for span in s.spans:
-            values = span_start_values(span)
+            values = span_start_values(span, self.span_file.enumeration("solver"))
             self.params[span.name] = values
             inputs = self.span_inputs_at(span, t)
             self.inst[span.name] = self._new_span_instance(span, values, inputs, t)

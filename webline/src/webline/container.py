@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU
+from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, enumeration
 from .master import CoSimulation, Options, span_start_values
 from .result import Result
 from .scene import Dancer, Prescribed, Roller, Scene, Span
@@ -106,7 +106,7 @@ def build_container(scene: Scene, step: float, path: Path, fmu_dir=DEFAULT_FMU_D
         if c.name not in components:
             continue
         if isinstance(c, Span):
-            values = span_start_values(c)
+            values = span_start_values(c, enumeration(mds["span"], "solver"))
         else:
             values = {"J": c.J, "R": c.R, "b": c.b, "omega_start": scene.initial_speed(c) / c.R}
         for pname, x in values.items():

@@ -1,6 +1,6 @@
 """webline: web lines of ConvertingSpan and Roller FMUs, co-simulated with FMPy.
 
-    webline run fmu/scenes/lamination.json      # CSV, PNG and a summary in out/
+    webline run webline/scenes/lamination.json      # CSV, PNG and a summary in out/
     python -m webline --help
 
 Modules: `scene` (the JSON format, read strictly), `master` (the

@@ -1,6 +1,8 @@
 """The two FMUs of a line, loaded with FMPy: one `Instance` per component.
 
-`FmuFile` extracts an FMU once and reads its model description; `Instance`
+`FmuFile` extracts an FMU once and reads its model description (the
+enumerations a scene names, such as the span's solvers, come from there:
+`enumeration`); `Instance`
 is one FMPy `FMU2Slave` with preallocated ctypes buffers for the calls made
 every communication step, an FMU state slot for rollbacks, and the FMU's log
 messages kept so that a failed call can say why.
@@ -13,6 +15,7 @@ import os
 import shutil
 import tempfile
 from ctypes import byref
+from functools import lru_cache
 from pathlib import Path
 
 from fmpy import extract, read_model_description
@@ -30,7 +33,7 @@ from fmpy.fmi2 import (
 )
 from fmpy import calloc, free
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 DEFAULT_FMU_DIR = ROOT / "out"
 SPAN_FMU = "ConvertingSpan.fmu"
 ROLLER_FMU = "Roller.fmu"
@@ -40,6 +43,31 @@ OK, WARNING, DISCARD = 0, 1, 2
 
 class FmuError(RuntimeError):
     """An FMU call failed with fmi2Error or fmi2Fatal; the message carries the FMU's log."""
+
+
+def enumeration(md, variable: str) -> dict:
+    """The items of an Enumeration variable's type in a model description: name -> value."""
+    v = next((v for v in md.modelVariables if v.name == variable), None)
+    if v is None or v.declaredType is None or not v.declaredType.items:
+        raise FmuError(f"{md.modelName} has no Enumeration variable {variable!r}")
+    return {item.name: int(item.value) for item in v.declaredType.items}
+
+
+@lru_cache(maxsize=8)
+def _read(path: str, mtime: float):
+    return read_model_description(path)
+
+
+def span_description(fmu_dir=None):
+    """ConvertingSpan's model description: the one of the FMU in `fmu_dir`
+    (out/ by default); without a `fmu_dir` and before the FMUs are built, the
+    repository's modelDescription.xml, which the FMU is packaged from."""
+    path = Path(fmu_dir or DEFAULT_FMU_DIR) / SPAN_FMU
+    if not path.exists() and fmu_dir is None and (ROOT / "modelDescription.xml").exists():
+        path = ROOT / "modelDescription.xml"
+    if not path.exists():
+        raise FileNotFoundError(f"{path} is missing: build the FMUs first with `python3 fmu/package.py`")
+    return _read(str(path), os.path.getmtime(path))
 
 
 class FmuFile:
@@ -67,6 +95,9 @@ class FmuFile:
 
     def vr(self, name: str) -> int:
         return self.variables[name].valueReference
+
+    def enumeration(self, variable: str) -> dict:
+        return enumeration(self.md, variable)
 
     def can_interpolate_inputs(self) -> bool:
         return bool(self.md.coSimulation.canInterpolateInputs)

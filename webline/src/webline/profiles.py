@@ -26,27 +26,22 @@ class Profile:
     def _times(self):
         return [t for t, _ in self.knots]
 
-    def value(self, t: float) -> float:
-        """The value at t (the value after a jump at t)."""
-        times = self._times()
-        i = bisect.bisect_right(times, t)
+    def _interpolate(self, t: float, i: int) -> float:
+        """The value at t on the piece that ends at knot i (held before the first knot and after the last)."""
         if i == 0:
             return self.knots[0][1]
-        if i == len(times):
+        if i == len(self.knots):
             return self.knots[-1][1]
         (t0, v0), (t1, v1) = self.knots[i - 1], self.knots[i]
         return v0 + (v1 - v0) * (t - t0) / (t1 - t0)
 
+    def value(self, t: float) -> float:
+        """The value at t (the value after a jump at t)."""
+        return self._interpolate(t, bisect.bisect_right(self._times(), t))
+
     def value_left(self, t: float) -> float:
         """The limit from the left at t (the value before a jump at t)."""
-        times = self._times()
-        i = bisect.bisect_left(times, t)
-        if i == 0:
-            return self.knots[0][1]
-        if i == len(times):
-            return self.knots[-1][1]
-        (t0, v0), (t1, v1) = self.knots[i - 1], self.knots[i]
-        return v0 + (v1 - v0) * (t - t0) / (t1 - t0)
+        return self._interpolate(t, bisect.bisect_left(self._times(), t))
 
     def slope(self, t: float) -> float:
         """The derivative just after t (piecewise constant)."""

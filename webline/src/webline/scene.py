@@ -15,13 +15,13 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import jsonpos, units
-from .jsonpos import Node, Obj
+from . import jsontree, units
+from .fmus import enumeration, span_description
+from .jsontree import Node, Obj
 from .profiles import Profile
 from .units import UnitError
 
 EFFECTS = ("includeDamping", "preventNegativeTension", "includeMass", "variableLength")
-SOLVERS = {"auto": 1, "exact": 2, "rosenbrock": 3, "dopri5": 4, "rk4": 5, "euler": 6}
 FIRST = ("source", "unwinder")
 MIDDLE = ("roller", "dancer")
 LAST = ("sink", "winder")
@@ -246,8 +246,13 @@ def profiles_of(c):
 
 
 class _Reader:
-    def __init__(self, source: str):
+    def __init__(self, source: str, fmu_dir=None):
         self.source = source
+        self.fmu_dir = fmu_dir
+
+    def solvers(self):
+        """The span's solvers: the items of its Enumeration `solver`, from its model description."""
+        return enumeration(span_description(self.fmu_dir), "solver")
 
     def err(self, node_or_pos, message):
         if isinstance(node_or_pos, Node):
@@ -410,8 +415,8 @@ def _span(r, o_node, name, webs) -> Span:
         raise r.err(o_node, f"{what}: the start strain {s.eps_start} must be > -1")
     if "solver" in o:
         s.solver = r.string(o["solver"], f"{what}: solver")
-        if s.solver not in SOLVERS:
-            raise r.err(o["solver"], f"{what}: unknown solver {s.solver!r} (solvers: {', '.join(SOLVERS)})")
+        if s.solver not in r.solvers():
+            raise r.err(o["solver"], f"{what}: unknown solver {s.solver!r} (solvers: {', '.join(r.solvers())})")
     if "tolerance" in o:
         s.tolerance = r.quantity(o["tolerance"], units.DIMENSIONLESS, f"{what}: tolerance", positive=True)
     if "substeps" in o:
@@ -520,13 +525,15 @@ def _event(r, node, i, scene_line, webs, stop_time) -> Event:
     return Event(time=t, component=cname, changes=changes, where=f"{r.source}:{node.line}:{node.col}")
 
 
-def parse_scene(text: str, source: str = "<scene>") -> Scene:
-    """A scene from JSON text; `source` names it in error messages."""
+def parse_scene(text: str, source: str = "<scene>", fmu_dir=None) -> Scene:
+    """A scene from JSON text; `source` names it in error messages. Solver
+    names are checked against the model description of the span FMU in
+    `fmu_dir` (see `fmus.span_description`)."""
     try:
-        root = jsonpos.parse(text, source)
-    except jsonpos.JsonError as e:
+        root = jsontree.parse(text, source)
+    except jsontree.JsonError as e:
         raise SceneError(str(e)) from None
-    r = _Reader(source)
+    r = _Reader(source, fmu_dir)
     o = r.keys(
         root,
         "the scene",
@@ -652,18 +659,18 @@ def parse_scene(text: str, source: str = "<scene>") -> Scene:
     )
 
 
-def load_scene(path, overrides=None) -> Scene:
+def load_scene(path, overrides=None, fmu_dir=None) -> Scene:
     """Reads a scene file; `overrides` ({"line.film.L": "2 m", ...}) replace
     values first (the sweep uses them), and errors then name the override."""
     path = Path(path)
     text = path.read_text(encoding="utf-8")
     if not overrides:
-        return parse_scene(text, str(path))
+        return parse_scene(text, str(path), fmu_dir)
     data = json.loads(text)
     for key, value in overrides.items():
         set_path(data, key, value)
     label = f"{path} (with {', '.join(f'{k}={v}' for k, v in overrides.items())})"
-    return parse_scene(json.dumps(data, indent=2), label)
+    return parse_scene(json.dumps(data, indent=2), label, fmu_dir)
 
 
 def set_path(data, key: str, value):

@@ -95,7 +95,7 @@ def summary(scene, result: Result) -> str:
 
 
 def cmd_run(args):
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     cs = CoSimulation(scene, options_of(args, progress=progress))
     result = cs.run()
@@ -153,7 +153,7 @@ def cmd_reference(args):
 def cmd_convergence(args):
     from .study import convergence, observed_orders
 
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     steps = [time_arg(s) for s in args.steps.split(",")]
     rows, _ = convergence(scene, steps, algorithm=args.algorithm, coupling=args.coupling, fmu_dir=args.fmu_dir)
     orders = observed_orders(rows)
@@ -171,8 +171,8 @@ def cmd_convergence(args):
 def cmd_study(args):
     from .study import line_study, stability_limit
 
-    scene = load_scene(args.scene)
-    stiff = load_scene(args.stiff)
+    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+    stiff = load_scene(args.stiff, fmu_dir=args.fmu_dir)
     steps = [time_arg(x) for x in args.steps.split(",")]
     stiff_steps = [time_arg(x) for x in args.stiff_steps.split(",")]
     out = Path(args.out)
@@ -196,7 +196,7 @@ def cmd_study(args):
 def cmd_container(args):
     from .container import compare_container
 
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     report = compare_container(scene, step=args.step, fmu_dir=args.fmu_dir, out=Path(args.out))
     print(report)
     return 0
@@ -250,8 +250,8 @@ def main(argv=None):
     p.set_defaults(func=cmd_convergence)
 
     p = sub.add_parser("study", help="line-level accuracy-cost study and the stability limit of a stiff line (PNG)")
-    p.add_argument("scene", nargs="?", default=str(Path(__file__).resolve().parents[1] / "scenes" / "lamination.json"))
-    p.add_argument("--stiff", default=str(Path(__file__).resolve().parents[1] / "scenes" / "stiff_line.json"))
+    p.add_argument("scene", nargs="?", default=str(Path(__file__).resolve().parents[2] / "scenes" / "lamination.json"))
+    p.add_argument("--stiff", default=str(Path(__file__).resolve().parents[2] / "scenes" / "stiff_line.json"))
     p.add_argument("--steps", default="2ms,1ms,0.5ms,0.25ms")
     p.add_argument("--stiff-steps", default="1ms,0.5ms,0.35ms,0.25ms,0.18ms,0.125ms,0.0625ms")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)

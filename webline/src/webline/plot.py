@@ -1,0 +1,46 @@
+"""PNG plots of a run: one panel per unit (tensions, speeds, strains, ...), each curve in line order."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from .result import Result  # noqa: E402
+
+
+# What a column's unit measures, for the axis label; a unit not listed is shown alone.
+QUANTITY_OF_UNIT = {"N": "tension", "m/s": "speed", "1": "strain", "rad/s": "angular speed", "m": "length or position", "N.m": "torque"}
+FIRST = ("N", "m/s")  # tensions on top, then speeds, then the rest in recording order
+
+
+def plot(result: Result, path, title=None, reference: Result | None = None):
+    """One panel per unit, so that each quantity is read on an axis of its own
+    unit (strains of 1e-3 and angular speeds of 40 rad/s never share one):
+    tensions (N) on top, speeds (m/s) below, then strain, angular speed,
+    position, torque as recorded; each curve in line order."""
+    panels = {}  # unit -> [column key]
+    for c in result.columns:
+        key, unit = c.split(" [")[0], c.split(" [")[1].rstrip("]")
+        panels.setdefault(unit, []).append(key)
+    units = [u for u in FIRST if u in panels] + [u for u in panels if u not in FIRST]
+    fig, axes = plt.subplots(len(units), 1, figsize=(9, 2.6 * len(units) + 0.6), sharex=True, squeeze=False)
+    for ax, unit in zip(axes[:, 0], units):
+        for key in panels[unit]:
+            (line,) = ax.plot(result.time, result.column(key), lw=1.3, label=key)
+            if reference is not None and key in reference.keys():
+                ax.plot(reference.time, reference.column(key), lw=0.8, ls="--", color=line.get_color())
+        ax.set_ylabel(f"{QUANTITY_OF_UNIT[unit]} [{unit}]" if unit in QUANTITY_OF_UNIT else f"[{unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize=8, ncol=2)
+    axes[-1, 0].set_xlabel("time [s]")
+    info = result.info
+    sub = f"{info.get('method', '')}, step {info.get('step', 0) * 1e3:g} ms" if info else ""
+    if reference is not None:
+        sub += "; dashed: monolithic reference"
+    fig.suptitle(f"{title or result.scene}\n{sub}", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
