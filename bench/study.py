@@ -16,7 +16,7 @@ when it is missing), runs the grid and writes into target/study/:
   fmpy.png       error against whole-run wall time through FMPy
 
 --publish copies study.md, pareto.png and comm_step.png to bench/results/
-(the files the README shows).
+(the files docs/accuracy.md shows).
 
 Scenes (inputs given as functions of time; the FMU sees them at its
 communication points t_k = k*h):
@@ -1164,7 +1164,7 @@ def main():
     ap.add_argument("--dahlquist", action="append", default=[], metavar="[LABEL=]LIB.so[:GUID]",
                     help="a build of the Modelica Reference FMUs' Dahlquist, measured beside the span (repeatable; "
                          "the ratio is taken to the last one)")
-    ap.add_argument("--publish", action="store_true", help="copy study.md and the README's PNGs to bench/results/")
+    ap.add_argument("--publish", action="store_true", help="copy study.md and the PNGs docs/accuracy.md shows to bench/results/")
     args = ap.parse_args()
     start = time.time()
     OUT.mkdir(parents=True, exist_ok=True)

@@ -1,5 +1,5 @@
 """Scenes and the runner: the shipped scenes, strict parsing (every error names
-the key and the file position), the README's complete example, and the
+the key and the file position), the complete example of docs/line-coupling.md, and the
 `webline` command (CSV, PNG, summary, Jacobi, rollback on a discarded step).
 """
 
@@ -118,11 +118,11 @@ def test_more_scene_errors():
     assert load_scene(path, {"line.film.L": "2 m"}).component("film").length == 2.0
 
 
-def test_the_readme_example_is_a_valid_scene(tmp_path):
-    readme = (ROOT / "README.md").read_text()
-    m = re.search(r"<!-- scene example -->\s*```json\n(.*?)```", readme, re.S)
-    assert m, "the README's complete scene example (marked <!-- scene example -->) is missing"
-    s = parse_scene(m.group(1), "README example")
+def test_the_documented_example_is_a_valid_scene(tmp_path):
+    doc = (ROOT / "docs" / "line-coupling.md").read_text()
+    m = re.search(r"<!-- scene example -->\s*```json\n(.*?)```", doc, re.S)
+    assert m, "the complete scene example of docs/line-coupling.md (marked <!-- scene example -->) is missing"
+    s = parse_scene(m.group(1), "docs/line-coupling.md example")
     assert s.spans and s.nodes
 
 

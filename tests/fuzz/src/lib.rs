@@ -34,7 +34,7 @@
 //!
 //! A broken rule is a `Violation`. Two kinds of non-finite outputs are
 //! counted as `Finding`s rather than violations because they are known
-//! product issues (see the README, "Hardening", and tests/fuzz_findings.rs):
+//! product issues (see docs/hardening.md and tests/fuzz_findings.rs):
 //! overflow after extreme but accepted values, and forged FMU states.
 
 #![allow(clippy::missing_safety_doc)]

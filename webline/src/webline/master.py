@@ -402,7 +402,7 @@ class CoSimulation:
         if depth > MAX_HALVINGS:
             raise CoSimulationError(
                 f"the step at t = {t} was discarded even at h = {h}: {self._last_messages()}. "
-                "The coupling is probably unstable at this communication step (README: 'Stability'): "
+                "The coupling is probably unstable at this communication step (docs/line-coupling.md: 'Stability: the longest step'): "
                 "take a smaller step, or --algorithm gauss-seidel --coupling extrapolate"
             )
         half = 0.5 * h
@@ -483,7 +483,7 @@ class CoSimulation:
             if not all(map(math.isfinite, out)):
                 raise CoSimulationError(
                     f"span {span.name!r} gave non-finite outputs {out} at t = {t1} (inputs {values}): the co-simulation "
-                    "diverged; the coupling is unstable at this communication step (README: 'Stability'): "
+                    "diverged; the coupling is unstable at this communication step (docs/line-coupling.md: 'Stability: the longest step'): "
                     "take a smaller step, or --algorithm gauss-seidel --coupling extrapolate"
                 )
             new_span[span.name] = out
