@@ -64,7 +64,7 @@ impl ConvertingSpan {
 
     /// Every output now. Only the effects that read the input rates
     /// (damping, web mass) pay for them.
-    #[inline]
+    #[inline(always)]
     pub fn outputs(&self) -> Outputs {
         let p = &self.params;
         let rates = if p.include_damping || p.include_mass { self.input_rates() } else { Rates::default() };

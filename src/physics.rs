@@ -27,7 +27,7 @@ pub struct Outputs {
 
 /// The outputs [1], [5], [7]-[10] for the state x, the inputs u and the
 /// rates of the inputs. Effects that are off are not computed at all.
-#[inline]
+#[inline(always)]
 pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sensor: &SensorScale) -> Outputs {
     let length = span_length(p, u);
     let strain = strain(length, x, 0.0);
@@ -47,7 +47,7 @@ pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sens
 }
 
 /// The bracket of [5]: the strain, plus d_r2 times its rate [4] with damping.
-#[inline]
+#[inline(always)]
 pub fn effective_strain(p: &Parameters, u: &Inputs, length: f64, x: f64, strain_b: f64, length_rate: f64) -> f64 {
     if p.include_damping {
         let rate = unstretched_rate(u, strain_b);

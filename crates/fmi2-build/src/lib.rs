@@ -536,11 +536,16 @@ fn emit(md: &ModelDescription, source: &str) -> String {
         };
         let (min, min_inclusive) = bound(v.type_attrs.get("min"), v.greater_than, f64::NEG_INFINITY);
         let (max, max_inclusive) = bound(v.type_attrs.get("max"), v.less_than, f64::INFINITY);
+        // The same bounds, inclusive: a strict bound moves by one ulp.
+        let lo = v.greater_than.map_or_else(|| min.clone(), |b| rust_f64(b.next_up()));
+        let hi = v.less_than.map_or_else(|| max.clone(), |b| rust_f64(b.next_down()));
         writeln!(
             w,
             "    Variable {{ name: {:?}, vr: {}, description: {:?}, kind: {kind}, causality: Causality::{causality}, \
              variability: Variability::{variability}, initial: Initial::{initial}, start: {}, \
-             range: Range {{ min: {min}, min_inclusive: {min_inclusive}, max: {max}, max_inclusive: {max_inclusive} }}, unit: {:?} }},",
+             range: Range {{ min: {min}, min_inclusive: {min_inclusive}, max: {max}, max_inclusive: {max_inclusive}, lo: {lo}, hi: {hi} }}, \
+             unit: {:?}, family: Family::of({kind}), \
+             settable_in: settable_in(Causality::{causality}, Variability::{variability}, Initial::{initial}) }},",
             v.name(),
             v.vr(),
             v.attrs.get("description").cloned().unwrap_or_default(),
@@ -551,14 +556,13 @@ fn emit(md: &ModelDescription, source: &str) -> String {
     }
     writeln!(w, "];\n").unwrap();
 
-    // vr -> position in VARIABLES (+1; 0 means no such value reference).
+    // vr -> its row of VARIABLES.
     let max_vr = md.variables.iter().map(Variable::vr).max().unwrap_or(0) as usize;
-    let mut index = vec![0usize; max_vr + 1];
+    let mut by_vr = vec!["None".to_string(); max_vr + 1];
     for (i, v) in md.variables.iter().enumerate() {
-        index[v.vr() as usize] = i + 1;
+        by_vr[v.vr() as usize] = format!("Some(&VARIABLES[{i}])");
     }
-    let index: Vec<String> = index.iter().map(usize::to_string).collect();
-    writeln!(w, "static VR_INDEX: [u16; {}] = [{}];\n", max_vr + 1, index.join(", ")).unwrap();
+    writeln!(w, "static BY_VR: [Option<&Variable>; {}] = [{}];\n", max_vr + 1, by_vr.join(", ")).unwrap();
 
     let dependencies = |list: &[Unknown]| -> String {
         let rows: Vec<String> = list
@@ -577,7 +581,7 @@ fn emit(md: &ModelDescription, source: &str) -> String {
     writeln!(
         w,
         "pub static DESCRIPTION: ModelDescription = ModelDescription {{\n    model_name: {:?},\n    model_identifier: {:?},\n    guid: {:?},\n    \
-         log_categories: &[{}],\n    variables: &VARIABLES,\n    vr_index: &VR_INDEX,\n    output_dependencies: {},\n    initial_dependencies: {},\n    \
+         log_categories: &[{}],\n    variables: &VARIABLES,\n    by_vr: &BY_VR,\n    output_dependencies: {},\n    initial_dependencies: {},\n    \
          can_handle_variable_communication_step_size: {},\n    can_interpolate_inputs: {},\n    can_get_and_set_fmu_state: {},\n    can_serialize_fmu_state: {},\n    \
          model_exchange: {},\n    states: &[{}],\n    derivatives: {},\n    number_of_event_indicators: {},\n}};\n",
         md.attrs.get("modelName").cloned().unwrap_or_default(),

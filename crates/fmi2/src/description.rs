@@ -2,6 +2,8 @@
 //! The FMI layer checks every call against this table, so causality,
 //! variability, types and allowed ranges are enforced in one place for any model.
 
+use crate::phase::Phase;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Causality {
     Parameter,
@@ -30,6 +32,60 @@ pub enum Initial {
     None,
 }
 
+/// The type family of a get/set function: enumerations travel through the
+/// Integer functions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    Real,
+    Integer,
+    Boolean,
+    String,
+}
+
+impl Family {
+    pub const fn of(kind: Kind) -> Family {
+        match kind {
+            Kind::Real => Family::Real,
+            Kind::Integer | Kind::Enumeration { .. } => Family::Integer,
+            Kind::Boolean => Family::Boolean,
+            Kind::String => Family::String,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Real => "Real",
+            Family::Integer => "Integer",
+            Family::Boolean => "Boolean",
+            Family::String => "String",
+        }
+    }
+}
+
+/// The phases in which `fmi2Set*` may set a variable (FMI 2.0, 2.2.7, the
+/// table for co-simulation), one bit per `Phase`: inputs always; parameters
+/// before initialization when `initial` is exact or approx, during it when
+/// exact, afterwards only when tunable; constants and computed values never.
+pub const fn settable_in(causality: Causality, variability: Variability, initial: Initial) -> u8 {
+    if matches!(variability, Variability::Constant) {
+        return 0;
+    }
+    match causality {
+        Causality::Input => u8::MAX,
+        Causality::Parameter => {
+            let before = if matches!(initial, Initial::Exact | Initial::Approx) { Phase::Instantiated.bit() } else { 0 };
+            let during = if matches!(initial, Initial::Exact) { Phase::InitializationMode.bit() } else { 0 };
+            let after = if matches!(variability, Variability::Tunable) {
+                !(Phase::Instantiated.bit() | Phase::InitializationMode.bit())
+            } else {
+                0
+            };
+            before | during | after
+        }
+        _ => 0,
+    }
+}
+
 /// The FMI type of a variable. Enumerations travel through the Integer functions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
@@ -49,20 +105,24 @@ pub enum Start {
 }
 
 /// Allowed values of a Real: XML `min`/`max` are inclusive, the
-/// `ConvertingSpan.range` annotation adds strict bounds.
+/// `ConvertingSpan.range` annotation adds strict bounds. `lo` and `hi` are
+/// the same set as inclusive bounds (a strict bound moved by one ulp, which
+/// is exact for doubles), so that a check is two comparisons.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Range {
     pub min: f64,
     pub min_inclusive: bool,
     pub max: f64,
     pub max_inclusive: bool,
+    pub lo: f64,
+    pub hi: f64,
 }
 
 impl Range {
+    /// False for NaN.
+    #[inline]
     pub fn contains(&self, x: f64) -> bool {
-        let above = if self.min_inclusive { x >= self.min } else { x > self.min };
-        let below = if self.max_inclusive { x <= self.max } else { x < self.max };
-        above && below
+        self.lo <= x && x <= self.hi
     }
 
     pub fn is_unbounded(&self) -> bool {
@@ -91,6 +151,9 @@ pub struct Variable {
     pub start: Start,
     pub range: Range,
     pub unit: &'static str,
+    /// Derived: `Family::of(kind)`, and `settable_in(causality, variability, initial)`.
+    pub family: Family,
+    pub settable_in: u8,
 }
 
 /// One entry of ModelStructure: the unknown `vr` depends on the knowns `on`
@@ -118,8 +181,8 @@ pub struct ModelDescription {
     pub guid: &'static str,
     pub log_categories: &'static [&'static str],
     pub variables: &'static [Variable],
-    /// Value reference -> 1 + position in `variables`; 0 where there is none.
-    pub vr_index: &'static [u16],
+    /// Value reference -> its variable.
+    pub by_vr: &'static [Option<&'static Variable>],
     pub output_dependencies: &'static [Dependency],
     pub initial_dependencies: &'static [Dependency],
     pub can_handle_variable_communication_step_size: bool,
@@ -136,11 +199,9 @@ pub struct ModelDescription {
 }
 
 impl ModelDescription {
+    #[inline]
     pub fn variable(&self, vr: u32) -> Option<&'static Variable> {
-        let position = *self.vr_index.get(vr as usize)? as usize;
-        // `variables` is 'static, so the borrow outlives self.
-        let variables: &'static [Variable] = self.variables;
-        position.checked_sub(1).and_then(|i| variables.get(i))
+        *self.by_vr.get(vr as usize)?
     }
 
     pub fn variable_by_name(&self, name: &str) -> Option<&'static Variable> {

@@ -30,7 +30,7 @@ impl Phase {
         Phase::ContinuousTimeMode,
     ];
 
-    const fn bit(self) -> u8 {
+    pub const fn bit(self) -> u8 {
         1 << self as u8
     }
 
@@ -147,9 +147,20 @@ impl Call {
         self.allowed() & phase.bit() != 0
     }
 
+    /// Whether the call is one of this interface's functions and allowed in
+    /// this phase: the whole check of the state machine in one mask.
+    #[inline]
+    pub fn is_allowed(self, phase: Phase, model_exchange: bool) -> bool {
+        let own = match self.model_exchange_only() {
+            Some(me) => me == model_exchange,
+            None => true,
+        };
+        own && self.is_allowed_in(phase)
+    }
+
     /// `Some(true)` for functions of Model Exchange only, `Some(false)` for
     /// functions of Co-Simulation only, `None` for the common ones.
-    pub fn model_exchange_only(self) -> Option<bool> {
+    pub const fn model_exchange_only(self) -> Option<bool> {
         use Call::*;
         match self {
             EnterEventMode | NewDiscreteStates | EnterContinuousTimeMode | CompletedIntegratorStep | SetTime

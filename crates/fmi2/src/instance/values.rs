@@ -10,7 +10,7 @@ impl<M: Model> Instance<M> {
     #[inline]
     fn variable(&self, call: Call, vr: u32, family: Family) -> FmiResult<&'static Variable> {
         match Self::description().variable(vr) {
-            Some(v) if Family::of(v.kind) == family => Ok(v),
+            Some(v) if v.family == family => Ok(v),
             found => Err(wrong_variable(call, vr, found, family)),
         }
     }
@@ -71,16 +71,7 @@ impl<M: Model> Instance<M> {
     /// variable may be set) for co-simulation.
     #[inline]
     fn check_settable(&self, call: Call, v: &Variable) -> FmiResult {
-        let ok = match v.causality {
-            Causality::Input => true,
-            Causality::Parameter => match self.phase {
-                Phase::Instantiated => matches!(v.initial, Initial::Exact | Initial::Approx),
-                Phase::InitializationMode => v.initial == Initial::Exact,
-                _ => v.variability == Variability::Tunable,
-            },
-            _ => false,
-        } && v.variability != Variability::Constant;
-        if ok {
+        if v.settable_in & self.phase.bit() != 0 {
             Ok(())
         } else {
             Err(not_settable(call, v, self.phase))
@@ -120,8 +111,7 @@ impl<M: Model> Instance<M> {
                 // Parameters are range-checked when initialization ends (they
                 // may pass through odd values while a user sets them one by
                 // one); inputs take effect at once, so they are checked now.
-                let checked = !x.is_finite() || v.causality == Causality::Input;
-                if checked && !(x.is_finite() && v.range.contains(x)) {
+                if !x.is_finite() || (v.causality == Causality::Input && !v.range.contains(x)) {
                     Err(out_of_range(v, x))
                 } else {
                     Ok(())
@@ -206,7 +196,7 @@ fn wrong_variable(call: Call, vr: u32, found: Option<&Variable>, family: Family)
             "{}: {} (value reference {vr}) is of type {}, not {}",
             call.name(),
             v.name,
-            Family::of(v.kind).name(),
+            v.family.name(),
             family.name()
         ),
     })
