@@ -42,15 +42,22 @@ impl Step<'_> {
 
     /// The state at the end of the step, and the step size an adaptive
     /// method proposes next (`adaptive_step` passed on by the others).
+    #[inline]
     pub fn integrate(&self, solver: Solver, tolerance: f64, adaptive_step: f64) -> FmiResult<(CompensatedSum, f64)> {
         let choice = method(solver, self.rates.is_some())?;
-        if choice == Solver::Exact {
+        let length = physics::span_length(self.params, &self.start);
+        if choice == Solver::Exact && length > 0.0 {
             // Held inputs: L is constant too, even with moving rollers,
             // because their positions are held.
-            let length = physics::span_length(self.params, &self.start);
-            check_length(length)?;
             return Ok((physics::exact_step(length, &self.start, self.x0, self.h), adaptive_step));
         }
+        self.integrate_numerically(choice, tolerance, adaptive_step)
+    }
+
+    /// The methods other than the exact step (and a span length that
+    /// reaches zero, which `check_length` reports).
+    #[inline(never)]
+    fn integrate_numerically(&self, choice: Solver, tolerance: f64, adaptive_step: f64) -> FmiResult<(CompensatedSum, f64)> {
         check_length(self.shortest_length())?;
         let h = self.h;
         let length = physics::span_length(self.params, &self.start);

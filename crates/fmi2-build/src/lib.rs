@@ -617,11 +617,14 @@ fn emit(md: &ModelDescription, source: &str) -> String {
         writeln!(w, "}}\n\nimpl {family} {{").unwrap();
         writeln!(w, "    pub const ALL: [{family}; {}] = [{}];", vars.len(),
             vars.iter().map(|v| format!("{family}::{}", v.rust_name())).collect::<Vec<_>>().join(", ")).unwrap();
-        writeln!(w, "    pub fn from_vr(vr: u32) -> Option<Self> {{\n        match vr {{").unwrap();
+        // A table indexed by value reference: one bounds check and one load.
+        let slots = vars.iter().map(|v| v.vr() as usize + 1).max().unwrap_or(0);
+        let mut table = vec!["None".to_string(); slots];
         for v in &vars {
-            writeln!(w, "            {} => Some({family}::{}),", v.vr(), v.rust_name()).unwrap();
+            table[v.vr() as usize] = format!("Some({family}::{})", v.rust_name());
         }
-        writeln!(w, "            _ => None,\n        }}\n    }}").unwrap();
+        writeln!(w, "    const BY_VR: [Option<{family}>; {slots}] = [{}];", table.join(", ")).unwrap();
+        writeln!(w, "    #[inline]\n    pub fn from_vr(vr: u32) -> Option<Self> {{\n        match Self::BY_VR.get(vr as usize) {{ Some(&v) => v, None => None }}\n    }}").unwrap();
         writeln!(w, "    pub const fn vr(self) -> u32 {{ self as u32 }}").unwrap();
         writeln!(w, "    pub fn name(self) -> &'static str {{ DESCRIPTION.variable(self.vr()).map_or(\"?\", |v| v.name) }}").unwrap();
         writeln!(w, "}}\n").unwrap();
