@@ -169,7 +169,7 @@ fn vr(src: &mut Source, want: impl std::ops::Fn(&Variable) -> bool) -> u32 {
     let d = desc();
     match src.pick(8) {
         0 => src.u32(),
-        1 => [0, u32::MAX, d.vr_index.len() as u32, 1000][src.pick(4)],
+        1 => [0, u32::MAX, d.by_vr.len() as u32, 1000][src.pick(4)],
         2 => d.variables[src.pick(d.variables.len())].vr,
         _ => {
             let wanted: Vec<&Variable> = d.variables.iter().filter(|v| want(v)).collect();
@@ -1873,14 +1873,7 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     }
     let set_states = buf.clone();
     let mut flags = [0i32; 2];
-    let mut info = fmi2EventInfo {
-        newDiscreteStatesNeeded: 0,
-        terminateSimulation: 0,
-        nominalsOfContinuousStatesChanged: 0,
-        valuesOfContinuousStatesChanged: 0,
-        nextEventTimeDefined: 0,
-        nextEventTime: 0.0,
-    };
+    let mut info = fmi2EventInfo::default();
     let null = src.chance(64);
     let p = if null { null_mut() } else { buf.as_mut_ptr() };
     let orders = vec![1i32; n];

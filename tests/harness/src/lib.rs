@@ -501,14 +501,7 @@ unsafe fn raw_call<M: Model>(c: fmi2Component, api: Api, state: fmi2FMUstate, by
         }
         Api::EnterEventMode => fmi2EnterEventMode(c),
         Api::NewDiscreteStates => {
-            let mut info = fmi2EventInfo {
-                newDiscreteStatesNeeded: 0,
-                terminateSimulation: 0,
-                nominalsOfContinuousStatesChanged: 0,
-                valuesOfContinuousStatesChanged: 0,
-                nextEventTimeDefined: 0,
-                nextEventTime: 0.0,
-            };
+            let mut info = fmi2EventInfo::default();
             fmi2NewDiscreteStates(c, &mut info)
         }
         Api::EnterContinuousTimeMode => fmi2EnterContinuousTimeMode(c),

@@ -72,6 +72,7 @@ pub struct fmi2CallbackFunctions {
 }
 
 #[repr(C)]
+#[derive(Default)]
 pub struct fmi2EventInfo {
     pub newDiscreteStatesNeeded: fmi2Boolean,
     pub terminateSimulation: fmi2Boolean,
