@@ -73,17 +73,17 @@ CALLS = ("fmi2SetReal", "fmi2DoStep", "fmi2GetReal")
 # pattern that matches the function's name (or, for "model", its file) wins.
 GROUPS = [
     ("entry and exit: tag and poison checks, catch_unwind, status mapping, argument pointers",
-     r"^fmi2::ffi::(enter|handle|slice|slice_mut)\b|^fmi2\w+$|^fmi2::ffi::exports::|is_allowed_when_poisoned"
+     r"^fmi2::ffi::(enter|handle|slice|slice_mut)\b|^fmi2\w+$|^fmi2::ffi::(exports|calls)::|is_allowed_when_poisoned"
      r"|Instance::fail\b|traces_calls|LogFilter"),
     ("state mask: is the call allowed in this phase", r"Instance::(begin|prepare_get|check_computable)\b|\b(Call|Phase)::"),
-    ("time checks in do_step", r"Instance::do_step\b"),
+    ("time checks in do_step", r"Instance::(do_step|check_step)\b"),
     ("input checks: finite and in range", r"Instance::set_reals::\{\{closure\}\}|Range::contains|out_of_range"),
     ("value-reference lookup: table, family, settable, from_vr, field match",
      r"ModelDescription::variable\b|Instance::variable\b|Family::of|check_settable|wrong_variable|::from_vr"
-     r"|<\w+ as Model>::(get|set)_real\b|ConvertingSpan::(real|real_field|set_real_var)$|input_field"
+     r"|<\w+ as Model>::(get|set)_real\b|Variables for \w+>::(get|set)_real\b|ConvertingSpan::(real|real_field|set_real_var)$|input_field"
      r"|<(Causality|Variability|Initial|Kind) as PartialEq>"),
     ("get/set loops", r"Instance::(get_reals|set_reals|set_all)$"),
-    ("model arithmetic: the step and the outputs (libm included)", r"^src/(span|solver)/|^libm"),
+    ("model arithmetic: the step and the outputs (libm included)", r"^src/|^crates/solver/|^libm"),
 ]
 OTHER = "other"
 

@@ -91,7 +91,7 @@ fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
     }
     let mut bytes = vec![0u8; size];
     assert_eq!(unsafe { fmi2SerializeFMUstate(fmu.c, state, bytes.as_mut_ptr() as *mut _, size) }, OK);
-    // Reals are stored as their little-endian bits (src/fmi2/snapshot.rs).
+    // Reals are stored as their little-endian bits (crates/fmi2/src/snapshot.rs).
     let l_at = bytes.windows(8).position(|w| w == marker.to_le_bytes()).expect("L in the serialized state");
     bytes[l_at..l_at + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
     let n = bytes.len() - 8;

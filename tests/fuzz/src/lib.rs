@@ -199,7 +199,7 @@ pub enum St {
 }
 
 impl St {
-    /// The serialized phase byte (documented order of src/fmi2/snapshot.rs).
+    /// The serialized phase byte (documented order of crates/fmi2/src/snapshot.rs).
     fn from_byte(b: u8) -> Option<St> {
         [
             St::Instantiated,
@@ -1450,7 +1450,7 @@ fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     Ok(())
 }
 
-/// FNV-1a, 64 bit, as documented in src/fmi2/snapshot.rs: the harness
+/// FNV-1a, 64 bit, as documented in crates/fmi2/src/snapshot.rs: the harness
 /// recomputes the checksum to forge states that get past it.
 fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
