@@ -21,8 +21,9 @@ use super::phase::Phase;
 use super::status::{FmiError, FmiResult};
 
 const MAGIC: &[u8; 8] = b"FMI2SNAP";
-/// 2: the experiment (interface, tolerance, start and stop time) is saved too.
-const FORMAT_VERSION: u32 = 2;
+/// 2: the experiment (interface, tolerance, start and stop time) is saved too;
+/// 3: the model's variables in the order of its binding table, then its own state.
+const FORMAT_VERSION: u32 = 3;
 const HEADER: usize = 24;
 const TRAILER: usize = 8;
 
