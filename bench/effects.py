@@ -20,6 +20,7 @@ import re
 import shutil
 import platform
 import subprocess
+import tempfile
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -43,7 +44,9 @@ def build_library(source: Path, target_dir: Path) -> Path:
 
 
 def baseline_source(rev: str) -> Path:
-    tree = OUT / f"baseline-{rev}"
+    # Outside this repository: inside it, cargo would take the tree for a
+    # member of this workspace.
+    tree = Path(tempfile.gettempdir()) / "converting-span-bench" / f"baseline-{rev}"
     if not tree.exists():
         subprocess.run(["git", "worktree", "add", "--detach", str(tree), rev], cwd=ROOT, check=True,
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
