@@ -208,7 +208,7 @@ impl Model for ConvertingSpan {
     fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult {
         let var = Real::from_vr(vr).ok_or_else(|| fmi2::model::unknown_vr(vr))?;
         if value != 0.0 {
-            stepping::method(self.params.solver, true).map_err(|e| prefixed(&format!("derivative of {} = {value}", var.name()), e))?;
+            stepping::method(self.params.solver, true).map_err(|e| e.prefixed(&format!("derivative of {} = {value}", var.name())))?;
         }
         let mut rates = self.input_rates.unwrap_or_default();
         *Self::input_field(&mut rates, var).ok_or_else(|| FmiError::error(format!("{} is not an input", var.name())))? = value;
@@ -344,9 +344,4 @@ pub fn effective_tolerance(parameter: f64, experiment: Option<f64>) -> f64 {
         Some(t) if parameter == default => t,
         _ => parameter,
     }
-}
-
-#[cold]
-fn prefixed(what: &str, e: FmiError) -> FmiError {
-    FmiError { status: e.status, message: format!("{what}: {}", e.message) }
 }

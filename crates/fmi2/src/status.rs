@@ -43,6 +43,12 @@ impl FmiError {
     pub fn discard(message: impl Into<String>) -> Self {
         FmiError { status: Status::Discard, message: message.into() }
     }
+
+    /// The same error, its message prefixed with where it happened.
+    #[cold]
+    pub fn prefixed(self, what: &str) -> Self {
+        FmiError { status: self.status, message: format!("{what}: {}", self.message) }
+    }
 }
 
 pub type FmiResult<T = ()> = Result<T, FmiError>;

@@ -142,7 +142,7 @@ impl<M: Model> Instance<M> {
             self.panic_in_next_step = true;
             return Ok(());
         }
-        self.log.set(on, categories).map_err(|e| prefixed(Call::SetDebugLogging, e))
+        self.log.set(on, categories).map_err(|e| e.prefixed(Call::SetDebugLogging.name()))
     }
 
     pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> FmiResult {
@@ -172,7 +172,7 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn exit_initialization_mode(&mut self) -> FmiResult {
-        self.settle_initial_values().map_err(|e| prefixed(Call::ExitInitializationMode, e))?;
+        self.settle_initial_values().map_err(|e| e.prefixed(Call::ExitInitializationMode.name()))?;
         self.phase = if self.experiment.model_exchange { Phase::EventMode } else { Phase::StepComplete };
         self.log_event("initialization done");
         Ok(())
@@ -218,8 +218,7 @@ impl<M: Model> Instance<M> {
     pub fn do_step(&mut self, current: f64, h: f64) -> FmiResult {
         // The common case inline: a positive finite step from the instance's
         // time (within TIME_TOLERANCE) to a finite end; `check_step` says why not.
-        let slack = TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0);
-        let usual = h > 0.0 && h < f64::INFINITY && (current - self.time).abs() <= slack && (current + h).is_finite();
+        let usual = h > 0.0 && h < f64::INFINITY && self.is_current_time(current) && (current + h).is_finite();
         if !usual {
             self.check_step(current, h)?;
         }
@@ -243,9 +242,15 @@ impl<M: Model> Instance<M> {
                 if e.status == Status::Discard {
                     self.phase = Phase::StepFailed;
                 }
-                Err(FmiError { status: e.status, message: format!("{} at t = {current} with h = {h}: {}", Call::DoStep.name(), e.message) })
+                Err(e.prefixed(&format!("{} at t = {current} with h = {h}", Call::DoStep.name())))
             }
         }
+    }
+
+    /// `current` is the instance's time up to `TIME_TOLERANCE` (false for NaN and infinities).
+    #[inline]
+    fn is_current_time(&self, current: f64) -> bool {
+        current.is_finite() && (current - self.time).abs() <= TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0)
     }
 
     /// Why `fmi2DoStep(current, h)` is refused, if it is.
@@ -255,8 +260,7 @@ impl<M: Model> Instance<M> {
         if !(h.is_finite() && h > 0.0) {
             return Err(FmiError::error(format!("{name}: communicationStepSize = {h} must be finite and > 0")));
         }
-        let tolerance = TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0);
-        if !current.is_finite() || (current - self.time).abs() > tolerance {
+        if !self.is_current_time(current) {
             return Err(FmiError::error(format!(
                 "{name}: currentCommunicationPoint = {current} is not the current time {} of the instance",
                 self.time
@@ -290,10 +294,6 @@ fn out_of_range(v: &Variable, value: f64) -> FmiError {
     FmiError::error(format!("{} = {value}{unit} is outside its allowed range {}", v.name, v.range))
 }
 
-#[cold]
-fn prefixed(call: Call, e: FmiError) -> FmiError {
-    FmiError { status: e.status, message: format!("{}: {}", call.name(), e.message) }
-}
 
 /// FMI 2.0: a status kind the FMU does not provide answers fmi2Discard.
 pub fn unavailable_status(call: Call, kind: i32) -> FmiError {

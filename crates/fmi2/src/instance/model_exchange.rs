@@ -34,31 +34,31 @@ impl<M: Model> Instance<M> {
         if let Some(bad) = x.iter().find(|v| !v.is_finite()) {
             return Err(FmiError::error(format!("{}: a state value is {bad}", call.name())));
         }
-        self.model.set_continuous_states(x).map_err(|e| prefixed(call, e))
+        self.model.set_continuous_states(x).map_err(|e| e.prefixed(call.name()))
     }
 
     pub fn get_continuous_states(&mut self, x: &mut [f64]) -> FmiResult {
         let call = Call::GetContinuousStates;
         self.prepare_computed(call, "states", x.len(), Self::description().states.len())?;
-        self.model.get_continuous_states(x).map_err(|e| prefixed(call, e))
+        self.model.get_continuous_states(x).map_err(|e| e.prefixed(call.name()))
     }
 
     pub fn get_derivatives(&mut self, dx: &mut [f64]) -> FmiResult {
         let call = Call::GetDerivatives;
         self.prepare_computed(call, "derivatives", dx.len(), Self::description().states.len())?;
-        self.model.get_derivatives(dx).map_err(|e| prefixed(call, e))
+        self.model.get_derivatives(dx).map_err(|e| e.prefixed(call.name()))
     }
 
     pub fn get_event_indicators(&mut self, z: &mut [f64]) -> FmiResult {
         let call = Call::GetEventIndicators;
         self.prepare_computed(call, "event indicators", z.len(), Self::description().number_of_event_indicators)?;
-        self.model.get_event_indicators(z).map_err(|e| prefixed(call, e))
+        self.model.get_event_indicators(z).map_err(|e| e.prefixed(call.name()))
     }
 
     pub fn get_nominals(&mut self, nominals: &mut [f64]) -> FmiResult {
         let call = Call::GetNominalsOfContinuousStates;
         Self::check_count(call, "nominals", nominals.len(), Self::description().states.len())?;
-        self.model.get_nominals(nominals).map_err(|e| prefixed(call, e))
+        self.model.get_nominals(nominals).map_err(|e| e.prefixed(call.name()))
     }
 
     pub fn enter_event_mode(&mut self) -> FmiResult {

@@ -19,7 +19,7 @@ impl<M: Model> Instance<M> {
     /// set so far, so they are computed before they are read.
     pub(super) fn prepare_get(&mut self, call: Call) -> FmiResult {
         if self.phase == Phase::InitializationMode {
-            self.settle_initial_values().map_err(|e| prefixed(call, e))?;
+            self.settle_initial_values().map_err(|e| e.prefixed(call.name()))?;
         }
         Ok(())
     }
@@ -29,7 +29,7 @@ impl<M: Model> Instance<M> {
     /// may never have passed initialization).
     pub(super) fn check_computable(&self, call: Call, computed: bool) -> FmiResult {
         if computed && self.phase == Phase::Error {
-            self.model.outputs_defined().map_err(|e| prefixed(call, e))?;
+            self.model.outputs_defined().map_err(|e| e.prefixed(call.name()))?;
         }
         Ok(())
     }
@@ -93,7 +93,7 @@ impl<M: Model> Instance<M> {
         for (&vr, &value) in vrs.iter().zip(values) {
             let v = self.variable(call, vr, family)?;
             self.check_settable(call, v)?;
-            check(v, value).map_err(|e| prefixed(call, e))?;
+            check(v, value).map_err(|e| e.prefixed(call.name()))?;
         }
         for (&vr, &value) in vrs.iter().zip(values) {
             apply(&mut self.model, vr, value)?;
