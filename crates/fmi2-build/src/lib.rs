@@ -525,7 +525,7 @@ fn emit(md: &ModelDescription, source: &str) -> String {
                     start.map(|s| format!("Start::Integer({s})")),
                 )
             }
-            _ => ("Kind::String".to_string(), None),
+            _ => ("Kind::String".to_string(), start.map(|s| format!("Start::String({s:?})"))),
         };
         let bound = |xml: Option<&String>, strict: Option<f64>, default: f64| -> (String, bool) {
             match (strict, xml.and_then(|x| x.parse::<f64>().ok())) {
@@ -606,7 +606,10 @@ fn emit(md: &ModelDescription, source: &str) -> String {
     .unwrap();
 
     // One typed enum per FMI type family; the discriminant is the value reference.
-    for (family, kinds) in [("Real", &["Real"][..]), ("Integer", &["Integer", "Enumeration"][..]), ("Boolean", &["Boolean"][..])] {
+    // FMI's String family is `Text` here, so that it does not shadow Rust's String.
+    for (family, kinds) in
+        [("Real", &["Real"][..]), ("Integer", &["Integer", "Enumeration"][..]), ("Boolean", &["Boolean"][..]), ("Text", &["String"][..])]
+    {
         let vars: Vec<&Variable> = md.variables.iter().filter(|v| kinds.contains(&v.kind.as_str())).collect();
         writeln!(w, "/// The {family} variables of the model description; the discriminant is the value reference.").unwrap();
         writeln!(w, "#[allow(non_camel_case_types)]\n#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]\npub enum {family} {{").unwrap();
@@ -625,7 +628,12 @@ fn emit(md: &ModelDescription, source: &str) -> String {
         }
         writeln!(w, "    const BY_VR: [Option<{family}>; {slots}] = [{}];", table.join(", ")).unwrap();
         writeln!(w, "    #[inline]\n    pub fn from_vr(vr: u32) -> Option<Self> {{\n        match Self::BY_VR.get(vr as usize) {{ Some(&v) => v, None => None }}\n    }}").unwrap();
-        writeln!(w, "    pub const fn vr(self) -> u32 {{ self as u32 }}").unwrap();
+        if vars.is_empty() {
+            // A family without variables is an empty enum, which has no discriminant to cast.
+            writeln!(w, "    pub const fn vr(self) -> u32 {{ match self {{}} }}").unwrap();
+        } else {
+            writeln!(w, "    pub const fn vr(self) -> u32 {{ self as u32 }}").unwrap();
+        }
         writeln!(w, "    pub fn name(self) -> &'static str {{ DESCRIPTION.variable(self.vr()).map_or(\"?\", |v| v.name) }}").unwrap();
         writeln!(w, "}}\n").unwrap();
     }

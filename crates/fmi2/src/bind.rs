@@ -11,7 +11,10 @@
 //!   derivatives land at the same path in a value of the `inputs` type;
 //! * `computed(expr)` — a value computed as `self.expr` (outputs, locals).
 //!
-//! The caller has the generated `Real`, `Integer` and `Boolean` in scope.
+//! String parameters are stored as `Arc<str>`: cloning a model (which the
+//! layer does to make a call all-or-nothing) then never allocates.
+//!
+//! The caller has the generated `Real`, `Integer`, `Boolean` and `Text` in scope.
 
 /// Writes the `Variables` impl and the inherent `real`, `integer`,
 /// `boolean` and `input_field` functions of a model from its bindings.
@@ -23,6 +26,7 @@ macro_rules! bind_variables {
         real { $($r:ident: $rk:ident($($rf:tt)+)),* $(,)? }
         integer { $($i:ident: $ik:ident($($if:tt)+)),* $(,)? }
         boolean { $($b:ident: $bk:ident($($bf:tt)+)),* $(,)? }
+        string { $($s:ident: $sk:ident($($sf:tt)+)),* $(,)? }
     ) => {
         impl $model {
             /// The value of a Real variable.
@@ -88,10 +92,22 @@ macro_rules! bind_variables {
                 match var { $(Boolean::$b => $crate::__bound_set!(self, var, value, $bk, $($bf)+),)* }
             }
 
+            fn get_string(&self, vr: u32) -> $crate::FmiResult<&str> {
+                match Text::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))? {
+                    $(Text::$s => Ok(&*$crate::__bound!(self, $sk, $($sf)+)),)*
+                }
+            }
+
+            fn set_string(&mut self, vr: u32, value: &str) -> $crate::FmiResult {
+                let var = Text::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))?;
+                match var { $(Text::$s => $crate::__bound_set!(self, var, ::std::sync::Arc::from(value), $sk, $($sf)+),)* }
+            }
+
             fn save_variables(&self, out: &mut $crate::StateWriter) {
                 $($crate::__bound_save!(out.f64, self, $rk, ::core::convert::identity, $($rf)+);)*
                 $($crate::__bound_save!(out.i32, self, $ik, $crate::IntegerValue::to_i32, $($if)+);)*
                 $($crate::__bound_save!(out.bool, self, $bk, ::core::convert::identity, $($bf)+);)*
+                $($crate::__bound_save!(out.str, self, $sk, @ref, $($sf)+);)*
             }
 
             fn load_variables(&mut self, input: &mut $crate::StateReader) -> $crate::FmiResult {
@@ -99,6 +115,7 @@ macro_rules! bind_variables {
                 $($crate::__bound_load!(self, $ik,
                     $crate::model::integer_value(Integer::$i.name(), input.i32(Integer::$i.name())?)?, $($if)+);)*
                 $($crate::__bound_load!(self, $bk, input.bool(Boolean::$b.name())?, $($bf)+);)*
+                $($crate::__bound_load!(self, $sk, ::std::sync::Arc::from(input.string(Text::$s.name())?), $($sf)+);)*
                 Ok(())
             }
         }
@@ -131,6 +148,7 @@ macro_rules! __bound_input {
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __bound_save {
+    ($out:ident.$put:ident, $s:tt, param, @ref, $($f:tt)+) => { $out.$put(&$s.$($f)+) };
     ($out:ident.$put:ident, $s:tt, param, $conv:path, $($f:tt)+) => { $out.$put($conv($s.$($f)+)) };
     ($out:ident.$put:ident, $s:tt, input, $conv:path, $($f:tt)+) => { $out.$put($conv($s.inputs.$($f)+)) };
     ($out:ident.$put:ident, $s:tt, computed, $conv:path, $($f:tt)+) => { () };

@@ -101,6 +101,7 @@ pub enum Start {
     Real(f64),
     Integer(i32),
     Boolean(bool),
+    String(&'static str),
     None,
 }
 

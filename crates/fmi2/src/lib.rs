@@ -7,6 +7,7 @@
 //!   get, set, save and load follow from that binding;
 //! * `description` — the types of the table the generator (`fmi2-build`)
 //!   emits from a modelDescription.xml;
+//! * `resources` — the FMU's resources/ folder from the importer's URI;
 //! * `model`, `persist`, `snapshot`, `phase`, `status`, `logging`.
 
 #![deny(unsafe_code)]
@@ -20,9 +21,11 @@ pub mod logging;
 pub mod model;
 pub mod persist;
 pub mod phase;
+pub mod resources;
 pub mod snapshot;
 pub mod status;
 
 pub use model::{Event, Experiment, IntegerValue, Model, Variables};
 pub use persist::{StateReader, StateWriter};
+pub use resources::Resources;
 pub use status::{FmiError, FmiResult, Status};

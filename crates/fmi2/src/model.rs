@@ -4,6 +4,7 @@
 
 use super::description::{Causality, ModelDescription, Start};
 use super::persist::{StateReader, StateWriter};
+use super::resources::Resources;
 use super::status::{FmiError, FmiResult};
 
 fn no_model_exchange() -> FmiError {
@@ -57,6 +58,8 @@ pub trait Variables {
     fn set_integer(&mut self, vr: u32, value: i32) -> FmiResult;
     fn get_boolean(&self, vr: u32) -> FmiResult<bool>;
     fn set_boolean(&mut self, vr: u32, value: bool) -> FmiResult;
+    fn get_string(&self, vr: u32) -> FmiResult<&str>;
+    fn set_string(&mut self, vr: u32, value: &str) -> FmiResult;
     /// Every parameter and input, in the binding's order.
     fn save_variables(&self, out: &mut StateWriter);
     fn load_variables(&mut self, input: &mut StateReader) -> FmiResult;
@@ -77,10 +80,11 @@ pub trait Model: Variables + Clone + Default + 'static {
     fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult;
 
     /// Checks what the description's ranges cannot say (relations between
-    /// values) and computes the initial state from parameters and inputs.
-    /// Called when initialization ends, and before outputs are read during
-    /// initialization. Must not change anything when it fails.
-    fn initialize(&mut self, experiment: &Experiment) -> FmiResult;
+    /// values) and computes the initial state from parameters and inputs;
+    /// `resources` is the FMU's `resources/` folder, for models that read
+    /// files. Called when initialization ends, and before outputs are read
+    /// during initialization. Must not change anything when it fails.
+    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult;
 
     /// Advances the model over a communication step of length `h` > 0, the
     /// inputs held at their current values. On failure the model must be
@@ -141,6 +145,7 @@ pub trait Model: Variables + Clone + Default + 'static {
                 Start::Real(x) => model.set_real(v.vr, x),
                 Start::Integer(x) => model.set_integer(v.vr, x),
                 Start::Boolean(x) => model.set_boolean(v.vr, x),
+                Start::String(x) => model.set_string(v.vr, x),
                 Start::None => Ok(()),
             };
         }

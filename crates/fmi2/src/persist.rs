@@ -20,6 +20,11 @@ impl StateWriter {
     pub fn bool(&mut self, x: bool) {
         self.bytes.push(x as u8);
     }
+    /// Length (u32) then the UTF-8 bytes.
+    pub fn str(&mut self, x: &str) {
+        self.bytes.extend_from_slice(&(x.len() as u32).to_le_bytes());
+        self.bytes.extend_from_slice(x.as_bytes());
+    }
 }
 
 /// Reads fields back in the order `StateWriter` wrote them; every read
@@ -55,6 +60,15 @@ impl<'a> StateReader<'a> {
     }
     pub fn i32(&mut self, what: &str) -> FmiResult<i32> {
         Ok(i32::from_le_bytes(self.take(what)?))
+    }
+    pub fn string(&mut self, what: &str) -> FmiResult<&'a str> {
+        let n = u32::from_le_bytes(self.take(what)?) as usize;
+        if self.bytes.len() < n {
+            return Err(malformed(format!("payload ends inside {what}")));
+        }
+        let (head, rest) = self.bytes.split_at(n);
+        self.bytes = rest;
+        std::str::from_utf8(head).map_err(|_| malformed(format!("{what} is not UTF-8")))
     }
     pub fn bool(&mut self, what: &str) -> FmiResult<bool> {
         match self.take::<1>(what)?[0] {

@@ -22,8 +22,9 @@ use super::status::{FmiError, FmiResult};
 
 const MAGIC: &[u8; 8] = b"FMI2SNAP";
 /// 2: the experiment (interface, tolerance, start and stop time) is saved too;
-/// 3: the model's variables in the order of its binding table, then its own state.
-const FORMAT_VERSION: u32 = 3;
+/// 3: the model's variables in the order of its binding table, then its own state;
+/// 4: String variables too (length-prefixed UTF-8), and the model's own data may vary in length.
+const FORMAT_VERSION: u32 = 4;
 const HEADER: usize = 24;
 const TRAILER: usize = 8;
 

@@ -12,7 +12,7 @@
 pub mod description;
 pub mod physics;
 
-use description::{Boolean, Integer, Real, DESCRIPTION};
+use description::{Boolean, Integer, Real, Text, DESCRIPTION};
 use fmi2::{Experiment, FmiError, FmiResult, Model, StateReader, StateWriter};
 use physics::{Inputs, Parameters};
 use solver::CompensatedSum;
@@ -35,6 +35,7 @@ fmi2::bind_variables! {
     }
     integer {}
     boolean {}
+    string {}
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -81,7 +82,7 @@ impl Model for Roller {
         )))
     }
 
-    fn initialize(&mut self, _experiment: &Experiment) -> FmiResult {
+    fn initialize(&mut self, _experiment: &Experiment, _resources: &fmi2::Resources) -> FmiResult {
         self.omega = CompensatedSum::from_parts(self.params.omega_start, 0.0);
         Ok(())
     }

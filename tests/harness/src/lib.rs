@@ -201,12 +201,20 @@ impl<M: Model> Default for Setup<M> {
             name: Some(M::description().model_identifier.to_ascii_lowercase()),
             fmu_type: CS,
             guid: Some(guid::<M>().into()),
-            resource_location: Some("file:///tmp/resources".into()),
+            resource_location: Some(shipped_resources()),
             logging_on: false,
             no_logger: false,
             model: PhantomData,
         }
     }
+}
+
+/// The repository's fmu/resources/ (what the FMU ships in resources/) as a
+/// file: URI, spaces percent-encoded as importers do.
+pub fn shipped_resources() -> String {
+    let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fmu/resources");
+    let folder = folder.canonicalize().unwrap_or(folder);
+    format!("file://{}/", folder.display().to_string().replace('%', "%25").replace(' ', "%20"))
 }
 
 fn c_opt(s: &Option<String>) -> Option<CString> {
@@ -708,10 +716,25 @@ impl<M: Model> Fmu<M> {
         status_of(s, v)
     }
 
-    pub fn get_strings_vr(&self, vrs: &[u32]) -> i32 {
+    /// The status, and the texts when it is OK (copied before the next call).
+    pub fn get_strings_vr(&self, vrs: &[u32]) -> Result<Vec<String>, i32> {
         let mut v: Vec<fmi2String> = vec![std::ptr::null(); vrs.len()];
         // SAFETY: as above.
-        unsafe { fmi2GetString(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) }
+        let s = unsafe { fmi2GetString(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
+        if s != OK {
+            return Err(s);
+        }
+        // SAFETY: on OK the FMU filled every slot with a text valid until the next call.
+        Ok(v.iter().map(|&p| unsafe { string(p) }).collect())
+    }
+
+    /// A String variable's text by name.
+    pub fn text(&self, name: &str) -> String {
+        self.get_strings_vr(&[var::<M>(name).vr]).unwrap_or_else(|s| panic!("get {name}: status {s}: {:?}", self.logs())).remove(0)
+    }
+
+    pub fn set_text(&self, name: &str, value: &str) -> i32 {
+        self.set_strings_vr(&[var::<M>(name).vr], &[value])
     }
 
     pub fn set_reals_vr(&self, vrs: &[u32], values: &[f64]) -> i32 {
@@ -740,7 +763,7 @@ impl<M: Model> Fmu<M> {
         unsafe { fmi2SetString(self.c, vrs.as_ptr(), vrs.len(), ptrs.as_ptr()) }
     }
 
-    // ---- values by name (any type: Real, Integer/Enumeration, Boolean)
+    // ---- values by name (any type: Real, Integer/Enumeration, Boolean; Strings hashed by `get`)
 
     /// Sets one variable by name; the value is converted to the variable's
     /// type (Booleans and enumerations take the raw integer).
@@ -750,7 +773,7 @@ impl<M: Model> Fmu<M> {
             Kind::Real => self.set_reals_vr(&[v.vr], &[value]),
             Kind::Integer | Kind::Enumeration { .. } => self.set_integers_vr(&[v.vr], &[value as i32]),
             Kind::Boolean => self.set_booleans_vr(&[v.vr], &[value as i32]),
-            Kind::String => panic!("no String variables"),
+            Kind::String => panic!("{name} is a String: use set_text"),
         }
     }
 
@@ -768,7 +791,9 @@ impl<M: Model> Fmu<M> {
             Kind::Real => self.get_reals_vr(&[v.vr]).map(|x| x[0]),
             Kind::Integer | Kind::Enumeration { .. } => self.get_integers_vr(&[v.vr]).map(|x| x[0] as f64),
             Kind::Boolean => self.get_booleans_vr(&[v.vr]).map(|x| x[0] as f64),
-            Kind::String => panic!("no String variables"),
+            // A text as the FNV-1a hash of its bytes, so that comparisons of
+            // every variable's value cover the String variables too.
+            Kind::String => self.get_strings_vr(&[v.vr]).map(|x| f64::from_bits(fnv1a(x[0].as_bytes()))),
         }
     }
 
@@ -916,4 +941,8 @@ impl<M: Model> Fmu<M> {
             status => status,
         }
     }
+}
+
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
 }

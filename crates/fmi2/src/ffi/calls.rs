@@ -111,8 +111,14 @@ pub unsafe fn get_string<M: Model>(
     let call = Call::GetString;
     enter::<M>(c, call, |h| {
         let vrs = slice(call, vr, nvr, "vr")?;
-        slice_mut(call, value, nvr, "value")?;
-        h.instance.check_strings(call, vrs)?;
+        let out = slice_mut(call, value, nvr, "value")?;
+        let mut texts = Vec::with_capacity(vrs.len());
+        h.instance.get_strings(vrs, |s| texts.push(c_text(s)))?;
+        // The pointers stay valid until the next call replaces the texts.
+        h.strings = texts;
+        for (slot, s) in out.iter_mut().zip(&h.strings) {
+            *slot = s.as_ptr();
+        }
         OK
     })
 }
@@ -165,8 +171,12 @@ pub unsafe fn set_string<M: Model>(
     let call = Call::SetString;
     enter::<M>(c, call, |h| {
         let vrs = slice(call, vr, nvr, "vr")?;
-        slice(call, value, nvr, "value")?;
-        h.instance.check_strings(call, vrs)?;
+        let texts = slice(call, value, nvr, "value")?
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| utf8(call, s, i))
+            .collect::<FmiResult<Vec<_>>>()?;
+        h.instance.set_strings(vrs, &texts)?;
         OK
     })
 }

@@ -22,6 +22,7 @@ use super::instance::Instance;
 use super::logging::Log;
 use super::model::Model;
 use super::phase::Call;
+use super::resources::Resources;
 use super::snapshot::Snapshot;
 use super::status::{FmiError, FmiResult, Status};
 #[doc(hidden)]
@@ -127,6 +128,8 @@ struct Handle<M: Model> {
     tag: u64,
     instance: Instance<M>,
     states: Vec<*mut Snapshot<M>>,
+    /// The texts `fmi2GetString` last returned: they stay valid until the next call.
+    strings: Vec<CString>,
     /// Set when a panic was caught inside a call: the instance may be half
     /// updated, so only the calls of `Call::is_allowed_when_poisoned` are
     /// accepted until an `fmi2Reset` succeeds.
@@ -209,13 +212,13 @@ pub unsafe fn instantiate<M: Model>(
         .unwrap_or(std::ptr::null_mut())
 }
 
-/// Checks the FMU type and GUID, copies what it keeps. The resource
-/// location is not kept: neither model reads resources.
+/// Checks the FMU type and GUID, copies what it keeps (the resource
+/// location as a folder, or why it is none).
 unsafe fn checked_instance<M: Model>(
     instance_name: fmi2String,
     fmu_type: fmi2Type,
     guid: fmi2String,
-    _resource_location: fmi2String,
+    resource_location: fmi2String,
     functions: *const fmi2CallbackFunctions,
     logging_on: fmi2Boolean,
 ) -> fmi2Component {
@@ -246,8 +249,9 @@ unsafe fn checked_instance<M: Model>(
             ));
         }
     }
-    let instance = Instance::<M>::new(Box::new(logger), logging_on != 0, model_exchange);
-    Box::into_raw(Box::new(Handle { tag: TAG, instance, states: Vec::new(), poisoned: false })) as fmi2Component
+    let resources = Resources::from_location(text(resource_location).as_deref());
+    let instance = Instance::<M>::new(Box::new(logger), logging_on != 0, model_exchange, resources);
+    Box::into_raw(Box::new(Handle { tag: TAG, instance, states: Vec::new(), strings: Vec::new(), poisoned: false })) as fmi2Component
 }
 
 /// `fmi2FreeInstance`.
@@ -338,6 +342,17 @@ fn out_ref<'a, T>(call: Call, ptr: *mut T, what: &str) -> FmiResult<&'a mut T> {
 #[cold]
 fn null_argument(call: Call, what: &str) -> FmiError {
     FmiError::error(format!("{}: {what} is NULL", call.name()))
+}
+
+/// A String value: `Ok(None)` for NULL, an error for bytes that are not UTF-8.
+unsafe fn utf8<'a>(call: Call, s: fmi2String, i: usize) -> FmiResult<Option<&'a str>> {
+    if s.is_null() {
+        return Ok(None);
+    }
+    CStr::from_ptr(s)
+        .to_str()
+        .map(Some)
+        .map_err(|_| FmiError::error(format!("{}: value[{i}] is not UTF-8 text", call.name())))
 }
 
 /// A copy of a C string (lossy UTF-8); `None` for NULL.

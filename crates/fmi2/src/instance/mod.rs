@@ -16,6 +16,7 @@ use super::description::{Causality, Family, Kind, ModelDescription, Variability,
 use super::logging::{Log, LogFilter};
 use super::model::{Experiment, Model};
 use super::phase::{Call, Phase};
+use super::resources::Resources;
 use super::snapshot::Snapshot;
 use super::status::{FmiError, FmiResult, Status};
 
@@ -51,19 +52,22 @@ pub struct Instance<M: Model> {
     phase: Phase,
     time: f64,
     experiment: Experiment,
+    /// The FMU's resources/ folder, from fmi2Instantiate.
+    resources: Resources,
     model: M,
     #[cfg(feature = "test-hooks")]
     panic_in_next_step: bool,
 }
 
 impl<M: Model> Instance<M> {
-    pub fn new(logger: Box<dyn Log>, logging_on: bool, model_exchange: bool) -> Self {
+    pub fn new(logger: Box<dyn Log>, logging_on: bool, model_exchange: bool, resources: Resources) -> Self {
         let instance = Instance {
             logger,
             log: LogFilter::new(Self::description().log_categories, logging_on),
             phase: Phase::Instantiated,
             time: 0.0,
             experiment: Experiment { model_exchange, ..Experiment::default() },
+            resources,
             model: M::at_start_values(),
             #[cfg(feature = "test-hooks")]
             panic_in_next_step: false,
@@ -195,7 +199,7 @@ impl<M: Model> Instance<M> {
             }
         }
         let mut model = self.model.clone();
-        model.initialize(&self.experiment)?;
+        model.initialize(&self.experiment, &self.resources)?;
         self.model = model;
         Ok(())
     }

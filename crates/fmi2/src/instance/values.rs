@@ -62,9 +62,29 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
-    /// The model has no String variables, so only an empty request succeeds.
-    pub fn check_strings(&self, call: Call, vrs: &[u32]) -> FmiResult {
-        vrs.iter().try_for_each(|&vr| self.variable(call, vr, Family::String).map(|_| ()))
+    /// Each value is handed to `put`, which copies it out.
+    pub fn get_strings(&mut self, vrs: &[u32], mut put: impl FnMut(&str)) -> FmiResult {
+        self.prepare_get(Call::GetString)?;
+        for &vr in vrs {
+            self.variable(Call::GetString, vr, Family::String)?;
+            put(self.model.get_string(vr)?);
+        }
+        Ok(())
+    }
+
+    /// `None` is a NULL pointer, which FMI does not allow as a value.
+    pub fn set_strings(&mut self, vrs: &[u32], values: &[Option<&str>]) -> FmiResult {
+        self.set_all(
+            Call::SetString,
+            Family::String,
+            vrs,
+            values,
+            |v, x| match x {
+                Some(_) => Ok(()),
+                None => Err(FmiError::error(format!("{} = NULL: a String value must be a text (\"\" for none)", v.name))),
+            },
+            |m, vr, x| m.set_string(vr, x.unwrap_or_default()),
+        )
     }
 
     /// May `v` be set now? FMI 2.0, section 2.2.7 (the table of when a
