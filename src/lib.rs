@@ -3,6 +3,8 @@
 //! (arriving) to wp2 (in the span).
 //!
 //! * `parameters` — what the user sets, in SI units;
+//! * `records` — webs by name from JSON libraries (serde_json);
+//! * `stress_strain` — a nonlinear web's curve (monotone cubic, PCHIP);
 //! * `physics` — the equations, numbered as in the model documentation,
 //!   every output's equation among them;
 //! * `stepping` — one communication step: the choice of method, the
@@ -21,8 +23,10 @@ pub mod description;
 mod model;
 pub mod parameters;
 pub mod physics;
+pub mod records;
 pub mod sensor;
 mod slack;
+pub mod stress_strain;
 pub mod stepping;
 mod variables;
 

@@ -6,8 +6,11 @@ use crate::parameters::{Inputs, Parameters, Rates};
 use crate::physics::{self, Outputs};
 use crate::sensor::SensorScale;
 use crate::stepping;
-use fmi2::{Event, Experiment, FmiError, FmiResult, Model, StateReader, StateWriter};
+use crate::records;
+use fmi2::{Event, Experiment, FmiError, FmiResult, Model, Resources, StateReader, StateWriter};
+use crate::stress_strain::StressStrain;
 use solver::CompensatedSum;
+use std::sync::Arc;
 
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ConvertingSpan {
@@ -77,10 +80,10 @@ impl ConvertingSpan {
         physics::unstretched_rate(&self.inputs, physics::strain(length, self.unstretched, 0.0))
     }
 
-    /// The bracket of [5] for a state x and inputs u.
-    pub(crate) fn effective_strain_at(&self, x: CompensatedSum, u: &Inputs, length_rate: f64) -> f64 {
+    /// The web's pull before the slack clamp [5] for a state x and inputs u.
+    pub(crate) fn web_force_at(&self, x: CompensatedSum, u: &Inputs, length_rate: f64) -> f64 {
         let length = physics::span_length(&self.params, u);
-        physics::effective_strain(&self.params, u, length, x.value(), physics::strain(length, x, 0.0), length_rate)
+        physics::web_force(&self.params, u, length, x.value(), physics::strain(length, x, 0.0), length_rate)
     }
 
     /// Advances over one communication step of length h [3].
@@ -179,6 +182,15 @@ impl Model for ConvertingSpan {
         }
         out.f64(self.adaptive_step);
         out.f64(self.tolerance);
+        // The records' stress–strain tables: a state restores without the files.
+        for web in [&self.params.incoming, &self.params.span_web] {
+            let points: Vec<[f64; 2]> = web.curve.as_ref().map_or_else(Vec::new, |c| c.points().collect());
+            out.i32(points.len() as i32);
+            for [e, s] in points {
+                out.f64(e);
+                out.f64(s);
+            }
+        }
     }
 
     fn load_state(&mut self, r: &mut StateReader) -> FmiResult {
@@ -199,6 +211,17 @@ impl Model for ConvertingSpan {
         };
         self.adaptive_step = r.finite("adaptive step")?;
         self.tolerance = r.finite("effective tolerance")?;
+        for (web, what) in [(&mut self.params.incoming, "wp1 stress_strain"), (&mut self.params.span_web, "wp2 stress_strain")] {
+            let n = r.i32(what)?;
+            if !(0..=1_000_000).contains(&n) {
+                return Err(FmiError::error(format!("{what} has {n} points")));
+            }
+            let points = (0..n).map(|_| Ok([r.finite(what)?, r.finite(what)?])).collect::<FmiResult<Vec<_>>>()?;
+            web.curve = match points.is_empty() {
+                true => None,
+                false => Some(Arc::new(StressStrain::new(&points).map_err(|e| FmiError::error(format!("{what} {e}")))?)),
+            };
+        }
         // Derived from the parameters; a state saved before initialization
         // ended gets the scale of its parameters, which initialization recomputes.
         self.sensor = SensorScale::new(&self.params).unwrap_or_default();
@@ -216,7 +239,8 @@ impl Model for ConvertingSpan {
         Ok(())
     }
 
-    fn initialize(&mut self, experiment: &Experiment) -> FmiResult {
+    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult {
+        records::apply(&mut self.params, resources)?;
         let p = &self.params;
         let length = physics::span_length(p, &self.inputs);
         if !(length > 0.0) {
@@ -320,11 +344,11 @@ impl Model for ConvertingSpan {
         Ok(())
     }
 
-    /// The bracket of [5] for a slack web (it crosses zero where the web goes
+    /// The web's pull for a slack web (it crosses zero where the web goes
     /// slack or takes up tension again); a constant 1 (never an event) otherwise.
     fn get_event_indicators(&self, z: &mut [f64]) -> FmiResult {
         z[0] = if self.params.prevent_negative_tension {
-            self.effective_strain_at(self.unstretched, &self.inputs, 0.0)
+            self.web_force_at(self.unstretched, &self.inputs, 0.0)
         } else {
             1.0
         };

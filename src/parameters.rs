@@ -1,11 +1,14 @@
 //! Parameters and inputs of the span, in SI units.
 
 use crate::description::Solver;
+use crate::stress_strain::StressStrain;
+use std::sync::Arc;
 
 /// Properties of one web (`wp1`: arriving at a; `wp2`: in the span).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct WebProperties {
-    /// Young's modulus E in the machine direction, Pa.
+    /// Young's modulus E in the machine direction, Pa (with a stress–strain
+    /// table: its steepest chord, the stiffest the web gets).
     pub modulus: f64,
     /// Unstrained thickness, m.
     pub thickness: f64,
@@ -15,6 +18,8 @@ pub struct WebProperties {
     pub density: f64,
     /// Kelvin–Voigt retardation time d_r, s.
     pub retardation_time: f64,
+    /// A nonlinear web's stress–strain curve, from a record; `None`: sigma = E*eps.
+    pub curve: Option<Arc<StressStrain>>,
 }
 
 impl WebProperties {
@@ -34,7 +39,7 @@ impl WebProperties {
     }
 }
 
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Parameters {
     /// L, m (when the length is not taken from the roller positions).
     pub span_length: f64,
@@ -42,6 +47,11 @@ pub struct Parameters {
     pub incoming: WebProperties,
     /// wp2: the web in the span, after the conversion.
     pub span_web: WebProperties,
+    /// `wp1.record`, `wp2.record`: names of records that give the webs ("": none).
+    pub incoming_record: Arc<str>,
+    pub span_record: Arc<str>,
+    /// `webLibrary`: a user's JSON file of records, searched first ("": none).
+    pub web_library: Arc<str>,
     pub include_damping: bool,
     pub prevent_negative_tension: bool,
     pub include_mass: bool,

@@ -31,7 +31,7 @@ pub struct Outputs {
 pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sensor: &SensorScale) -> Outputs {
     let length = span_length(p, u);
     let strain = strain(length, x, 0.0);
-    let tension = tension(p, effective_strain(p, u, length, x.value(), strain, rates.length));
+    let tension = tension(p, web_force(p, u, length, x.value(), strain, rates.length));
     let exit_force =
         if p.include_mass { tension + momentum_difference(p, u, strain, x.value(), rates.speed_b) } else { tension };
     let sensor_on = |value: f64| if p.use_sensor { value } else { 0.0 };
@@ -46,14 +46,21 @@ pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sens
     }
 }
 
-/// The bracket of [5]: the strain, plus d_r2 times its rate [4] with damping.
+/// The web's pull before the slack clamp [5]: E*A*(eps_b + d_r2*deps_b/dt),
+/// or with a stress–strain table [5a] A*(sigma(eps_b) + d_r2*E_t(eps_b)*deps_b/dt)
+/// with the tangent modulus E_t. The rate [4] is computed only with damping.
 #[inline(always)]
-pub fn effective_strain(p: &Parameters, u: &Inputs, length: f64, x: f64, strain_b: f64, length_rate: f64) -> f64 {
-    if p.include_damping {
-        let rate = unstretched_rate(u, strain_b);
-        strain_b + p.span_web.retardation_time * strain_rate(length, length_rate, x, strain_b, rate)
-    } else {
-        strain_b
+pub fn web_force(p: &Parameters, u: &Inputs, length: f64, x: f64, strain_b: f64, length_rate: f64) -> f64 {
+    let web = &p.span_web;
+    let rate = || strain_rate(length, length_rate, x, strain_b, unstretched_rate(u, strain_b));
+    match &web.curve {
+        None if p.include_damping => web.stiffness() * (strain_b + web.retardation_time * rate()),
+        None => web.stiffness() * strain_b,
+        Some(curve) => {
+            let (sigma, tangent) = curve.at(strain_b);
+            let damping = if p.include_damping { web.retardation_time * tangent * rate() } else { 0.0 };
+            web.area() * (sigma + damping)
+        }
     }
 }
 
@@ -144,10 +151,10 @@ pub fn strain_rate(length: f64, length_rate: f64, x: f64, strain_b: f64, unstret
     length_rate / x - (1.0 + strain_b) * (1.0 + strain_b) / length * unstretched_rate
 }
 
-/// Span tension [5] from the strain (plus d_r * strain rate with damping),
-/// clamped at 0 for a slack web with `preventNegativeTension`.
-pub fn tension(p: &Parameters, effective_strain: f64) -> f64 {
-    let t = p.span_web.stiffness() * effective_strain;
+/// Span tension [5]: the web's pull, clamped at 0 for a slack web with
+/// `preventNegativeTension`.
+pub fn tension(p: &Parameters, web_force: f64) -> f64 {
+    let t = web_force;
     if p.prevent_negative_tension {
         t.max(0.0)
     } else {

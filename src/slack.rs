@@ -16,7 +16,7 @@ impl ConvertingSpan {
         let zero_rates = Inputs::default();
         let r = rates.unwrap_or(&zero_rates);
         let length_rate = physics::length_rate(p, start, r);
-        let tension_at = |tau: f64, x: CompensatedSum| self.effective_strain_at(x, &start.advanced(r, tau), length_rate);
+        let tension_at = |tau: f64, x: CompensatedSum| self.web_force_at(x, &start.advanced(r, tau), length_rate);
         let (g0, g1) = (tension_at(0.0, x0), tension_at(h, next));
         if (g0 > 0.0) == (g1 > 0.0) {
             return None;

@@ -3,7 +3,7 @@
 //! `fmi2::bind_variables!`). Ranges and types come from the XML; equations
 //! for computed variables live in `physics`.
 
-use crate::description::{Boolean, Integer, Real};
+use crate::description::{Boolean, Integer, Real, Text};
 use crate::parameters::Inputs;
 use crate::ConvertingSpan;
 
@@ -57,5 +57,10 @@ fmi2::bind_variables! {
         variableLength: param(params.variable_length),
         startAtEquilibrium: param(params.start_at_equilibrium),
         useSensor: param(params.use_sensor),
+    }
+    string {
+        wp1_record: param(params.incoming_record),
+        wp2_record: param(params.span_record),
+        webLibrary: param(params.web_library),
     }
 }

@@ -556,7 +556,7 @@ fn unknown_value_references_are_refused() {
             ("fmi2GetReal", |f, r| f.get_reals_vr(&[r]).err().unwrap_or(OK)),
             ("fmi2GetInteger", |f, r| f.get_integers_vr(&[r]).err().unwrap_or(OK)),
             ("fmi2GetBoolean", |f, r| f.get_booleans_vr(&[r]).err().unwrap_or(OK)),
-            ("fmi2GetString", |f, r| f.get_strings_vr(&[r])),
+            ("fmi2GetString", |f, r| f.get_strings_vr(&[r]).err().unwrap_or(OK)),
         ];
         for (function, set) in setters {
             let fmu = Fmu::new();
@@ -583,7 +583,7 @@ fn wrong_type_is_refused() {
     let cases: [(&str, &str, &str, fn(&Fmu, u32) -> i32); 6] = [
         ("fmi2GetBoolean", "toUnitF", "Integer", |f, r| f.get_booleans_vr(&[r]).err().unwrap_or(OK)),
         ("fmi2GetReal", "includeDamping", "Boolean", |f, r| f.get_reals_vr(&[r]).err().unwrap_or(OK)),
-        ("fmi2GetString", "T", "Real", |f, r| f.get_strings_vr(&[r])),
+        ("fmi2GetString", "T", "Real", |f, r| f.get_strings_vr(&[r]).err().unwrap_or(OK)),
         ("fmi2SetInteger", "web_a.v", "Real", |f, r| f.set_integers_vr(&[r], &[1])),
         ("fmi2SetReal", "toUnitV", "Integer", |f, r| f.set_reals_vr(&[r], &[2.0])),
         ("fmi2SetBoolean", "web_b.v", "Real", |f, r| f.set_booleans_vr(&[r], &[1])),
@@ -1379,6 +1379,17 @@ fn output_dependencies_are_exact() {
     assert!(problems.is_empty(), "{problems:#?}");
 }
 
+/// The other text a String parameter is set to: other records, and a user
+/// library whose PET-12 differs from the shipped one.
+fn perturbed_text(v: &Variable) -> String {
+    match v.name {
+        "wp1.record" => "LDPE-50".into(),
+        "wp2.record" => "BOPP-20".into(),
+        "webLibrary" => concat!(env!("CARGO_MANIFEST_DIR"), "/tests/records/user_webs.json").into(),
+        other => panic!("no perturbation for {other}"),
+    }
+}
+
 /// A perturbation of a parameter or input: relative 1e-6 for Reals (1e-6
 /// absolute at 0), the other value for Booleans, the next item for
 /// enumerations, +1 for Integers.
@@ -1396,7 +1407,8 @@ fn perturbed(v: &Variable, x: f64) -> f64 {
             }
         }
         Kind::Integer => x + 1.0,
-        Kind::String => unreachable!(),
+        // Strings are perturbed to the text `perturbed_text` gives.
+        Kind::String => unreachable!("{} is a String", v.name),
     }
 }
 
@@ -1428,7 +1440,7 @@ fn initial_dependencies_are_exact() {
             for unit in [1.0, 5.0] {
                 for slack in [false, true] {
                     for mass in [0.0, 1.0] {
-                        for variable_length in [0.0, 1.0] {
+                        for (variable_length, with_records) in [(0.0, false), (1.0, false), (0.0, true), (1.0, true)] {
                             let mut base = vec![
                                 ("wp2.d_r", 0.01),
                                 ("startAtEquilibrium", sae),
@@ -1442,27 +1454,50 @@ fn initial_dependencies_are_exact() {
                                 ("web_a.eps", 1e-3),
                             ];
                             base.extend(FRAMES);
-                            let in_init = |change: Option<(&str, f64)>| -> Fmu {
+                            // Half the configurations take both webs from the record PET-12.
+                            let records: &[(&str, &str)] =
+                                if with_records { &[("wp1.record", "PET-12"), ("wp2.record", "PET-12")] } else { &[] };
+                            if with_records {
+                                // The record gives wp2.d_r (0): the base may not set it.
+                                base.retain(|(name, _)| !name.starts_with("wp"));
+                            }
+                            // `change`: a known and its new value (a String's comes from `perturbed_text`).
+                            let in_init = |change: Option<(&Variable, f64)>| -> Fmu {
                                 let fmu = Fmu::new();
                                 fmu.set_all(&base);
-                                if let Some((name, x)) = change {
-                                    assert_eq!(fmu.set(name, x), OK, "{name} = {x}");
+                                for (name, text) in records {
+                                    assert_eq!(fmu.set_text(name, text), OK);
+                                }
+                                if let Some((v, x)) = change {
+                                    let status = match v.kind {
+                                        Kind::String => fmu.set_text(v.name, &perturbed_text(v)),
+                                        _ => fmu.set(v.name, x),
+                                    };
+                                    assert_eq!(status, OK, "perturbing {}", v.name);
                                 }
                                 assert_eq!(fmu.setup_experiment(0.0), OK);
                                 assert_eq!(fmu.enter_init(), OK);
                                 fmu
                             };
-                            let read = |fmu: &Fmu| -> Vec<f64> {
-                                unknowns.iter().map(|u| fmu.get_reals_vr(&[u.vr]).unwrap()[0]).collect()
+                            // None where initialization refuses the values (a web's
+                            // individual value changed while a record gives it).
+                            let read = |fmu: &Fmu| -> Option<Vec<f64>> {
+                                unknowns.iter().map(|u| fmu.get_reals_vr(&[u.vr]).ok().map(|x| x[0])).collect()
                             };
                             let probe = in_init(None);
-                            let baseline = read(&probe);
+                            let baseline = read(&probe).expect("the base configuration initializes");
                             for (i, y) in baseline.iter().enumerate() {
                                 scale[i] = scale[i].max(y.abs());
                             }
                             for (j, known) in knowns.iter().enumerate() {
-                                let x = perturbed(known, probe.real(known.name));
-                                let after = read(&in_init(Some((known.name, x))));
+                                let x = if known.kind == Kind::String { 0.0 } else { perturbed(known, probe.real(known.name)) };
+                                let fmu = in_init(Some((known, x)));
+                                let Some(after) = read(&fmu) else {
+                                    // Only a web's value set against its record (or a record against a set value).
+                                    let refusal = format!("{:?}", fmu.logs());
+                                    assert!(refusal.contains("selects the web"), "{} refused: {refusal}", known.name);
+                                    continue;
+                                };
                                 for i in 0..unknowns.len() {
                                     largest[i][j] = largest[i][j].max((after[i] - baseline[i]).abs());
                                 }
@@ -1474,7 +1509,7 @@ fn initial_dependencies_are_exact() {
             }
         }
     }
-    assert_eq!(configurations, 64);
+    assert_eq!(configurations, 128);
     for (row, s) in largest.iter_mut().zip(&scale) {
         row.iter_mut().for_each(|c| *c /= s);
     }

@@ -180,7 +180,7 @@ fn run(case: &Case, r: &Run) -> Outcome {
     for (name, x) in &case.initial {
         m.set_real(vr(name), *x).unwrap();
     }
-    m.initialize(&Experiment::default()).unwrap_or_else(|e| panic!("initialize: {}", e.message));
+    m.initialize(&Experiment::default(), &Default::default()).unwrap_or_else(|e| panic!("initialize: {}", e.message));
     let observed = observed();
     let mut out: BTreeMap<&'static str, Vec<f64>> = observed.iter().map(|(n, _)| (*n, Vec::new())).collect();
     let read = |m: &ConvertingSpan, out: &mut BTreeMap<&'static str, Vec<f64>>| {

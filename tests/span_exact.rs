@@ -94,7 +94,7 @@ fn step_changes_in_each_input_follow_the_exact_solution_for_any_step() {
     ];
     for h in [1e-4, 1e-3, 0.01, 0.1, 0.5] {
         let mut m = span(1.0, base);
-        m.initialize(&Experiment::default()).unwrap();
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
         let worst = worst_error(&mut m, &segments, h);
         println!("h = {h}: worst relative tension error {worst:.2e}");
     }
@@ -106,7 +106,7 @@ fn very_short_fast_span_is_exact_with_huge_steps() {
     let u = Held { va: 30.0, eps_a: 1e-3, vb: 30.03 };
     for h in [1e-5, 1e-3, 0.1, 1.0] {
         let mut m = span(5e-3, Held { vb: 30.0, ..u });
-        m.initialize(&Experiment::default()).unwrap();
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
         worst_error(&mut m, &[(u, 2.0f64.max(10.0 * h))], h);
         let steady = exact_strain(5e-3, u, 0.0, f64::INFINITY);
         assert!((m.outputs().strain - steady).abs() <= 1e-15, "strain must sit at the steady state");
@@ -120,7 +120,7 @@ fn speeds_near_zero_stay_exact_and_finite() {
         let mut m = span(1.0, u);
         m.set_real_var(Real::eps_start, 2e-3).unwrap();
         m.params.start_at_equilibrium = false;
-        m.initialize(&Experiment::default()).unwrap();
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
         worst_error(&mut m, &[(u, 10.0)], 0.5);
     }
 }
@@ -128,7 +128,7 @@ fn speeds_near_zero_stay_exact_and_finite() {
 #[test]
 fn stopped_line_holds_its_state_exactly() {
     let mut m = span(1.0, Held { va: 5.0, eps_a: 1e-3, vb: 5.005 });
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     for _ in 0..100 {
         m.do_step(0.01).unwrap();
     }
@@ -146,7 +146,7 @@ fn millions_of_tiny_steps_do_not_drift() {
     // would stall ~1e-11 short of the exact strain; the compensated sum must not.
     let u = Held { va: 1.0, eps_a: 1e-3, vb: 1.001 };
     let mut m = span(1.0, Held { vb: 1.0, ..u });
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     set_inputs(&mut m, u);
     for _ in 0..1_000_000 {
         m.do_step(1e-6).unwrap();
@@ -165,7 +165,7 @@ fn reverse_flow_matches_the_linear_balance() {
     let mut m = span(l, u);
     m.params.start_at_equilibrium = false;
     m.set_real_var(Real::eps_start, 1e-3).unwrap();
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let lambda = (u.vb - u.va) / l;
     let x0 = m.unstretched_length();
     for k in 1..=50 {
@@ -180,7 +180,7 @@ fn reverse_flow_matches_the_linear_balance() {
 fn web_fed_from_both_ends_is_discarded_not_infinite() {
     let mut m = span(1.0, Held { va: 1.0, eps_a: 0.0, vb: -1.0 });
     m.params.start_at_equilibrium = false;
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let before = m.clone();
     let err = m.do_step(1e4).unwrap_err();
     assert_eq!(err.status, fmi2::Status::Discard);
@@ -193,7 +193,7 @@ fn damping_feeds_speed_steps_through_to_the_tension_at_once() {
     let mut m = span(1.0, u);
     m.params.include_damping = true;
     m.set_real_var(Real::wp2_d_r, 0.1).unwrap();
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let ea = stiffness(&m);
     assert!((m.real(Real::summary_Tension) - ea * 1e-3).abs() <= 1e-12 * ea * 1e-3, "no damping force at equilibrium");
     // Step web_b.v: no time passes, the state is unchanged, the tension jumps by
@@ -212,7 +212,7 @@ fn slack_web_carries_no_compression_and_re_tensions() {
     let u = Held { va: 5.0, eps_a: 1e-3, vb: 5.0 };
     let mut m = span(1.0, u);
     m.params.prevent_negative_tension = true;
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     // Downstream roller 1 % slower: the strain heads for about -9e-3.
     set_inputs(&mut m, Held { vb: 4.95, ..u });
     let mut went_slack = false;
@@ -238,24 +238,24 @@ fn slack_web_carries_no_compression_and_re_tensions() {
 fn start_at_equilibrium_and_at_eps_start() {
     let u = Held { va: 4.0, eps_a: 2e-3, vb: 4.01 };
     let mut m = span(1.5, u);
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let expected = (4.01 / 4.0) * (1.0 + 2e-3) - 1.0;
     assert!((m.outputs().strain - expected).abs() <= 1e-15);
     // v_a = 0: eps_b = eps_a.
     let mut m = span(1.5, Held { va: 0.0, ..u });
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     assert!((m.outputs().strain - 2e-3).abs() <= 1e-18);
     // Opposite signs: no steady state, a clear error that changes nothing.
     let mut m = span(1.5, Held { vb: -1.0, ..u });
     let before = m.clone();
-    let err = m.initialize(&Experiment::default()).unwrap_err();
+    let err = m.initialize(&Experiment::default(), &Default::default()).unwrap_err();
     assert!(err.message.contains("startAtEquilibrium") && err.message.contains("web_b.v = -1"), "{}", err.message);
     assert_eq!(m, before);
     // Not at equilibrium: eps_start, to full precision even for tiny strains.
     let mut m = span(1.5, u);
     m.params.start_at_equilibrium = false;
     m.set_real_var(Real::eps_start, 1e-9).unwrap();
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     assert!((m.outputs().strain - 1e-9).abs() <= 1e-24);
 }
 
@@ -268,13 +268,13 @@ fn every_unit_conversion_matches_hand_computed_values() {
     let force = [1.0, 1e-3, 1.0 / lbf, 1.0 / 9.80665, 1.0 / 1.3, 0.0254 / (lbf * 1.3)];
     for (i, unit) in SPEED_UNIT.iter().enumerate() {
         m.params.speed_unit = unit.value;
-        m.initialize(&Experiment::default()).unwrap();
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
         let expected = 3.0 * speed[i];
         assert!((m.real(Real::v) - expected).abs() <= 1e-14 * expected, "{}", unit.name);
     }
     for (i, unit) in FORCE_UNIT.iter().enumerate() {
         m.params.force_unit = unit.value;
-        m.initialize(&Experiment::default()).unwrap();
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
         let expected = m.real(Real::summary_Tension) * force[i];
         let got = m.real(Real::T);
         assert!((got - expected).abs() <= 1e-14 * expected, "{}: {got} vs {expected}", unit.name);
@@ -287,7 +287,7 @@ fn every_unit_conversion_matches_hand_computed_values() {
 #[test]
 fn summary_outputs_are_consistent() {
     let mut m = span(2.5, Held { va: 5.0, eps_a: 1e-3, vb: 5.01 });
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let t = m.real(Real::summary_Tension);
     assert_eq!(m.real(Real::web_a_F), t);
     assert_eq!(m.real(Real::web_b_F), t);
@@ -308,6 +308,7 @@ fn start_values_come_from_the_model_description() {
             Start::Real(x) => assert_eq!(m.get_real(v.vr).unwrap(), x, "{}", v.name),
             Start::Integer(x) => assert_eq!(m.get_integer(v.vr).unwrap(), x, "{}", v.name),
             Start::Boolean(x) => assert_eq!(m.get_boolean(v.vr).unwrap(), x, "{}", v.name),
+            Start::String(x) => assert_eq!(m.get_string(v.vr).unwrap(), x, "{}", v.name),
             Start::None => {}
         }
     }
@@ -320,7 +321,7 @@ fn saved_fields_load_back_identically() {
     let mut m = span(1.7, Held { va: 3.0, eps_a: 1.5e-3, vb: 3.1 });
     m.params.include_damping = true;
     m.params.force_unit = 6;
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     m.do_step(0.123).unwrap();
     let snapshot = fmi2::snapshot::Snapshot {
         phase: fmi2::phase::Phase::StepComplete,
@@ -341,7 +342,7 @@ fn slack_crossings_are_located_inside_the_step() {
     let (l, u) = (1.0, Held { va: 5.0, eps_a: 1e-3, vb: 4.95 });
     let mut m = span(l, Held { vb: 5.0, ..u });
     m.params.prevent_negative_tension = true;
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let x0 = m.unstretched_length();
     set_inputs(&mut m, u);
     m.do_step(0.5).unwrap();
@@ -374,7 +375,7 @@ fn slack_crossings_with_moving_inputs_use_the_step_interpolant() {
         let mut m = span(1.0, Held { va: 5.0, eps_a: 1e-3, vb: 5.0 });
         m.params.prevent_negative_tension = true;
         m.params.tolerance = 1e-12;
-        m.initialize(&Experiment::default()).unwrap();
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
         let mut t = 0.0;
         loop {
             m.set_input_derivative(Real::web_b_v.vr(), -0.2).unwrap();
@@ -399,7 +400,7 @@ fn a_state_the_equations_cannot_hold_is_discarded_never_a_nan() {
     let mut m = span(0.8, Held { va: 1.975, eps_a: 0.0010235, vb: -20350.0 });
     m.params.include_damping = true;
     m.params.start_at_equilibrium = false;
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let mut discarded = false;
     for _ in 0..4 {
         let before = m.clone();

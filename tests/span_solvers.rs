@@ -26,8 +26,8 @@ fn held_error(solver: i32, h: f64, tolerance: f64, substeps: i32) -> f64 {
     let mut m = span(solver);
     m.params.tolerance = tolerance;
     m.params.substeps = substeps;
-    reference.initialize(&Experiment::default()).unwrap();
-    m.initialize(&Experiment::default()).unwrap();
+    reference.initialize(&Experiment::default(), &Default::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     for model in [&mut reference, &mut m] {
         model.set_real_var(Real::web_b_v, 5.005).unwrap();
     }
@@ -102,7 +102,7 @@ fn input_derivatives_are_followed_by_rosenbrock_and_dopri5() {
     for (solver, tol) in [(1, 1e-10), (3, 1e-10), (4, 1e-10)] {
         let mut m = span(solver);
         m.params.tolerance = tol;
-        m.initialize(&Experiment::default()).unwrap();
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
         let x0 = m.unstretched_length();
         let h = 0.05;
         let mut worst: f64 = 0.0;
@@ -124,7 +124,7 @@ fn input_derivatives_are_followed_by_rosenbrock_and_dopri5() {
 fn held_inputs_ignore_the_ramp_and_stay_exact() {
     // The same ramp without derivatives: the exact solver holds web_b.v.
     let mut m = span(1);
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     m.set_real_var(Real::web_b_v, 5.05).unwrap();
     m.do_step(0.3).unwrap();
     assert_eq!(m.real(Real::web_b_v), 5.05);
@@ -140,7 +140,7 @@ fn explicit_solvers_refuse_unstable_steps_with_discard() {
         for speed in [Real::web_a_v, Real::web_b_v] {
             m.set_real_var(speed, 30.0).unwrap();
         }
-        m.initialize(&Experiment::default()).unwrap();
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
         let before = m.clone();
         let err = m.do_step(0.1).unwrap_err();
         assert_eq!(err.status, fmi2::Status::Discard);
@@ -157,7 +157,7 @@ fn dopri5_gives_up_with_discard_when_the_work_is_unbounded() {
     for speed in [Real::web_a_v, Real::web_b_v] {
         m.set_real_var(speed, 30.0).unwrap();
     }
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     m.set_real_var(Real::web_b_v, 30.03).unwrap();
     let before = m.clone();
     let err = m.do_step(1e4).unwrap_err();

@@ -20,7 +20,7 @@ fn roller(j: f64, r: f64, b: f64, omega0: f64) -> Roller {
     for (var, x) in [(Real::J, j), (Real::R, r), (Real::b, b), (Real::omega_start, omega0)] {
         m.set_real(var.vr(), x).unwrap();
     }
-    m.initialize(&Experiment::default()).unwrap();
+    m.initialize(&Experiment::default(), &Default::default()).unwrap();
     m
 }
 
