@@ -6,7 +6,8 @@
 Each FMU is one package of the cargo workspace: ConvertingSpan the root
 package, Roller the one in fmu/roller; Roller.fmu is written next to
 ConvertingSpan.fmu. Each FMU holds its modelDescription.xml,
-binaries/linux64/<modelIdentifier>.so and documentation/index.html. The
+binaries/linux64/<modelIdentifier>.so, documentation/index.html and, for
+the span, resources/webs.json (the library of webs, from fmu/resources). The
 documentation's variable and unit tables are rendered from the model
 description, so they never disagree with the FMU. Only the Python standard
 library is used.
@@ -50,6 +51,8 @@ class Model:
         self.package = package
         self.description = crate_dir / "modelDescription.xml"
         self.template = crate_dir / ("fmu/documentation" if crate_dir == ROOT else "documentation") / "index.html"
+        # Files shipped in the FMU's resources/ folder (the span's library of webs).
+        self.resources = crate_dir / ("fmu/resources" if crate_dir == ROOT else "resources")
         library = f"lib{package.replace('-', '_')}.so"
         self.library = ROOT / "target" / "release" / library
         # The portable build: one target directory for the workspace.
@@ -173,6 +176,8 @@ def write_fmu(out, model, library):
         (f"binaries/linux64/{identifier}.so", library.read_bytes()),
         ("documentation/index.html", documentation(root, model.template).encode("utf-8")),
     ]
+    if model.resources.is_dir():
+        entries += [(f"resources/{f.name}", f.read_bytes()) for f in sorted(model.resources.iterdir()) if f.is_file()]
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
         for name, data in entries:
             info = zipfile.ZipInfo(name, ZIP_TIME)
