@@ -100,6 +100,8 @@ def start_values(model_description):
             values[v.name] = float(v.start)
         elif v.type == "Boolean":
             values[v.name] = str(v.start).lower() in ("true", "1")
+        elif v.type == "String":
+            values[v.name] = v.start
         else:
             values[v.name] = int(v.start)
     return values

@@ -106,7 +106,7 @@ def build_container(scene: Scene, step: float, path: Path, fmu_dir=DEFAULT_FMU_D
         if c.name not in components:
             continue
         if isinstance(c, Span):
-            values = span_start_values(c, enumeration(mds["span"], "solver"))
+            values = span_start_values(c, enumeration(mds["span"], "solver"), web_library=scene.web_library)
         else:
             values = {"J": c.J, "R": c.R, "b": c.b, "omega_start": scene.initial_speed(c) / c.R}
         for pname, x in values.items():

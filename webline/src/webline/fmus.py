@@ -149,7 +149,7 @@ class Instance:
         """fmi2SetupExperiment, start values, fmi2EnterInitializationMode."""
         s = self.slave
         self._check("fmi2SetupExperiment", lambda: s.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time))
-        reals, ints, bools = [], [], []
+        reals, ints, bools, texts = [], [], [], []
         for name, value in start_values.items():
             if name not in self.file.variables:
                 raise FmuError(f"{self.name}: the FMU has no variable {name!r}")
@@ -158,6 +158,8 @@ class Instance:
                 reals.append((v.valueReference, float(value)))
             elif v.type == "Boolean":
                 bools.append((v.valueReference, bool(value)))
+            elif v.type == "String":
+                texts.append((v.valueReference, str(value)))
             else:
                 ints.append((v.valueReference, int(value)))
         if reals:
@@ -166,6 +168,8 @@ class Instance:
             self._check("setting parameters", lambda: s.setInteger([r[0] for r in ints], [r[1] for r in ints]))
         if bools:
             self._check("setting parameters", lambda: s.setBoolean([r[0] for r in bools], [r[1] for r in bools]))
+        if texts:
+            self._check("setting parameters", lambda: s.setString([r[0] for r in texts], [r[1] for r in texts]))
         self._check("fmi2EnterInitializationMode", s.enterInitializationMode)
 
     def end_initialization(self):

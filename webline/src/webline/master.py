@@ -91,14 +91,27 @@ def span_frames(scene: Scene, span: Span, y: float, R_dancer: float):
     return (0.0, 0.0, 1.0, 0.0)
 
 
-def span_start_values(span: Span, solvers: dict, length_default=1.0):
+WEB_FIELDS = ("E", "thickness", "width", "density", "d_r")
+
+
+def web_values(side: str, web, web_library=None) -> dict:
+    """The span FMU's parameters for one web ("wp1" or "wp2"): the record's
+    name, which the FMU looks up itself, or the values one by one."""
+    if web.record:
+        values = {f"{side}.record": web.record}
+        if web_library:
+            values["webLibrary"] = web_library
+        return values
+    return {f"{side}.record": "", **{f"{side}.{k}": getattr(web, k) for k in WEB_FIELDS}}
+
+
+def span_start_values(span: Span, solvers: dict, length_default=1.0, web_library=None):
     """The span FMU's parameters for `span`; `solvers` maps solver names to the
     values of the FMU's Enumeration `solver` (`FmuFile.enumeration`)."""
-    w1, w2 = span.wp1, span.wp2
     values = {
         "L": span.length if span.length is not None else length_default,
-        "wp1.E": w1.E, "wp1.thickness": w1.thickness, "wp1.width": w1.width, "wp1.density": w1.density, "wp1.d_r": w1.d_r,
-        "wp2.E": w2.E, "wp2.thickness": w2.thickness, "wp2.width": w2.width, "wp2.density": w2.density, "wp2.d_r": w2.d_r,
+        **web_values("wp1", span.wp1, web_library),
+        **web_values("wp2", span.wp2, web_library),
         "includeDamping": "includeDamping" in span.effects,
         "preventNegativeTension": "preventNegativeTension" in span.effects,
         "includeMass": "includeMass" in span.effects,
@@ -272,7 +285,7 @@ class CoSimulation:
                 self.sig[(node.name, "y")] = Signal(now=node.y_start, t_now=t)
         # Spans in line order: each one's start strain feeds the next.
         for span in s.spans:
-            values = span_start_values(span, self.span_file.enumeration("solver"))
+            values = span_start_values(span, self.span_file.enumeration("solver"), web_library=self.scene.web_library)
             self.params[span.name] = values
             inputs = self.span_inputs_at(span, t)
             self.inst[span.name] = self._new_span_instance(span, values, inputs, t)
@@ -520,8 +533,9 @@ class CoSimulation:
                 if "web" in webs:
                     webs["wp1"] = webs["wp2"] = webs.pop("web")
                 for side, web in webs.items():
-                    for k in ("E", "thickness", "width", "density", "d_r"):
-                        values[f"{side}.{k}"] = getattr(web, k)
+                    # The old web's values go: a record may not meet values set one by one.
+                    values = {k: x for k, x in values.items() if not k.startswith(f"{side}.")}
+                    values.update(web_values(side, web, s.web_library))
                 # Continue from the old instance's state: its strain.
                 values["startAtEquilibrium"] = False
                 values["eps_start"] = self.sig[(comp.name, "eps")].now

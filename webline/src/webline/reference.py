@@ -16,7 +16,9 @@ scene. States:
   m_up*R^2: F_b = T + p + m*dv_b/dt and v_b = R*omega;
 * each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0).
 
-Tension: T = EA*(eps + d_r*deps/dt) (damping), clamped at 0 for a slack web.
+Tension: T = EA*(eps + d_r*deps/dt) (damping), or for a web record's
+stress-strain table T = A*(sigma(eps) + d_r*dsigma/deps*deps/dt); clamped at
+0 for a slack web.
 Profiles are integrated piece by piece between their breakpoints and the
 events, where parameters change (a splice) with the state kept (strain;
 a roller's surface speed).
@@ -106,8 +108,11 @@ class LineODE:
                 qa = va / (1.0 + eps)
             deps = (1.0 + eps) / L * (dL + vb - (1.0 + eps) * qa)
             dz[self.i_eps[sp.name]] = deps
-            bracket = eps + (w2.d_r * deps if "includeDamping" in sp.effects else 0.0)
-            T = w2.EA * bracket
+            damped = "includeDamping" in sp.effects
+            if w2.curve is None:
+                T = w2.EA * (eps + (w2.d_r * deps if damped else 0.0))
+            else:  # a record's stress-strain table, with the tangent modulus in the damping term
+                T = w2.area * (float(w2.curve.sigma(eps)) + (w2.d_r * float(w2.curve.tangent(eps)) * deps if damped else 0.0))
             if "preventNegativeTension" in sp.effects:
                 T = max(T, 0.0)
             x = L / (1.0 + eps)

@@ -15,11 +15,14 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import jsontree, units
-from .fmus import enumeration, span_description
+from . import jsontree, records, units
+from .fmus import DEFAULT_FMU_DIR, SPAN_FMU, enumeration, span_description
 from .jsontree import Node, Obj
 from .profiles import Profile
 from .units import UnitError
+
+import numpy as np
+from scipy.optimize import brentq
 
 EFFECTS = ("includeDamping", "preventNegativeTension", "includeMass", "variableLength")
 FIRST = ("source", "unwinder")
@@ -53,6 +56,10 @@ class Web:
     width: float
     density: float
     d_r: float = 0.0
+    # A web given by a record: the span FMU is set up with the record's name
+    # (its own reader); the line reference evaluates the record's curve.
+    record: str | None = None
+    curve: records.Curve | None = field(default=None, compare=False)
 
     @property
     def area(self):
@@ -160,6 +167,7 @@ class Scene:
     line: list
     events: list
     record: list  # [(component name, quantity)]
+    web_library: str | None = None  # absolute path of the scene's own web records
 
     def component(self, name):
         return next(c for c in self.line if c.name == name)
@@ -338,8 +346,17 @@ class _Reader:
         return Profile(tuple(knots))
 
 
-def _web(r: _Reader, name: str, node: Node) -> Web:
+def _web(r: _Reader, name: str, node: Node, web_library) -> Web:
     what = f"web {name!r}"
+    if isinstance(node.value, Obj) and "record" in node.value.keys():
+        o = r.keys(node, what, required=("record",), optional=("description",))
+        record = r.string(o["record"], f"{what}: record")
+        try:
+            rec = records.find(record, web_library, Path(r.fmu_dir or DEFAULT_FMU_DIR) / SPAN_FMU)
+        except (records.RecordError, OSError) as e:
+            raise r.err(o["record"], f"{what}: {e}") from None
+        fields = {k: getattr(rec, k) for k in ("E", "thickness", "width", "density", "d_r")}
+        return Web(name=name, record=record, curve=rec.curve(), **fields)
     o = r.keys(node, what, required=("E", "thickness", "width", "density"), optional=("d_r", "description"))
     U = units
     return Web(
@@ -350,6 +367,16 @@ def _web(r: _Reader, name: str, node: Node) -> Web:
         density=r.quantity(o["density"], U.DENSITY, f"{what}: density", positive=True),
         d_r=r.quantity(o["d_r"], U.TIME, f"{what}: d_r", nonnegative=True) if "d_r" in o else 0.0,
     )
+
+
+def _strain_at(web: Web, tension: float) -> float:
+    """The strain at which the web carries `tension` (N) at rest."""
+    if web.curve is None:
+        return tension / web.EA
+    stress = tension / web.area
+    # sigma is non-decreasing and linear beyond the table: bracket, then solve.
+    lo, hi = -0.5, 1.0
+    return brentq(lambda e: float(web.curve.sigma(e)) - stress, lo, hi, xtol=1e-16, rtol=4 * np.finfo(float).eps)
 
 
 def _web_ref(r: _Reader, webs: dict, node: Node, what: str) -> Web:
@@ -408,7 +435,7 @@ def _span(r, o_node, name, webs) -> Span:
     if "T_start" in o and "eps_start" in o:
         raise r.err(r.key_pos(o["eps_start"]), f"{what}: give T_start or eps_start, not both")
     if "T_start" in o:
-        s.eps_start = r.quantity(o["T_start"], units.FORCE, f"{what}: T_start") / s.wp2.EA
+        s.eps_start = _strain_at(s.wp2, r.quantity(o["T_start"], units.FORCE, f"{what}: T_start"))
     elif "eps_start" in o:
         s.eps_start = r.quantity(o["eps_start"], units.DIMENSIONLESS, f"{what}: eps_start")
     if s.eps_start is not None and not s.eps_start > -1:
@@ -525,10 +552,12 @@ def _event(r, node, i, scene_line, webs, stop_time) -> Event:
     return Event(time=t, component=cname, changes=changes, where=f"{r.source}:{node.line}:{node.col}")
 
 
-def parse_scene(text: str, source: str = "<scene>", fmu_dir=None) -> Scene:
+def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None) -> Scene:
     """A scene from JSON text; `source` names it in error messages. Solver
     names are checked against the model description of the span FMU in
-    `fmu_dir` (see `fmus.span_description`)."""
+    `fmu_dir` (see `fmus.span_description`), and webs given by a record are
+    looked up in the scene's `web_library` (relative to `base_dir`) and then
+    in that FMU's resources/webs.json."""
     try:
         root = jsontree.parse(text, source)
     except jsontree.JsonError as e:
@@ -538,7 +567,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None) -> Scene:
         root,
         "the scene",
         required=("name", "stop_time", "step", "webs", "line"),
-        optional=("description", "events", "record"),
+        optional=("description", "events", "record", "web_library"),
     )
     name = r.string(o["name"], "name")
     description = r.string(o["description"], "description") if "description" in o else ""
@@ -547,8 +576,11 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None) -> Scene:
     if step > stop:
         raise r.err(o["step"], f"step {step} s is longer than stop_time {stop} s")
 
+    web_library = None
+    if "web_library" in o:
+        web_library = str((Path(base_dir or ".") / r.string(o["web_library"], "web_library")).resolve())
     webs_obj = r.obj(o["webs"], "webs")
-    webs = {k: _web(r, k, v) for k, v in webs_obj.items.items()}
+    webs = {k: _web(r, k, v, web_library) for k, v in webs_obj.items.items()}
     if not webs:
         raise r.err(o["webs"], "webs must define at least one web")
 
@@ -656,6 +688,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None) -> Scene:
         line=line,
         events=sorted(events, key=lambda e: e.time),
         record=record,
+        web_library=web_library,
     )
 
 
@@ -665,12 +698,12 @@ def load_scene(path, overrides=None, fmu_dir=None) -> Scene:
     path = Path(path)
     text = path.read_text(encoding="utf-8")
     if not overrides:
-        return parse_scene(text, str(path), fmu_dir)
+        return parse_scene(text, str(path), fmu_dir, path.parent)
     data = json.loads(text)
     for key, value in overrides.items():
         set_path(data, key, value)
     label = f"{path} (with {', '.join(f'{k}={v}' for k, v in overrides.items())})"
-    return parse_scene(json.dumps(data, indent=2), label, fmu_dir)
+    return parse_scene(json.dumps(data, indent=2), label, fmu_dir, path.parent)
 
 
 def set_path(data, key: str, value):
