@@ -23,6 +23,7 @@ need the glibc of the machine that built them.
 
 import argparse
 import html
+import json
 import os
 import shutil
 import subprocess
@@ -147,7 +148,18 @@ def unit_rows(root):
     return "\n".join(rows)
 
 
-def documentation(root, template):
+def web_rows(library):
+    """The shipped web records as table rows (the span's documentation)."""
+    rows = []
+    for w in json.loads(library.read_text(encoding="utf-8"))["webs"]:
+        modulus = f"{w['E'] / 1e9:.4g} GPa" if "E" in w else f"table, {len(w['stress_strain'])} points"
+        cells = [w["name"], w["description"], modulus, f"{w['thickness'] * 1e6:g} um", f"{w['density']:g}",
+                 f"{w['d_r']:g} s", w.get("source", "")]
+        rows.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells) + "</tr>")
+    return "\n".join(rows)
+
+
+def documentation(root, template, resources=None):
     text = template.read_text(encoding="utf-8")
     replacements = {
         "<!-- STYLE -->": STYLE.read_text(encoding="utf-8"),
@@ -155,6 +167,8 @@ def documentation(root, template):
         "<!-- GUID -->": html.escape(root.get("guid")),
         "<!-- VERSION -->": html.escape(root.get("version", "")),
     }
+    if resources is not None and (resources / "webs.json").exists():
+        replacements["<!-- WEBS -->"] = web_rows(resources / "webs.json")
     # A model with enumerations (unit choices) documents them.
     if root.find("TypeDefinitions") is not None:
         replacements["<!-- UNIT_CHOICES -->"] = unit_rows(root)
@@ -174,7 +188,7 @@ def write_fmu(out, model, library):
     entries = [
         ("modelDescription.xml", model.description.read_bytes()),
         (f"binaries/linux64/{identifier}.so", library.read_bytes()),
-        ("documentation/index.html", documentation(root, model.template).encode("utf-8")),
+        ("documentation/index.html", documentation(root, model.template, model.resources).encode("utf-8")),
     ]
     if model.resources.is_dir():
         entries += [(f"resources/{f.name}", f.read_bytes()) for f in sorted(model.resources.iterdir()) if f.is_file()]

@@ -80,9 +80,8 @@ def model_description(path=MODEL_DESCRIPTION):
         s = t.get("start")
         if s is None:
             continue
-        start[v.get("name")] = (
-            float(s) if t.tag == "Real" else s.lower() in ("true", "1") if t.tag == "Boolean" else int(s)
-        )
+        convert = {"Real": float, "Boolean": lambda x: x.lower() in ("true", "1"), "String": str}.get(t.tag, int)
+        start[v.get("name")] = convert(s)
     solvers = None
     for st in root.iter("SimpleType"):
         if st.get("name") == "Solver":

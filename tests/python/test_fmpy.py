@@ -28,12 +28,12 @@ def test_fmpy_validation_finds_no_problem(fmu_path):
     assert validate_fmu(str(fmu_path)) == []
 
 
-def test_archive_holds_exactly_the_three_files_with_clean_paths(fmu_path):
+def test_archive_holds_exactly_its_files_with_clean_paths(fmu_path):
     with zipfile.ZipFile(fmu_path) as zf:
         names = zf.namelist()
         assert zf.testzip() is None, "a member of the FMU is corrupted"
     assert sorted(names) == sorted(
-        ["modelDescription.xml", "binaries/linux64/ConvertingSpan.so", "documentation/index.html"]
+        ["modelDescription.xml", "binaries/linux64/ConvertingSpan.so", "documentation/index.html", "resources/webs.json"]
     )
     for name in names:
         assert "\\" not in name, f"{name!r} uses a backslash separator"
@@ -47,7 +47,7 @@ def test_documentation_lists_every_variable_and_the_guid(fmu_path, model_descrip
     missing = [v.name for v in model_description.modelVariables if f"<code>{html.escape(v.name)}</code>" not in doc]
     assert not missing, f"the documentation does not name the variables {missing}"
     assert model_description.guid in doc
-    for placeholder in ("<!-- VARIABLES -->", "<!-- UNIT_CHOICES -->", "<!-- GUID -->", "<!-- VERSION -->"):
+    for placeholder in ("<!-- VARIABLES -->", "<!-- UNIT_CHOICES -->", "<!-- GUID -->", "<!-- VERSION -->", "<!-- WEBS -->"):
         assert placeholder not in doc, f"the placeholder {placeholder} was not filled in"
 
 
