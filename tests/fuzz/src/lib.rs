@@ -743,7 +743,8 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let guid_ok = guid_kind >= 2 && !guid_ptr.is_null();
     let null_functions = src.chance(8);
     let null_name = src.chance(8);
-    let resources = CString::new("file:///nonexistent/resources").unwrap();
+    // The repository's fmu/resources: what the FMU ships, so records load.
+    let resources = CString::new(concat!("file://", env!("CARGO_MANIFEST_DIR"), "/../../fmu/resources/")).unwrap();
     let logging_on = boolean(src);
     let c = unsafe {
         fmi2Instantiate(
@@ -1158,13 +1159,17 @@ fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let vrs: Vec<u32> = (0..n)
         .map(|_| vr(src, |v| family(v) == Family::String))
         .collect();
-    let text = CString::new("a string").unwrap();
+    // Record names of the shipped library (a linear web, a curve), none, and an unknown name.
+    let texts: Vec<CString> = ["PET-12", "nonwoven-PP-spunbond", "steel-1.0", "", "a string"]
+        .iter()
+        .map(|t| CString::new(*t).unwrap())
+        .collect();
     let values: Vec<fmi2String> = (0..n)
         .map(|_| {
             if src.chance(64) {
                 std::ptr::null()
             } else {
-                text.as_ptr()
+                texts[src.pick(texts.len())].as_ptr()
             }
         })
         .collect();
@@ -1174,7 +1179,7 @@ fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let known = vrs
         .iter()
         .all(|&x| var(x, Family::String).is_some_and(|v| v.causality != Causality::Output));
-    call_on(
+    let res = call_on(
         r,
         t,
         Fn::Set,
@@ -1188,6 +1193,13 @@ fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         },
         |c| unsafe { fmi2SetString(c, vr_ptr, n, value_ptr) },
     )?;
+    // A record (or a library path) may fail initialization, like any changed value.
+    if let Some((i, OK)) = res {
+        if n > 0 {
+            let slot = r.slot_mut(i);
+            slot.values = slot.values.worsen(Values::Moderate);
+        }
+    }
     Ok(())
 }
 
