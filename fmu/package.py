@@ -89,7 +89,7 @@ def build_portable_library(model):
 def allowed_range(root, var, t):
     """The allowed values as the FMU checks them: XML min/max plus the strict
     bounds of the model-level VendorAnnotations."""
-    strict = root.find(f"./VendorAnnotations/Tool[@name='{RANGE_TOOL}']/Range[@variable='{var.get('name')}']")
+    strict = root.find(f"./VendorAnnotations/Tool[@name='{RANGE_TOOL}']/Ranges/Range[@variable='{var.get('name')}']")
     low = high = None
     if strict is not None and "greaterThan" in strict.attrib:
         low = f"&gt; {strict.get('greaterThan')}"

@@ -16,9 +16,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// Tool of the model-level `<VendorAnnotations>` that carries strict bounds
-/// the XML `min`/`max` cannot say, one `<Range variable=".." greaterThan=".."/>`
-/// per variable. Model-level because importers with a strict schema (rust-fmi)
-/// refuse `<Annotations>` inside a `ScalarVariable`.
+/// the XML `min`/`max` cannot say: `<Ranges>` (the schema allows a Tool one
+/// child) holding one `<Range variable=".." greaterThan=".."/>` per variable.
+/// Model-level because importers with a strict schema (rust-fmi) refuse
+/// `<Annotations>` inside a `ScalarVariable`.
 const RANGE_TOOL: &str = "ConvertingSpan.range";
 
 /// For a build script: checks `source` (a modelDescription.xml, relative to
@@ -230,11 +231,11 @@ fn parse(xml: &str) -> Result<ModelDescription, String> {
                 }
             }
             ("VendorAnnotations" | "Annotations", "Tool") => tool = attrs.get("name").cloned(),
-            ("Tool", "Range") if tool.as_deref() == Some(RANGE_TOOL) => {
-                if current_var.is_some() {
+            ("Tool" | "Ranges", "Range") if tool.as_deref() == Some(RANGE_TOOL) => {
+                if current_var.is_some() || parent == "Tool" {
                     return Err(format!(
-                        "line {line}: a {RANGE_TOOL} range inside a ScalarVariable is refused by strict importers; \
-                         list it in <VendorAnnotations><Tool name=\"{RANGE_TOOL}\"> as <Range variable=\"...\" .../>"
+                        "line {line}: put {RANGE_TOOL} ranges in <VendorAnnotations><Tool name=\"{RANGE_TOOL}\"><Ranges> \
+                         as <Range variable=\"...\" .../> (strict importers refuse annotations inside a ScalarVariable)"
                     ));
                 }
                 let name = attrs.get("variable").cloned().ok_or(format!("line {line}: a {RANGE_TOOL} Range needs variable=\"...\""))?;
@@ -727,7 +728,7 @@ mod tests {
     }
 
     fn tool(ranges: &str) -> String {
-        format!(r#"<VendorAnnotations><Tool name="{RANGE_TOOL}">{ranges}</Tool></VendorAnnotations>"#)
+        format!(r#"<VendorAnnotations><Tool name="{RANGE_TOOL}"><Ranges>{ranges}</Ranges></Tool></VendorAnnotations>"#)
     }
 
     #[test]
@@ -737,7 +738,7 @@ mod tests {
     }
 
     #[test]
-    fn an_unknown_variable_a_repeated_one_or_a_range_inside_a_variable_is_refused() {
+    fn an_unknown_variable_a_repeated_one_or_a_range_outside_ranges_is_refused() {
         let unknown = parse(&md(&tool(r#"<Range variable="y" greaterThan="0"/>"#), "")).err().unwrap();
         assert!(unknown.contains("\"y\", which is not a variable"), "{unknown}");
         let twice = parse(&md(&tool(r#"<Range variable="x" greaterThan="0"/><Range variable="x" lessThan="1"/>"#), ""))
@@ -746,6 +747,8 @@ mod tests {
         assert!(twice.contains("lists \"x\" twice"), "{twice}");
         let inside = format!(r#"<Annotations><Tool name="{RANGE_TOOL}"><Range greaterThan="0"/></Tool></Annotations>"#);
         let refused = parse(&md("", &inside)).err().unwrap();
-        assert!(refused.contains("inside a ScalarVariable"), "{refused}");
+        let bare = parse(&md(&tool("").replace("<Ranges></Ranges>", r#"<Range variable="x" greaterThan="0"/>"#), ""));
+        assert!(bare.err().unwrap().contains("<Ranges>"));
+        assert!(refused.contains("put ConvertingSpan.range ranges in"), "{refused}");
     }
 }
