@@ -8,6 +8,7 @@ cd "$ROOT"
 # the FMI layer, the generator, the solvers.
 cargo test --release --quiet --workspace
 python3 fmu/package.py
+"$PY" fmu/compat.py out
 # fmi-sim for the importer tests (cached; see the file).
 source tests/importers.sh
 "$PY" -m pytest tests/python -q
