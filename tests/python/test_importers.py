@@ -139,3 +139,27 @@ def teardown_module():
     """Printed with pytest -s (docs/importers.md)."""
     for importer, worst in AGREEMENT.items():
         print(f"\n{importer}: largest relative difference from FMPy {worst:.2e}")
+
+
+def test_the_roller_loads_in_both(fmus, tmp_path):
+    """Acceptance of the Roller's model description; with no torque and equal (zero) tensions omega holds exactly."""
+    roller = fmus / "Roller.fmu"
+    out = tmp_path / "roller.csv"
+    run = subprocess.run([shutil.which("fmi-sim") or "fmi-sim", "--model", str(roller), "-o", str(out),
+                          "co-simulation", "--output-interval", "0.01", "-f", "0.1"],
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, f"fmi-sim refused Roller.fmu:\n{run.stderr}"
+    with open(out) as f:
+        assert [float(r["omega"]) for r in csv.DictReader(f)] == [100.0] * 11
+
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    execution = CosimExecution.from_step_size(step_size=10_000_000)
+    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(roller), instance_name="roller"))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    omega = {v.name.decode(): v.reference for v in execution.slave_variables(index)}["omega"]
+    assert execution.step(10)
+    assert observer.last_real_values(index, [omega]) == [100.0]
