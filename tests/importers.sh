@@ -7,7 +7,8 @@
 # libcosim comes with the venv (PyPI libcosimpy, fmu/requirements.txt).
 FMI_SIM_VERSION=0.7.0
 # `fmi-sim --version` prints "Error: fmi-sim 0.7.0" on stderr and fails.
-if ! "$CONVERTING_SPAN_TOOLS/bin/fmi-sim" --version 2>&1 | grep -q "fmi-sim $FMI_SIM_VERSION\$"; then
+FMI_SIM_FOUND="$("$CONVERTING_SPAN_TOOLS/bin/fmi-sim" --version 2>&1 || true)"
+if [[ "$FMI_SIM_FOUND" != *"fmi-sim $FMI_SIM_VERSION"* ]]; then
     dpkg -s libclang-dev >/dev/null 2>&1 || apt_install libclang-dev
     echo "importers.sh: installing fmi-sim $FMI_SIM_VERSION (crates.io) into $CONVERTING_SPAN_TOOLS"
     cargo install --quiet --locked --root "$CONVERTING_SPAN_TOOLS" "fmi-sim@$FMI_SIM_VERSION"
