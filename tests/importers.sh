@@ -11,8 +11,8 @@ FMI_SIM_FOUND="$("$CONVERTING_SPAN_TOOLS/bin/fmi-sim" --version 2>&1 || true)"
 if [[ "$FMI_SIM_FOUND" != *"fmi-sim $FMI_SIM_VERSION"* ]]; then
     dpkg -s libclang-dev >/dev/null 2>&1 || apt_install libclang-dev
     echo "importers.sh: installing fmi-sim $FMI_SIM_VERSION (crates.io) into $CONVERTING_SPAN_TOOLS"
-    # Unoptimized: a third of the build (about 3 min cold on 2 cores instead of 8 or
-    # more); the tests' 1000 steps still take 0.1 s.
+    # Unoptimized: a cold build takes about 2 min of CPU instead of about 8 (arrow at
+    # opt-level 3), and the tests' 1000 steps still take 0.1 s.
     CARGO_PROFILE_RELEASE_OPT_LEVEL=0 \
         cargo install --quiet --locked --root "$CONVERTING_SPAN_TOOLS" "fmi-sim@$FMI_SIM_VERSION"
 fi
