@@ -10,7 +10,7 @@ tension, strain and speed must agree with FMPy's at every point.
 Tolerance: 1e-14 relative. Why: the importers load the same binary and call
 the same exact step with the same held inputs; only the step size differs by
 rounding. FMPy passes (n+1)*h - n*h, which is h to within a few ulps of t,
-while fmi-sim and libcosim pass h itself; exp(-v*dt/L) then differs by
+while fmi-sim and libcosim pass h (to an ulp); exp(-v*dt/L) then differs by
 ~1e-16 per step, and the tension magnifies a state error by 1/strain (1e3),
 so a few 1e-15 are expected (seen: under 3e-15).
 """
