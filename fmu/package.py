@@ -90,9 +90,10 @@ def build_portable_library(model):
     subprocess.run(command, cwd=ROOT, check=True, env=env)
 
 
-def allowed_range(var, t):
-    """The allowed values as the FMU checks them: XML min/max plus strict bounds."""
-    strict = var.find(f"./Annotations/Tool[@name='{RANGE_TOOL}']/Range")
+def allowed_range(root, var, t):
+    """The allowed values as the FMU checks them: XML min/max plus the strict
+    bounds of the model-level VendorAnnotations."""
+    strict = root.find(f"./VendorAnnotations/Tool[@name='{RANGE_TOOL}']/Ranges/Range[@variable='{var.get('name')}']")
     low = high = None
     if strict is not None and "greaterThan" in strict.attrib:
         low = f"&gt; {strict.get('greaterThan')}"
@@ -122,7 +123,7 @@ def variable_rows(root):
         elif kind == "Boolean":
             allowed = "true / false"
         else:
-            allowed = allowed_range(var, kind_el)
+            allowed = allowed_range(root, var, kind_el)
         rows.append(
             "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>".format(
                 html.escape(var.get("name")),

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Every test: Rust tests of the model core and of the C API, then the packaged
-# FMU through a C importer and through FMPy (pytest).
+# FMU through a C importer, FMPy, fmi-sim and libcosim (pytest).
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
 cd "$ROOT"
@@ -8,6 +8,9 @@ cd "$ROOT"
 # the FMI layer, the generator, the solvers.
 cargo test --release --quiet --workspace
 python3 fmu/package.py
+"$PY" fmu/compat.py out
+# fmi-sim for the importer tests (cached; see the file).
+source tests/importers.sh
 "$PY" -m pytest tests/python -q
 # Hardening, CI size (tests/hardening.sh --full for the long runs): the
 # portable .so, the panic boundary, the fuzzed C API, AddressSanitizer and

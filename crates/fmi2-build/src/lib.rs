@@ -15,7 +15,11 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// Tool annotation that carries strict bounds the XML `min`/`max` cannot say.
+/// Tool of the model-level `<VendorAnnotations>` that carries strict bounds
+/// the XML `min`/`max` cannot say: `<Ranges>` (the schema allows a Tool one
+/// child) holding one `<Range variable=".." greaterThan=".."/>` per variable.
+/// Model-level because importers with a strict schema (rust-fmi) refuse
+/// `<Annotations>` inside a `ScalarVariable`.
 const RANGE_TOOL: &str = "ConvertingSpan.range";
 
 /// For a build script: checks `source` (a modelDescription.xml, relative to
@@ -54,6 +58,8 @@ struct ModelDescription {
     enumerations: BTreeMap<String, Vec<(String, i32)>>,
     log_categories: Vec<String>,
     variables: Vec<Variable>,
+    /// The `RANGE_TOOL` entries: (line, variable name, attributes).
+    strict_ranges: Vec<(usize, String, BTreeMap<String, String>)>,
     outputs: Vec<Unknown>,
     derivatives: Vec<Unknown>,
     initial_unknowns: Vec<Unknown>,
@@ -224,18 +230,16 @@ fn parse(xml: &str) -> Result<ModelDescription, String> {
                     v.type_attrs = attrs;
                 }
             }
-            ("Annotations", "Tool") => tool = attrs.get("name").cloned(),
-            ("Tool", "Range") if tool.as_deref() == Some(RANGE_TOOL) => {
-                if let Some(v) = current_var.as_mut() {
-                    for (key, value) in &attrs {
-                        let bound = Some(number(value, key, line)?);
-                        match key.as_str() {
-                            "greaterThan" => v.greater_than = bound,
-                            "lessThan" => v.less_than = bound,
-                            other => return Err(format!("line {line}: unknown range bound \"{other}\" (use greaterThan or lessThan)")),
-                        }
-                    }
+            ("VendorAnnotations" | "Annotations", "Tool") => tool = attrs.get("name").cloned(),
+            ("Tool" | "Ranges", "Range") if tool.as_deref() == Some(RANGE_TOOL) => {
+                if current_var.is_some() || parent == "Tool" {
+                    return Err(format!(
+                        "line {line}: put {RANGE_TOOL} ranges in <VendorAnnotations><Tool name=\"{RANGE_TOOL}\"><Ranges> \
+                         as <Range variable=\"...\" .../> (strict importers refuse annotations inside a ScalarVariable)"
+                    ));
                 }
+                let name = attrs.get("variable").cloned().ok_or(format!("line {line}: a {RANGE_TOOL} Range needs variable=\"...\""))?;
+                md.strict_ranges.push((line, name, attrs));
             }
             ("Outputs" | "Derivatives" | "InitialUnknowns", "Unknown") => {
                 let index = attrs
@@ -263,7 +267,31 @@ fn parse(xml: &str) -> Result<ModelDescription, String> {
             path.push(name);
         }
     }
+    apply_strict_ranges(&mut md)?;
     Ok(md)
+}
+
+/// Moves each model-level strict range onto its variable.
+fn apply_strict_ranges(md: &mut ModelDescription) -> Result<(), String> {
+    for (line, name, attrs) in std::mem::take(&mut md.strict_ranges) {
+        let v = md
+            .variables
+            .iter_mut()
+            .find(|v| v.name() == name)
+            .ok_or(format!("line {line}: {RANGE_TOOL} names \"{name}\", which is not a variable"))?;
+        if v.greater_than.is_some() || v.less_than.is_some() {
+            return Err(format!("line {line}: {RANGE_TOOL} lists \"{name}\" twice"));
+        }
+        for (key, value) in attrs.iter().filter(|(key, _)| *key != "variable") {
+            let bound = Some(number(value, key, line)?);
+            match key.as_str() {
+                "greaterThan" => v.greater_than = bound,
+                "lessThan" => v.less_than = bound,
+                other => return Err(format!("line {line}: unknown range bound \"{other}\" (use greaterThan or lessThan)")),
+            }
+        }
+    }
+    Ok(())
 }
 
 // ---------------------------------------------------------------- checks
@@ -692,4 +720,44 @@ fn typed_enumeration(w: &mut String, ty: &str, items: &[(String, i32)]) {
         writeln!(w, "            {value} => Some({ty}::{}),", camel(item)).unwrap();
     }
     writeln!(w, "            _ => None,\n        }}\n    }}\n    fn to_i32(self) -> i32 {{ self as i32 }}\n}}\n").unwrap();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A minimal model description with `extra` before ModelVariables and `inside` in variable `x`.
+    fn md(extra: &str, inside: &str) -> String {
+        format!(
+            r#"<fmiModelDescription fmiVersion="2.0" modelName="m" guid="{{1}}">{extra}
+            <ModelVariables><ScalarVariable name="x" valueReference="1" causality="parameter" description="x">
+            <Real start="1"/>{inside}</ScalarVariable></ModelVariables></fmiModelDescription>"#
+        )
+    }
+
+    fn tool(ranges: &str) -> String {
+        format!(r#"<VendorAnnotations><Tool name="{RANGE_TOOL}"><Ranges>{ranges}</Ranges></Tool></VendorAnnotations>"#)
+    }
+
+    #[test]
+    fn a_model_level_range_reaches_its_variable() {
+        let parsed = parse(&md(&tool(r#"<Range variable="x" greaterThan="0" lessThan="2"/>"#), "")).unwrap();
+        assert_eq!((parsed.variables[0].greater_than, parsed.variables[0].less_than), (Some(0.0), Some(2.0)));
+    }
+
+    #[test]
+    fn an_unknown_variable_a_repeated_one_or_a_range_outside_ranges_is_refused() {
+        let unknown = parse(&md(&tool(r#"<Range variable="y" greaterThan="0"/>"#), "")).err().unwrap();
+        assert!(unknown.contains("\"y\", which is not a variable"), "{unknown}");
+        let twice = parse(&md(&tool(r#"<Range variable="x" greaterThan="0"/><Range variable="x" lessThan="1"/>"#), ""))
+            .err()
+            .unwrap();
+        assert!(twice.contains("lists \"x\" twice"), "{twice}");
+        let inside = format!(r#"<Annotations><Tool name="{RANGE_TOOL}"><Range greaterThan="0"/></Tool></Annotations>"#);
+        let refused = parse(&md("", &inside)).err().unwrap();
+        assert!(refused.contains("put ConvertingSpan.range ranges in"), "{refused}");
+        let bare = tool("").replace("<Ranges></Ranges>", r#"<Range variable="x" greaterThan="0"/>"#);
+        let refused = parse(&md(&bare, "")).err().unwrap();
+        assert!(refused.contains("put ConvertingSpan.range ranges in"), "{refused}");
+    }
 }
