@@ -93,13 +93,27 @@ impl ConvertingSpan {
         let step = stepping::Step { params: &self.params, start, rates, x0: self.unstretched, h };
         let (next, adaptive_step) = step.integrate(self.params.solver, self.tolerance, self.adaptive_step)?;
         let x = next.value();
-        let length_after = match &rates {
-            Some(r) => physics::span_length(&self.params, &start.advanced(r, h)),
-            None => physics::span_length(&self.params, &start),
+        let end = match &rates {
+            Some(r) => {
+                let end = start.advanced(r, h);
+                check_inputs_at_end(&end, r, h)?;
+                end
+            }
+            None => start,
         };
+        let length_after = physics::span_length(&self.params, &end);
+        if self.params.variable_length && !(length_after >= min_length()) {
+            return Err(FmiError::discard(format!(
+                "variableLength: the rollers would come {length_after} m apart by the end of the step, closer than \
+                 the shortest span L may be ({} m); take a shorter step",
+                min_length()
+            )));
+        }
         if !physics::representable(length_after, x) {
             let why = if start.speed_b < start.speed_a.min(0.0) {
                 "web fed in from both ends grows without bound"
+            } else if length_after > (1.0 + physics::max_strain()) * x {
+                "the strain would pass its physical bound (web pulled out faster than it comes in)"
             } else {
                 "the method could not follow the span over this step"
             };
@@ -133,16 +147,50 @@ impl ConvertingSpan {
     fn update_rates(&mut self, start: &Inputs, given: Option<&Inputs>, h: f64) {
         let p = &self.params;
         let length = physics::span_length(p, start);
+        // An estimate from a very short step is held to the inputs' declared
+        // maximum rates (given derivatives are checked against them when set).
+        let bound = |x: f64, limit: f64| x.clamp(-limit, limit);
         self.rates = match given {
             Some(r) => Rates { speed_b: r.speed_b, length: physics::length_rate(p, &start.advanced(r, h), r) },
             None if self.previous.step > 0.0 => Rates {
-                speed_b: (start.speed_b - self.previous.speed_b) / self.previous.step,
-                length: (length - self.previous.length) / self.previous.step,
+                speed_b: bound((start.speed_b - self.previous.speed_b) / self.previous.step, max_rate(Real::web_b_v)),
+                // |dL/dt| <= |d(r_b - r_a)/dt| <= 2*sqrt(2) times a coordinate's maximum rate.
+                length: bound((length - self.previous.length) / self.previous.step, 2.0 * std::f64::consts::SQRT_2 * max_rate(Real::frame_a_x)),
             },
             None => Rates::default(),
         };
         self.previous = Previous { speed_b: start.speed_b, length, step: h };
     }
+}
+
+fn max_rate(var: Real) -> f64 {
+    DESCRIPTION.variable(var.vr()).map_or(f64::INFINITY, |v| v.max_rate)
+}
+
+/// The shortest span: the declared minimum of `L`, also for `variableLength`.
+fn min_length() -> f64 {
+    DESCRIPTION.variable(Real::L.vr()).map_or(0.0, |v| v.range.lo)
+}
+
+/// Inputs moved by their derivatives must still be in their ranges at the
+/// end of the step (and so all along it: they move linearly).
+#[cold]
+fn check_inputs_at_end(end: &Inputs, rates: &Inputs, h: f64) -> FmiResult {
+    let mut end = *end;
+    let mut rates = *rates;
+    for var in Real::ALL {
+        let (Some(x), Some(r)) = (ConvertingSpan::input_field(&mut end, var).copied(), ConvertingSpan::input_field(&mut rates, var).copied()) else {
+            continue;
+        };
+        let Some(v) = DESCRIPTION.variable(var.vr()) else { continue };
+        if !v.range.contains(x) {
+            return Err(FmiError::discard(format!(
+                "{} would reach {x} by the end of the step (derivative {r} over {h} s), outside its range {}; take a shorter step",
+                v.name, v.range
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Products of parameters that are each in range but together overflow
@@ -243,9 +291,11 @@ impl Model for ConvertingSpan {
         records::apply(&mut self.params, resources)?;
         let p = &self.params;
         let length = physics::span_length(p, &self.inputs);
-        if !(length > 0.0) {
+        if !(length >= min_length()) {
             return Err(FmiError::error(format!(
-                "variableLength: the span length |frame_b - frame_a| = {length} m must be > 0 (the rollers coincide)"
+                "variableLength: the span length |frame_b - frame_a| = {length} m must be at least {} m, \
+                 the shortest span L may be (the rollers nearly coincide)",
+                min_length()
             )));
         }
         check_derived(p)?;

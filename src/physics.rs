@@ -3,6 +3,7 @@
 //!
 //! The state is the unstretched length of web in the span, x = L/(1+eps_b).
 
+use crate::description::{Real, DESCRIPTION};
 use crate::parameters::{Inputs, Parameters, Rates, WebProperties};
 use crate::sensor::SensorScale;
 use solver::{decay_integral, CompensatedSum};
@@ -91,12 +92,20 @@ pub fn strain(length: f64, x0: CompensatedSum, y: f64) -> f64 {
     (((length - x0.hi()) - x0.lo()) - y) / (x0.value() + y)
 }
 
-/// Whether x is a state the equations can evaluate: positive, and short
-/// enough that 1 + eps_b = L/x is not lost to rounding (x < L/2^-52). Beyond
-/// that the strain is -1 to double precision and the rates divide by zero:
-/// web fed in from both ends for too long.
+/// Whether x is a state the equations can evaluate: short enough that
+/// 1 + eps_b = L/x is not lost to rounding (x < L/2^-52; beyond that the
+/// strain is -1 to double precision and the rates divide by zero: web fed in
+/// from both ends for too long), and long enough that the strain stays
+/// within the physical bound of every strain, `web_a.eps`'s maximum (web
+/// pulled out faster than it comes in would otherwise stretch without end).
 pub fn representable(length: f64, x: f64) -> bool {
-    x > 0.0 && x.is_finite() && length > f64::EPSILON * x
+    x > 0.0 && x.is_finite() && length > f64::EPSILON * x && length <= (1.0 + max_strain()) * x
+}
+
+/// The largest strain any web may have: the declared maximum of `web_a.eps`.
+#[inline]
+pub fn max_strain() -> f64 {
+    DESCRIPTION.variable(Real::web_a_eps.vr()).map_or(f64::INFINITY, |v| v.range.hi)
 }
 
 /// The unstretched length that holds strain `eps` in a span of length L [1]:

@@ -18,6 +18,8 @@ use std::path::Path;
 /// Tool of the model-level `<VendorAnnotations>` that carries strict bounds
 /// the XML `min`/`max` cannot say: `<Ranges>` (the schema allows a Tool one
 /// child) holding one `<Range variable=".." greaterThan=".."/>` per variable.
+/// An input's entry may also bound its rate: `maxRate` is the largest
+/// |derivative| (per second) the FMU accepts or estimates for it.
 /// Model-level because importers with a strict schema (rust-fmi) refuse
 /// `<Annotations>` inside a `ScalarVariable`.
 const RANGE_TOOL: &str = "ConvertingSpan.range";
@@ -74,6 +76,7 @@ struct Variable {
     type_attrs: BTreeMap<String, String>,
     greater_than: Option<f64>,
     less_than: Option<f64>,
+    max_rate: Option<f64>,
 }
 
 struct Unknown {
@@ -279,7 +282,7 @@ fn apply_strict_ranges(md: &mut ModelDescription) -> Result<(), String> {
             .iter_mut()
             .find(|v| v.name() == name)
             .ok_or(format!("line {line}: {RANGE_TOOL} names \"{name}\", which is not a variable"))?;
-        if v.greater_than.is_some() || v.less_than.is_some() {
+        if v.greater_than.is_some() || v.less_than.is_some() || v.max_rate.is_some() {
             return Err(format!("line {line}: {RANGE_TOOL} lists \"{name}\" twice"));
         }
         for (key, value) in attrs.iter().filter(|(key, _)| *key != "variable") {
@@ -287,7 +290,9 @@ fn apply_strict_ranges(md: &mut ModelDescription) -> Result<(), String> {
             match key.as_str() {
                 "greaterThan" => v.greater_than = bound,
                 "lessThan" => v.less_than = bound,
-                other => return Err(format!("line {line}: unknown range bound \"{other}\" (use greaterThan or lessThan)")),
+                "maxRate" if v.causality() == "input" && bound.is_some_and(|b| b > 0.0) => v.max_rate = bound,
+                "maxRate" => return Err(format!("line {line}: maxRate must be > 0, and only an input has one")),
+                other => return Err(format!("line {line}: unknown range bound \"{other}\" (use greaterThan, lessThan or maxRate)")),
             }
         }
     }
@@ -572,13 +577,14 @@ fn emit(md: &ModelDescription, source: &str) -> String {
             "    Variable {{ name: {:?}, vr: {}, description: {:?}, kind: {kind}, causality: Causality::{causality}, \
              variability: Variability::{variability}, initial: Initial::{initial}, start: {}, \
              range: Range {{ min: {min}, min_inclusive: {min_inclusive}, max: {max}, max_inclusive: {max_inclusive}, lo: {lo}, hi: {hi} }}, \
-             unit: {:?}, family: Family::of({kind}), \
+             unit: {:?}, max_rate: {}, family: Family::of({kind}), \
              settable_in: settable_in(Causality::{causality}, Variability::{variability}, Initial::{initial}) }},",
             v.name(),
             v.vr(),
             v.attrs.get("description").cloned().unwrap_or_default(),
             start.unwrap_or_else(|| "Start::None".into()),
             v.type_attrs.get("unit").cloned().unwrap_or_default(),
+            rust_f64(v.max_rate.unwrap_or(f64::INFINITY)),
         )
         .unwrap();
     }

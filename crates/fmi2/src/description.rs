@@ -152,6 +152,9 @@ pub struct Variable {
     pub start: Start,
     pub range: Range,
     pub unit: &'static str,
+    /// An input's largest |derivative| per second (`maxRate` of the range
+    /// annotation; infinite when not given).
+    pub max_rate: f64,
     /// Derived: `Family::of(kind)`, and `settable_in(causality, variability, initial)`.
     pub family: Family,
     pub settable_in: u8,

@@ -195,8 +195,14 @@ impl<M: Model> Instance<M> {
                     v.name
                 )));
             }
-            if !value.is_finite() {
-                return Err(FmiError::error(format!("{}: derivative of {} = {value} must be finite", call.name(), v.name)));
+            if !(value.abs() <= v.max_rate) {
+                let unit = if v.unit.is_empty() || v.unit == "1" { "1/s".to_string() } else { format!("{}/s", v.unit) };
+                return Err(FmiError::error(format!(
+                    "{}: derivative of {} = {value} {unit} is outside its allowed range [-{2}, {2}]",
+                    call.name(),
+                    v.name,
+                    v.max_rate
+                )));
             }
         }
         let mut model = self.model.clone();
