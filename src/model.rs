@@ -210,6 +210,20 @@ fn check_derived(p: &Parameters) -> FmiResult {
     }
 }
 
+impl ConvertingSpan {
+    #[cold]
+    fn why_outputs_undefined(&self, length: f64) -> FmiResult {
+        check_derived(&self.params)?;
+        Err(FmiError::error(format!(
+            "outputs are not defined for a span length of {length} m with {} m of unstretched web \
+             (the span is at least {} m long, and its strain at most {})",
+            self.unstretched.value(),
+            min_length(),
+            physics::max_strain()
+        )))
+    }
+}
+
 impl Model for ConvertingSpan {
     fn description() -> &'static fmi2::description::ModelDescription {
         &DESCRIPTION
@@ -311,6 +325,13 @@ impl Model for ConvertingSpan {
         } else {
             p.strain_start
         };
+        if strain > physics::max_strain() {
+            return Err(FmiError::error(format!(
+                "startAtEquilibrium: the inputs web_a.v = {} m/s, web_b.v = {} m/s, web_a.eps = {} give a steady-state \
+                 strain of {strain}, beyond the largest strain a web may have ({}); or set startAtEquilibrium = false and eps_start",
+                self.inputs.speed_a, self.inputs.speed_b, self.inputs.strain_a, physics::max_strain()
+            )));
+        }
         if experiment.model_exchange {
             // Model Exchange gives the current inputs only, not their rates.
             if p.include_mass {
@@ -341,16 +362,14 @@ impl Model for ConvertingSpan {
         self.advance(h)
     }
 
+    #[inline]
     fn outputs_defined(&self) -> FmiResult {
-        check_derived(&self.params)?;
         let length = physics::span_length(&self.params, &self.inputs);
-        if length > 0.0 && physics::representable(length, self.unstretched.value()) {
+        let derived = self.params.span_web.stiffness().is_finite() && self.params.span_web.linear_density().is_finite();
+        if derived && length >= min_length() && physics::representable(length, self.unstretched.value()) {
             Ok(())
         } else {
-            Err(FmiError::error(format!(
-                "outputs are not defined for a span length of {length} m with {} m of unstretched web",
-                self.unstretched.value()
-            )))
+            self.why_outputs_undefined(length)
         }
     }
 

@@ -120,9 +120,11 @@ pub trait Model: Variables + Clone + Default + 'static {
         Err(no_model_exchange())
     }
 
-    /// Whether the outputs can be computed from what the model holds now. The
-    /// layer asks only in the error state, where parameters may never have
-    /// passed initialization; a failure answers the get with fmi2Error.
+    /// Whether the outputs can be computed from what the model holds now:
+    /// asked before every read of computed values (keep it cheap). In the
+    /// error state the parameters may never have passed initialization, and
+    /// inputs set since the last step may describe no valid configuration; a
+    /// failure answers the get with fmi2Error.
     fn outputs_defined(&self) -> FmiResult {
         Ok(())
     }

@@ -185,6 +185,15 @@ impl<M: Model> Instance<M> {
     /// Checks every parameter against its allowed range, then lets the model
     /// compute its initial state. Nothing changes when a check fails.
     fn settle_initial_values(&mut self) -> FmiResult {
+        self.check_parameter_ranges()?;
+        let mut model = self.model.clone();
+        model.initialize(&self.experiment, &self.resources)?;
+        self.model = model;
+        Ok(())
+    }
+
+    /// Every parameter within its allowed range.
+    fn check_parameter_ranges(&self) -> FmiResult {
         for v in Self::description().variables {
             if v.causality != Causality::Parameter || v.range.is_unbounded() {
                 continue;
@@ -198,9 +207,6 @@ impl<M: Model> Instance<M> {
                 return Err(out_of_range(v, value));
             }
         }
-        let mut model = self.model.clone();
-        model.initialize(&self.experiment, &self.resources)?;
-        self.model = model;
         Ok(())
     }
 

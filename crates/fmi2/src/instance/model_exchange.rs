@@ -25,7 +25,7 @@ impl<M: Model> Instance<M> {
     fn prepare_computed(&mut self, call: Call, what: &str, given: usize, declared: usize) -> FmiResult {
         Self::check_count(call, what, given, declared)?;
         self.prepare_get(call)?;
-        self.check_computable(call, true)
+        self.check_computable(call)
     }
 
     pub fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {

@@ -24,21 +24,26 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
-    /// Diagnosis after an error: parameters and inputs are always there, but
-    /// computed values only where the model can compute them (the parameters
-    /// may never have passed initialization).
-    pub(super) fn check_computable(&self, call: Call, computed: bool) -> FmiResult {
-        if computed && self.phase == Phase::Error {
-            self.model.outputs_defined().map_err(|e| e.prefixed(call.name()))?;
+    /// Parameters and inputs are always there, but computed values only where
+    /// the model can compute them: after an error the parameters may never
+    /// have passed initialization, and inputs set since the last step may
+    /// leave no valid configuration (rollers moved onto each other).
+    pub(super) fn check_computable(&self, call: Call) -> FmiResult {
+        if self.phase == Phase::Error {
+            self.check_parameter_ranges().map_err(|e| e.prefixed(&format!("{}: outputs are not defined", call.name())))?;
         }
-        Ok(())
+        self.model.outputs_defined().map_err(|e| e.prefixed(call.name()))
     }
 
     pub fn get_reals(&mut self, vrs: &[u32], values: &mut [f64]) -> FmiResult {
         self.prepare_get(Call::GetReal)?;
+        let mut checked = false;
         for (vr, value) in vrs.iter().zip(values.iter_mut()) {
             let v = self.variable(Call::GetReal, *vr, Family::Real)?;
-            self.check_computable(Call::GetReal, !matches!(v.causality, Causality::Parameter | Causality::Input))?;
+            if !checked && !matches!(v.causality, Causality::Parameter | Causality::Input) {
+                self.check_computable(Call::GetReal)?;
+                checked = true;
+            }
             *value = self.model.get_real(*vr)?;
         }
         Ok(())
