@@ -14,7 +14,7 @@
 #   1. the packaged FMU's .so: glibc <= 2.17, only glibc + libgcc_s, no test hook
 #      (pytest tests/hardening)
 #   2. panic boundary through the C API (cargo test --features test-hooks)
-#   3. fuzz harness tests/fuzz, property-based: 50,000 / 1,000,000 sequences
+#   3. fuzz harness tests/fuzz, property-based, --strict: 50,000 / 1,000,000 sequences
 #   4. the same harness built with AddressSanitizer (LeakSanitizer included):
 #      10,000 / 200,000 sequences
 #   5. the same harness under valgrind memcheck: 200 / 5,000 sequences
@@ -116,9 +116,9 @@ done
 step "2. panic boundary (test-only hook, separate target directory)"
 cargo test --release --quiet --features test-hooks --target-dir target/test-hooks --test panic_boundary
 
-step "3. fuzz harness: $SEQ sequences"
+step "3. fuzz harness, strict (a non-finite output after accepted values fails too): $SEQ sequences"
 build_fuzz
-"$FUZZ" --sequences "$SEQ" | tee "$OUT/fuzz.log"
+"$FUZZ" --sequences "$SEQ" --strict | tee "$OUT/fuzz.log"
 note "fuzz: $(grep '^fuzzed' "$OUT/fuzz.log")"
 
 step "4. fuzz harness with AddressSanitizer: $SEQ_ASAN sequences"
