@@ -138,3 +138,65 @@ fn a_state_saved_before_initialization_round_trips() {
     let status = unsafe { fmi2DeSerializeFMUstate(fmu.c, bytes.as_ptr() as *const _, size, &mut copy) };
     assert_eq!(status, OK, "the FMU refused its own serialized state: {:?}", fmu.messages());
 }
+
+/// Physical bounds (issue: 71 of 1,000,000 fuzzed sequences overflowed).
+/// An input derivative of 1e308 carried over a step made the inputs and then
+/// the outputs infinite (`fuzz_sequences --only 10366`). Fix: derivatives
+/// beyond the input's maxRate are refused, and a step that would carry an
+/// input out of its range is discarded.
+#[test]
+fn a_huge_input_derivative_is_refused_and_a_step_that_leaves_the_range_is_discarded() {
+    let fmu = Fmu::named("rates");
+    assert_eq!(fmu.initialize(), OK);
+    let frame = vr::<converting_span::ConvertingSpan>("frame_a.x");
+    assert_eq!(fmu.set_real_input_derivatives(&[frame], &[1], &[1e308]), ERROR);
+    assert!(fmu.messages().last().unwrap().contains("frame_a.x = 1e308"), "{:?}", fmu.messages());
+    assert_eq!(fmu.reset(), OK);
+    assert_eq!(fmu.initialize(), OK);
+    // Inside the rate bound, but 1e4 m/s over 10 s leaves the +-1e4 m range.
+    assert_eq!(fmu.set_real_input_derivatives(&[frame], &[1], &[1e4]), OK);
+    assert_eq!(fmu.do_step(0.0, 10.0), DISCARD);
+    assert!(fmu.messages().last().unwrap().contains("frame_a.x would reach"), "{:?}", fmu.messages());
+    assert!(non_finite(&fmu).is_empty());
+}
+
+/// Backward differences over a tiny step (h = 5e-324) estimated dv_b/dt as
+/// inf, and the web-mass term made web_b.F infinite. Fix: estimates are held
+/// to the input's maxRate.
+#[test]
+fn rates_estimated_over_a_tiny_step_stay_bounded() {
+    let fmu = Fmu::named("tiny step");
+    assert_eq!(fmu.set("includeMass", 1.0), OK);
+    assert_eq!(fmu.initialize(), OK);
+    assert_eq!(fmu.do_step(0.0, 5e-324), OK);
+    assert_eq!(fmu.set_real("web_b.v", 900.0), OK);
+    assert_eq!(fmu.do_step(5e-324, 5e-324), OK);
+    assert_eq!(fmu.do_step(1e-323, 1e-3), OK);
+    let bad = non_finite(&fmu);
+    assert!(bad.is_empty(), "non-finite outputs (value reference, value): {bad:?}");
+}
+
+/// With variableLength, rollers moved onto each other between steps left
+/// a state the equations cannot evaluate (strain -1: 0/0 in the rates).
+/// Fix: outputs are refused until the configuration is valid again.
+#[test]
+fn rollers_moved_onto_each_other_make_outputs_refused_not_nan() {
+    let fmu = Fmu::named("coincide");
+    assert_eq!(fmu.set("variableLength", 1.0), OK);
+    assert_eq!(fmu.set("includeDamping", 1.0), OK);
+    assert_eq!(fmu.initialize(), OK);
+    assert_eq!(fmu.set_real("frame_b.x", 1e-300), OK);
+    let (status, _) = fmu.get_reals(&output_vrs());
+    assert_eq!(status, ERROR);
+    assert!(fmu.messages().last().unwrap().contains("outputs are not defined"), "{:?}", fmu.messages());
+}
+
+/// A steady start with web_a.v almost 0 gave a strain of 1e300 and an
+/// infinite tension. Fix: a start beyond the largest strain is refused.
+#[test]
+fn a_steady_start_beyond_the_largest_strain_is_refused() {
+    let fmu = Fmu::named("steady");
+    fmu.set_real("web_a.v", 1e-300);
+    assert_eq!(fmu.initialize(), ERROR);
+    assert!(fmu.messages().last().unwrap().contains("beyond the largest strain"), "{:?}", fmu.messages());
+}

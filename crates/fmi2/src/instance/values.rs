@@ -201,9 +201,13 @@ impl<M: Model> Instance<M> {
                 )));
             }
             if !(value.abs() <= v.max_rate) {
-                let unit = if v.unit.is_empty() || v.unit == "1" { "1/s".to_string() } else { format!("{}/s", v.unit) };
+                let unit = match v.unit {
+                    "" | "1" => "1/s".to_string(),
+                    "m/s" => "m/s2".to_string(),
+                    u => format!("{u}/s"),
+                };
                 return Err(FmiError::error(format!(
-                    "{}: derivative of {} = {value} {unit} is outside its allowed range [-{2}, {2}]",
+                    "{}: derivative of {} = {value:?} {unit} is outside its allowed range [-{2:?}, {2:?}]",
                     call.name(),
                     v.name,
                     v.max_rate
