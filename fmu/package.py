@@ -103,7 +103,8 @@ def allowed_range(root, var, t):
         high = f"&lt; {strict.get('lessThan')}"
     elif t.get("max") is not None:
         high = f"&le; {t.get('max')}"
-    return ", ".join(x for x in (low, high) if x) or "any finite value"
+    rate = f"|d/dt| &le; {strict.get('maxRate')} per s" if strict is not None and "maxRate" in strict.attrib else None
+    return ", ".join(x for x in (low, high, rate) if x) or "any finite value"
 
 
 def variable_rows(root):
