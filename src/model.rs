@@ -213,7 +213,6 @@ fn check_derived(p: &Parameters) -> FmiResult {
 impl ConvertingSpan {
     #[cold]
     fn why_outputs_undefined(&self, length: f64) -> FmiResult {
-        check_derived(&self.params)?;
         Err(FmiError::error(format!(
             "outputs are not defined for a span length of {length} m with {} m of unstretched web \
              (the span is at least {} m long, and its strain at most {})",
@@ -271,6 +270,13 @@ impl Model for ConvertingSpan {
             length: r.finite("previous length")?,
             step: r.finite("previous step")?,
         };
+        let length = physics::span_length(&self.params, &self.inputs);
+        if !physics::representable(length, self.unstretched.value()) {
+            return Err(FmiError::error(format!(
+                "the unstretched length {} m is no valid state of a span of {length} m",
+                self.unstretched.value()
+            )));
+        }
         self.adaptive_step = r.finite("adaptive step")?;
         self.tolerance = r.finite("effective tolerance")?;
         for (web, what) in [(&mut self.params.incoming, "wp1 stress_strain"), (&mut self.params.span_web, "wp2 stress_strain")] {
@@ -362,11 +368,16 @@ impl Model for ConvertingSpan {
         self.advance(h)
     }
 
+    /// With a fixed length every state the model holds is valid (steps,
+    /// initialization and restored states are checked; the layer checks the
+    /// parameters' ranges after an error); moving rollers can make it invalid.
     #[inline]
     fn outputs_defined(&self) -> FmiResult {
+        if !self.params.variable_length {
+            return Ok(());
+        }
         let length = physics::span_length(&self.params, &self.inputs);
-        let derived = self.params.span_web.stiffness().is_finite() && self.params.span_web.linear_density().is_finite();
-        if derived && length >= min_length() && physics::representable(length, self.unstretched.value()) {
+        if length >= min_length() && physics::representable(length, self.unstretched.value()) {
             Ok(())
         } else {
             self.why_outputs_undefined(length)

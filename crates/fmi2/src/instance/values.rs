@@ -28,11 +28,21 @@ impl<M: Model> Instance<M> {
     /// the model can compute them: after an error the parameters may never
     /// have passed initialization, and inputs set since the last step may
     /// leave no valid configuration (rollers moved onto each other).
+    #[inline]
     pub(super) fn check_computable(&self, call: Call) -> FmiResult {
         if self.phase == Phase::Error {
-            self.check_parameter_ranges().map_err(|e| e.prefixed(&format!("{}: outputs are not defined", call.name())))?;
+            return self.check_computable_after_error(call);
         }
-        self.model.outputs_defined().map_err(|e| e.prefixed(call.name()))
+        match self.model.outputs_defined() {
+            Ok(()) => Ok(()),
+            Err(e) => Err(prefixed(e, call)),
+        }
+    }
+
+    #[cold]
+    fn check_computable_after_error(&self, call: Call) -> FmiResult {
+        self.check_parameter_ranges().map_err(|e| e.prefixed(&format!("{}: outputs are not defined", call.name())))?;
+        self.model.outputs_defined().map_err(|e| prefixed(e, call))
     }
 
     pub fn get_reals(&mut self, vrs: &[u32], values: &mut [f64]) -> FmiResult {
@@ -221,6 +231,11 @@ impl<M: Model> Instance<M> {
         self.model = model;
         Ok(())
     }
+}
+
+#[cold]
+fn prefixed(e: FmiError, call: Call) -> FmiError {
+    e.prefixed(call.name())
 }
 
 #[cold]
