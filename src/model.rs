@@ -270,8 +270,9 @@ impl Model for ConvertingSpan {
             length: r.finite("previous length")?,
             step: r.finite("previous step")?,
         };
+        // (A length out of range is reported by the layer's range check.)
         let length = physics::span_length(&self.params, &self.inputs);
-        if !physics::representable(length, self.unstretched.value()) {
+        if length >= min_length() && !physics::representable(length, self.unstretched.value()) {
             return Err(FmiError::error(format!(
                 "the unstretched length {} m is no valid state of a span of {length} m",
                 self.unstretched.value()
