@@ -211,6 +211,17 @@ fn check_derived(p: &Parameters) -> FmiResult {
 }
 
 impl ConvertingSpan {
+    /// The span at least as long as the shortest L, and its strain within bounds.
+    #[inline]
+    fn configuration_valid(&self) -> FmiResult {
+        let length = physics::span_length(&self.params, &self.inputs);
+        if length >= min_length() && physics::representable(length, self.unstretched.value()) {
+            Ok(())
+        } else {
+            self.why_outputs_undefined(length)
+        }
+    }
+
     #[cold]
     fn why_outputs_undefined(&self, length: f64) -> FmiResult {
         Err(FmiError::error(format!(
@@ -270,14 +281,6 @@ impl Model for ConvertingSpan {
             length: r.finite("previous length")?,
             step: r.finite("previous step")?,
         };
-        // (A length out of range is reported by the layer's range check.)
-        let length = physics::span_length(&self.params, &self.inputs);
-        if length >= min_length() && !physics::representable(length, self.unstretched.value()) {
-            return Err(FmiError::error(format!(
-                "the unstretched length {} m is no valid state of a span of {length} m",
-                self.unstretched.value()
-            )));
-        }
         self.adaptive_step = r.finite("adaptive step")?;
         self.tolerance = r.finite("effective tolerance")?;
         for (web, what) in [(&mut self.params.incoming, "wp1 stress_strain"), (&mut self.params.span_web, "wp2 stress_strain")] {
@@ -369,19 +372,25 @@ impl Model for ConvertingSpan {
         self.advance(h)
     }
 
-    /// With a fixed length every state the model holds is valid (steps,
-    /// initialization and restored states are checked; the layer checks the
-    /// parameters' ranges after an error); moving rollers can make it invalid.
-    #[inline]
+    /// A state saved with rollers transiently too close is still the model's
+    /// own: with a moving span the configuration is the inputs' (`inputs_valid`).
     fn outputs_defined(&self) -> FmiResult {
-        if !self.params.variable_length {
-            return Ok(());
-        }
-        let length = physics::span_length(&self.params, &self.inputs);
-        if length >= min_length() && physics::representable(length, self.unstretched.value()) {
+        check_derived(&self.params)?;
+        if self.params.variable_length {
             Ok(())
         } else {
-            self.why_outputs_undefined(length)
+            self.configuration_valid()
+        }
+    }
+
+    /// With a fixed length every state the model holds after a step or
+    /// initialization is valid; moving rollers can make it invalid.
+    #[inline]
+    fn inputs_valid(&self) -> FmiResult {
+        if self.params.variable_length {
+            self.configuration_valid()
+        } else {
+            Ok(())
         }
     }
 

@@ -120,12 +120,19 @@ pub trait Model: Variables + Clone + Default + 'static {
         Err(no_model_exchange())
     }
 
-    /// Whether the outputs can be computed from what the model holds now:
-    /// asked before every read of computed values (keep it cheap). In the
-    /// error state the parameters may never have passed initialization, and
-    /// inputs set since the last step may describe no valid configuration; a
-    /// failure answers the get with fmi2Error.
+    /// Whether the outputs can be computed from the model's parameters and
+    /// state: asked after an error (the parameters may never have passed
+    /// initialization; `inputs_valid` is asked too) and of a restored state
+    /// that had passed it. A failure answers the get, or the restore, with
+    /// fmi2Error.
     fn outputs_defined(&self) -> FmiResult {
+        Ok(())
+    }
+
+    /// Whether the inputs set since the last step still describe something
+    /// the outputs can be computed for: asked before every read of computed
+    /// values, so keep it cheap.
+    fn inputs_valid(&self) -> FmiResult {
         Ok(())
     }
 

@@ -59,6 +59,9 @@ impl<M: Model> Instance<M> {
                 return Err(FmiError::error(format!("{} = {why}", v.name)));
             }
         }
+        if initialized {
+            snapshot.model.outputs_defined()?;
+        }
         Ok(())
     }
 }

@@ -33,7 +33,7 @@ impl<M: Model> Instance<M> {
         if self.phase == Phase::Error {
             return self.check_computable_after_error(call);
         }
-        match self.model.outputs_defined() {
+        match self.model.inputs_valid() {
             Ok(()) => Ok(()),
             Err(e) => Err(prefixed(e, call)),
         }
@@ -42,7 +42,7 @@ impl<M: Model> Instance<M> {
     #[cold]
     fn check_computable_after_error(&self, call: Call) -> FmiResult {
         self.check_parameter_ranges().map_err(|e| e.prefixed(&format!("{}: outputs are not defined", call.name())))?;
-        self.model.outputs_defined().map_err(|e| prefixed(e, call))
+        self.model.outputs_defined().and_then(|()| self.model.inputs_valid()).map_err(|e| prefixed(e, call))
     }
 
     pub fn get_reals(&mut self, vrs: &[u32], values: &mut [f64]) -> FmiResult {
