@@ -16,7 +16,7 @@
 #                  Wine 8 lacks ProcessPrng, which Rust's std imports.
 #                  Windows 10 and later have it; the shim never ships.
 #
-# Exports CROSS_CARGO (cargo-web with its rustc), WINEPREFIX, and the cargo
+# Exports CROSS_CARGO and CROSS_RUSTC (cargo-web, rustc-web), WINEPREFIX, and the cargo
 # linkers and runners of both targets (CARGO_TARGET_<TRIPLE>_...).
 RUST_WEB_VERSION=1.96.0+dfsg1-1~deb12u2
 RUST_WEB="$TOOLS/rust-web-$RUST_WEB_VERSION"
@@ -50,7 +50,7 @@ EOF
     chmod +x "$RUST_WEB.tmp/bin/rustc" "$RUST_WEB.tmp/bin/cargo"
     rm -rf "$RUST_WEB" && mv "$RUST_WEB.tmp" "$RUST_WEB"
 fi
-export CROSS_CARGO="$RUST_WEB/bin/cargo"
+export CROSS_CARGO="$RUST_WEB/bin/cargo" CROSS_RUSTC="$RUST_WEB/bin/rustc"
 
 export CARGO_TARGET_X86_64_PC_WINDOWS_GNU_LINKER=x86_64-w64-mingw32-gcc
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc

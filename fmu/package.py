@@ -18,9 +18,9 @@ The platforms (README, "Platforms"; docs/platforms.md):
                    against glibc 2.17's symbol versions)
     win64          x86-64 Windows 10 or later: rustc-web with -Zbuild-std,
                    x86_64-w64-mingw32-gcc as the linker
-    aarch64-linux  ARM64 Linux: the same rustc-web, aarch64-linux-gnu-gcc; the
-                   folder is FMI 3.0's platform tuple, which FMI 2.0.4 names
-                   for platforms beyond win/linux/darwin
+    aarch64-linux  ARM64 Linux, glibc >= 2.17: the same rustc-web through
+                   cargo-zigbuild; the folder is FMI 3.0's platform tuple,
+                   which FMI 2.0.4 names for platforms beyond win/linux/darwin
 
 fmu/env.sh installs every tool once (fmu/toolchain.sh,
 fmu/cross_toolchain.sh); run without it, this script goes through it.
@@ -89,7 +89,7 @@ PLATFORMS = {
         # The oldest glibc the binary supports is part of the target name.
         Platform("linux64", "x86_64-unknown-linux-gnu.2.17", ".so", "lib", ROOT / "target" / "portable"),
         Platform("win64", "x86_64-pc-windows-gnu", ".dll", "", ROOT / "target" / "cross"),
-        Platform("aarch64-linux", "aarch64-unknown-linux-gnu", ".so", "lib", ROOT / "target" / "cross"),
+        Platform("aarch64-linux", "aarch64-unknown-linux-gnu.2.17", ".so", "lib", ROOT / "target" / "cross"),
     ]
 }
 # Libraries built elsewhere may go into these folders too (--add-binary).
@@ -126,12 +126,18 @@ def build(platform):
     """Both models' libraries for one platform, with the tools of fmu/env.sh."""
     common = ["--release", "--lib", "--quiet", *packages(), "--target", platform.target]
     common += ["--target-dir", str(platform.target_dir)]
+    env = dict(os.environ)
     if platform.folder == "linux64":
         command = ["cargo", "zigbuild", *common]
     else:
-        # rustup has no standard library for these targets here: build it.
+        # rustup has no standard library for these targets here: rustc-web builds it.
         command = [os.environ["CROSS_CARGO"], "build", *common, "-Zbuild-std=std,panic_unwind"]
-    subprocess.run(command, cwd=ROOT, check=True)
+        if platform.target.endswith(".2.17"):
+            # cargo-zigbuild drives rustc-web's cargo and links with zig (glibc 2.17 floor).
+            env.pop("CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER", None)
+            env.update(CARGO=command[0], RUSTC=os.environ["CROSS_RUSTC"], RUSTC_BOOTSTRAP="1")
+            command[0:2] = ["cargo-zigbuild", "build"]
+    subprocess.run(command, cwd=ROOT, check=True, env=env)
 
 
 def exported_functions(path):

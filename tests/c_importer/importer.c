@@ -262,7 +262,8 @@ static void print_cont(const char *run, double t, int n, double rec[][3])
  *     enter | exit | terminate | reset    the lifecycle calls
  *     outputs <vr> ...                    the Reals printed after every step
  *     steps <n> <h bits>                  n calls of fmi2DoStep from the instance's time
- *     save <file> | load <file>           serialize the FMU state to a file / set it from one
+ *     save <file>                         serialize the FMU state to a file
+ *     load <file> <t bits>                set the FMU state from one; t: its time
  *     hook                                arm the test-only panic of the next step
  *     free                                fmi2FreeInstance
  *
@@ -374,7 +375,7 @@ static int run_script(const Api *api, const char *guid, const char *path)
             if (f != NULL) fclose(f);
             free(bytes);
             if (state != NULL) api->freeFMUstate(c, &state);
-        } else if (strcmp(cmd, "load") == 0 && n == 2) {
+        } else if (strcmp(cmd, "load") == 0 && n == 3) {
             FILE *f = fopen(words[1], "rb");
             static fmi2Byte bytes[1 << 20];
             size_t size = f != NULL ? fread(bytes, 1, sizeof bytes, f) : 0;
@@ -383,6 +384,7 @@ static int run_script(const Api *api, const char *guid, const char *path)
             s = api->deSerializeFMUstate(c, bytes, size, &state);
             if (s == fmi2OK) s = api->setFMUstate(c, state);
             if (state != NULL) api->freeFMUstate(c, &state);
+            t = from_bits(words[2]);
         } else if (strcmp(cmd, "hook") == 0) {
             const fmi2String hook[] = {"testHook.panicInNextDoStep"};
             s = api->setDebugLogging(c, fmi2True, 1, hook);
