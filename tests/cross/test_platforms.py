@@ -12,7 +12,9 @@ cover every solver and effect of the span, every sensor unit, bad inputs,
 the panic boundary (a test-hooks build per platform) and FMU states
 serialized on one platform and deserialized on every other.
 
-Needs the tools of fmu/env.sh (tests/run.sh sources it): mingw-w64 and
+    bash tests/cross.sh      (runs this after the Rust tests under Wine and QEMU)
+
+Needs the tools of fmu/env.sh (tests/cross.sh sources it): mingw-w64 and
 aarch64 gcc, Wine (WINEPREFIX with the test-only ProcessPrng shim) and QEMU.
 """
 
@@ -20,6 +22,7 @@ import math
 import os
 import struct
 import subprocess
+import sys
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
@@ -296,6 +299,7 @@ def bad_scene(variables):
 def test_the_c_importers_scene_is_bit_identical(importers, binaries, descriptions, platform, tmp_path):
     """importer.c's own scene (state save/restore, serialization, illegal
     calls): the same output text, statuses and log messages as Linux x86-64."""
+    sys.path.insert(0, str(ROOT / "tests" / "python"))
     from test_c_importer import NAMES
 
     guid, variables = descriptions["ConvertingSpan"]
