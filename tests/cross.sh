@@ -4,13 +4,14 @@
 #
 #   1. the Rust tests of each target under its emulator (cargo's
 #      CARGO_TARGET_<TRIPLE>_RUNNER, set by fmu/cross_toolchain.sh): the model
-#      core, the C API, the hard cases, the panic boundary, the Roller's tests
+#      core and its solvers, the FMI layer, the C API, the hard cases, the
+#      panic boundary, the Roller's tests
 #   2. the fuzz harness tests/fuzz built for each target: FUZZ_SEQUENCES each
 #   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
 #      the packaged FMUs, bit for bit against Linux x86-64
 #
-# Each target builds std with rustc-web into target/cross-test (the test-hooks
-# build, kept apart from the shipped libraries of target/cross).
+# Each target builds std with rustc-web into target/cross-test (profile
+# cross-test, with the test hooks: apart from the shipped libraries of target/cross).
 # A summary is printed at the end and written to target/platforms/summary.txt.
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
@@ -24,16 +25,16 @@ SUMMARY="$OUT/summary.txt"
 note() { echo "$*" | tee -a "$SUMMARY"; }
 START=$SECONDS
 cross() { # cargo COMMAND ARGS...: rustc-web's cargo, std built for the target
-    "$CROSS_CARGO" "$1" --quiet --release -Zbuild-std=std,panic_unwind --target-dir target/cross-test "${@:2}"
+    "$CROSS_CARGO" "$1" --quiet -Zbuild-std=std,panic_unwind --target-dir target/cross-test "${@:2}"
 }
 
 declare -A NAME=([x86_64-pc-windows-gnu]="win64 (Wine)" [aarch64-unknown-linux-gnu]="aarch64-linux (QEMU)")
 for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     echo "== Rust tests for $target under ${NAME[$target]}"
     t0=$SECONDS
-    cross test --features test-hooks --target "$target" -p converting-span \
-        --lib --test span_exact --test c_api --test hard_cases --test panic_boundary 2>&1 | tee "$OUT/rust-$target.log" | grep -E "^test result|FAILED|panicked" || true
-    cross test --target "$target" -p roller 2>&1 | tee -a "$OUT/rust-$target.log" | grep -E "^test result|FAILED" || true
+    cross test --profile cross-test --features test-hooks --target "$target" -p converting-span -p solver -p fmi2 \
+        --lib --test span_exact --test span_solvers --test c_api --test hard_cases --test panic_boundary 2>&1 | tee "$OUT/rust-$target.log" | grep -E "^test result|FAILED|panicked" || true
+    cross test --profile cross-test --target "$target" -p roller --lib --tests 2>&1 | tee -a "$OUT/rust-$target.log" | grep -E "^test result|FAILED" || true
     if grep -q "FAILED\|error\[" "$OUT/rust-$target.log" || ! grep -q "^test result: ok" "$OUT/rust-$target.log"; then
         echo "Rust tests failed for $target: $OUT/rust-$target.log"; exit 1
     fi
@@ -42,9 +43,9 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
 
     echo "== fuzz harness for $target: $FUZZ_SEQUENCES sequences"
     t0=$SECONDS
-    cross build --target "$target" --manifest-path tests/fuzz/Cargo.toml
+    cross build --profile cross-test --target "$target" --manifest-path tests/fuzz/Cargo.toml
     runner_var="CARGO_TARGET_$(echo "$target" | tr 'a-z-' 'A-Z_')_RUNNER"
-    exe="target/cross-test/$target/release/fuzz_sequences"
+    exe="target/cross-test/$target/cross-test/fuzz_sequences"
     [ -f "$exe.exe" ] && exe="$exe.exe"
     "${!runner_var}" "$exe" --sequences "$FUZZ_SEQUENCES" --seed 3 | tr -d '\r' | tee "$OUT/fuzz-$target.log"
     grep -q "^$FUZZ_SEQUENCES passed, 0 failed" "$OUT/fuzz-$target.log" || { echo "fuzz violations on $target"; exit 1; }

@@ -7,7 +7,8 @@ tests check it against exact solutions); every other platform must give the
 same bits for every output of every step, the same status for every call
 and the same log messages. A difference, if a platform's math library ever
 rounds otherwise, may be at most 1e-14 relative: the test names the variable
-and the size, and docs/platforms.md says which function and why. The scenes
+and the size. (None does today: the solvers take expm1 and pow from the
+libm crate, not from the platform's C library; docs/platforms.md.) The scenes
 cover every solver and effect of the span, every sensor unit, bad inputs,
 the panic boundary (a test-hooks build per platform) and FMU states
 serialized on one platform and deserialized on every other.
@@ -232,7 +233,9 @@ def span_scene(variables):
             # an input step and, for the variable length, a moving roller
             s.set("web_b.v", 4.9 if effect == "no negative tension" else 5.005)
             if effect == "mass and variable length":
+                # off the axis: the length goes through hypot, the platform's libm
                 s.set("frame_b.x", 1.02)
+                s.set("frame_b.y", 0.013)
             s.steps(200)
             s.add("free")
     for unit in range(1, 7):
@@ -352,11 +355,9 @@ def test_bad_inputs_are_refused_with_the_same_messages(importers, binaries, desc
 
 @pytest.mark.parametrize("model", MODELS)
 def test_an_fmu_state_saved_on_one_platform_continues_on_every_other(importers, binaries, descriptions, model, tmp_path):
-    """The serialized state is little-endian on every platform: each platform
-    continues from each platform's state. Where the libms agree (Linux x86-64
-    and ARM64: glibc) the saved bytes and the continuations are bit-identical;
-    Windows' expm1 (mingw-w64's) may round the Roller's last bit otherwise, so
-    there the continuation is held to 1e-14 relative (docs/platforms.md)."""
+    """The serialized state is little-endian on every platform: the bytes
+    saved on each platform are the same, and each platform continues from
+    each platform's state with the same bits as Linux x86-64 continuing its own."""
     guid, variables = descriptions[model]
     first = Scene(variables)
     if model == "ConvertingSpan":
@@ -370,8 +371,8 @@ def test_an_fmu_state_saved_on_one_platform_continues_on_every_other(importers, 
         state = tmp_path / f"state-{p.folder}.bin"
         run_script(importers, p.folder, binaries[model, p.folder], guid, first.text() + f"save {state}\n", tmp_path)
         saved[p.folder] = state
-    assert saved["aarch64-linux"].read_bytes() == saved[REFERENCE].read_bytes(), "glibc platforms saved different states"
-    assert saved["win64"].read_bytes()[:12] == saved[REFERENCE].read_bytes()[:12], "the state's header differs on Windows"
+    for folder in OTHERS:
+        assert saved[folder].read_bytes() == saved[REFERENCE].read_bytes(), f"{model}: {folder} saved another state"
     continuations = {}
     for p in PLATFORMS:
         for origin, state in saved.items():
@@ -384,7 +385,6 @@ def test_an_fmu_state_saved_on_one_platform_continues_on_every_other(importers, 
     reference = continuations[REFERENCE, REFERENCE]
     calls = [l for l in reference.splitlines() if l.startswith("call,")]
     assert all(l.endswith(",0") for l in calls), reference[-2000:]
-    assert continuations["aarch64-linux", "aarch64-linux"] == reference
     worst_of_all = 0.0
     for (platform, origin), text in continuations.items():
         assert [l for l in text.splitlines() if l.startswith("call,")] == calls, (platform, origin)
@@ -395,7 +395,8 @@ def test_an_fmu_state_saved_on_one_platform_continues_on_every_other(importers, 
 
 
 def panic_libraries():
-    """The span's library with the test-only panic hook, per platform (not shipped)."""
+    """The span's library with the test-only panic hook, per platform (not shipped);
+    the cross builds share tests/cross.sh's target directory and profile."""
     libraries = {}
     for p in PLATFORMS:
         if p.target is None:
@@ -403,11 +404,11 @@ def panic_libraries():
                        "--target-dir", str(ROOT / "target" / "test-hooks")]
             libraries[p.folder] = ROOT / "target" / "test-hooks" / "release" / "libconverting_span.so"
         else:
-            command = [os.environ["CROSS_CARGO"], "build", "--release", "--lib", "--quiet", "--features", "test-hooks",
+            command = [os.environ["CROSS_CARGO"], "build", "--profile", "cross-test", "--lib", "--quiet", "--features", "test-hooks",
                        "-p", "converting-span", "--target", p.target, "-Zbuild-std=std,panic_unwind",
                        "--target-dir", str(ROOT / "target" / "cross-test")]
             prefix = "" if p.suffix == ".dll" else "lib"
-            libraries[p.folder] = ROOT / "target" / "cross-test" / p.target / "release" / f"{prefix}converting_span{p.suffix}"
+            libraries[p.folder] = ROOT / "target" / "cross-test" / p.target / "cross-test" / f"{prefix}converting_span{p.suffix}"
         subprocess.run(command, cwd=ROOT, check=True)
     return libraries
 
