@@ -18,21 +18,32 @@
 #
 # Exports CROSS_CARGO and CROSS_RUSTC (cargo-web, rustc-web), WINEPREFIX, and the cargo
 # linkers and runners of both targets (CARGO_TARGET_<TRIPLE>_...).
-RUST_WEB_VERSION=1.96.0+dfsg1-1~deb12u2
+# The rustc-web that bookworm-security ships now (a security update replaces it
+# there, and a new one is unpacked beside the old); its std and LLVM packages
+# carry the version in their names, so they are read from its dependencies.
+candidate() { apt-cache policy "$1" 2>/dev/null | awk '/Candidate:/ && $2 != "(none)" {print $2}'; }
+RUST_WEB_VERSION="$(candidate rustc-web)"
+if [ -z "$RUST_WEB_VERSION" ]; then
+    apt-get update -qq -o DPkg::Lock::Timeout=300 || true
+    RUST_WEB_VERSION="$(candidate rustc-web)"
+fi
+[ -n "$RUST_WEB_VERSION" ] || { echo "cross_toolchain.sh: apt knows no rustc-web (is bookworm-security in the sources?)" >&2; return 1; }
 RUST_WEB="$TOOLS/rust-web-$RUST_WEB_VERSION"
+STD_PACKAGE="$(apt-cache depends "libstd-rust-web-dev=$RUST_WEB_VERSION" | awk '/Depends: libstd-rust-web-[0-9]/ {print $2}')"
+LLVM_PACKAGE="$(apt-cache depends "$STD_PACKAGE=$RUST_WEB_VERSION" | awk '/Depends: libllvm[0-9]/ {print $2}')"
 
-if ! command -v x86_64-w64-mingw32-gcc >/dev/null || ! command -v aarch64-linux-gnu-gcc >/dev/null \
-    || ! [ -x /usr/lib/wine/wine64 ] || ! command -v qemu-aarch64-static >/dev/null \
-    || ! [ -e /usr/lib/x86_64-linux-gnu/libgit2.so.1.5 ] || ! [ -e /usr/lib/x86_64-linux-gnu/libLLVM.so.22.1 ]; then
+APT_PACKAGES=(gcc-mingw-w64-x86-64 gcc-aarch64-linux-gnu wine64 qemu-user-static libgit2-1.5 libssh2-1 "$LLVM_PACKAGE")
+installed() { [ "$(dpkg-query -W -f='${Status}\n' "$@" 2>/dev/null | grep -c '^install ok installed$')" = "$#" ]; }
+if ! installed "${APT_PACKAGES[@]}"; then
     echo "cross_toolchain.sh: installing mingw-w64, aarch64 gcc, Wine and QEMU (apt, about 2 GB, once)"
-    # libgit2, libssh2 (for cargo-web) and libllvm22 (for rustc-web): libraries only.
-    apt_install gcc-mingw-w64-x86-64 gcc-aarch64-linux-gnu wine64 qemu-user-static libgit2-1.5 libssh2-1 libllvm22
+    # libgit2, libssh2 (for cargo-web) and libllvm (for rustc-web): libraries only.
+    apt_install "${APT_PACKAGES[@]}"
 fi
 
 if ! [ -x "$RUST_WEB/bin/cargo" ]; then
     echo "cross_toolchain.sh: unpacking rustc-web $RUST_WEB_VERSION (apt-get download) into $RUST_WEB"
     debs="$(mktemp -d)"
-    (cd "$debs" && apt-get download -qq -o APT::Sandbox::User=root $(for p in rustc-web cargo-web rust-web-src libstd-rust-web-dev libstd-rust-web-1.96; do
+    (cd "$debs" && apt-get download -qq -o APT::Sandbox::User=root $(for p in rustc-web cargo-web rust-web-src libstd-rust-web-dev "$STD_PACKAGE"; do
         echo "$p=$RUST_WEB_VERSION"; done))
     rm -rf "$RUST_WEB.tmp" && mkdir -p "$RUST_WEB.tmp/bin"
     for deb in "$debs"/*.deb; do dpkg-deb -x "$deb" "$RUST_WEB.tmp"; done
