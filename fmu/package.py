@@ -346,6 +346,11 @@ def main():
     elif not args.no_build:
         for folder in chosen:
             build(PLATFORMS[folder])
+    names = {model.name for model in MODELS}
+    for folder, path in args.add_binary:
+        if not path.is_dir() and path.stem not in names:
+            sys.exit(f"package.py: --add-binary {folder}={path}: name the library after its model, "
+                     f"{' or '.join(n + SUFFIXES[folder] for n in sorted(names))}")
     span_out = args.out.resolve()
     for model in MODELS:
         libraries = {folder: PLATFORMS[folder].library(model) for folder in chosen}
@@ -365,6 +370,10 @@ def main():
         sizes = ", ".join(f"{folder} {library.stat().st_size} bytes" for folder, library in sorted(libraries.items()))
         kind = " (host build, not portable)" if args.host_build else ""
         print(f"wrote {out} ({out.stat().st_size} bytes; {sizes}){kind}")
+    for folder, path in args.add_binary:
+        # tests/run.sh runs the platforms built here; an added library only its own platform can run.
+        print(f"added binaries/{folder} from {path}: its exports are checked, but it was not run here; "
+              "run the FMU on that platform before publishing it")
 
 
 if __name__ == "__main__":
