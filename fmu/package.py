@@ -1,31 +1,44 @@
 #!/usr/bin/env python3
 """Build the release libraries and write the FMUs: ConvertingSpan and Roller.
 
-    python3 fmu/package.py [--out out/ConvertingSpan.fmu] [--no-build] [--host-build]
+    python3 fmu/package.py [--out out/ConvertingSpan.fmu] [--platforms linux64,win64,aarch64-linux]
+                           [--add-binary PLATFORM=PATH ...] [--no-build] [--host-build]
 
 Each FMU is one package of the cargo workspace: ConvertingSpan the root
 package, Roller the one in fmu/roller; Roller.fmu is written next to
-ConvertingSpan.fmu. Each FMU holds its modelDescription.xml,
-binaries/linux64/<modelIdentifier>.so, documentation/index.html and, for
-the span, resources/webs.json (the library of webs, from fmu/resources). The
-documentation's variable and unit tables are rendered from the model
-description, so they never disagree with the FMU. Only the Python standard
-library is used.
+ConvertingSpan.fmu. Each FMU holds its modelDescription.xml, one library per
+platform in binaries/<platform>/<modelIdentifier>.<so|dll>,
+documentation/index.html and, for the span, resources/webs.json (its library
+of webs, from fmu/resources). The documentation's variable and unit tables are
+rendered from the model description, so they never disagree with the FMU.
+Only the Python standard library is used (and binutils' objdump).
 
-The shipped binaries are portable: they are built with cargo-zigbuild (zig as
-the linker) for the target x86_64-unknown-linux-gnu.2.17, so they need no
-glibc symbol newer than 2.17 and load on any x86-64 Linux since 2012 (CentOS
-7); fmu/env.sh installs zig and cargo-zigbuild (fmu/toolchain.sh), and
-tests/hardening/test_portable_so.py checks the result. `--host-build` packages
-plain `cargo build --release` libraries instead: for development only, they
-need the glibc of the machine that built them.
+The platforms (README, "Platforms"; docs/platforms.md):
+
+    linux64        x86-64 Linux, glibc >= 2.17: cargo-zigbuild (zig links
+                   against glibc 2.17's symbol versions)
+    win64          x86-64 Windows 10 or later: rustc-web with -Zbuild-std,
+                   x86_64-w64-mingw32-gcc as the linker
+    aarch64-linux  ARM64 Linux, glibc >= 2.17: the same rustc-web through
+                   cargo-zigbuild; the folder is FMI 3.0's platform tuple,
+                   which FMI 2.0.4 names for platforms beyond win/linux/darwin
+
+fmu/env.sh installs every tool once (fmu/toolchain.sh,
+fmu/cross_toolchain.sh); run without it, this script goes through it.
+`--platforms` builds only the chosen ones (quick development loops).
+`--add-binary PLATFORM=PATH` adds a library built elsewhere (macOS: darwin64)
+after checking that it exports exactly the 44 fmi2 functions; its FMU then
+also carries every platform built here. `--host-build` packages a plain
+`cargo build --release` library as linux64 only: for development, it needs the
+glibc of the machine that built it.
 """
 
 import argparse
 import html
 import json
 import os
-import shutil
+import re
+import struct
 import subprocess
 import sys
 import zipfile
@@ -38,26 +51,65 @@ STYLE = ROOT / "fmu" / "documentation" / "style.css"
 RANGE_TOOL = "ConvertingSpan.range"
 # Fixed timestamp: the same inputs give the same archive bytes.
 ZIP_TIME = (2026, 1, 1, 0, 0, 0)
-# The oldest glibc the binaries support is part of the target name.
-PORTABLE_TARGET = "x86_64-unknown-linux-gnu.2.17"
 # Present only in a library built with the test-only feature `test-hooks`.
 TEST_HOOK_MARKER = b"testHook.panicInNextDoStep"
+# The FMI 2.0 C API: what every binary exports, nothing more, nothing less.
+FMI2_FUNCTIONS = frozenset(
+    "fmi2" + name
+    for name in """
+    GetTypesPlatform GetVersion SetDebugLogging Instantiate FreeInstance SetupExperiment
+    EnterInitializationMode ExitInitializationMode Terminate Reset GetReal GetInteger GetBoolean
+    GetString SetReal SetInteger SetBoolean SetString GetFMUstate SetFMUstate FreeFMUstate
+    SerializedFMUstateSize SerializeFMUstate DeSerializeFMUstate GetDirectionalDerivative
+    EnterEventMode NewDiscreteStates EnterContinuousTimeMode CompletedIntegratorStep SetTime
+    SetContinuousStates GetDerivatives GetEventIndicators GetContinuousStates
+    GetNominalsOfContinuousStates SetRealInputDerivatives GetRealOutputDerivatives DoStep
+    CancelStep GetStatus GetRealStatus GetIntegerStatus GetBooleanStatus GetStringStatus
+    """.split()
+)
+assert len(FMI2_FUNCTIONS) == 44
+
+
+class Platform:
+    """One binaries/<folder> of the FMUs: its cargo target and where the library lands."""
+
+    def __init__(self, folder, target, suffix, prefix, target_dir):
+        self.folder = folder
+        self.target = target
+        self.suffix = suffix
+        self.prefix = prefix  # "lib" for Linux shared objects, none for DLLs
+        self.target_dir = target_dir
+
+    def library(self, model):
+        triple = self.target.removesuffix(".2.17")
+        return self.target_dir / triple / "release" / f"{self.prefix}{model.crate}{self.suffix}"
+
+
+PLATFORMS = {
+    p.folder: p
+    for p in [
+        # The oldest glibc the binary supports is part of the target name.
+        Platform("linux64", "x86_64-unknown-linux-gnu.2.17", ".so", "lib", ROOT / "target" / "portable"),
+        Platform("win64", "x86_64-pc-windows-gnu", ".dll", "", ROOT / "target" / "cross"),
+        Platform("aarch64-linux", "aarch64-unknown-linux-gnu.2.17", ".so", "lib", ROOT / "target" / "cross"),
+    ]
+}
+# Libraries built elsewhere may go into these folders too (--add-binary).
+SUFFIXES = {"linux64": ".so", "win64": ".dll", "aarch64-linux": ".so", "darwin64": ".dylib", "aarch64-darwin": ".dylib"}
 
 
 class Model:
-    """One FMU of the workspace: its interface, documentation and how to build its library."""
+    """One FMU of the workspace: its interface, documentation and library name."""
 
     def __init__(self, name, package, crate_dir):
         self.name = name
         self.package = package
+        self.crate = package.replace("-", "_")
         self.description = crate_dir / "modelDescription.xml"
         self.template = crate_dir / ("fmu/documentation" if crate_dir == ROOT else "documentation") / "index.html"
         # Files shipped in the FMU's resources/ folder (the span's library of webs).
         self.resources = crate_dir / ("fmu/resources" if crate_dir == ROOT else "resources")
-        library = f"lib{package.replace('-', '_')}.so"
-        self.library = ROOT / "target" / "release" / library
-        # The portable build: one target directory for the workspace.
-        self.portable_library = ROOT / "target" / "portable" / "x86_64-unknown-linux-gnu" / "release" / library
+        self.host_library = ROOT / "target" / "release" / f"lib{self.crate}.so"
 
 
 MODELS = [
@@ -66,28 +118,93 @@ MODELS = [
 ]
 
 
-def build_library(model):
-    subprocess.run(["cargo", "build", "--release", "--lib", "--quiet", "-p", model.package], cwd=ROOT, check=True)
+def packages():
+    return [arg for model in MODELS for arg in ("-p", model.package)]
 
 
-def tools_path():
-    """PATH with the cached zig and cargo-zigbuild of fmu/toolchain.sh."""
-    cache = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    tools = os.environ.get("CONVERTING_SPAN_TOOLS") or os.path.join(cache, "converting-span-tools")
-    return os.pathsep.join([os.path.join(tools, "bin"), os.environ.get("PATH", "")])
+def build_host():
+    subprocess.run(["cargo", "build", "--release", "--lib", "--quiet", *packages()], cwd=ROOT, check=True)
 
 
-def build_portable_library(model):
-    env = dict(os.environ, PATH=tools_path())
-    missing = [tool for tool in ("cargo-zigbuild", "zig") if shutil.which(tool, path=env["PATH"]) is None]
-    if missing:
-        sys.exit(
-            f"package.py: {' and '.join(missing)} not found: `source fmu/env.sh` installs them "
-            "(or use --host-build for development FMUs that are not portable)"
-        )
-    command = ["cargo", "zigbuild", "--release", "--lib", "--quiet", "-p", model.package, "--target", PORTABLE_TARGET]
-    command += ["--target-dir", str(ROOT / "target" / "portable")]
+def build(platform):
+    """Both models' libraries for one platform, with the tools of fmu/env.sh."""
+    common = ["--release", "--lib", "--quiet", *packages(), "--target", platform.target]
+    common += ["--target-dir", str(platform.target_dir)]
+    env = dict(os.environ)
+    if platform.folder == "linux64":
+        command = ["cargo", "zigbuild", *common]
+    else:
+        # rustup has no standard library for these targets here: rustc-web builds it.
+        command = [os.environ["CROSS_CARGO"], "build", *common, "-Zbuild-std=std,panic_unwind"]
+        if platform.target.endswith(".2.17"):
+            # cargo-zigbuild drives rustc-web's cargo and links with zig (glibc 2.17 floor).
+            env.pop("CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER", None)
+            env.update(CARGO=command[0], RUSTC=os.environ["CROSS_RUSTC"], RUSTC_BOOTSTRAP="1")
+            command[0:2] = ["cargo-zigbuild", "build"]
     subprocess.run(command, cwd=ROOT, check=True, env=env)
+
+
+def exported_functions(path):
+    """The functions a library exports, read with objdump: the dynamic symbol
+    table of an ELF object, the export table of a PE DLL."""
+    data = path.read_bytes()[:4]
+    if data == b"\x7fELF":
+        listing = subprocess.run(["objdump", "-T", str(path)], check=True, capture_output=True, text=True).stdout
+        # defined (not *UND*) global symbols in .text
+        return set(re.findall(r"^\S+\s+g\s+DF\s+\.text\s+\S+\s+(?:\S+\s+)?(\w+)$", listing, re.M))
+    if data[:2] == b"MZ":
+        listing = subprocess.run(["objdump", "-p", str(path)], check=True, capture_output=True, text=True).stdout
+        table = listing.split("[Ordinal/Name Pointer] Table", 1)[1].split("\n\n", 1)[0]
+        return set(re.findall(r"^\s+\[\s*\d+\]\s+(\S+)$", table, re.M))
+    if data in (b"\xcf\xfa\xed\xfe", b"\xca\xfe\xba\xbe"):
+        return macho_exports(path)
+    sys.exit(f"package.py: {path} is neither an ELF, a PE nor a Mach-O library")
+
+
+def macho_exports(path):
+    """The external symbols a Mach-O library defines (LC_SYMTAB), each
+    architecture of a universal binary alike; Mach-O prefixes C names with '_'."""
+    data = path.read_bytes()
+    if data[:4] == b"\xca\xfe\xba\xbe":
+        count = struct.unpack_from(">I", data, 4)[0]
+        slices = [struct.unpack_from(">iiII", data, 8 + 20 * i)[2:] for i in range(count)]
+        found = [macho_exports_thin(data[offset : offset + size]) for offset, size in slices]
+        if any(names != found[0] for names in found):
+            sys.exit(f"package.py: the architectures of {path} export different functions")
+        return found[0]
+    return macho_exports_thin(data)
+
+
+def macho_exports_thin(data):
+    ncmds = struct.unpack_from("<I", data, 16)[0]
+    offset, names = 32, set()  # after the 64-bit header
+    for _ in range(ncmds):
+        cmd, size = struct.unpack_from("<II", data, offset)
+        if cmd == 0x2:  # LC_SYMTAB
+            symoff, nsyms, stroff, _ = struct.unpack_from("<IIII", data, offset + 8)
+            for k in range(nsyms):
+                strx, kind = struct.unpack_from("<IB", data, symoff + 16 * k)
+                # N_EXT set, defined in a section (N_SECT), not a debugging entry
+                if kind & 0xE0 == 0 and kind & 0x01 and kind & 0x0E == 0x0E:
+                    name = data[stroff + strx : data.index(b"\0", stroff + strx)].decode()
+                    names.add(name.removeprefix("_"))
+        offset += size
+    return names
+
+
+def check_library(folder, path):
+    """A library goes into an FMU only if it exports the fmi2 API exactly and has no test hook."""
+    if not path.exists():
+        sys.exit(f"package.py: {path} is missing; run without --no-build")
+    if not path.name.endswith(SUFFIXES[folder]):
+        sys.exit(f"package.py: {path} is not a {SUFFIXES[folder]} library, as binaries/{folder} needs")
+    if TEST_HOOK_MARKER in path.read_bytes():
+        sys.exit(f"package.py: {path} was built with the test-only feature test-hooks; it must not ship")
+    exported = exported_functions(path)
+    if exported != FMI2_FUNCTIONS:
+        missing = sorted(FMI2_FUNCTIONS - exported)
+        extra = sorted(exported - FMI2_FUNCTIONS)
+        sys.exit(f"package.py: {path} must export exactly the 44 fmi2 functions; missing {missing}, extra {extra}")
 
 
 def allowed_range(root, var, t):
@@ -181,17 +298,17 @@ def documentation(root, template, resources=None):
     return text
 
 
-def write_fmu(out, model, library):
+def write_fmu(out, model, libraries):
+    """libraries: {platform folder: library path}."""
     root = ET.parse(model.description).getroot()
     identifier = root.find("CoSimulation").get("modelIdentifier")
     if identifier != model.name:
         sys.exit(f"package.py: {model.description} names the model {identifier}, expected {model.name}")
     out.parent.mkdir(parents=True, exist_ok=True)
-    entries = [
-        ("modelDescription.xml", model.description.read_bytes()),
-        (f"binaries/linux64/{identifier}.so", library.read_bytes()),
-        ("documentation/index.html", documentation(root, model.template, model.resources).encode("utf-8")),
-    ]
+    entries = [("modelDescription.xml", model.description.read_bytes())]
+    for folder, library in sorted(libraries.items()):
+        entries.append((f"binaries/{folder}/{identifier}{SUFFIXES[folder]}", library.read_bytes()))
+    entries.append(("documentation/index.html", documentation(root, model.template, model.resources).encode("utf-8")))
     if model.resources.is_dir():
         entries += [(f"resources/{f.name}", f.read_bytes()) for f in sorted(model.resources.iterdir()) if f.is_file()]
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
@@ -203,6 +320,16 @@ def write_fmu(out, model, library):
     return out
 
 
+def added_binary(text):
+    """--add-binary PLATFORM=PATH: PATH is a folder with each model's library
+    under its model identifier (ConvertingSpan.dylib, Roller.dylib), or one
+    such library for that model's FMU alone."""
+    folder, sep, path = text.partition("=")
+    if not sep or folder not in SUFFIXES:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected PLATFORM=PATH with PLATFORM one of {', '.join(SUFFIXES)}")
+    return folder, Path(path).resolve()
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument(
@@ -211,25 +338,68 @@ def main():
         default=ROOT / "out" / "ConvertingSpan.fmu",
         help="where to write ConvertingSpan.fmu (Roller.fmu goes into the same folder)",
     )
+    parser.add_argument(
+        "--platforms",
+        default=",".join(PLATFORMS),
+        help=f"comma-separated platforms to build and package (default: all, {','.join(PLATFORMS)})",
+    )
+    parser.add_argument(
+        "--add-binary",
+        type=added_binary,
+        action="append",
+        default=[],
+        metavar="PLATFORM=PATH",
+        help="add libraries built elsewhere: a folder with <modelIdentifier>.<suffix> of each model, or one such file",
+    )
     parser.add_argument("--no-build", action="store_true", help="package the libraries as they are")
     parser.add_argument(
         "--host-build", action="store_true", help="plain cargo build against this machine's glibc (development only)"
     )
     args = parser.parse_args()
+    chosen = [p for p in args.platforms.split(",") if p]
+    unknown = [p for p in chosen if p not in PLATFORMS]
+    if unknown:
+        parser.error(f"unknown platform(s) {unknown}; known: {', '.join(PLATFORMS)}")
+    if args.host_build:
+        chosen = []
+        if not args.no_build:
+            build_host()
+    elif not args.no_build:
+        for folder in chosen:
+            build(PLATFORMS[folder])
+    names = {model.name for model in MODELS}
+    for folder, path in args.add_binary:
+        if not path.is_dir() and path.stem not in names:
+            sys.exit(f"package.py: --add-binary {folder}={path}: name the library after its model, "
+                     f"{' or '.join(n + SUFFIXES[folder] for n in sorted(names))}")
     span_out = args.out.resolve()
     for model in MODELS:
-        library = model.library if args.host_build else model.portable_library
-        if not args.no_build:
-            build_library(model) if args.host_build else build_portable_library(model)
-        if not library.exists():
-            sys.exit(f"package.py: {library} is missing; run without --no-build")
-        if TEST_HOOK_MARKER in library.read_bytes():
-            sys.exit(f"package.py: {library} was built with the test-only feature test-hooks; it must not ship")
+        libraries = {folder: PLATFORMS[folder].library(model) for folder in chosen}
+        if args.host_build:
+            libraries["linux64"] = model.host_library
+        for folder, path in args.add_binary:
+            if path.is_dir():
+                libraries[folder] = path / f"{model.name}{SUFFIXES[folder]}"
+            elif path.stem == model.name:
+                libraries[folder] = path
+        if not libraries:
+            sys.exit("package.py: no platform chosen")
+        for folder, library in libraries.items():
+            check_library(folder, library)
         out = span_out if model.name == "ConvertingSpan" else span_out.parent / f"{model.name}.fmu"
-        write_fmu(out, model, library)
-        kind = "host build, not portable" if args.host_build else f"portable, {PORTABLE_TARGET}"
-        print(f"wrote {out} ({out.stat().st_size} bytes; library {library.stat().st_size} bytes, {kind})")
+        write_fmu(out, model, libraries)
+        sizes = ", ".join(f"{folder} {library.stat().st_size} bytes" for folder, library in sorted(libraries.items()))
+        kind = " (host build, not portable)" if args.host_build else ""
+        print(f"wrote {out} ({out.stat().st_size} bytes; {sizes}){kind}")
+    for folder, path in args.add_binary:
+        # tests/run.sh runs the platforms built here; an added library only its own platform can run.
+        print(f"added binaries/{folder} from {path}: its exports are checked, but it was not run here; "
+              "run the FMU on that platform before publishing it")
 
 
 if __name__ == "__main__":
+    # The cross tools come from fmu/env.sh (installed once, cached): without
+    # them in the environment, run again through it.
+    if "CROSS_CARGO" not in os.environ and "--host-build" not in sys.argv and "--no-build" not in sys.argv:
+        os.execvp("bash", ["bash", "-c", 'source "$0/fmu/env.sh" >&2 && exec python3 "$0/fmu/package.py" "$@"', str(ROOT), *sys.argv[1:]])
     main()

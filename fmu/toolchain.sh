@@ -31,3 +31,5 @@ case ":$PATH:" in
     *":$TOOLS/bin:"*) ;;
     *) export PATH="$TOOLS/bin:$PATH" ;;
 esac
+# The Windows and ARM64 Linux tools and their emulators (see the file).
+source "$ROOT/fmu/cross_toolchain.sh"

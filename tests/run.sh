@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Every test: Rust tests of the model core and of the C API, then the packaged
-# FMU through a C importer, FMPy, fmi-sim and libcosim (pytest).
+# FMU through a C importer, FMPy, fmi-sim and libcosim (pytest), hardening, and the
+# Windows and ARM64 binaries under Wine and QEMU (tests/cross.sh).
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
 cd "$ROOT"
@@ -16,3 +17,6 @@ source tests/importers.sh
 # portable .so, the panic boundary, the fuzzed C API, AddressSanitizer and
 # valgrind, dlopen/dlclose cycles.
 bash tests/hardening.sh
+# Windows x64 under Wine, ARM64 Linux under QEMU: Rust tests, fuzzing, the C
+# importer on each binary against Linux x86-64's bits (docs/platforms.md).
+bash tests/cross.sh

@@ -1,13 +1,18 @@
 /*
  * A minimal FMI 2.0 co-simulation importer for ConvertingSpan, written
- * against FMPy's copy of the standard headers. tests/python/test_c_importer.py
- * compiles it with
+ * against FMPy's copy of the standard headers, portable: dlopen on Linux,
+ * LoadLibrary on Windows. tests/python/test_c_importer.py compiles it with
  *
  *     gcc -Wall -Werror -I <fmpy>/c-code importer.c -o importer -ldl
  *
- * and runs it as
+ * (tests/python/test_platforms.py also with x86_64-w64-mingw32-gcc and
+ * aarch64-linux-gnu-gcc, run under Wine and QEMU) and runs it as
  *
- *     importer <path of binaries/linux64/ConvertingSpan.so> <GUID> name=vr ...
+ *     importer <path of binaries/<platform>/ConvertingSpan.<so|dll>> <GUID> name=vr ...
+ *
+ * or, for the scripted scenes of the cross-platform tests, as
+ *
+ *     importer <library> <GUID> --script <file>       (see run_script below)
  *
  * The value references come from the command line (the test reads them from
  * modelDescription.xml); none is written here. Results go to stdout as CSV:
@@ -26,7 +31,7 @@
  * a usage or loading problem.
  */
 
-#include <dlfcn.h>
+#include <inttypes.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -34,7 +39,30 @@
 
 #include "fmi2Functions.h"
 
-/* ---- the API, looked up with dlsym and typed with the header's TYPEs ---- */
+/* ---- loading a shared library: the one platform-specific part ---- */
+
+#ifdef _WIN32
+#include <windows.h>
+typedef HMODULE Library;
+static Library open_library(const char *path) { return LoadLibraryA(path); }
+static void *find_symbol(Library lib, const char *name) { return (void *)GetProcAddress(lib, name); }
+static void close_library(Library lib) { FreeLibrary(lib); }
+static const char *library_error(void)
+{
+    static char text[64];
+    snprintf(text, sizeof text, "Windows error %lu", (unsigned long)GetLastError());
+    return text;
+}
+#else
+#include <dlfcn.h>
+typedef void *Library;
+static Library open_library(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void *find_symbol(Library lib, const char *name) { return dlsym(lib, name); }
+static void close_library(Library lib) { dlclose(lib); }
+static const char *library_error(void) { return dlerror(); }
+#endif
+
+/* ---- the API, looked up by name and typed with the header's TYPEs ---- */
 
 typedef struct {
     fmi2GetVersionTYPE *getVersion;
@@ -50,6 +78,7 @@ typedef struct {
     fmi2SetRealTYPE *setReal;
     fmi2SetIntegerTYPE *setInteger;
     fmi2SetBooleanTYPE *setBoolean;
+    fmi2SetDebugLoggingTYPE *setDebugLogging;
     fmi2DoStepTYPE *doStep;
     fmi2GetFMUstateTYPE *getFMUstate;
     fmi2SetFMUstateTYPE *setFMUstate;
@@ -64,14 +93,14 @@ typedef struct {
    to fmi2InstantiateTYPE*. */
 #define LOAD(field, sym)                                                        \
     do {                                                                        \
-        api->field = (sym##TYPE *)dlsym(lib, #sym);                             \
+        api->field = (sym##TYPE *)find_symbol(lib, #sym);                       \
         if (api->field == NULL) {                                               \
-            fprintf(stderr, "importer: dlsym(%s) failed: %s\n", #sym, dlerror()); \
+            fprintf(stderr, "importer: %s not found: %s\n", #sym, library_error()); \
             return 0;                                                           \
         }                                                                       \
     } while (0)
 
-static int load_api(void *lib, Api *api)
+static int load_api(Library lib, Api *api)
 {
     LOAD(getVersion, fmi2GetVersion);
     LOAD(getTypesPlatform, fmi2GetTypesPlatform);
@@ -86,6 +115,7 @@ static int load_api(void *lib, Api *api)
     LOAD(setReal, fmi2SetReal);
     LOAD(setInteger, fmi2SetInteger);
     LOAD(setBoolean, fmi2SetBoolean);
+    LOAD(setDebugLogging, fmi2SetDebugLogging);
     LOAD(doStep, fmi2DoStep);
     LOAD(getFMUstate, fmi2GetFMUstate);
     LOAD(setFMUstate, fmi2SetFMUstate);
@@ -221,8 +251,173 @@ static void print_cont(const char *run, double t, int n, double rec[][3])
     }
 }
 
+/* ---- scripted scenes (--script): the same calls on every platform ----
+ *
+ * One command per line; values are the 16 hex digits of an IEEE double's bits,
+ * so no platform's strtod or printf takes part:
+ *
+ *     instance <name>                     fmi2Instantiate (co-simulation, logging on)
+ *     setup <stop bits>                   fmi2SetupExperiment from 0
+ *     real|integer|boolean <vr> <value>   one set (integer and boolean values in decimal)
+ *     enter | exit | terminate | reset    the lifecycle calls
+ *     outputs <vr> ...                    the Reals printed after every step
+ *     steps <n> <h bits>                  n calls of fmi2DoStep from the instance's time
+ *     save <file>                         serialize the FMU state to a file
+ *     load <file> <t bits>                set the FMU state from one; t: its time
+ *     hook                                arm the test-only panic of the next step
+ *     free                                fmi2FreeInstance
+ *
+ * Output: call,<line>,<command>,<fmi2Status> for every call and
+ * out,<line>,<k>,<bits>... after every step; the FMU's log to stderr. */
+
+static double from_bits(const char *text)
+{
+    uint64_t bits = strtoull(text, NULL, 16);
+    double value;
+    memcpy(&value, &bits, sizeof value);
+    return value;
+}
+
+static uint64_t to_bits(double value)
+{
+    uint64_t bits;
+    memcpy(&bits, &value, sizeof bits);
+    return bits;
+}
+
+static int run_script(const Api *api, const char *guid, const char *path)
+{
+    FILE *script = fopen(path, "r");
+    if (script == NULL) {
+        fprintf(stderr, "importer: cannot open %s\n", path);
+        return 2;
+    }
+    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    fmi2Component c = NULL;
+    fmi2ValueReference outputs[64];
+    int n_outputs = 0, line_no = 0;
+    double t = 0.0;
+    char line[4096];
+    while (fgets(line, sizeof line, script) != NULL) {
+        char *words[70];
+        int n = 0;
+        line_no++;
+        for (char *w = strtok(line, " \t\r\n"); w != NULL && n < 70; w = strtok(NULL, " \t\r\n")) {
+            words[n++] = w;
+        }
+        if (n == 0) {
+            continue;
+        }
+        const char *cmd = words[0];
+        fmi2Status s = fmi2OK;
+        if (strcmp(cmd, "instance") == 0 && n == 2) {
+            c = api->instantiate(words[1], fmi2CoSimulation, guid, "file:///nonexistent/resources", &callbacks,
+                                 fmi2False, fmi2True);
+            t = 0.0;
+            s = c != NULL ? fmi2OK : fmi2Error;
+        } else if (c == NULL) {
+            fprintf(stderr, "importer: line %d: no instance\n", line_no);
+            fclose(script);
+            return 2;
+        } else if (strcmp(cmd, "setup") == 0 && n == 2) {
+            s = api->setupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, from_bits(words[1]));
+        } else if (strcmp(cmd, "real") == 0 && n == 3) {
+            fmi2ValueReference vr = (fmi2ValueReference)strtoul(words[1], NULL, 10);
+            double v = from_bits(words[2]);
+            s = api->setReal(c, &vr, 1, &v);
+        } else if (strcmp(cmd, "integer") == 0 && n == 3) {
+            fmi2ValueReference vr = (fmi2ValueReference)strtoul(words[1], NULL, 10);
+            fmi2Integer v = (fmi2Integer)strtol(words[2], NULL, 10);
+            s = api->setInteger(c, &vr, 1, &v);
+        } else if (strcmp(cmd, "boolean") == 0 && n == 3) {
+            fmi2ValueReference vr = (fmi2ValueReference)strtoul(words[1], NULL, 10);
+            fmi2Boolean v = (fmi2Boolean)strtol(words[2], NULL, 10);
+            s = api->setBoolean(c, &vr, 1, &v);
+        } else if (strcmp(cmd, "enter") == 0) {
+            s = api->enterInitializationMode(c);
+        } else if (strcmp(cmd, "exit") == 0) {
+            s = api->exitInitializationMode(c);
+        } else if (strcmp(cmd, "terminate") == 0) {
+            s = api->terminate(c);
+        } else if (strcmp(cmd, "reset") == 0) {
+            s = api->reset(c);
+            t = 0.0;
+        } else if (strcmp(cmd, "outputs") == 0) {
+            n_outputs = n - 1;
+            for (int i = 1; i < n; i++) {
+                outputs[i - 1] = (fmi2ValueReference)strtoul(words[i], NULL, 10);
+            }
+            continue;
+        } else if (strcmp(cmd, "steps") == 0 && n == 3) {
+            int steps = atoi(words[1]);
+            double h = from_bits(words[2]), t0 = t, values[64];
+            for (int k = 1; k <= steps && s == fmi2OK; k++) {
+                s = api->doStep(c, t0 + (k - 1) * h, h, fmi2True);
+                if (s == fmi2OK && n_outputs > 0) {
+                    s = api->getReal(c, outputs, (size_t)n_outputs, values);
+                    printf("out,%d,%d", line_no, k);
+                    for (int i = 0; i < n_outputs; i++) {
+                        printf(",%016" PRIx64, to_bits(values[i]));
+                    }
+                    printf("\n");
+                }
+                t = t0 + k * h;
+            }
+        } else if (strcmp(cmd, "save") == 0 && n == 2) {
+            fmi2FMUstate state = NULL;
+            size_t size = 0;
+            s = api->getFMUstate(c, &state);
+            if (s == fmi2OK) s = api->serializedFMUstateSize(c, state, &size);
+            fmi2Byte *bytes = malloc(size ? size : 1);
+            if (s == fmi2OK) s = api->serializeFMUstate(c, state, bytes, size);
+            FILE *f = fopen(words[1], "wb");
+            if (s == fmi2OK && (f == NULL || fwrite(bytes, 1, size, f) != size)) s = fmi2Fatal;
+            if (f != NULL) fclose(f);
+            free(bytes);
+            if (state != NULL) api->freeFMUstate(c, &state);
+        } else if (strcmp(cmd, "load") == 0 && n == 3) {
+            FILE *f = fopen(words[1], "rb");
+            static fmi2Byte bytes[1 << 20];
+            size_t size = f != NULL ? fread(bytes, 1, sizeof bytes, f) : 0;
+            fmi2FMUstate state = NULL;
+            if (f != NULL) fclose(f);
+            s = api->deSerializeFMUstate(c, bytes, size, &state);
+            if (s == fmi2OK) s = api->setFMUstate(c, state);
+            if (state != NULL) api->freeFMUstate(c, &state);
+            t = from_bits(words[2]);
+        } else if (strcmp(cmd, "hook") == 0) {
+            const fmi2String hook[] = {"testHook.panicInNextDoStep"};
+            s = api->setDebugLogging(c, fmi2True, 1, hook);
+        } else if (strcmp(cmd, "free") == 0) {
+            api->freeInstance(c);
+            c = NULL;
+        } else {
+            fprintf(stderr, "importer: line %d: cannot read the command %s\n", line_no, cmd);
+            fclose(script);
+            return 2;
+        }
+        printf("call,%d,%s,%d\n", line_no, cmd, (int)s);
+    }
+    fclose(script);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 5 && strcmp(argv[3], "--script") == 0) {
+        Api api;
+        Library lib = open_library(argv[1]);
+        if (lib == NULL) {
+            fprintf(stderr, "importer: loading %s failed: %s\n", argv[1], library_error());
+            return 2;
+        }
+        if (!load_api(lib, &api)) {
+            return 2;
+        }
+        int code = run_script(&api, argv[2], argv[4]);
+        close_library(lib);
+        return code;
+    }
     if (argc < 4) {
         fprintf(stderr, "usage: %s <library.so> <GUID> name=vr ...\n", argv[0]);
         return 2;
@@ -232,9 +427,9 @@ int main(int argc, char **argv)
     n_refs = argc - 3;
     ref_args = argv + 3;
 
-    void *lib = dlopen(library, RTLD_NOW | RTLD_LOCAL);
+    Library lib = open_library(library);
     if (lib == NULL) {
-        fprintf(stderr, "importer: dlopen(%s) failed: %s\n", library, dlerror());
+        fprintf(stderr, "importer: loading %s failed: %s\n", library, library_error());
         return 2;
     }
     Api api_storage;
@@ -387,7 +582,7 @@ int main(int argc, char **argv)
     must("terminate illegal", api->terminate(d));
     api->freeInstance(d);
 
-    dlclose(lib);
+    close_library(lib);
     printf("check,failures,%d\n", failures == 0);
     return failures == 0 ? 0 : 1;
 }

@@ -33,7 +33,8 @@ def test_archive_holds_exactly_its_files_with_clean_paths(fmu_path):
         names = zf.namelist()
         assert zf.testzip() is None, "a member of the FMU is corrupted"
     assert sorted(names) == sorted(
-        ["modelDescription.xml", "binaries/linux64/ConvertingSpan.so", "documentation/index.html", "resources/webs.json"]
+        ["modelDescription.xml", "binaries/linux64/ConvertingSpan.so", "binaries/win64/ConvertingSpan.dll",
+         "binaries/aarch64-linux/ConvertingSpan.so", "documentation/index.html", "resources/webs.json"]
     )
     for name in names:
         assert "\\" not in name, f"{name!r} uses a backslash separator"

@@ -8,12 +8,13 @@
 //! (very short span at high speed, any step size).
 
 /// `phi1(z) = (exp(z) - 1) / z`, with `phi1(0) = 1`. `expm1` keeps full
-/// precision for tiny `|z|`, where `exp(z) - 1` would cancel.
+/// precision for tiny `|z|`, where `exp(z) - 1` would cancel; the `libm`
+/// crate's, so that every platform gets the same bits (docs/platforms.md).
 pub fn phi1(z: f64) -> f64 {
     if z == 0.0 {
         1.0
     } else {
-        z.exp_m1() / z
+        libm::expm1(z) / z
     }
 }
 
@@ -28,7 +29,7 @@ pub fn decay_integral(lambda: f64, h: f64) -> f64 {
     if z.abs() < 1.0 {
         h * phi1(z)
     } else {
-        -z.exp_m1() / lambda
+        -libm::expm1(z) / lambda
     }
 }
 

@@ -130,7 +130,8 @@ fn step_factor(norm: f64, q: f64) -> f64 {
     if norm == 0.0 {
         5.0
     } else {
-        (0.9 * norm.powf(-1.0 / q)).clamp(0.2, 5.0)
+        // libm's pow: the same step sizes on every platform (linear.rs)
+        (0.9 * libm::pow(norm, -1.0 / q)).clamp(0.2, 5.0)
     }
 }
 

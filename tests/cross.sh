@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# The other platforms' tests: Windows x64 under Wine, ARM64 Linux under QEMU
+# (tests/run.sh runs this; docs/platforms.md).
+#
+#   1. the Rust tests of each target under its emulator (cargo's
+#      CARGO_TARGET_<TRIPLE>_RUNNER, set by fmu/cross_toolchain.sh): the model
+#      core and its solvers, the FMI layer, the C API, the hard cases, the
+#      panic boundary, the Roller's tests
+#   2. the fuzz harness tests/fuzz built for each target: FUZZ_SEQUENCES each
+#   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
+#      the packaged FMUs, bit for bit against Linux x86-64
+#
+# Each target builds std with rustc-web into target/cross-test (profile
+# cross-test, with the test hooks: apart from the shipped libraries of
+# target/cross) and, for the fuzz harness's own workspace, target/cross-fuzz.
+# A summary is printed at the end and written to target/platforms/summary.txt.
+set -euo pipefail
+source "$(dirname "$0")/../fmu/env.sh"
+cd "$ROOT"
+export RUST_BACKTRACE=0 # the panic-boundary tests panic on purpose
+FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}"
+OUT=target/platforms
+mkdir -p "$OUT"
+SUMMARY="$OUT/summary.txt"
+: > "$SUMMARY"
+note() { echo "$*" | tee -a "$SUMMARY"; }
+START=$SECONDS
+cross() { # cargo COMMAND ARGS...: rustc-web's cargo, std built for the target
+    "$CROSS_CARGO" "$1" --quiet -Zbuild-std=std,panic_unwind "${@:2}"
+}
+
+declare -A NAME=([x86_64-pc-windows-gnu]="win64 (Wine)" [aarch64-unknown-linux-gnu]="aarch64-linux (QEMU)")
+for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
+    echo "== Rust tests for $target under ${NAME[$target]}"
+    t0=$SECONDS
+    cross test --profile cross-test --target-dir target/cross-test --features test-hooks --target "$target" \
+        -p converting-span -p solver -p fmi2 \
+        --lib --test span_exact --test span_solvers --test c_api --test hard_cases --test panic_boundary 2>&1 | tee "$OUT/rust-$target.log" | grep -E "^test result|FAILED|panicked" || true
+    cross test --profile cross-test --target-dir target/cross-test --target "$target" -p roller --lib --tests 2>&1 | tee -a "$OUT/rust-$target.log" | grep -E "^test result|FAILED" || true
+    if grep -q "FAILED\|error\[" "$OUT/rust-$target.log" || ! grep -q "^test result: ok" "$OUT/rust-$target.log"; then
+        echo "Rust tests failed for $target: $OUT/rust-$target.log"; exit 1
+    fi
+    passed=$(grep -o "^test result: ok. [0-9]* passed" "$OUT/rust-$target.log" | awk '{s += $4} END {print s}')
+    note "Rust tests on ${NAME[$target]}: $passed passed in $((SECONDS - t0)) s"
+
+    echo "== fuzz harness for $target: $FUZZ_SEQUENCES sequences"
+    t0=$SECONDS
+    # its own target directory: the same crates built from another workspace
+    # get other source paths, and cargo would mix the two builds
+    cross build --profile cross-test --target-dir target/cross-fuzz --target "$target" --manifest-path tests/fuzz/Cargo.toml
+    runner_var="CARGO_TARGET_$(echo "$target" | tr 'a-z-' 'A-Z_')_RUNNER"
+    exe="target/cross-fuzz/$target/cross-test/fuzz_sequences"
+    [ -f "$exe.exe" ] && exe="$exe.exe"
+    "${!runner_var}" "$exe" --sequences "$FUZZ_SEQUENCES" --seed 3 | tr -d '\r' | tee "$OUT/fuzz-$target.log"
+    grep -q "^$FUZZ_SEQUENCES passed, 0 failed" "$OUT/fuzz-$target.log" || { echo "fuzz violations on $target"; exit 1; }
+    note "fuzz on ${NAME[$target]}: $(grep '^fuzzed' "$OUT/fuzz-$target.log"), 0 violations ($((SECONDS - t0)) s with the build)"
+done
+
+echo "== importer.c on every platform's binary"
+t0=$SECONDS
+python3 fmu/package.py
+"$PY" -m pytest tests/cross -q -p no:cacheprovider
+note "importer.c scenes on win64, aarch64-linux, linux64: passed in $((SECONDS - t0)) s"
+note "cross-platform tests took $((SECONDS - START)) s"
+echo
+cat "$SUMMARY"
