@@ -260,3 +260,30 @@ fn a_table_record_survives_a_serialized_state_in_a_fresh_instance() {
     }
     assert_eq!(continued, again);
 }
+
+/// With a table the clamp of a slack web, the stress, the per-width sensor
+/// unit and the web mass all follow the record: a web pushed into
+/// compression by a slower roller b reads 0 N, and the other outputs keep
+/// their relations to the tension and the record's cross-section.
+#[test]
+fn a_table_web_goes_slack_and_every_output_follows_the_record() {
+    let fmu = Fmu::new();
+    assert_eq!(fmu.set_text("webLibrary", USER), OK);
+    assert_eq!(fmu.set_text("wp2.record", "paper-measured"), OK);
+    fmu.set_all(&[("preventNegativeTension", 1.0), ("includeMass", 1.0), ("toUnitF", 5.0), ("web_a.v", 5.0), ("web_b.v", 5.0)]);
+    fmu.init(0.0);
+    let area = 100e-6 * 1.0;
+    let mut slack_seen = false;
+    for k in 0..400 {
+        // roller b slows to 4.99 m/s: the strain falls below 0 and the web goes slack
+        fmu.set_all(&[("web_b.v", if k < 10 { 5.0 } else { 4.99 })]);
+        assert_eq!(fmu.do_step(k as f64 * 1e-3, 1e-3), OK);
+        let (t, eps) = (fmu.real("summary_Tension"), fmu.real("summary_Strain"));
+        assert!(t >= 0.0, "clamped: {t}");
+        slack_seen |= eps < 0.0 && t == 0.0;
+        assert_eq!(fmu.real("summary_Stress"), t / area);
+        assert_eq!(fmu.real("T"), t / 1.0, "N/m divides by the record's width");
+        assert_eq!(fmu.real("m_web"), 800.0 * area * fmu.real("unstretchedLength"));
+    }
+    assert!(slack_seen, "the web went slack");
+}
