@@ -10,9 +10,9 @@
 #   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
 #      the packaged FMUs, bit for bit against Linux x86-64
 #
-# Each target builds std with rustc-web into target/cross-test (profile
+# Each target builds std with rustc-web into target/cross-test once (profile
 # cross-test, with the test hooks: apart from the shipped libraries of
-# target/cross) and, for the fuzz harness's own workspace, target/cross-fuzz.
+# target/cross), for its tests and the fuzz harness alike.
 # A summary is printed at the end and written to target/platforms/summary.txt.
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
@@ -35,7 +35,7 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     t0=$SECONDS
     cross test --profile cross-test --target-dir target/cross-test --features test-hooks --target "$target" \
         -p converting-span -p solver -p fmi2 \
-        --lib --test span_exact --test span_solvers --test c_api --test hard_cases --test panic_boundary 2>&1 | tee "$OUT/rust-$target.log" | grep -E "^test result|FAILED|panicked" || true
+        --lib --test span_exact --test span_solvers --test c_api --test hard_cases --test panic_boundary --test records 2>&1 | tee "$OUT/rust-$target.log" | grep -E "^test result|FAILED|panicked" || true
     cross test --profile cross-test --target-dir target/cross-test --target "$target" -p roller --lib --tests 2>&1 | tee -a "$OUT/rust-$target.log" | grep -E "^test result|FAILED" || true
     if grep -q "FAILED\|error\[" "$OUT/rust-$target.log" || ! grep -q "^test result: ok" "$OUT/rust-$target.log"; then
         echo "Rust tests failed for $target: $OUT/rust-$target.log"; exit 1
@@ -45,11 +45,10 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
 
     echo "== fuzz harness for $target: $FUZZ_SEQUENCES sequences"
     t0=$SECONDS
-    # its own target directory: the same crates built from another workspace
-    # get other source paths, and cargo would mix the two builds
-    cross build --profile cross-test --target-dir target/cross-fuzz --target "$target" --manifest-path tests/fuzz/Cargo.toml
+    # the tests' target directory: std and the FMU are already built there
+    cross build --profile cross-test --target-dir target/cross-test --target "$target" -p converting-span-fuzz --bin fuzz_sequences
     runner_var="CARGO_TARGET_$(echo "$target" | tr 'a-z-' 'A-Z_')_RUNNER"
-    exe="target/cross-fuzz/$target/cross-test/fuzz_sequences"
+    exe="target/cross-test/$target/cross-test/fuzz_sequences"
     [ -f "$exe.exe" ] && exe="$exe.exe"
     "${!runner_var}" "$exe" --sequences "$FUZZ_SEQUENCES" --seed 3 | tr -d '\r' | tee "$OUT/fuzz-$target.log"
     grep -q "^$FUZZ_SEQUENCES passed, 0 failed" "$OUT/fuzz-$target.log" || { echo "fuzz violations on $target"; exit 1; }

@@ -60,9 +60,9 @@ step() { echo; echo "== $*"; }
 START=$SECONDS
 
 FUZZ_DIR=target/fuzz
-FUZZ="$FUZZ_DIR/release/fuzz_sequences"
+FUZZ="$FUZZ_DIR/fuzz/fuzz_sequences"
 build_fuzz() {
-    cargo build --release --quiet --manifest-path tests/fuzz/Cargo.toml --target-dir "$FUZZ_DIR"
+    cargo build --profile fuzz --quiet -p converting-span-fuzz --target-dir "$FUZZ_DIR"
 }
 
 if [ "$MODE" = afl ]; then
@@ -72,7 +72,7 @@ if [ "$MODE" = afl ]; then
     fi
     cargo afl config --build 2>/dev/null || true # "already built" is fine
     step "AFL++ (cargo-afl), $AFL_SECONDS s"
-    cargo afl build --release --quiet --features afl --manifest-path tests/fuzz/Cargo.toml --target-dir target/fuzz-afl
+    cargo afl build --profile fuzz --quiet --features afl -p converting-span-fuzz --target-dir target/fuzz-afl
     build_fuzz
     mkdir -p "$OUT/afl-seeds"
     # Seeds: a few sequences of the property driver's generator.
@@ -87,7 +87,7 @@ EOF
     AFL_SKIP_CPUFREQ=1 AFL_I_DONT_CARE_ABOUT_MISSING_CRASHES=1 AFL_NO_UI=1 AFL_QUIET=1 \
         timeout --preserve-status $((AFL_SECONDS + 60)) \
         cargo afl fuzz -V "$AFL_SECONDS" -i "$OUT/afl-seeds" -o "$OUT/afl-out" \
-        target/fuzz-afl/release/afl_target > "$OUT/afl.log" 2>&1 || true
+        target/fuzz-afl/fuzz/afl_target > "$OUT/afl.log" 2>&1 || true
     STATS="$OUT/afl-out/default/fuzzer_stats"
     [ -f "$STATS" ] || { echo "AFL++ did not run; see $OUT/afl.log"; tail -20 "$OUT/afl.log"; exit 1; }
     execs=$(awk -F': *' '/^execs_done/ {print $2}' "$STATS")
@@ -124,10 +124,10 @@ note "fuzz: $(grep '^fuzzed' "$OUT/fuzz.log")"
 step "4. fuzz harness with AddressSanitizer: $SEQ_ASAN sequences"
 # -Zsanitizer needs a nightly flag: RUSTC_BOOTSTRAP=1 lets this stable toolchain take it.
 RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" \
-    cargo build --release --quiet --target x86_64-unknown-linux-gnu \
-    --manifest-path tests/fuzz/Cargo.toml --target-dir target/fuzz-asan
+    cargo build --quiet --target x86_64-unknown-linux-gnu \
+    --profile fuzz -p converting-span-fuzz --target-dir target/fuzz-asan
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 \
-    target/fuzz-asan/x86_64-unknown-linux-gnu/release/fuzz_sequences --sequences "$SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan.log"
+    target/fuzz-asan/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences --sequences "$SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan.log"
 note "fuzz under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan.log"), no ASan/LSan report"
 
 VALGRIND=(valgrind --tool=memcheck --leak-check=full --show-leak-kinds=definite,indirect,possible

@@ -5,9 +5,10 @@
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
 cd "$ROOT"
-# Every package of the workspace: the span and the Roller (model and C API),
+# Every package of the workspace but the fuzz harness (tests/hardening.sh builds it with
+# its own profile): the span and the Roller (model and C API),
 # the FMI layer, the generator, the solvers.
-cargo test --release --quiet --workspace
+cargo test --release --quiet --workspace --exclude converting-span-fuzz
 python3 fmu/package.py
 "$PY" fmu/compat.py out
 # fmi-sim for the importer tests (cached; see the file).

@@ -211,10 +211,11 @@ impl<M: Model> Default for Setup<M> {
 
 /// The repository's fmu/resources/ (what the FMU ships in resources/) as a
 /// file: URI, spaces percent-encoded as importers do.
+/// (No canonicalize: on Windows it gives a verbatim \\?\ path, which is no URI.)
 pub fn shipped_resources() -> String {
-    let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fmu/resources");
-    let folder = folder.canonicalize().unwrap_or(folder);
-    format!("file://{}/", folder.display().to_string().replace('%', "%25").replace(' ', "%20"))
+    let folder = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fmu/resources/").replace('\\', "/");
+    let folder = folder.replace('%', "%25").replace(' ', "%20");
+    if folder.starts_with('/') { format!("file://{folder}") } else { format!("file:///{folder}") }
 }
 
 fn c_opt(s: &Option<String>) -> Option<CString> {
