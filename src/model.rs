@@ -102,11 +102,11 @@ impl ConvertingSpan {
             None => start,
         };
         let length_after = physics::span_length(&self.params, &end);
-        if self.params.variable_length && !(length_after >= min_length()) {
+        if self.params.variable_length && !(length_after >= physics::min_length()) {
             return Err(FmiError::discard(format!(
                 "variableLength: the rollers would come {length_after} m apart by the end of the step, closer than \
                  the shortest span L may be ({} m); take a shorter step",
-                min_length()
+                physics::min_length()
             )));
         }
         if !physics::representable(length_after, x) {
@@ -153,23 +153,14 @@ impl ConvertingSpan {
         self.rates = match given {
             Some(r) => Rates { speed_b: r.speed_b, length: physics::length_rate(p, &start.advanced(r, h), r) },
             None if self.previous.step > 0.0 => Rates {
-                speed_b: bound((start.speed_b - self.previous.speed_b) / self.previous.step, max_rate(Real::web_b_v)),
+                speed_b: bound((start.speed_b - self.previous.speed_b) / self.previous.step, physics::max_rate(Real::web_b_v)),
                 // |dL/dt| <= |d(r_b - r_a)/dt| <= 2*sqrt(2) times a coordinate's maximum rate.
-                length: bound((length - self.previous.length) / self.previous.step, 2.0 * std::f64::consts::SQRT_2 * max_rate(Real::frame_a_x)),
+                length: bound((length - self.previous.length) / self.previous.step, 2.0 * std::f64::consts::SQRT_2 * physics::max_rate(Real::frame_a_x)),
             },
             None => Rates::default(),
         };
         self.previous = Previous { speed_b: start.speed_b, length, step: h };
     }
-}
-
-fn max_rate(var: Real) -> f64 {
-    DESCRIPTION.variable(var.vr()).map_or(f64::INFINITY, |v| v.max_rate)
-}
-
-/// The shortest span: the declared minimum of `L`, also for `variableLength`.
-fn min_length() -> f64 {
-    DESCRIPTION.variable(Real::L.vr()).map_or(0.0, |v| v.range.lo)
 }
 
 /// Inputs moved by their derivatives must still be in their ranges at the
@@ -215,7 +206,7 @@ impl ConvertingSpan {
     #[inline]
     fn configuration_valid(&self) -> FmiResult {
         let length = physics::span_length(&self.params, &self.inputs);
-        if length >= min_length() && physics::representable(length, self.unstretched.value()) {
+        if length >= physics::min_length() && physics::representable(length, self.unstretched.value()) {
             Ok(())
         } else {
             self.why_outputs_undefined(length)
@@ -228,7 +219,7 @@ impl ConvertingSpan {
             "outputs are not defined for a span length of {length} m with {} m of unstretched web \
              (the span is at least {} m long, and its strain at most {})",
             self.unstretched.value(),
-            min_length(),
+            physics::min_length(),
             physics::max_strain()
         )))
     }
@@ -315,11 +306,11 @@ impl Model for ConvertingSpan {
         records::apply(&mut self.params, resources)?;
         let p = &self.params;
         let length = physics::span_length(p, &self.inputs);
-        if !(length >= min_length()) {
+        if !(length >= physics::min_length()) {
             return Err(FmiError::error(format!(
                 "variableLength: the span length |frame_b - frame_a| = {length} m must be at least {} m, \
                  the shortest span L may be (the rollers nearly coincide)",
-                min_length()
+                physics::min_length()
             )));
         }
         check_derived(p)?;

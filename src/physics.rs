@@ -102,10 +102,24 @@ pub fn representable(length: f64, x: f64) -> bool {
     x > 0.0 && x.is_finite() && length > f64::EPSILON * x && length <= (1.0 + max_strain()) * x
 }
 
+// The physical bounds the equations rely on, as modelDescription.xml declares them.
+
 /// The largest strain any web may have: the declared maximum of `web_a.eps`.
 #[inline]
 pub fn max_strain() -> f64 {
     DESCRIPTION.variable(Real::web_a_eps.vr()).map_or(f64::INFINITY, |v| v.range.hi)
+}
+
+/// The shortest span: the declared minimum of `L`, also for `variableLength`.
+#[inline]
+pub fn min_length() -> f64 {
+    DESCRIPTION.variable(Real::L.vr()).map_or(0.0, |v| v.range.lo)
+}
+
+/// An input's largest rate of change (`maxRate`), per second.
+#[inline]
+pub fn max_rate(var: Real) -> f64 {
+    DESCRIPTION.variable(var.vr()).map_or(f64::INFINITY, |v| v.max_rate)
 }
 
 /// The unstretched length that holds strain `eps` in a span of length L [1]:

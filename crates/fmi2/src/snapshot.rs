@@ -38,7 +38,7 @@ pub struct Snapshot<M> {
 }
 
 /// FNV-1a, 64 bit: cheap, and any change of a byte changes it.
-fn fnv1a(bytes: &[u8]) -> u64 {
+pub fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
 }
 

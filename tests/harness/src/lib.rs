@@ -794,7 +794,7 @@ impl<M: Model> Fmu<M> {
             Kind::Boolean => self.get_booleans_vr(&[v.vr]).map(|x| x[0] as f64),
             // A text as the FNV-1a hash of its bytes, so that comparisons of
             // every variable's value cover the String variables too.
-            Kind::String => self.get_strings_vr(&[v.vr]).map(|x| f64::from_bits(fnv1a(x[0].as_bytes()))),
+            Kind::String => self.get_strings_vr(&[v.vr]).map(|x| f64::from_bits(fmi2::snapshot::fnv1a(x[0].as_bytes()))),
         }
     }
 
@@ -942,8 +942,4 @@ impl<M: Model> Fmu<M> {
             status => status,
         }
     }
-}
-
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
 }
