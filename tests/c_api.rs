@@ -1400,6 +1400,8 @@ fn perturbed_text(v: &Variable) -> String {
         "wp1.record" => "LDPE-50".into(),
         "wp2.record" => "BOPP-20".into(),
         "webLibrary" => concat!(env!("CARGO_MANIFEST_DIR"), "/tests/records/user_webs.json").into(),
+        // Changes later than the start: no initial value depends on them.
+        "profile" => concat!(env!("CARGO_MANIFEST_DIR"), "/tests/records/splice_profile.json").into(),
         other => panic!("no perturbation for {other}"),
     }
 }

@@ -160,8 +160,10 @@ impl Roller {
         2.0 * self.roll.radius
     }
 
+    /// Heights from the dancer's start position, up positive: 0 at the start,
+    /// so a master that starts its inputs at 0 (FMPy) still sees a valid span.
     fn contact_y(&self) -> f64 {
-        -self.carriage[0]
+        self.params.carriage_start - self.carriage[0]
     }
 
     /// d/dt of (omega, r, y, y') now [R1]–[R4], for Model Exchange.
