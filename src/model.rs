@@ -80,7 +80,7 @@ impl ConvertingSpan {
         physics::outputs(p, &self.inputs, self.unstretched, rates, &self.sensor)
     }
 
-    /// d(unknown)/d(known) [14]: `known` is an input or the state, `unknown`
+    /// d(unknown)/d(known) (docs/directional-derivatives.md): `known` is an input or the state, `unknown`
     /// an output, the state or its derivative; during initialization the
     /// state is the initial state's function of the inputs.
     pub fn partial_derivative(&self, unknown: Real, known: Real, of: Jacobian) -> FmiResult<f64> {
