@@ -105,17 +105,25 @@ def communication_points(start, stop, h, breakpoints=(), mode="aligned"):
     """The communication points: multiples of h from `start` and the stop time;
     `aligned` adds the breakpoints (points closer than 1e-6*h merge, the
     breakpoint kept); `fmpy` adds h again and again while t < stop, as FMPy does."""
+    steps = steps_of(start, stop, h, breakpoints, mode)
+    return [t for t, _ in steps] + [steps[-1][0] + steps[-1][1] if mode == "fmpy" else stop]
+
+
+def steps_of(start, stop, h, breakpoints=(), mode="aligned"):
+    """The communication steps (t, step size). `uniform` and `fmpy` pass h
+    itself as other engines do, not a difference of two points (the last
+    uniform step ends at the stop time)."""
     if mode == "fmpy":
-        out, t = [start], start
+        out, t = [], start
         while t < stop:
+            out.append((t, h))
             t += h
-            out.append(t)
         return out
     n = max(1, int(math.ceil((stop - start) / h - 1e-9)))
     points = [min(start + k * h, stop) for k in range(n + 1)]
+    points[-1] = stop
     if mode == "uniform":
-        points[-1] = stop
-        return points
+        return [(t, h if k < n - 1 else stop - t) for k, t in enumerate(points[:-1])]
     bset = set(breakpoints)
     out = []
     for t in sorted(set(points) | bset):
@@ -125,7 +133,7 @@ def communication_points(start, stop, h, breakpoints=(), mode="aligned"):
             continue
         out.append(t)
     out[-1] = stop
-    return out
+    return [(a, b - a) for a, b in zip(out[:-1], out[1:])]
 
 
 def profile_file(profile: dict) -> str:
@@ -306,18 +314,19 @@ class Master:
         start = clock.perf_counter()
         s = self.system
         breaks = s.breakpoints() if self.opt.grid == "aligned" else []
-        grid = communication_points(s.start_time, s.stop_time, self.h, breaks, self.opt.grid)
+        steps = steps_of(s.start_time, s.stop_time, self.h, breaks, self.opt.grid)
         bset = set(breaks)
         bar = None
         try:
             self.instantiate()
-            times, rows = [grid[0]], [self.record()]
+            times, rows = [s.start_time], [self.record()]
             if self.opt.progress:
                 from tqdm import tqdm
 
-                bar = tqdm(total=len(grid) - 1, unit="step", desc=s.name, leave=False)
-            for t, t1 in zip(grid[:-1], grid[1:]):
-                self.step(t, t1 - t)
+                bar = tqdm(total=len(steps), unit="step", desc=s.name, leave=False)
+            ends = [t for t, _ in steps[1:]] + [steps[-1][0] + steps[-1][1] if self.opt.grid == "fmpy" else s.stop_time]
+            for (t, h), t1 in zip(steps, ends):
+                self.step(t, h)
                 if t1 in bset:  # a kink or jump: extrapolate afresh
                     for sg in self.sig.values():
                         sg.has_prev = False
