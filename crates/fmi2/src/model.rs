@@ -29,6 +29,14 @@ pub struct Event {
     pub what: &'static str,
 }
 
+/// What a Model Exchange event changed, and when the next one is due.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EventUpdate {
+    pub next_event_time: Option<f64>,
+    /// The continuous states jumped (the importer must read them again).
+    pub states_changed: bool,
+}
+
 /// A type an Integer variable can be bound to: `i32`, or an enumeration
 /// type the generator emits from the model description.
 pub trait IntegerValue: Copy {
@@ -90,6 +98,18 @@ pub trait Model: Variables + Clone + Default + 'static {
     /// inputs held at their current values. On failure the model must be
     /// left as it was before the step.
     fn do_step(&mut self, h: f64) -> FmiResult;
+
+    /// The time now: the start of the next communication step, or the time
+    /// a Model Exchange importer set. Models whose inputs come from profiles
+    /// of time keep it; others ignore it.
+    #[inline]
+    fn set_time(&mut self, _time: f64) {}
+
+    /// Model Exchange, in event mode: applies what is due at the time set
+    /// (parameter changes, jumps) and names the next time event.
+    fn event_update(&mut self) -> EventUpdate {
+        EventUpdate::default()
+    }
 
     /// What happened inside the last step, for the `logEvents` category.
     fn step_events(&self) -> &[Event] {

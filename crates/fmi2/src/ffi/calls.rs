@@ -283,7 +283,7 @@ pub unsafe fn new_discrete_states<M: Model>(c: fmi2Component, info: *mut fmi2Eve
             newDiscreteStatesNeeded: update.new_discrete_states_needed as fmi2Boolean,
             terminateSimulation: update.terminate_simulation as fmi2Boolean,
             nominalsOfContinuousStatesChanged: 0,
-            valuesOfContinuousStatesChanged: 0,
+            valuesOfContinuousStatesChanged: update.states_changed as fmi2Boolean,
             nextEventTimeDefined: update.next_event_time.is_some() as fmi2Boolean,
             nextEventTime: update.next_event_time.unwrap_or(0.0),
         };

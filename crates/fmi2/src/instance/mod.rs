@@ -44,6 +44,7 @@ pub struct DiscreteUpdate {
     pub new_discrete_states_needed: bool,
     pub terminate_simulation: bool,
     pub next_event_time: Option<f64>,
+    pub states_changed: bool,
 }
 
 pub struct Instance<M: Model> {
@@ -232,6 +233,7 @@ impl<M: Model> Instance<M> {
         if !usual {
             self.check_step(current, h)?;
         }
+        self.model.set_time(current);
         match self.model.do_step(h) {
             Ok(()) => {
                 #[cfg(feature = "test-hooks")]
