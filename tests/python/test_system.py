@@ -107,9 +107,15 @@ def fmpy_loop(system, fmu_paths):
     return np.array(rows)
 
 
-@pytest.mark.parametrize("name", ["splice", "dancer"])
+# Shortened; the lamination line at the step where Jacobi with held inputs is stable.
+FMPY_RUNS = {"emergency_stop": {"stop_time": "0.6 s"}, "lamination": {"stop_time": "0.5 s", "step": "0.5 ms"}, "splice": {"stop_time": "1.2 s"}}
+
+
+@pytest.mark.parametrize("name", list(FMPY_RUNS))
 def test_the_fmpy_option_reproduces_fmpys_loop_bit_for_bit(fmus, tmp_path, name):
-    scene = load_scene(SCENES / f"{name}.json", {"stop_time": "1.2 s" if name == "splice" else "0.4 s"}, fmu_dir=fmus)
+    """(Not the dancer: FMPy's zero start puts both frames of the span above it
+    at the origin, and the span refuses a length of 0 m.)"""
+    scene = load_scene(SCENES / f"{name}.json", FMPY_RUNS[name], fmu_dir=fmus)
     system = compile_scene(scene, fmus)
     theirs = fmpy_loop(system, component_fmus(system, tmp_path))
     ours = Master(system, Options.fmpy()).run()
