@@ -208,8 +208,10 @@ class Master:
 
     # ------------------------------------------------------------ a step
 
-    def input_values(self, comp, t, h):
-        """(values, slopes or None) of a component's connected inputs over [t, t+h]."""
+    def input_values(self, comp, t, h, at_break=False):
+        """(values, slopes or None) of a component's connected inputs over [t, t+h].
+        `at_break`: the step ends at a profile breakpoint, where a source's new value
+        may already be after a jump or kink: its old trend is used instead."""
         conns = self.inputs[comp.name]
         if self.first and self.opt.zero_start:
             return [0.0] * len(conns), None
@@ -218,7 +220,7 @@ class Master:
         t1 = t + h
         values, slopes = [], []
         for c in conns:
-            s = self.sig[c.source]
+            s = self.before[c.source] if at_break else self.sig[c.source]
             stepped = s.t_now == t1 and t1 != t
             if not ex:
                 values.append(s.now)
@@ -234,11 +236,11 @@ class Master:
                 values.append(x0 + 0.5 * h * dx)
         return values, (slopes if ders and any(slopes) else None)
 
-    def step_component(self, comp, t, h):
+    def step_component(self, comp, t, h, at_break=False):
         """Sets the inputs, steps, reads the outputs: the outputs, or None if discarded."""
         inst = self.inst[comp.name]
         if self.inputs[comp.name]:
-            values, slopes = self.input_values(comp, t, h)
+            values, slopes = self.input_values(comp, t, h, at_break)
             inst.set_inputs(values)
             if slopes is not None:
                 inst.set_input_derivatives(slopes)
@@ -253,12 +255,14 @@ class Master:
             )
         return out
 
-    def try_step(self, t, h) -> bool:
+    def try_step(self, t, h, at_break=False) -> bool:
         t1 = t + h
         gs = self.opt.algorithm == "gauss-seidel"
+        if at_break:  # the signals as they were at t
+            self.before = {k: s.copy() for k, s in self.sig.items()}
         new = {}
         for comp in self.system.components:
-            out = self.step_component(comp, t, h)
+            out = self.step_component(comp, t, h, at_break)
             if out is None:
                 return False
             if gs:
@@ -272,9 +276,9 @@ class Master:
         self.first = False
         return True
 
-    def step(self, t, h, depth=0):
+    def step(self, t, h, at_break=False, depth=0):
         if not self.opt.rollback:
-            if not self.try_step(t, h):
+            if not self.try_step(t, h, at_break):
                 raise CoSimulationError(f"a component discarded the step at t = {t} ({self.last_messages()}); rollback is off")
             self.steps += 1
             return
@@ -282,7 +286,7 @@ class Master:
             inst.save()
         saved = {k: s.copy() for k, s in self.sig.items()}
         first = self.first
-        if self.try_step(t, h):
+        if self.try_step(t, h, at_break):
             self.steps += 1
             return
         for inst in self.inst.values():
@@ -292,8 +296,8 @@ class Master:
         if depth >= MAX_HALVINGS:
             raise CoSimulationError(f"step at t = {t} discarded after {MAX_HALVINGS} halvings: {self.last_messages()}")
         half = 0.5 * h
-        self.step(t, half, depth + 1)
-        self.step(t + half, h - half, depth + 1)
+        self.step(t, half, False, depth + 1)
+        self.step(t + half, h - half, at_break, depth + 1)
 
     def last_messages(self):
         return "; ".join(f"{n}: {i.messages[-1]}" for n, i in self.inst.items() if i.messages) or "no message"
@@ -326,7 +330,7 @@ class Master:
                 bar = tqdm(total=len(steps), unit="step", desc=s.name, leave=False)
             ends = [t for t, _ in steps[1:]] + [steps[-1][0] + steps[-1][1] if self.opt.grid == "fmpy" else s.stop_time]
             for (t, h), t1 in zip(steps, ends):
-                self.step(t, h)
+                self.step(t, h, t1 in bset)
                 if t1 in bset:  # a kink or jump: extrapolate afresh
                     for sg in self.sig.values():
                         sg.has_prev = False
