@@ -6,8 +6,10 @@
 //! * this file — the instance, its lifecycle, `fmi2DoStep` and the status queries;
 //! * `values` — getting and setting variables, with every check;
 //! * `model_exchange` — the Model Exchange functions;
+//! * `directional` — `fmi2GetDirectionalDerivative`: its knowns and unknowns;
 //! * `states` — FMU states: save, restore, check a deserialized one.
 
+mod directional;
 mod model_exchange;
 mod states;
 mod values;
