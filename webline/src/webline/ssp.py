@@ -20,7 +20,7 @@ from pathlib import Path
 from lxml import etree
 
 from .archive import ArchiveError, check_archive, extract
-from .system import Component, Connection, System
+from .system import Component, Connection, System, fmu_with_profile
 
 NS = {
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -35,6 +35,7 @@ SSD = "SystemStructure.ssd"
 FMU_TYPE = "application/x-fmu-sharedlibrary"
 KINDS = {"ConvertingSpan": "span", "Roller": "roller"}  # modelName -> System kind
 PROFILE = "resources/profile.json"
+PROFILE_BYTES = 16 << 20
 XML_PARSER = etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=False, remove_comments=True)
 
 
@@ -91,15 +92,6 @@ def _literal(where: str, var, value) -> tuple[str, str]:
     raise SspError(f"{where}: a {t} variable: FMPy's SSP simulation cannot set String or Enumeration variables and "
                    f"libcosim ignores Enumerations; give a profile as the component's profile "
                    f"(resources/profile.json of its FMU), other choices as Integer or Boolean parameters")
-
-
-def _fmu_with_profile(fmu: Path, profile: dict, out: Path):
-    """A copy of an FMU whose resources/profile.json is `profile`."""
-    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
-        for info in src.infolist():
-            if info.filename != PROFILE:
-                dst.writestr(info, src.read(info))
-        dst.writestr(PROFILE, json.dumps(profile, indent=1))
 
 
 def E(prefix: str, tag: str, parent=None, **attrs):
@@ -187,10 +179,8 @@ def write_ssp(system: System, path) -> Path:
                 raise SspError(f"{system.name}: {comp.name}: FMU {fmu} is missing")
             _, variables[comp.name] = _variables(fmu)
             if comp.profile is not None:
-                copy = tmp / f"{comp.name}.fmu"
-                _fmu_with_profile(fmu, comp.profile, copy)
                 sources[comp.name] = f"resources/{comp.name}.fmu"
-                files[sources[comp.name]] = copy
+                files[sources[comp.name]] = fmu_with_profile(fmu, comp.profile, tmp)
             else:
                 shared = next((k for k, f in files.items() if f == fmu), None)
                 if shared is None:
@@ -228,9 +218,12 @@ def write_ssp(system: System, path) -> Path:
 
 def _parse(path: Path, where: str):
     try:
-        return etree.parse(str(path), XML_PARSER).getroot()
+        tree = etree.parse(str(path), XML_PARSER)
     except (etree.XMLSyntaxError, OSError) as e:
         raise SspError(f"{where}: not readable XML ({e})") from None
+    if tree.docinfo.internalDTD is not None or tree.docinfo.doctype:
+        raise SspError(f"{where}: a DOCTYPE declaration (SSP files have none; entities are not expanded)")
+    return tree.getroot()
 
 
 def ssp_step(root) -> float | None:
@@ -329,6 +322,8 @@ def read_ssp(path, target_dir) -> System:
         profile = None
         with zipfile.ZipFile(fmu) as zf:
             if PROFILE in zf.namelist():
+                if zf.getinfo(PROFILE).file_size > PROFILE_BYTES:
+                    raise SspError(f"{w}: {el.get('source')}: {PROFILE} is larger than {PROFILE_BYTES} bytes")
                 try:
                     profile = json.loads(zf.read(PROFILE))
                 except ValueError as e:
