@@ -111,10 +111,11 @@ def export_step(system) -> float:
     """The step an export carries: the largest stable step `webline check` predicts for the engines'
     coupling (Jacobi, held inputs), when it is smaller than the scene's; else the scene's."""
     try:
-        from .check import predict_step
+        from .stability import predict_step
     except ImportError:  # the prediction is not there: the scene's step
         return system.step
-    return min(system.step, predict_step(system))
+    predicted = predict_step(system)  # NaN: no stable step found
+    return min(system.step, predicted) if math.isfinite(predicted) else system.step
 
 
 def cmd_export(args):
