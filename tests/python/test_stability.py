@@ -117,3 +117,44 @@ def test_conserved_length_is_excluded_by_rule():
     assert spectral_radius(line, h, "gauss-seidel", "hold") < 1.0 - 1e-6  # the rest decays
     # Without the rule the radius would be 1 (not a decay); a damped line far beyond its limit still grows.
     assert spectral_radius(line, 3 / omega(), "gauss-seidel", "hold") > 1.0
+
+
+# ---------------------------------------------------------------- FMUs
+
+
+def span_component(name="s", E=4e9, thickness=5e-4, L=0.2, d_r=1e-4, damping=True, eps=1e-3, v=2.0, fmu=None):
+    from types import SimpleNamespace
+
+    from conftest import ROOT
+
+    start = {"L": L, "startAtEquilibrium": False, "eps_start": eps, "web_a.v": v, "web_a.eps": eps, "web_b.v": v * 1.001,
+             "includeDamping": damping}
+    for w in ("wp1", "wp2"):
+        start.update({f"{w}.record": "", f"{w}.E": E, f"{w}.thickness": thickness, f"{w}.width": 1.0,
+                      f"{w}.density": 800.0, f"{w}.d_r": d_r})
+    return SimpleNamespace(name=name, kind="span", fmu=fmu or ROOT / "out" / "ConvertingSpan.fmu", start=start, profile=None)
+
+
+def test_span_jacobians_by_differences(fmu_path, tmp_path):
+    """The span's Jacobians through FMPy by central differences against the material balance written
+    out here: x' = v_a/(1+eps_a) - v_b*x/L, eps = L/x - 1, F = EA*(eps + d_r*eps'). Relative 1e-6:
+    the differences' truncation and rounding are below 1e-9 (RELATIVE_STEP 1e-6)."""
+    from webline.linearization import ModelInstance
+
+    c = span_component(fmu=fmu_path)
+    st = c.start
+    m = ModelInstance(c, 0.0, tmp_path)
+    try:
+        (x,) = m.states()
+        J = m.jacobians_by_differences(["web_a.v", "web_a.eps", "web_b.v"], ["web_a.F", "web_b.eps"])
+    finally:
+        m.free()
+    L, va, ea, vb = st["L"], st["web_a.v"], st["web_a.eps"], st["web_b.v"]
+    EA, d_r = st["wp2.E"] * st["wp2.thickness"] * st["wp2.width"], st["wp2.d_r"]
+    dxdot = np.array([-vb / L, 1 / (1 + ea), -va / (1 + ea) ** 2, -x / L])  # d x' / d(x, v_a, eps_a, v_b)
+    deps_dx = -L / x**2
+    xdot = va / (1 + ea) - vb * x / L
+    dF = EA * (np.array([deps_dx, 0, 0, 0]) + d_r * (deps_dx * dxdot + np.array([2 * L / x**3 * xdot, 0, 0, 0])))
+    want = np.vstack([dxdot, dF, [deps_dx, 0, 0, 0]])
+    scale = np.abs(want).max(axis=1, keepdims=True)
+    assert np.max(np.abs(J - want) / scale) < 1e-6

@@ -319,3 +319,77 @@ def hand_estimate(system) -> list[tuple[str, float, float]]:
             w = math.sqrt(k / m)
             out.append((c.name, w, 2.0 / w))
     return out
+
+
+# ---------------------------------------------------------------- the prediction and its report
+
+VARIANTS = (("jacobi", "hold"), ("jacobi", "extrapolate"), ("gauss-seidel", "hold"), ("gauss-seidel", "extrapolate"))
+
+
+@dataclass
+class Prediction:
+    line: Line
+    limits: dict  # (algorithm, coupling) -> largest stable step, s (inf: none found, 0: none stable)
+    modes: list
+    estimate: list  # hand_estimate(system)
+
+    def step(self) -> float:
+        """The step to recommend: SAFETY times the smallest limit, rounded down to 1, 2 or 5 times a power of ten."""
+        finite = [h for h in self.limits.values() if h > 0.0 and math.isfinite(h)]
+        if not finite:
+            return math.nan
+        return nice_floor(SAFETY * min(finite))
+
+
+def nice_floor(h: float) -> float:
+    """The largest of 1, 2, 5 times a power of ten that is at most h."""
+    e = math.floor(math.log10(h))
+    for m in (5.0, 2.0, 1.0):
+        if m * 10.0**e <= h * (1 + 1e-12):
+            return float(f"{m * 10.0**e:.3g}")
+    return 10.0 ** (e - 1) * 5
+
+
+def analyse(system, method: str = "auto", variants=VARIANTS) -> Prediction:
+    from .linearization import linearize
+
+    line = linearize(system, method=method)
+    limits = {v: stable_step(line, *v)[0] for v in variants}
+    return Prediction(line, limits, modes(line), hand_estimate(system))
+
+
+def predict_step(system) -> float:
+    """The communication step the SSP export writes: SAFETY (0.5) times the smallest of the four predicted
+    limits (Jacobi and Gauss–Seidel, held and extrapolated inputs), rounded down to 1, 2 or 5 times a power
+    of ten. The half is for what the linearization at the start does not see: speeds and tensions that change
+    the modes along the run. NaN when no variant has a stable step."""
+    return analyse(system).step()
+
+
+def _ms(h):
+    if h == 0.0:
+        return "none stable"
+    if not math.isfinite(h):
+        return "no limit found"
+    return f"{h * 1e3:.4g} ms"
+
+
+def report(system, prediction: Prediction, n_modes: int = 4) -> str:
+    p = prediction
+    out = [f"  linearized at t = {system.start_time:g} s: "
+           + ", ".join(f"{b.name} ({len(b.states)} states, {b.method})" for b in p.line.blocks)]
+    out += [f"  note: {n}" for n in p.line.notes]
+    fast = [m for m in p.modes if m.omega_n > 0][:n_modes]
+    if fast:
+        out.append("  fastest modes:  omega_n [rad/s]  frequency [Hz]  damping ratio")
+        out += [f"  {'':14}{m.omega_n:>14.4g}{m.frequency:>16.4g}{m.damping:>15.3g}" for m in fast]
+    out.append("  largest stable step: " + ", ".join(f"{a} {c} {_ms(h)}" for (a, c), h in p.limits.items()))
+    for name, w, h in p.estimate:
+        ratio = ""
+        jh = p.limits.get(("gauss-seidel", "hold"))
+        if jh and math.isfinite(jh):
+            ratio = f" (Gauss–Seidel hold predicts {jh / h:.2f} times that)"
+        out.append(f"  estimate (physics.md) at {name}: omega_n = sqrt(sum(EA/L)/(J/R^2)) = {w:.4g} rad/s, "
+                   f"h ~ 2/omega_n = {_ms(h)}{ratio}")
+    out.append(f"  recommended step: {_ms(p.step())} ({SAFETY:g} of the smallest limit, rounded down)")
+    return "\n".join(out)
