@@ -4,7 +4,6 @@
     webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
     webline reference SCENE.json
     webline convergence SCENE.json [--steps 2ms,1ms,0.5ms]
-    webline container SCENE.json
     webline study [SCENE.json] [--stiff STIFF.json]
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
 """
@@ -21,7 +20,7 @@ import numpy as np
 
 from . import units
 from .fmus import DEFAULT_FMU_DIR, FmuError
-from .master import ALGORITHMS, COUPLINGS, CoSimulation, CoSimulationError, Options
+from .master import ALGORITHMS, COUPLINGS, CoSimulationError, run_scene, scene_grid
 from .result import Result
 from .scene import Dancer, SceneError, Span, load_scene
 
@@ -50,8 +49,8 @@ def add_master_options(p):
     p.add_argument("--no-rollback", action="store_true", help="do not save FMU states; a discarded step is an error")
 
 
-def options_of(args, progress=False) -> Options:
-    return Options(
+def options_of(args, progress=False) -> dict:
+    return dict(
         algorithm=args.algorithm,
         coupling=args.coupling,
         step=args.step,
@@ -66,8 +65,7 @@ def summary(scene, result: Result) -> str:
     lines = [
         f"{scene.name}: {info['method']}, step {info['step'] * 1e3:g} ms, {info['steps']} steps, "
         f"{info['rollbacks']} rollbacks, {info['instances']} FMU instances"
-        + (f" ({info['replaced']} replaced by events)" if info.get("replaced") else "")
-        + f", {info['wall_time']:.2f} s wall time",
+                + f", {info['wall_time']:.2f} s wall time",
     ]
     keys = result.keys()
     spans = [c for c in scene.line if isinstance(c, Span) and f"{c.name}.T" in keys]
@@ -98,8 +96,7 @@ def summary(scene, result: Result) -> str:
 def cmd_run(args):
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     progress = sys.stderr.isatty() if args.progress is None else args.progress
-    cs = CoSimulation(scene, options_of(args, progress=progress))
-    result = cs.run()
+    result = run_scene(scene, **options_of(args, progress=progress))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / f"{scene.name}.csv"
@@ -162,7 +159,7 @@ def cmd_reference(args):
     from .reference import reference
 
     scene = load_scene(args.scene)
-    ref = reference(scene, times=CoSimulation.grid_of(scene, args.step or scene.step)[0])
+    ref = reference(scene, times=scene_grid(scene, args.step))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{scene.name}_reference.csv"
@@ -211,15 +208,6 @@ def cmd_study(args):
         what = "with input derivatives and extrapolation" if coupling == "extrapolate" else "with inputs held"
         print(f"  {what}: stable at {ok * 1e3 if ok else '-'} ms, diverges at {bad * 1e3 if bad else '-'} ms")
     print(f"wrote {png}")
-    return 0
-
-
-def cmd_container(args):
-    from .container import compare_container
-
-    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-    report = compare_container(scene, step=args.step, fmu_dir=args.fmu_dir, out=Path(args.out))
-    print(report)
     return 0
 
 
@@ -282,13 +270,6 @@ def main(argv=None):
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.add_argument("--out", default=str(OUT))
     p.set_defaults(func=cmd_study)
-
-    p = sub.add_parser("container", help="the same line as an FMPy container FMU, simulated by FMPy and compared")
-    p.add_argument("scene")
-    p.add_argument("--step", type=time_arg)
-    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
-    p.add_argument("--out", default=str(OUT))
-    p.set_defaults(func=cmd_container)
 
     p = sub.add_parser("sweep", help="run a scene over a grid of parameters on Dask")
     p.add_argument("scene")
