@@ -158,3 +158,154 @@ def test_span_jacobians_by_differences(fmu_path, tmp_path):
     want = np.vstack([dxdot, dF, [deps_dx, 0, 0, 0]])
     scale = np.abs(want).max(axis=1, keepdims=True)
     assert np.max(np.abs(J - want) / scale) < 1e-6
+
+
+# ---------------------------------------------------------------- lines of FMUs: prediction against runs
+#
+# A run starts from the line's steady state with the light roller's speed disturbed (DISTURBANCE), and
+# takes N steps, N chosen so that the predicted growth at 1.25x, rho^N, is at least 1e4. Deviation:
+# the largest |T - T_start| over the spans at a communication point. "Bounded": the deviation over the
+# last quarter of the run stays below 2x the largest of the first 10 steps (a decaying or marginal
+# mode passes; any mode growing by rho^N >= 1e4 does not). "Grows": the last deviation is at least 100x
+# the largest of the first 10 steps.
+
+DISTURBANCE = 1e-5  # m/s on the light roller's speed: the deviations stay linear (T changes by < 1 N)
+GROWTH = 1e4
+
+
+def light_idler_scene(tmp_path):
+    """Thick PET (E*A = 9e5 N) over two 0.9 m spans, k = E*A/L = 1e6 N/m, around an idler of
+    J = 2e-4 kg.m2, R = 0.05 m (m = 0.08 kg): omega_n = sqrt(2k/m) = 5000 rad/s."""
+    import json
+
+    scene = {
+        "name": "light_idler", "stop_time": "0.1 s", "step": "0.1 ms",
+        "webs": {"PET": {"E": "4.5 GPa", "thickness": "0.2 mm", "width": "1 m", "density": "1390 kg/m3", "d_r": "0.1 ms"}},
+        "line": [
+            {"type": "source", "name": "infeed", "speed": "2 m/s", "strain": 0.001},
+            {"type": "span", "name": "first", "L": "0.9 m", "web": "PET", "effects": ["includeDamping"]},
+            {"type": "roller", "name": "idler", "J": "0.0002 kg.m2", "R": "0.05 m"},
+            {"type": "span", "name": "second", "L": "0.9 m", "web": "PET", "effects": ["includeDamping"]},
+            {"type": "sink", "name": "outfeed", "speed": "2 m/s"},
+        ],
+    }
+    path = tmp_path / "light_idler.json"
+    path.write_text(json.dumps(scene))
+    return path
+
+
+def compiled(path, fmus):
+    from webline.scene import load_scene
+    from webline.system import compile_scene
+
+    system = compile_scene(load_scene(path), fmus)
+    system.record = [(c.name, "summary_Tension") for c in system.components if c.kind == "span"]
+    return system
+
+
+def disturbed(system, roller, h, n, dv=DISTURBANCE):
+    import copy
+
+    s = copy.deepcopy(system)
+    s.component(roller).start["v_start"] += dv
+    s.stop_time = s.start_time + n * h
+    s.step = h
+    return s
+
+
+def run_webline(system, h):
+    from webline.master import Master, Options
+
+    r = Master(system, Options.engine(step=h)).run()
+    return r.data[1:]  # the rows after each step
+
+
+def run_libcosim(system, h, tmp_path):
+    """The System built directly in libcosim: a local slave per component, its start values, its connections."""
+    from fmpy import read_model_description
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+    from webline.system import component_fmus
+
+    log_output_level(CosimLogLevel.ERROR)
+    ns = int(round(h * 1e9))
+    assert abs(ns - h * 1e9) < 1e-6, "steps in whole nanoseconds (libcosim's time unit)"
+    n = int(round((system.stop_time - system.start_time) / h))
+    fmus = component_fmus(system, tmp_path / "fmus")
+    ex = CosimExecution.from_step_size(step_size=ns)
+    index, vr = {}, {}
+    for c in system.components:
+        i = ex.add_local_slave(CosimLocalSlave(fmu_path=str(fmus[c.name]), instance_name=c.name))
+        index[c.name] = i
+        md = {v.name: v for v in read_model_description(str(fmus[c.name])).modelVariables}
+        vr[c.name] = {name: v.valueReference for name, v in md.items()}
+        for name, value in c.start.items():
+            t = md[name].type
+            ok = (ex.real_initial_value(i, md[name].valueReference, float(value)) if t == "Real"
+                  else ex.boolean_initial_value(i, md[name].valueReference, bool(value)) if t == "Boolean"
+                  else ex.integer_initial_value(i, md[name].valueReference, int(value)) if t == "Integer"
+                  else ex.string_initial_value(i, md[name].valueReference, str(value)))
+            assert ok, f"libcosim refused {c.name}.{name} = {value}"
+    for conn in system.connections:
+        (a, y), (b, u) = conn.source, conn.target
+        assert ex.connect_real_variables(index[a], vr[a][y], index[b], vr[b][u])
+    observer = CosimObserver.create_last_value()
+    ex.add_observer(observer)
+    rows = []
+    for _ in range(n):
+        assert ex.step()
+        rows.append([observer.last_real_values(index[c], [vr[c][v]])[0] for c, v in system.record])
+    return np.array(rows)
+
+
+def deviation(rows, start):
+    return np.max(np.abs(rows - start), axis=1)
+
+
+def judged(rows, start):
+    d = deviation(np.asarray(rows), start)
+    first = d[:10].max()
+    return d, first, d[-len(d) // 4 :].max() <= 2 * first, d[-1] >= 100 * first
+
+
+LINES = {
+    "light_idler": (light_idler_scene, "idler"),
+    "lamination": (lambda tmp: __import__("conftest").SCENES / "lamination.json", "idler"),
+}
+OBSERVED = {}
+
+
+@pytest.fixture(scope="module")
+def predictions(fmus, tmp_path_factory):
+    from webline.stability import analyse
+
+    out = {}
+    for name, (scene, roller) in LINES.items():
+        system = compiled(scene(tmp_path_factory.mktemp(name)), fmus)
+        p = analyse(system, variants=[("jacobi", "hold")])
+        h = p.limits[("jacobi", "hold")]
+        assert 0 < h < math.inf, f"{name}: no finite Jacobi-hold limit"
+        rho = spectral_radius(p.line, 1.25 * h, "jacobi", "hold")
+        n = int(math.ceil(math.log(GROWTH) / math.log(rho)))
+        out[name] = (system, roller, h, n, rho)
+    return out
+
+
+@pytest.mark.parametrize("engine", ["webline", "libcosim"])
+@pytest.mark.parametrize("line", list(LINES))
+def test_predicted_step_separates_bounded_from_growing(predictions, line, engine, tmp_path):
+    system, roller, h_pred, n, rho = predictions[line]
+    assert n <= 20000, f"{line}: rho(1.25 h) = {rho}: the growth would take {n} steps"
+    run = (lambda s, h: run_webline(s, h)) if engine == "webline" else (lambda s, h: run_libcosim(s, h, tmp_path))
+    for factor, want_bounded in ((0.8, True), (1.25, False)):
+        h = round(factor * h_pred * 1e9) / 1e9  # whole nanoseconds, for libcosim
+        rows = run(disturbed(system, roller, h, n), h)
+        base = run(disturbed(system, roller, h, 1, dv=0.0), h)[0]  # the steady line's tensions
+        d, first, bounded, grows = judged(rows, base)
+        OBSERVED[(line, engine, factor)] = (h, d[-1] / first)
+        if want_bounded:
+            assert bounded, f"{line} in {engine} at {factor} x {h_pred:.4g} s: deviation grew {d[-1] / first:.3g} x in {n} steps"
+        else:
+            assert grows, f"{line} in {engine} at {factor} x {h_pred:.4g} s: deviation only {d[-1] / first:.3g} x in {n} steps"
