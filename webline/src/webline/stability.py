@@ -304,8 +304,8 @@ def hand_estimate(system) -> list[tuple[str, float, float]]:
     comps = {c.name: c for c in system.components}
     out = []
     for c in system.components:
-        if c.kind != "roller" or "J" not in c.start or "R" not in c.start:
-            continue
+        if c.kind != "roller" or "J" not in c.start or "R" not in c.start or "speed" in (c.profile or {}):
+            continue  # a prescribed speed (source, sink, speed drive) is no mass on the springs
         spans = {conn.source[0] for conn in system.connections if conn.target[0] == c.name and comps[conn.source[0]].kind == "span"}
         k = 0.0
         for s in spans:
