@@ -2,7 +2,7 @@
 
     webline run SCENE.json|LINE.ssp [--engine webline|libcosim|fmpy] [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
     webline export SCENE.json -o LINE.ssp
-    webline check SCENE.json ...
+    webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
     webline reference SCENE.json
     webline convergence SCENE.json [--steps 2ms,1ms,0.5ms]
     webline study [SCENE.json] [--stiff STIFF.json]
@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -205,13 +206,33 @@ def report_run(args, scene, name, result, text):
 
 
 def cmd_check(args):
+    """Describe each scene (read strictly), then linearize its line and predict the stable steps."""
+    from .stability import StabilityError, analyse, report
+
+    status = 0
     for path in args.scenes:
-        scene = load_scene(path)
-        chain = " -> ".join(f"{c.name} ({c.type})" for c in scene.line)
-        effects = sorted({e for c in scene.spans for e in c.effects})
-        print(f"{path}: {scene.name}: {chain}; effects: {', '.join(effects) or 'none'}; "
-              f"{len(scene.events)} events; step {scene.step * 1e3:g} ms, stop {scene.stop_time:g} s")
-    return 0
+        if str(path).endswith(".ssp"):
+            from .ssp import read_ssp
+
+            system = read_ssp(Path(path), Path(tempfile.mkdtemp(prefix="webline-check-")))
+            print(f"{path}: {system.name}: {len(system.components)} components, step {system.step * 1e3:g} ms")
+        else:
+            from .system import compile_scene
+
+            scene = load_scene(path)
+            chain = " -> ".join(f"{c.name} ({c.type})" for c in scene.line)
+            effects = sorted({e for c in scene.spans for e in c.effects})
+            print(f"{path}: {scene.name}: {chain}; effects: {', '.join(effects) or 'none'}; "
+                  f"{len(scene.events)} events; step {scene.step * 1e3:g} ms, stop {scene.stop_time:g} s")
+            if args.describe_only:
+                continue
+            system = compile_scene(scene, args.fmu_dir, settle=False)
+        try:
+            print(report(system, analyse(system, method=args.method)))
+        except StabilityError as e:
+            print(f"  stability: {e}")
+            status = 2
+    return status
 
 
 def cmd_reference(args):
@@ -311,8 +332,12 @@ def main(argv=None):
     p.add_argument("--out", default=str(OUT))
     p.set_defaults(func=cmd_export)
 
-    p = sub.add_parser("check", help="read scenes strictly and describe them")
-    p.add_argument("scenes", nargs="+")
+    p = sub.add_parser("check", help="describe scenes or SSP archives; predict the line's largest stable step")
+    p.add_argument("scenes", nargs="+", metavar="SCENE_OR_SSP")
+    p.add_argument("--describe-only", action="store_true", help="only read the scenes strictly and describe them")
+    p.add_argument("--method", choices=("auto", "derivatives", "differences"), default="auto",
+                   help="Jacobians from fmi2GetDirectionalDerivative or central differences (auto: the former when the FMU provides it)")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("reference", help="the monolithic SciPy reference of a scene, as CSV")
