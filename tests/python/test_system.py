@@ -108,7 +108,7 @@ def fmpy_loop(system, fmu_paths):
 
 
 # Shortened; the lamination line at the step where Jacobi with held inputs is stable.
-FMPY_RUNS = {"emergency_stop": {"stop_time": "0.6 s"}, "lamination": {"stop_time": "0.5 s", "step": "0.5 ms"}, "splice": {"stop_time": "1.2 s"}}
+FMPY_RUNS = {"emergency_stop": {"stop_time": "0.6 s"}, "lamination": {"stop_time": "0.5 s", "step": "0.5 ms"}, "splice": {"stop_time": "1.6 s"}}
 
 
 @pytest.mark.parametrize("name", list(FMPY_RUNS))

@@ -180,11 +180,13 @@ def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict) -> 
         start["tolerance"] = float(span.tolerance)
     if span.substeps is not None:
         start["substeps"] = int(span.substeps)
-    if dancer is not None:  # the span's fixed end (the other one moves with the carriage)
+    if dancer is not None:
+        # The span's fixed end, y_start above the dancer's start position (the
+        # Roller's contact points are measured from there, up positive).
         if scene.downstream(span) is dancer:
-            start.update({"frame_a.x": 0.0, "frame_a.y": 0.0})
+            start.update({"frame_a.x": 0.0, "frame_a.y": float(dancer.y_start)})
         else:
-            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": 0.0})
+            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(dancer.y_start)})
     sets = []
     webs = {"wp1": span.wp1, "wp2": span.wp2}
     for e in scene.events:
