@@ -221,6 +221,12 @@ def macho_exports_thin(data):
     return names
 
 
+def expected_exports(name):
+    """What the library of the model `name` exports: the fmi2 API, and the fmi3 API where the model has one."""
+    fmi3 = next(m.fmi3 for m in MODELS if m.name == name)
+    return FMI2_FUNCTIONS | FMI3_FUNCTIONS if fmi3 else FMI2_FUNCTIONS
+
+
 def check_library(folder, path, fmi3):
     """A library goes into an FMU only if it exports the fmi2 API (and, for a
     model with FMI 3.0, the fmi3 API) exactly and has no test hook."""
