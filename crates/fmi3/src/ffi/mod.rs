@@ -17,7 +17,8 @@
 pub mod calls;
 mod exports;
 
-use crate::call::Call;
+use crate::call::{state_name, Call};
+use fmi2::phase::Phase;
 use fmi2::instance::Instance;
 use fmi2::logging::Log;
 use fmi2::snapshot::Snapshot;
@@ -285,12 +286,16 @@ unsafe fn enter<M: Model>(c: fmi3Instance, call: Call, body: impl FnOnce(&mut Ha
 }
 
 /// The shared instance names its FMI 2.0 function first in a message
-/// (`fmi2DoStep at t = ..`, `fmi2SetReal: ..`): the importer sees the fmi3 call instead.
+/// (`fmi2DoStep at t = ..`, `fmi2SetReal: ..`) and its phases in FMI 2.0's
+/// words: the importer sees the fmi3 call and FMI 3.0's states instead.
 #[cold]
 fn in_fmi3_words(call: Call, mut error: FmiError) -> FmiError {
     if error.message.starts_with("fmi2") {
         let end = error.message.find([':', ' ']).unwrap_or(error.message.len());
         error.message.replace_range(..end, call.name());
+    }
+    for phase in Phase::ALL {
+        error.message = error.message.replace(&format!("the state \"{}\"", phase.name()), state_name(phase));
     }
     error
 }
