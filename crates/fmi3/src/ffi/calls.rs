@@ -55,11 +55,11 @@ pub unsafe fn instantiate_co_simulation<M: Model>(
 ) -> fmi3Instance {
     if n_required_intermediate_variables > 0 {
         let logger = Logger { callback: log_message, environment };
-        let first = required_intermediate_variables.as_ref().copied();
+        let first = required_intermediate_variables.as_ref().map_or("NULL".to_string(), |vr| vr.to_string());
         let _ = catch_unwind(AssertUnwindSafe(|| {
             logger.log(Status::Error, "logStatusError", &format!(
                 "fmi3InstantiateCoSimulation: {n_required_intermediate_variables} requiredIntermediateVariables \
-                 (the first {first:?}), but no variable of this FMU has intermediateUpdate"
+                 (the first {first}), but no variable of this FMU has intermediateUpdate"
             ))
         }));
         return std::ptr::null_mut();
