@@ -38,11 +38,11 @@ SCENES = {
         "stop": 2.0,
         "step": 1e-3,
         "inputs": lambda fmu: table(
-            ["F_up", "F_down", "tau_m"],
-            [(0.0, 844.0, 844.0, 0.0), (0.5, 844.0, 844.0, 0.0), (0.5, 844.0, 844.0, 0.5),
-             (1.5, 844.0, 844.0, 0.5), (1.5, 844.0, 844.0, 0.0), (2.0, 844.0, 844.0, 0.0)],
+            ["web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load"],
+            [(0.0, 844.0, 844.0, 1e-3, 0.0, 0.0), (0.5, 844.0, 844.0, 1e-3, 0.0, 0.0), (0.5, 844.0, 844.0, 1e-3, 0.5, 0.0),
+             (1.5, 844.0, 844.0, 1e-3, 0.5, 0.0), (1.5, 844.0, 844.0, 1e-3, 0.0, 0.0), (2.0, 844.0, 844.0, 1e-3, 0.0, 0.0)],
         ),
-        "outputs": ["v", "omega"],
+        "outputs": ["web_a.v", "omega"],
         "story": "A roller at 100 rad/s (5 m/s) between two spans at 844 N; the motor gives 0.5 N.m "
                  "from 0.5 s to 1.5 s, so omega rises at 10 rad/s2 to 110 rad/s and holds.",
     },

@@ -143,7 +143,7 @@ class Model:
 
 MODELS = [
     Model("ConvertingSpan", "converting-span", ROOT, fmi3=True),
-    Model("Roller", "roller", ROOT / "fmu" / "roller"),
+    Model("Roller", "roller", ROOT / "fmu" / "roller", fmi3=True),
 ]
 
 

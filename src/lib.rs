@@ -10,6 +10,7 @@
 //! * `stepping` — one communication step: the choice of method, the
 //!   balance written for the integrators;
 //! * `sensor` — unit conversion of the sensor outputs;
+//! * `jacobian` — the partial derivatives of the outputs and of dx/dt;
 //! * `slack` — where inside a step a slack web's tension crosses zero;
 //! * `variables` — each variable of modelDescription.xml bound to its field;
 //! * `description` — the interface generated from modelDescription.xml;
@@ -22,6 +23,7 @@
 pub mod description;
 mod model;
 pub mod parameters;
+pub mod jacobian;
 pub mod physics;
 pub mod records;
 pub mod sensor;

@@ -7,7 +7,8 @@ use crate::physics::{self, Outputs};
 use crate::sensor::SensorScale;
 use crate::stepping;
 use crate::records;
-use fmi2::{Event, Experiment, FmiError, FmiResult, Model, Resources, StateReader, StateWriter};
+use crate::jacobian::{self, Direction, Point};
+use fmi2::{Event, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use crate::stress_strain::StressStrain;
 use solver::CompensatedSum;
 use std::sync::Arc;
@@ -72,6 +73,46 @@ impl ConvertingSpan {
         let p = &self.params;
         let rates = if p.include_damping || p.include_mass { self.input_rates() } else { Rates::default() };
         physics::outputs(p, &self.inputs, self.unstretched, rates, &self.sensor)
+    }
+
+    /// d(unknown)/d(known) [14]: `known` is an input or the state, `unknown`
+    /// an output, the state or its derivative; during initialization the
+    /// state is the initial state's function of the inputs.
+    pub fn partial_derivative(&self, unknown: Real, known: Real, of: Jacobian) -> FmiResult<f64> {
+        let mut d = Direction::default();
+        if known == Real::unstretchedLength {
+            d.x = 1.0;
+        } else {
+            *Self::input_field(&mut d.u, known).ok_or_else(|| FmiError::error(format!("{} is not a known", known.name())))? = 1.0;
+        }
+        if of == Jacobian::Initialization {
+            d.x = jacobian::initial_state_tangent(&self.params, &self.inputs, &d.u);
+        }
+        let p = &self.params;
+        let effects = p.include_damping || p.include_mass;
+        let point = Point {
+            params: p,
+            inputs: &self.inputs,
+            x: self.unstretched,
+            rates: if effects { self.input_rates() } else { Rates::default() },
+            given: self.input_rates.as_ref().filter(|_| effects),
+            sensor: &self.sensor,
+        };
+        let t = point.tangents(&d);
+        // The same outputs as the bindings in variables.rs.
+        Ok(match unknown {
+            Real::v => t.outputs.sensor_speed,
+            Real::T => t.outputs.sensor_tension,
+            Real::web_a_F | Real::summary_Tension => t.outputs.tension,
+            Real::web_b_F => t.outputs.exit_force,
+            Real::web_b_eps | Real::summary_Strain => t.outputs.strain,
+            Real::summary_Length => t.outputs.length,
+            Real::summary_Stress => t.outputs.stress,
+            Real::m_web => t.web_mass,
+            Real::unstretchedLength => d.x,
+            Real::der_unstretchedLength => t.unstretched_rate,
+            other => return Err(FmiError::error(format!("{} is not an unknown", other.name()))),
+        })
     }
 
     /// dx/dt [2] now, with the inputs as they are.
@@ -395,6 +436,11 @@ impl Model for ConvertingSpan {
     }
 
     // Model Exchange [13]: the importer integrates the unstretched length.
+
+    fn partial_derivative(&self, unknown: u32, known: u32, of: Jacobian) -> FmiResult<f64> {
+        let real = |vr| Real::from_vr(vr).ok_or_else(|| fmi2::model::unknown_vr(vr));
+        ConvertingSpan::partial_derivative(self, real(unknown)?, real(known)?, of)
+    }
 
     fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
         x[0] = self.unstretched.value();

@@ -78,6 +78,22 @@ impl StressStrain {
         (sigma, tangent)
     }
 
+    /// d2sigma/deps2, Pa: 0 beyond the table (linear there). The PCHIP's
+    /// curvature jumps at a node: there the interval that starts at it is taken.
+    pub fn curvature(&self, eps: f64) -> f64 {
+        let n = self.strain.len();
+        if !(eps > self.strain[0]) || eps >= self.strain[n - 1] {
+            return 0.0;
+        }
+        let k = self.strain.partition_point(|&e| e <= eps) - 1;
+        let h = self.strain[k + 1] - self.strain[k];
+        let chord = (self.stress[k + 1] - self.stress[k]) / h;
+        let (d0, d1) = (self.slope[k], self.slope[k + 1]);
+        let c3 = (d0 + d1 - 2.0 * chord) / (h * h);
+        let c2 = (3.0 * chord - 2.0 * d0 - d1) / h;
+        6.0 * c3 * (eps - self.strain[k]) + 2.0 * c2
+    }
+
     /// The steepest chord of the table, Pa: the stiffest the web gets, which
     /// `wpN.E` reports for a table record.
     pub fn steepest_chord(&self) -> f64 {
@@ -202,6 +218,22 @@ mod tests {
         assert_eq!(table.at(0.05), (s_end + d_end * (0.05 - 0.04), d_end));
         let (s0, d0) = table.at(0.0);
         assert_eq!(table.at(-0.01), (s0 + d0 * -0.01, d0));
+    }
+
+    /// The curvature is the slope's derivative: central differences of the
+    /// tangent (step 1e-7 inside an interval of 5e-3: truncation ~ h^2 * 0 for
+    /// a cubic, rounding ~ 1e-16 * E / 1e-7) agree to 1e-6 relative.
+    #[test]
+    fn curvature_is_the_derivative_of_the_tangent_modulus() {
+        let table = sampled(11, 0.05);
+        for eps in [0.0013, 0.0121, 0.0248, 0.0377, 0.0499] {
+            let h = 1e-7;
+            let fd = (table.at(eps + h).1 - table.at(eps - h).1) / (2.0 * h);
+            let c = table.curvature(eps);
+            assert!((c - fd).abs() <= 1e-6 * c.abs().max(E0), "{eps}: {c} vs {fd}");
+        }
+        assert_eq!(table.curvature(0.06), 0.0);
+        assert_eq!(table.curvature(-0.01), 0.0);
     }
 
     #[test]

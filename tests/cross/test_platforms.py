@@ -251,8 +251,8 @@ def roller_scene(variables):
     s = Scene(variables)
     for b in (0.0, 0.02):
         s.start(f"roller-b{b}", [("b", b), ("J", 0.07)])
-        s.set("F_up", 120.0)
-        s.set("F_down", 80.0)
+        s.set("web_a.F", 120.0)
+        s.set("web_b.F", 80.0)
         s.steps(300)
         s.set("tau_m", -1.5)
         s.steps(300)
@@ -364,7 +364,7 @@ def test_an_fmu_state_saved_on_one_platform_continues_on_every_other(importers, 
         first.start("save", [("solver", 3), ("includeDamping", True), ("includeMass", True)])
     else:
         first.start("save", [("b", 0.02)])
-        first.set("F_up", 100.0)
+        first.set("web_a.F", 100.0)
     first.steps(150)
     saved = {}
     for p in PLATFORMS:

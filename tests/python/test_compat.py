@@ -98,7 +98,7 @@ def test_roller_reference_is_the_exact_solution(folder):
     ref = read_csv(folder / "Roller_ref.csv")
     table = read_csv(folder / "Roller_in.csv")
     # Pieces from the table: a repeated time starts the next piece.
-    pieces = [(t, fu, fd, tau) for t, fu, fd, tau in zip(table["time"], table["F_up"], table["F_down"], table["tau_m"])]
+    pieces = [(t, fu, fd, tau) for t, fu, fd, tau in zip(table["time"], table["web_a.F"], table["web_b.F"], table["tau_m"])]
     pieces = [p for i, p in enumerate(pieces) if i + 1 == len(pieces) or pieces[i + 1][0] != p[0]]
     for t, omega in zip(ref["time"], ref["omega"]):
         exact = float(exact_omega(0.05, 0.05, 0.0, 100.0, pieces, t))

@@ -155,7 +155,7 @@ def before_initialization(call):
     (lambda f, vr: f.doStep(5.0, 0.1), "fmi3DoStep: currentCommunicationPoint = 5"),
     (lambda f, vr: f.doStep(0.0, -0.1), "communicationStepSize = -0.1"),
     (lambda f, vr: f.enterEventMode(), "hasEventMode is false"),
-    (lambda f, vr: f.getDirectionalDerivative([vr["T"]], [vr["web_a.v"]], [1.0]), "providesDirectionalDerivatives is false"),
+    (lambda f, vr: f.getDirectionalDerivative([vr["T"]], [vr["L"]], [1.0]), "fmi3GetDirectionalDerivative: "),
     (lambda f, vr: f.enterConfigurationMode(), "no structural parameters"),
 ])
 def test_bad_calls_are_refused_with_a_message_and_reset_recovers(md3, unzipdir3, call, needle):
@@ -175,6 +175,47 @@ def test_bad_calls_are_refused_with_a_message_and_reset_recovers(md3, unzipdir3,
     fmu.doStep(0.0, 0.1)
     assert fmu.getFloat64([0]) == [0.1]
     fmu.freeInstance()
+
+
+def test_directional_derivatives_equal_the_fmi2_ones(md3, unzipdir3, unzipdir):
+    """The same partial derivatives through both APIs, bit for bit, after the same steps."""
+    from fmpy.fmi2 import FMU2Slave
+
+    md2 = read_model_description(unzipdir)
+    vr = {v.name: v.valueReference for v in md3.modelVariables}
+    unknowns, knowns = [vr["T"], vr["web_b.F"]], [vr["web_a.v"], vr["web_b.v"], vr["web_a.eps"]]
+    two = FMU2Slave(guid=md2.guid, unzipDirectory=unzipdir, modelIdentifier="ConvertingSpan", instanceName="d2")
+    two.instantiate()
+    two.setupExperiment(startTime=0.0)
+    # Damping makes the tension depend on the speeds at once: non-zero derivatives.
+    two.setBoolean([vr["includeDamping"]], [True])
+    two.enterInitializationMode()
+    two.exitInitializationMode()
+    three = slave(md3, unzipdir3, Log())
+    three.setBoolean([vr["includeDamping"]], [True])
+    three.enterInitializationMode(startTime=0.0)
+    three.exitInitializationMode()
+    for k in range(10):
+        two.doStep(k * 0.01, 0.01)
+        three.doStep(k * 0.01, 0.01)
+    for seed in ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.3, -2.0, 5.0]):
+        d2 = two.getDirectionalDerivative(unknowns, knowns, seed)
+        d3 = three.getDirectionalDerivative(unknowns, knowns, seed)
+        assert list(d2) == list(d3) and any(x != 0 for x in d3), seed
+    two.freeInstance()
+    three.freeInstance()
+
+
+@pytest.mark.parametrize("name", ["ConvertingSpan", "Roller"])
+def test_both_models_validate_and_have_the_web_ports(name):
+    fmu = _packaged(ROOT / "out" / "fmi3" / f"{name}.fmu")
+    assert validate_fmu(str(fmu)) == []
+    with zipfile.ZipFile(fmu) as zf:
+        document = etree.fromstring(zf.read("terminalsAndIcons/terminalsAndIcons.xml"))
+    schema = etree.XMLSchema(etree.parse(str(SCHEMA / "fmi3TerminalsAndIcons.xsd")))
+    assert schema.validate(document), schema.error_log
+    assert {(t.get("name"), t.get("terminalKind")) for t in document.iter("Terminal")} == {
+        ("web_a", "org.convertingspan.WebPort"), ("web_b", "org.convertingspan.WebPort")}
 
 
 def test_model_exchange_reports_its_sizes_and_refuses_co_simulation_calls(md3, unzipdir3):

@@ -1,5 +1,5 @@
 """The packaged Roller FMU through FMPy: validation, exports, the exact
-solution of J*dw/dt = R*(F_down - F_up) + tau_m - b*w at every output point,
+solution of J*dw/dt = R*(F_b - F_a) + tau_m - b*w at every output point,
 FMU states, bad values, and a Roller next to a ConvertingSpan in one process.
 
 Tolerance: the FMU takes the closed-form step, so with inputs held between
@@ -15,9 +15,11 @@ from pathlib import Path
 import mpmath
 import numpy as np
 import pytest
-from fmpy import read_model_description, simulate_fmu
+from fmpy import read_model_description
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
+
+from conftest import simulate_fmu  # the FMI 2.0 FMU, then its FMI 3.0 twin: bit-identical
 
 ROOT = Path(__file__).resolve().parents[2]
 ROLLER = ROOT / "out" / "Roller.fmu"
@@ -62,7 +64,10 @@ def test_validates_and_is_the_roller(roller_path, md):
     assert md.coSimulation.modelIdentifier == "Roller"
     assert md.guid != read_model_description(str(SPAN)).guid
     names = [v.name for v in md.modelVariables]
-    assert names == ["J", "R", "b", "omega_start", "F_up", "F_down", "tau_m", "v", "omega"]
+    assert names[:4] == ["J", "R", "b", "v_start"]
+    assert [n for n in names if n.startswith("web_")] == ["web_a.F", "web_b.F", "web_a.eps", "web_a.v", "web_b.v", "web_b.eps",
+                                                          "web_a.x", "web_a.y", "web_b.x", "web_b.y"]
+    assert md.modelExchange is not None and md.modelExchange.modelIdentifier == "Roller"
     units = {v.name: v.unit for v in md.modelVariables}
     assert units["J"] == "kg.m2" and units["b"] == "N.m.s" and units["tau_m"] == "N.m" and units["omega"] == "rad/s"
 
@@ -77,7 +82,7 @@ def test_exports_the_44_functions(roller_path, tmp_path):
         so.write_bytes(z.read("binaries/linux64/Roller.so"))
         doc = z.read("documentation/index.html").decode()
     assert "<!--" not in doc.split("<body>")[1] or "VARIABLES" not in doc, "documentation placeholders left"
-    assert "J * d(omega)/dt = R * (F_down - F_up) + tau_m - b * omega" in doc
+    assert "d(J*omega)/dt = r*(F_b - F_a) + tau - b*omega" in doc
     nm = shutil.which("nm")
     assert nm
     out = subprocess.run([nm, "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
@@ -96,20 +101,20 @@ def test_simulate_fmu_follows_the_exact_solution(roller_path, b):
             rows.append((t, prev[1], prev[2], prev[3]))
         rows.append((t, fu, fd, tau))
     rows.append((1.0, *pieces[-1][1:]))
-    table = np.array(rows, dtype=[("time", float), ("F_up", float), ("F_down", float), ("tau_m", float)])
+    table = np.array(rows, dtype=[("time", float), ("web_a.F", float), ("web_b.F", float), ("tau_m", float)])
     res = simulate_fmu(
         str(roller_path),
         stop_time=1.0,
         output_interval=1e-3,
-        start_values={"J": J, "R": R, "b": b, "omega_start": w0},
+        start_values={"J": J, "R": R, "b": b, "v_start": w0 * R},
         input=table,
-        output=["omega", "v"],
+        output=["omega", "web_a.v"],
     )
     want = np.array([float(exact_omega(J, R, b, w0, pieces, t)) for t in res["time"]])
     # omega crosses zero here: the error is measured against the largest |omega|.
     worst = np.max(np.abs(res["omega"] - want)) / np.max(np.abs(want))
     assert worst < 1e-12, worst
-    assert np.allclose(res["v"], R * res["omega"], rtol=1e-15, atol=0)
+    assert np.allclose(res["web_a.v"], R * res["omega"], rtol=1e-15, atol=0)
 
 
 def _callbacks(logged):
@@ -146,7 +151,7 @@ def test_fmu_state_round_trip_continues_bit_identically(roller_path):
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
     s.exitInitializationMode()
-    s.setReal([vr["F_up"], vr["F_down"], vr["tau_m"]], [100.0, 120.0, 0.5])
+    s.setReal([vr["web_a.F"], vr["web_b.F"], vr["tau_m"]], [100.0, 120.0, 0.5])
     s.doStep(0.0, 0.1)
     state = s.getFMUstate()
     blob = s.serializeFMUstate(state)
@@ -161,9 +166,9 @@ def test_fmu_state_round_trip_continues_bit_identically(roller_path):
 
 @pytest.mark.parametrize(
     "name,value,message",
-    [("J", 0.0, "J = 0 kg.m2 is outside its allowed range (0, inf)"),
-     ("R", -0.1, "R = -0.1 m is outside its allowed range (0, inf)"),
-     ("b", -1.0, "b = -1 N.m.s is outside its allowed range [0, inf)")],
+    [("J", 0.0, "J = 0 kg.m2 is outside its allowed range (0, 1000000000]"),
+     ("R", -0.1, "R = -0.1 m is outside its allowed range (0, 100]"),
+     ("b", -1.0, "b = -1 N.m.s is outside its allowed range [0, 1000000000]")],
 )
 def test_bad_parameters_are_refused_with_the_range(roller_path, name, value, message):
     # Through FMU2Slave with callbacks of our own (see _callbacks).
@@ -195,12 +200,12 @@ def test_nan_input_is_refused_and_changes_nothing(roller_path):
     s.enterInitializationMode()
     s.exitInitializationMode()
     with pytest.raises(FMICallException):
-        s.setReal([vr["F_up"], vr["F_down"]], [5.0, float("nan")])
+        s.setReal([vr["web_a.F"], vr["web_b.F"]], [5.0, float("nan")])
     s.reset()
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
     s.exitInitializationMode()
-    assert s.getReal([vr["F_up"]]) == [0.0]
+    assert s.getReal([vr["web_a.F"]]) == [0.0]
     # canInterpolateInputs is false: input derivatives are refused.
     assert md.coSimulation.canInterpolateInputs in (False, None)
     with pytest.raises(FMICallException):

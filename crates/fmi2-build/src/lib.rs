@@ -518,6 +518,7 @@ fn screaming(name: &str) -> String {
 fn emit(md: &ModelDescription, source: &str) -> String {
     let cs = md.co_simulation.as_ref().expect("checked");
     let flag = |k: &str| cs.get(k).map(|v| v == "true").unwrap_or(false);
+    let me_flag = |k: &str| md.model_exchange.as_ref().and_then(|me| me.get(k)).is_some_and(|v| v == "true");
     let vr_of_index = |i: usize| md.variables[i - 1].vr();
     let mut s = String::new();
     let w = &mut s;
@@ -620,7 +621,7 @@ fn emit(md: &ModelDescription, source: &str) -> String {
         "pub static DESCRIPTION: ModelDescription = ModelDescription {{\n    model_name: {:?},\n    model_identifier: {:?},\n    guid: {:?},\n    \
          log_categories: &[{}],\n    variables: &VARIABLES,\n    by_vr: &BY_VR,\n    output_dependencies: {},\n    initial_dependencies: {},\n    \
          can_handle_variable_communication_step_size: {},\n    can_interpolate_inputs: {},\n    can_get_and_set_fmu_state: {},\n    can_serialize_fmu_state: {},\n    \
-         model_exchange: {},\n    states: &[{}],\n    derivatives: {},\n    number_of_event_indicators: {},\n}};\n",
+         provides_directional_derivative: [{}, {}],\n    model_exchange: {},\n    states: &[{}],\n    derivatives: {},\n    number_of_event_indicators: {},\n}};\n",
         md.attrs.get("modelName").cloned().unwrap_or_default(),
         cs["modelIdentifier"],
         md.attrs["guid"],
@@ -631,6 +632,8 @@ fn emit(md: &ModelDescription, source: &str) -> String {
         flag("canInterpolateInputs"),
         flag("canGetAndSetFMUstate"),
         flag("canSerializeFMUstate"),
+        flag("providesDirectionalDerivative"),
+        me_flag("providesDirectionalDerivative"),
         md.model_exchange.is_some(),
         md.derivatives
             .iter()

@@ -193,6 +193,8 @@ pub struct ModelDescription {
     pub can_interpolate_inputs: bool,
     pub can_get_and_set_fmu_state: bool,
     pub can_serialize_fmu_state: bool,
+    /// `providesDirectionalDerivative` of Co-Simulation \[0\] and Model Exchange \[1\].
+    pub provides_directional_derivative: [bool; 2],
     /// A `<ModelExchange>` element is present.
     pub model_exchange: bool,
     /// Value references of the continuous states, in the order of `derivatives`.

@@ -25,7 +25,7 @@ pub mod resources;
 pub mod snapshot;
 pub mod status;
 
-pub use model::{Event, Experiment, IntegerValue, Model, Variables};
+pub use model::{Event, EventUpdate, Experiment, IntegerValue, Jacobian, Model, Variables};
 pub use persist::{StateReader, StateWriter};
 pub use resources::Resources;
 pub use status::{FmiError, FmiResult, Status};

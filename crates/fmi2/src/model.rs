@@ -11,6 +11,21 @@ fn no_model_exchange() -> FmiError {
     FmiError::error("this model does not implement Model Exchange")
 }
 
+/// Which function of the FMU a partial derivative is of (FMI 2.0,
+/// `fmi2GetDirectionalDerivative`): the knowns and unknowns differ by phase.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Jacobian {
+    /// Initialization mode: the initial unknowns (the states among them) as
+    /// functions of the inputs, through the initial state.
+    Initialization,
+    /// Model Exchange: outputs and state derivatives as functions of the
+    /// continuous states and the inputs.
+    ContinuousTime,
+    /// Co-Simulation at a communication point: outputs (and state
+    /// derivatives) as functions of the inputs, the state held.
+    CommunicationPoint,
+}
+
 /// What the importer said in `fmi2Instantiate` and `fmi2SetupExperiment`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Experiment {
@@ -27,6 +42,14 @@ pub struct Experiment {
 pub struct Event {
     pub offset: f64,
     pub what: &'static str,
+}
+
+/// What a Model Exchange event changed, and when the next one is due.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EventUpdate {
+    pub next_event_time: Option<f64>,
+    /// The continuous states jumped (the importer must read them again).
+    pub states_changed: bool,
 }
 
 /// A type an Integer variable can be bound to: `i32`, or an enumeration
@@ -91,6 +114,18 @@ pub trait Model: Variables + Clone + Default + 'static {
     /// left as it was before the step.
     fn do_step(&mut self, h: f64) -> FmiResult;
 
+    /// The time now: the start of the next communication step, or the time
+    /// a Model Exchange importer set. Models whose inputs come from profiles
+    /// of time keep it; others ignore it.
+    #[inline]
+    fn set_time(&mut self, _time: f64) {}
+
+    /// Model Exchange, in event mode: applies what is due at the time set
+    /// (parameter changes, jumps) and names the next time event.
+    fn event_update(&mut self) -> EventUpdate {
+        EventUpdate::default()
+    }
+
     /// What happened inside the last step, for the `logEvents` category.
     fn step_events(&self) -> &[Event] {
         &[]
@@ -118,6 +153,16 @@ pub trait Model: Variables + Clone + Default + 'static {
 
     fn get_event_indicators(&self, _z: &mut [f64]) -> FmiResult {
         Err(no_model_exchange())
+    }
+
+    /// d(unknown)/d(known) now, for `fmi2GetDirectionalDerivative` (when the
+    /// description says `providesDirectionalDerivative`). The layer has
+    /// checked that `unknown` is an unknown and `known` a known of `of`
+    /// (FMI 2.0, 2.1.9), that the unknown depends on the known in
+    /// ModelStructure, and that outputs are computable. Where the function
+    /// has a kink the model picks one side and documents which.
+    fn partial_derivative(&self, _unknown: u32, _known: u32, _of: Jacobian) -> FmiResult<f64> {
+        Err(FmiError::error("this model does not provide directional derivatives"))
     }
 
     /// Whether the outputs can be computed from the model's parameters and

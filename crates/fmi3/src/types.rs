@@ -116,7 +116,7 @@ pub fn check_count(call: Call, n_vr: usize, n_values: usize) -> FmiResult {
         Ok(())
     } else {
         Err(FmiError::error(format!(
-            "{}: nValues = {n_values} but nValueReferences = {n_vr}; every variable of this FMU is a scalar",
+            "{}: {n_values} values for {n_vr} value references; every variable of this FMU is a scalar",
             call.name()
         )))
     }

@@ -11,5 +11,6 @@ pub mod ode;
 pub mod rosenbrock;
 
 pub use compensated::CompensatedSum;
-pub use linear::{decay_integral, phi1};
+pub use linalg::expm;
+pub use linear::{decay_integral, phi1, phi2, ramp_integral};
 pub use ode::{Control, Failure, Ode, Solution};

@@ -1,63 +1,195 @@
-//! The equation of a roller of a web line (model documentation, "The rollers
-//! around a span"; numbers in brackets refer to the Roller FMU's
-//! documentation):
+//! The equations of a line part that is not a span (the Roller FMU's
+//! documentation numbers them):
 //!
-//! [R1]  J * d(omega)/dt = R * (F_down - F_up) + tau_m - b * omega
-//! [R2]  v = R * omega
+//! [R1]  d(J*omega)/dt = r*(F_b - F_a) + tau - b*omega     (F_a: web_a.F, F_b: web_b.F)
+//! [R2]  v = r*omega
+//! [R3]  d(r^2)/dt = s*h_w*v/pi, J = J0 + (pi/2)*rho*w*(r^4 - r0^4)   (s = -1 unwinder, +1 winder)
+//! [R4]  m*y'' = F_load + load - F_a - F_b - d*y' - k*(y - y_start)    (a dancer's carriage)
 //!
-//! With the inputs held over a communication step, [R1] is a linear ODE with
-//! constant coefficients, `d(omega)/dt = a - (b/J) * omega`, whose exact
-//! solution is the step below: exact, so L-stable for any `b/J * h`, and a
-//! plain integration `omega + a*h` when b = 0.
+//! Over a piece of a communication step where the inputs are held and the
+//! profiles are linear in time, [R1] with r and J held is a linear ODE with
+//! forcing linear in time, and [R4] a linear ODE too: both are stepped
+//! exactly. [R3] moves r and J after the piece, keeping J*omega (physics
+//! docs: accurate to O(h*v*dt/r^2) per step).
 
-use solver::{decay_integral, CompensatedSum};
+use solver::{decay_integral, expm, ramp_integral, CompensatedSum};
+use std::f64::consts::PI;
 
 /// Parameters, SI.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Parameters {
-    /// J, kg m2 (> 0).
     pub inertia: f64,
-    /// R, m (> 0).
     pub radius: f64,
-    /// b, N m s (>= 0).
     pub damping: f64,
-    /// omega at the start time, rad/s.
-    pub omega_start: f64,
+    pub speed_start: f64,
+    /// 0 roller, 1 unwinder, 2 winder.
+    pub roll: i32,
+    pub wound_thickness: f64,
+    pub wound_density: f64,
+    pub wound_width: f64,
+    pub carriage: bool,
+    pub carriage_mass: f64,
+    pub carriage_damping: f64,
+    pub carriage_stiffness: f64,
+    pub carriage_start: f64,
+    pub profile: std::sync::Arc<str>,
+}
+
+pub const UNWINDER: i32 = 1;
+pub const WINDER: i32 = 2;
+
+impl Parameters {
+    /// The sign of a tension drive's torque and of the radius change: the
+    /// web pulls an unwinder back and a winder forward.
+    pub fn roll_sign(&self) -> f64 {
+        match self.roll {
+            UNWINDER => -1.0,
+            WINDER => 1.0,
+            _ => 0.0,
+        }
+    }
+
+    /// [R3] is on: a roll with web of some thickness on it.
+    pub fn winding(&self) -> bool {
+        self.roll != 0 && self.wound_thickness > 0.0
+    }
 }
 
 /// Inputs, SI, held over a communication step.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Inputs {
-    /// F_up, N: the span before the roller pulls the web back.
-    pub force_up: f64,
-    /// F_down, N: the span after the roller pulls the web forward.
-    pub force_down: f64,
-    /// tau_m, N m: motor torque, forward positive.
+    pub force_a: f64,
+    pub force_b: f64,
+    pub strain_a: f64,
     pub torque: f64,
+    pub load: f64,
 }
 
-/// The driving part of [R1] over J, a = (R*(F_down - F_up) + tau_m)/J, rad/s2.
-pub fn drive(p: &Parameters, u: &Inputs) -> f64 {
-    (p.radius * (u.force_down - u.force_up) + u.torque) / p.inertia
+/// The roll's size: r, and J as [R3] gives it from a reference (J0 at r0).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Roll {
+    pub radius: f64,
+    pub inertia: f64,
+    pub reference_radius: f64,
+    pub reference_inertia: f64,
 }
 
-/// The decay rate of [R1], b/J, 1/s (0 without damping).
-pub fn decay_rate(p: &Parameters) -> f64 {
-    p.damping / p.inertia
+impl Roll {
+    pub fn new(radius: f64, inertia: f64) -> Roll {
+        Roll { radius, inertia, reference_radius: radius, reference_inertia: inertia }
+    }
+
+    /// J at radius r [R3].
+    pub fn inertia_at(&self, p: &Parameters, radius: f64) -> f64 {
+        self.reference_inertia + 0.5 * PI * p.wound_density * p.wound_width * (radius.powi(4) - self.reference_radius.powi(4))
+    }
+
+    /// dr/dt [R3] at surface speed v.
+    pub fn radius_rate(&self, p: &Parameters, speed: f64) -> f64 {
+        p.roll_sign() * p.wound_thickness * speed / (2.0 * PI * self.radius)
+    }
+
+    /// dJ/dt [R3] at surface speed v.
+    pub fn inertia_rate(&self, p: &Parameters, speed: f64) -> f64 {
+        2.0 * PI * p.wound_density * p.wound_width * self.radius.powi(3) * self.radius_rate(p, speed)
+    }
 }
 
-/// d(omega)/dt of [R1], rad/s2.
-pub fn angular_acceleration(p: &Parameters, u: &Inputs, omega: f64) -> f64 {
-    drive(p, u) - decay_rate(p) * omega
+/// v [R2].
+pub fn surface_speed(radius: f64, omega: f64) -> f64 {
+    radius * omega
 }
 
-/// The exact step of [R1] over h with held inputs:
-/// omega(t+h) = omega + (a - (b/J)*omega) * integral_0^h exp(-(b/J)*s) ds.
-pub fn exact_step(p: &Parameters, u: &Inputs, omega: CompensatedSum, h: f64) -> CompensatedSum {
-    omega.plus(angular_acceleration(p, u, omega.value()) * decay_integral(decay_rate(p), h))
+/// The web's torque on the roller, r*(F_b - F_a), N m.
+pub fn web_torque(radius: f64, u: &Inputs) -> f64 {
+    radius * (u.force_b - u.force_a)
 }
 
-/// Surface speed [R2], m/s.
-pub fn surface_speed(p: &Parameters, omega: f64) -> f64 {
-    p.radius * omega
+/// [R1] with r and J held over a piece of length h: the drive torque is
+/// `tau0 + tau1*s` (s from the piece's start). Exact:
+/// omega(h) = omega + (a0 - (b/J)*omega)*int e^{-(b/J)(h-s)} ds + a1*int s e^{-(b/J)(h-s)} ds.
+pub fn rotation_step(p: &Parameters, roll: &Roll, u: &Inputs, omega: CompensatedSum, tau0: f64, tau1: f64, h: f64) -> CompensatedSum {
+    let j = roll.inertia;
+    let decay = p.damping / j;
+    let a0 = (web_torque(roll.radius, u) + tau0) / j;
+    let a1 = tau1 / j;
+    omega.plus((a0 - decay * omega.value()) * decay_integral(decay, h) + a1 * ramp_integral(decay, h))
+}
+
+/// [R3] after a piece in which the surface moved `travel` metres: the new
+/// radius squared (None: the roll ran empty).
+pub fn wound_radius(p: &Parameters, radius: f64, travel: f64) -> Option<f64> {
+    let r2 = radius * radius + p.roll_sign() * p.wound_thickness * travel / PI;
+    (r2 > 0.0).then(|| r2.sqrt())
+}
+
+/// [R4] over a piece of length h with the force `g0 + g1*s` (load minus the
+/// spans' pull), exactly: exp of the augmented matrix acting on (y - y_start, y', 1, s).
+pub fn carriage_step(p: &Parameters, state: [f64; 2], g0: f64, g1: f64, h: f64) -> [f64; 2] {
+    let m = p.carriage_mass;
+    let (k, d) = (p.carriage_stiffness / m, p.carriage_damping / m);
+    let a = [
+        [0.0, h, 0.0, 0.0],
+        [-k * h, -d * h, g0 / m * h, g1 / m * h],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, h, 0.0],
+    ];
+    let e = expm(a);
+    let z = [state[0] - p.carriage_start, state[1]];
+    // (z, 1, s=0) at the start; the fourth column is never needed.
+    let y = e[0][0] * z[0] + e[0][1] * z[1] + e[0][2];
+    let v = e[1][0] * z[0] + e[1][1] * z[1] + e[1][2];
+    [y + p.carriage_start, v]
+}
+
+/// The carriage's acceleration [R4] with the total force g.
+pub fn carriage_acceleration(p: &Parameters, state: [f64; 2], g: f64) -> f64 {
+    (g - p.carriage_damping * state[1] - p.carriage_stiffness * (state[0] - p.carriage_start)) / p.carriage_mass
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> Parameters {
+        Parameters { inertia: 2.0, radius: 0.2, damping: 0.5, carriage_mass: 5.0, ..Parameters::default() }
+    }
+
+    #[test]
+    fn rotation_step_solves_linear_forcing_exactly() {
+        // J w' = tau0 + tau1 s - b w, from w0: w(h) against the closed form.
+        let p = params();
+        let roll = Roll::new(p.radius, p.inertia);
+        let (tau0, tau1, h, w0) = (3.0, -7.0, 0.4, 10.0);
+        let k = p.damping / p.inertia;
+        let (a0, a1) = (tau0 / p.inertia, tau1 / p.inertia);
+        // w(t) = a0/k + a1*(t/k - 1/k^2) + C e^{-kt}
+        let c = w0 - a0 / k + a1 / (k * k);
+        let exact = a0 / k + a1 * (h / k - 1.0 / (k * k)) + c * (-k * h).exp();
+        let got = rotation_step(&p, &roll, &Inputs::default(), CompensatedSum::from_parts(w0, 0.0), tau0, tau1, h).value();
+        assert!((got - exact).abs() < 1e-13 * exact.abs(), "{got} {exact}");
+    }
+
+    #[test]
+    fn carriage_step_solves_the_damped_oscillator_exactly() {
+        let p = Parameters { carriage_stiffness: 2000.0, carriage_damping: 30.0, carriage_start: 0.5, ..params() };
+        // Constant force g: equilibrium y_e = y_start + g/k; an underdamped approach.
+        let (g, h) = (100.0, 0.05);
+        let (m, k, d) = (p.carriage_mass, p.carriage_stiffness, p.carriage_damping);
+        let (alpha, beta) = (d / (2.0 * m), (k / m - (d / (2.0 * m)).powi(2)).sqrt());
+        let y_e = p.carriage_start + g / k;
+        // From rest at y_start: y = y_e - (g/k) e^{-alpha t} (cos(beta t) + alpha/beta sin(beta t)).
+        let exact = y_e - g / k * (-alpha * h).exp() * ((beta * h).cos() + alpha / beta * (beta * h).sin());
+        let [y, _] = carriage_step(&p, [p.carriage_start, 0.0], g, 0.0, h);
+        assert!((y - exact).abs() < 1e-14, "{y} {exact}");
+    }
+
+    #[test]
+    fn a_winder_grows_by_thickness_times_travel_over_pi() {
+        let p = Parameters { roll: WINDER, wound_thickness: 50e-6, ..params() };
+        let r = wound_radius(&p, 0.1, 100.0).unwrap();
+        assert!((r * r - (0.01 + 50e-6 * 100.0 / PI)).abs() < 1e-16);
+        let q = Parameters { roll: UNWINDER, ..p };
+        assert_eq!(wound_radius(&q, 0.01, 100.0), None);
+    }
 }

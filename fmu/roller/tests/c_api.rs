@@ -1,6 +1,7 @@
 //! The Roller model: its core against the exact solution of
-//! J*dw/dt = R*(F_down - F_up) + tau_m - b*w, state save/load, and the basics
+//! J*dw/dt = R*(F_b - F_a) + tau_m - b*w, state save/load, and the basics
 //! of its C API (`cargo test -p roller`): the same FMI layer as ConvertingSpan.
+//! Drives, rolls, carriages and profiles: tests/profiles.rs.
 //!
 //! Tolerances: the step is the closed-form solution evaluated with expm1, so
 //! one step agrees with an independent evaluation of the closed form to a few
@@ -17,7 +18,7 @@ use roller::Roller;
 
 fn roller(j: f64, r: f64, b: f64, omega0: f64) -> Roller {
     let mut m = Roller::at_start_values();
-    for (var, x) in [(Real::J, j), (Real::R, r), (Real::b, b), (Real::omega_start, omega0)] {
+    for (var, x) in [(Real::J, j), (Real::R, r), (Real::b, b), (Real::v_start, omega0 * r)] {
         m.set_real(var.vr(), x).unwrap();
     }
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
@@ -25,7 +26,7 @@ fn roller(j: f64, r: f64, b: f64, omega0: f64) -> Roller {
 }
 
 fn set_inputs(m: &mut Roller, f_up: f64, f_down: f64, tau: f64) {
-    for (var, x) in [(Real::F_up, f_up), (Real::F_down, f_down), (Real::tau_m, tau)] {
+    for (var, x) in [(Real::web_a_F, f_up), (Real::web_b_F, f_down), (Real::tau_m, tau)] {
         m.set_real(var.vr(), x).unwrap();
     }
 }
@@ -53,15 +54,23 @@ fn description_is_the_roller() {
     let span = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../modelDescription.xml")).unwrap();
     assert!(span.contains("guid=") && !span.contains(DESCRIPTION.guid), "the span and the roller share a GUID");
     let names: Vec<&str> = DESCRIPTION.variables.iter().map(|v| v.name).collect();
-    assert_eq!(names, ["J", "R", "b", "omega_start", "F_up", "F_down", "tau_m", "v", "omega"]);
+    assert_eq!(&names[..4], ["J", "R", "b", "v_start"]);
+    assert_eq!(&names[14..19], ["web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load"]);
+    assert_eq!(&names[19..22], ["web_a.v", "web_b.v", "web_b.eps"]);
     assert!(!DESCRIPTION.can_interpolate_inputs);
     // Strict and inclusive bounds from the XML (ConvertingSpan.range and min).
     let range = |n: &str| DESCRIPTION.variable_by_name(n).unwrap().range;
     assert!(!range("J").contains(0.0) && range("J").contains(1e-12));
     assert!(!range("R").contains(0.0) && range("R").contains(1e-12));
     assert!(range("b").contains(0.0) && !range("b").contains(-1e-12));
-    // No output feeds through from an input within a step.
-    assert!(DESCRIPTION.output_dependencies.iter().all(|d| d.on == Some(&[][..])));
+    // Only the strain passed on and the drive's torque feed through from an input within a step.
+    let through: Vec<&str> = DESCRIPTION
+        .output_dependencies
+        .iter()
+        .filter(|d| d.on.is_some_and(|on| on.iter().any(|vr| DESCRIPTION.variable(*vr).unwrap().causality == Causality::Input)))
+        .map(|d| DESCRIPTION.variable(d.vr).unwrap().name)
+        .collect();
+    assert_eq!(through, ["web_b.eps", "tau"]);
 }
 
 #[test]
@@ -69,17 +78,25 @@ fn every_start_value_is_accepted_and_read_back() {
     let m = Roller::at_start_values();
     for v in DESCRIPTION.variables {
         if matches!(v.causality, Causality::Parameter | Causality::Input) {
-            let Start::Real(x) = v.start else { panic!("{} has no Real start", v.name) };
-            assert_eq!(m.get_real(v.vr).unwrap(), x, "{}", v.name);
-            assert!(v.range.contains(x), "{} start {x} outside {}", v.name, v.range);
+            match v.start {
+                Start::Real(x) => {
+                    assert_eq!(m.get_real(v.vr).unwrap(), x, "{}", v.name);
+                    assert!(v.range.contains(x), "{} start {x} outside {}", v.name, v.range);
+                }
+                Start::Integer(x) => assert_eq!(m.get_integer(v.vr).unwrap(), x, "{}", v.name),
+                Start::Boolean(x) => assert_eq!(m.get_boolean(v.vr).unwrap(), x, "{}", v.name),
+                Start::String(x) => assert_eq!(m.get_string(v.vr).unwrap(), x, "{}", v.name),
+                Start::None => panic!("{} has no start value", v.name),
+            }
         }
     }
     // Outputs and unknown value references cannot be set.
     let mut m = m;
-    assert!(m.set_real(Real::v.vr(), 1.0).is_err());
+    assert!(m.set_real(Real::web_a_v.vr(), 1.0).is_err());
     assert!(m.set_real(Real::omega.vr(), 1.0).is_err());
     assert!(m.set_real(999, 1.0).is_err());
     assert!(m.get_integer(1).is_err() && m.get_boolean(1).is_err());
+    assert!(m.get_integer(Real::J.vr()).is_err());
 }
 
 #[test]
@@ -89,7 +106,7 @@ fn steps_follow_the_exact_solution_with_damping() {
     let mut m = roller(j, r, b, w0);
     set_inputs(&mut m, f_up, f_down, tau);
     assert_eq!(m.get_real(Real::omega.vr()).unwrap(), w0);
-    assert_eq!(m.get_real(Real::v.vr()).unwrap(), r * w0);
+    assert_eq!(m.get_real(Real::web_a_v.vr()).unwrap(), r * w0);
     let mut t = 0.0;
     // Variable steps, including one far beyond the time constant J/b = 2.5 s.
     for h in [1e-6, 1e-3, 0.01, 0.37, 1.0, 10.0] {
@@ -97,7 +114,7 @@ fn steps_follow_the_exact_solution_with_damping() {
         t += h;
         let want = exact(j, r, b, w0, f_up, f_down, tau, t);
         assert!(rel(m.omega(), want) < 1e-13, "t = {t}: {} vs {want}", m.omega());
-        assert!(rel(m.get_real(Real::v.vr()).unwrap(), r * want) < 1e-13);
+        assert!(rel(m.get_real(Real::web_a_v.vr()).unwrap(), r * want) < 1e-13);
     }
 }
 
@@ -151,12 +168,12 @@ fn a_million_tiny_steps_do_not_drift() {
 
 #[test]
 fn an_overflowing_step_is_discarded_and_changes_nothing() {
-    let mut m = roller(1e-300, 1.0, 0.0, 1.0);
+    let mut m = roller(1e-12, 1.0, 0.0, 1.0);
     set_inputs(&mut m, 0.0, 1e300, 0.0);
     let before = m.clone();
     let err = m.do_step(1.0).unwrap_err();
     assert_eq!(err.status, Status::Discard);
-    assert!(err.message.contains("angular speed"), "{}", err.message);
+    assert!(err.message.contains("would reach omega = NaN"), "{}", err.message);
     assert_eq!(m, before);
 }
 
@@ -184,12 +201,13 @@ fn save_and_load_continue_bit_identically() {
 
 #[test]
 fn physics_helpers_agree_with_the_equation() {
-    let p = Parameters { inertia: 2.0, radius: 0.5, damping: 0.4, omega_start: 0.0 };
-    let u = Inputs { force_up: 10.0, force_down: 30.0, torque: 1.0 };
-    // J w' = R (Fd - Fu) + tau - b w = 0.5*20 + 1 - 0.4*3 = 9.8 at w = 3
-    let acc = roller::physics::angular_acceleration(&p, &u, 3.0);
-    assert!((acc - 9.8 / 2.0).abs() < 1e-15);
-    assert_eq!(roller::physics::surface_speed(&p, 3.0), 1.5);
+    let p = Parameters { inertia: 2.0, radius: 0.5, damping: 0.4, ..Parameters::default() };
+    let u = Inputs { force_a: 10.0, force_b: 30.0, torque: 1.0, ..Inputs::default() };
+    // J w' = R (F_b - F_a) + tau - b w = 0.5*20 + 1 - 0.4*3 = 9.8 at w = 3
+    let mut m = roller(p.inertia, p.radius, p.damping, 3.0);
+    set_inputs(&mut m, u.force_a, u.force_b, u.torque);
+    assert!((m.derivatives()[0] - 9.8 / 2.0).abs() < 1e-15);
+    assert_eq!(roller::physics::surface_speed(0.5, 3.0), 1.5);
 }
 
 /// The C API of the Roller library: the same FMI layer as ConvertingSpan's,
@@ -247,10 +265,10 @@ mod c_api {
     #[test]
     fn simulates_through_the_c_api() {
         let fmu = Fmu::new(DESCRIPTION.guid).unwrap();
-        assert_eq!(fmu.set(&[(Real::J, 0.05), (Real::R, 0.1), (Real::b, 0.02), (Real::omega_start, 50.0)]), OK);
+        assert_eq!(fmu.set(&[(Real::J, 0.05), (Real::R, 0.1), (Real::b, 0.02), (Real::v_start, 5.0)]), OK);
         assert_eq!(fmu.init(), OK);
-        assert_eq!(fmu.get(Real::v), (OK, 5.0));
-        assert_eq!(fmu.set(&[(Real::F_up, 800.0), (Real::F_down, 650.0), (Real::tau_m, 3.0)]), OK);
+        assert_eq!(fmu.get(Real::web_a_v), (OK, 5.0));
+        assert_eq!(fmu.set(&[(Real::web_a_F, 800.0), (Real::web_b_F, 650.0), (Real::tau_m, 3.0)]), OK);
         let mut t = 0.0;
         for _ in 0..100 {
             assert_eq!(fmu.step(t, 0.01), OK);
@@ -266,22 +284,22 @@ mod c_api {
         // J = 0 is outside (0, inf): refused when initialization ends.
         assert_eq!(fmu.set(&[(Real::J, 0.0)]), OK);
         assert_eq!(fmu.init(), ERROR);
-        assert!(fmu.last_log().contains("J = 0 kg.m2 is outside its allowed range (0, inf)"), "{}", fmu.last_log());
+        assert!(fmu.last_log().contains("J = 0 kg.m2 is outside its allowed range (0, 1000000000]"), "{}", fmu.last_log());
         // SAFETY: a live instance.
         assert_eq!(unsafe { fmi2Reset(fmu.c) }, OK);
         assert_eq!(fmu.set(&[(Real::b, -1.0)]), OK);
         assert_eq!(fmu.init(), ERROR);
-        assert!(fmu.last_log().contains("b = -1 N.m.s is outside its allowed range [0, inf)"), "{}", fmu.last_log());
+        assert!(fmu.last_log().contains("b = -1 N.m.s is outside its allowed range [0, 1000000000]"), "{}", fmu.last_log());
         // SAFETY: a live instance.
         assert_eq!(unsafe { fmi2Reset(fmu.c) }, OK);
         assert_eq!(fmu.init(), OK);
         // A NaN input is refused at once and changes nothing (all values are checked first).
-        assert_eq!(fmu.set(&[(Real::F_up, 1.0), (Real::F_down, f64::NAN)]), ERROR);
-        assert!(fmu.last_log().contains("F_down"), "{}", fmu.last_log());
+        assert_eq!(fmu.set(&[(Real::web_a_F, 1.0), (Real::web_b_F, f64::NAN)]), ERROR);
+        assert!(fmu.last_log().contains("web_b.F"), "{}", fmu.last_log());
         // SAFETY: a live instance.
         assert_eq!(unsafe { fmi2Reset(fmu.c) }, OK);
         assert_eq!(fmu.init(), OK);
-        assert_eq!(fmu.get(Real::F_up), (OK, 0.0));
+        assert_eq!(fmu.get(Real::web_a_F), (OK, 0.0));
         // Outputs cannot be set; there are no Integer variables; no input derivatives.
         assert_eq!(fmu.set(&[(Real::omega, 1.0)]), ERROR);
         // SAFETY: a live instance, valid pointers.
@@ -290,6 +308,7 @@ mod c_api {
             fmu.init();
             let mut i = 0;
             assert_eq!(fmi2GetInteger(fmu.c, &1, 1, &mut i), ERROR);
+            assert!(fmu.last_log().contains("value reference 1"), "{}", fmu.last_log());
             fmi2Reset(fmu.c);
             fmu.init();
             assert_eq!(fmi2SetRealInputDerivatives(fmu.c, &Real::tau_m.vr(), 1, &1, &1.0), ERROR);
@@ -300,21 +319,21 @@ mod c_api {
     #[test]
     fn discard_keeps_the_state_and_a_saved_state_restores_it() {
         let fmu = Fmu::new(DESCRIPTION.guid).unwrap();
-        fmu.set(&[(Real::J, 1e-300), (Real::R, 1.0), (Real::omega_start, 1.0)]);
+        fmu.set(&[(Real::J, 1e-12), (Real::R, 1.0), (Real::v_start, 1.0)]);
         assert_eq!(fmu.init(), OK);
         let mut state: fmi2FMUstate = std::ptr::null_mut();
         // SAFETY: a live instance; the state is freed below.
         unsafe {
             assert_eq!(fmi2GetFMUstate(fmu.c, &mut state), OK);
-            fmu.set(&[(Real::F_down, 1e300)]);
-            assert_eq!(fmu.step(0.0, 1.0), DISCARD);
-            assert!(fmu.last_log().contains("angular speed"), "{}", fmu.last_log());
+            fmu.set(&[(Real::web_b_F, 1e12)]);
+            assert_eq!(fmu.step(0.0, 1e300), DISCARD);
+            assert!(fmu.last_log().contains("would reach omega ="), "{}", fmu.last_log());
             let mut last = f64::NAN;
             assert_eq!(fmi2GetRealStatus(fmu.c, 2, &mut last), OK);
             assert_eq!(last, 0.0);
             assert_eq!(fmu.get(Real::omega), (OK, 1.0));
             assert_eq!(fmi2SetFMUstate(fmu.c, state), OK);
-            fmu.set(&[(Real::F_down, 1e-300)]);
+            fmu.set(&[(Real::web_b_F, 1e-300)]);
             assert_eq!(fmu.step(0.0, 1.0), OK);
             assert_eq!(fmi2FreeFMUstate(fmu.c, &mut state), OK);
         }

@@ -258,14 +258,22 @@ pub unsafe fn de_serialize_fmu_state<M: Model>(
 
 pub unsafe fn get_directional_derivative<M: Model>(
     c: fmi2Component,
-    _unknown_refs: *const fmi2ValueReference,
-    _n_unknown: usize,
-    _known_refs: *const fmi2ValueReference,
-    _n_known: usize,
-    _dv_known: *const fmi2Real,
-    _dv_unknown: *mut fmi2Real,
+    unknown_refs: *const fmi2ValueReference,
+    n_unknown: usize,
+    known_refs: *const fmi2ValueReference,
+    n_known: usize,
+    dv_known: *const fmi2Real,
+    dv_unknown: *mut fmi2Real,
 ) -> fmi2Status {
-    unsupported::<M>(c, Call::GetDirectionalDerivative, "providesDirectionalDerivative is false")
+    let call = Call::GetDirectionalDerivative;
+    enter::<M>(c, call, |h| {
+        let unknowns = slice(call, unknown_refs, n_unknown, "vUnknown_ref")?;
+        let knowns = slice(call, known_refs, n_known, "vKnown_ref")?;
+        let seed = slice(call, dv_known, n_known, "dvKnown")?;
+        let out = slice_mut(call, dv_unknown, n_unknown, "dvUnknown")?;
+        h.instance.get_directional_derivative(unknowns, knowns, seed, out)?;
+        OK
+    })
 }
 
 // ---- Model Exchange
@@ -283,7 +291,7 @@ pub unsafe fn new_discrete_states<M: Model>(c: fmi2Component, info: *mut fmi2Eve
             newDiscreteStatesNeeded: update.new_discrete_states_needed as fmi2Boolean,
             terminateSimulation: update.terminate_simulation as fmi2Boolean,
             nominalsOfContinuousStatesChanged: 0,
-            valuesOfContinuousStatesChanged: 0,
+            valuesOfContinuousStatesChanged: update.states_changed as fmi2Boolean,
             nextEventTimeDefined: update.next_event_time.is_some() as fmi2Boolean,
             nextEventTime: update.next_event_time.unwrap_or(0.0),
         };

@@ -6,8 +6,10 @@
 //! * this file — the instance, its lifecycle, `fmi2DoStep` and the status queries;
 //! * `values` — getting and setting variables, with every check;
 //! * `model_exchange` — the Model Exchange functions;
+//! * `directional` — `fmi2GetDirectionalDerivative`: its knowns and unknowns;
 //! * `states` — FMU states: save, restore, check a deserialized one.
 
+mod directional;
 mod model_exchange;
 mod states;
 mod values;
@@ -44,6 +46,7 @@ pub struct DiscreteUpdate {
     pub new_discrete_states_needed: bool,
     pub terminate_simulation: bool,
     pub next_event_time: Option<f64>,
+    pub states_changed: bool,
 }
 
 pub struct Instance<M: Model> {
@@ -232,6 +235,7 @@ impl<M: Model> Instance<M> {
         if !usual {
             self.check_step(current, h)?;
         }
+        self.model.set_time(current);
         match self.model.do_step(h) {
             Ok(()) => {
                 #[cfg(feature = "test-hooks")]

@@ -9,6 +9,7 @@ impl<M: Model> Instance<M> {
             return Err(FmiError::error(format!("{}: time = {time} must be finite", Call::SetTime.name())));
         }
         self.time = time;
+        self.model.set_time(time);
         Ok(())
     }
 
@@ -66,10 +67,12 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
-    /// The model has no discrete states and no time events; the slack
-    /// event indicator only marks a kink in the tension.
+    /// The model applies what is due now (a profile's jumps and parameter
+    /// changes) and names its next time event; no discrete states otherwise.
     pub fn new_discrete_states(&mut self) -> DiscreteUpdate {
-        DiscreteUpdate::default()
+        self.model.set_time(self.time);
+        let update = self.model.event_update();
+        DiscreteUpdate { next_event_time: update.next_event_time, states_changed: update.states_changed, ..DiscreteUpdate::default() }
     }
 
     pub fn enter_continuous_time_mode(&mut self) -> FmiResult {

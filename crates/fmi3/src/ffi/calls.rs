@@ -443,7 +443,7 @@ pub unsafe fn update_discrete_states<M: Model>(
             update.new_discrete_states_needed,
             update.terminate_simulation,
             false,
-            false,
+            update.states_changed,
             update.next_event_time.is_some(),
         ];
         for (out, flag) in outs.into_iter().zip(flags) {
@@ -550,10 +550,36 @@ pub unsafe fn do_step<M: Model>(
     })
 }
 
+/// The FMI 2.0 layer's directional derivatives: the same checks (which
+/// unknowns and knowns each state allows) and the model's partial derivatives.
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn get_directional_derivative<M: Model>(
+    c: fmi3Instance,
+    unknowns: *const fmi3ValueReference,
+    n_unknowns: usize,
+    knowns: *const fmi3ValueReference,
+    n_knowns: usize,
+    seed: *const fmi3Float64,
+    n_seed: usize,
+    sensitivity: *mut fmi3Float64,
+    n_sensitivity: usize,
+) -> fmi3Status {
+    let call = Call::GetDirectionalDerivative;
+    enter::<M>(c, call, |h| {
+        // Every variable is a scalar: one seed per known, one sensitivity per unknown.
+        types::check_count(call, n_knowns, n_seed)?;
+        types::check_count(call, n_unknowns, n_sensitivity)?;
+        let unknowns = slice(call, unknowns, n_unknowns, "unknowns")?;
+        let knowns = slice(call, knowns, n_knowns, "knowns")?;
+        let seed = slice(call, seed, n_seed, "seed")?;
+        let out = slice_mut(call, sensitivity, n_sensitivity, "sensitivity")?;
+        h.instance.get_directional_derivative(unknowns, knowns, seed, out)
+    })
+}
+
 /// Refusals that depend on nothing but the call: the reason is the FMU's capabilities.
 pub mod reasons {
     pub const DEPENDENCIES: &str = "the dependencies are fixed and listed in modelDescription.xml's ModelStructure";
-    pub const DIRECTIONAL: &str = "providesDirectionalDerivatives is false";
     pub const ADJOINT: &str = "providesAdjointDerivatives is false";
     pub const CONFIGURATION: &str = "this FMU has no structural parameters";
     pub const CLOCKS: &str = "this FMU has no clocks";

@@ -1,0 +1,155 @@
+//! Profiles: what a line part does over time, read from a JSON file with
+//! serde_json. A profile holds tables (a quantity against time: a roller's
+//! speed, torque or tension, the strain of the web entering the line, a
+//! dancer's load) and `set` events (parameter changes at a time: a new roll,
+//! a brake, a splice). The models decide which keys they accept.
+//!
+//! ```json
+//! {"speed": [[0, 0], [0.2, 0], [0.6, 0.5]], "set": [{"time": 0.5, "b": 20}]}
+//! ```
+//!
+//! A table is `[[time, value], ...]`: times do not decrease, at most two
+//! entries share a time (a jump: the value before, then after), linear in
+//! between, constant before the first and after the last entry. SI units.
+
+mod table;
+
+pub use table::Table;
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Profiles are small; a larger file is refused before it is read.
+pub const MAX_FILE_BYTES: u64 = 16 << 20;
+
+/// A value a `set` event gives a parameter: a number, or a text (a record name).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Value {
+    Number(f64),
+    Text(String),
+}
+
+/// Parameter changes at one time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SetEvent {
+    pub time: f64,
+    /// (parameter name, value), by name.
+    pub changes: Vec<(String, Value)>,
+}
+
+/// A profile as checked: the tables by key, and the set events by time.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Profile {
+    pub tables: BTreeMap<String, Table>,
+    pub events: Vec<SetEvent>,
+}
+
+// Every key but `time` is a parameter name: no `deny_unknown_fields` (it cannot
+// be combined with `flatten`); the model refuses names it does not have.
+#[derive(Deserialize)]
+struct EventFile {
+    time: f64,
+    #[serde(flatten)]
+    changes: serde_json::Map<String, serde_json::Value>,
+}
+
+impl Profile {
+    /// Reads a profile file's text, refusing one larger than a profile can
+    /// be; the error names the file.
+    pub fn read_text(path: &Path) -> Result<String, String> {
+        let file = path.display();
+        let size = std::fs::metadata(path).map_err(|e| format!("profile {file}: {e}"))?.len();
+        if size > MAX_FILE_BYTES {
+            return Err(format!("profile {file}: {size} bytes, more than the {MAX_FILE_BYTES} a profile may have"));
+        }
+        std::fs::read_to_string(path).map_err(|e| format!("profile {file}: {e}"))
+    }
+
+    /// Parses and checks a profile's text.
+    pub fn parse(text: &str, tables: &[&str]) -> Result<Profile, String> {
+        let root: serde_json::Map<String, serde_json::Value> = serde_json::from_str(text).map_err(|e| e.to_string())?;
+        let mut profile = Profile::default();
+        for (key, value) in root {
+            if key == "set" {
+                let events: Vec<EventFile> = serde_json::from_value(value).map_err(|e| format!("set: {e}"))?;
+                for (i, e) in events.into_iter().enumerate() {
+                    profile.events.push(event(i, e)?);
+                }
+            } else if tables.contains(&key.as_str()) {
+                let points: Vec<[f64; 2]> = serde_json::from_value(value).map_err(|e| format!("{key}: {e} (a table is [[time, value], ...])"))?;
+                let table = Table::new(points).map_err(|e| format!("{key}: {e}"))?;
+                profile.tables.insert(key, table);
+            } else {
+                let mut allowed: Vec<&str> = tables.to_vec();
+                allowed.push("set");
+                return Err(format!("unknown key {key:?} (allowed: {})", allowed.join(", ")));
+            }
+        }
+        // A stable sort keeps the file's order for events at one time.
+        profile.events.sort_by(|a, b| a.time.total_cmp(&b.time));
+        Ok(profile)
+    }
+
+    pub fn table(&self, key: &str) -> Option<&Table> {
+        self.tables.get(key)
+    }
+
+    /// The first table entry or event later than `t`: where a piece of a
+    /// step that starts at `t` must end.
+    pub fn next_break(&self, t: f64) -> Option<f64> {
+        let tables = self.tables.values().filter_map(|table| table.next_break(t));
+        let events = self.events.iter().map(|e| e.time).find(|&time| time > t);
+        tables.chain(events).reduce(f64::min)
+    }
+}
+
+fn event(i: usize, e: EventFile) -> Result<SetEvent, String> {
+    if !e.time.is_finite() {
+        return Err(format!("set[{i}]: time = {} must be finite", e.time));
+    }
+    if e.changes.is_empty() {
+        return Err(format!("set[{i}] at {} s changes nothing", e.time));
+    }
+    let mut changes = Vec::with_capacity(e.changes.len());
+    for (name, value) in e.changes {
+        let value = match value {
+            serde_json::Value::Number(n) => Value::Number(n.as_f64().filter(|x| x.is_finite()).ok_or_else(|| format!("set[{i}]: {name} = {n} is not a finite number"))?),
+            serde_json::Value::String(s) => Value::Text(s),
+            other => return Err(format!("set[{i}]: {name} = {other} must be a number or a text")),
+        };
+        changes.push((name, value));
+    }
+    Ok(SetEvent { time: e.time, changes })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_tables_and_events_in_time_order() {
+        let p = Profile::parse(
+            r#"{"speed": [[0, 1], [1, 2]], "set": [{"time": 2, "b": 1}, {"time": 1, "J": 6, "R": 0.3}]}"#,
+            &["speed", "torque"],
+        )
+        .unwrap();
+        assert_eq!(p.table("speed").unwrap().value(0.5), 1.5);
+        assert_eq!(p.events[0].time, 1.0);
+        assert_eq!(p.events[0].changes, vec![("J".into(), Value::Number(6.0)), ("R".into(), Value::Number(0.3))]);
+        assert_eq!(p.events[1].changes, vec![("b".into(), Value::Number(1.0))]);
+    }
+
+    #[test]
+    fn refuses_what_it_cannot_use_and_says_what() {
+        let e = |text: &str| Profile::parse(text, &["speed"]).unwrap_err();
+        assert!(e(r#"{"torque": [[0, 1]]}"#).contains("unknown key \"torque\" (allowed: speed, set)"));
+        assert!(e(r#"{"speed": [[1, 1], [0, 1]]}"#).contains("speed: entry 1"));
+        assert!(e(r#"{"speed": [[0, 1, 2]]}"#).contains("speed:"));
+        assert!(e(r#"{"set": [{"time": 1}]}"#).contains("changes nothing"));
+        assert!(e(r#"{"set": [{"time": 1, "b": [1]}]}"#).contains("must be a number or a text"));
+        assert!(e(r#"{"set": [{"b": 1}]}"#).contains("set:"));
+        assert!(e("[1, 2]").contains("invalid type"));
+    }
+}
