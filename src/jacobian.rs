@@ -133,3 +133,144 @@ pub fn initial_state_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
     let x0 = length / (1.0 + strain);
     (d_length - x0 * d_strain) / (1.0 + strain)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stress_strain::StressStrain;
+    use std::sync::Arc;
+
+    /// The k-th input (web_a.v, web_a.eps, web_b.v, frame_a.x/y, frame_b.x/y).
+    fn input_mut(v: &mut Inputs, k: usize) -> &mut f64 {
+        match k {
+            0 => &mut v.speed_a,
+            1 => &mut v.strain_a,
+            2 => &mut v.speed_b,
+            3 => &mut v.frame_a[0],
+            4 => &mut v.frame_a[1],
+            5 => &mut v.frame_b[0],
+            _ => &mut v.frame_b[1],
+        }
+    }
+
+    fn web(curve: bool) -> crate::parameters::WebProperties {
+        let table = [[0.0, 0.0], [0.005, 1.5e5], [0.01, 4.5e5], [0.02, 1.2e6], [0.04, 2.6e6]];
+        crate::parameters::WebProperties {
+            modulus: 4.5e9,
+            thickness: 5e-5,
+            width: 1.2,
+            density: 1390.0,
+            retardation_time: 0.01,
+            curve: curve.then(|| Arc::new(StressStrain::new(&table).unwrap())),
+        }
+    }
+
+    /// The outputs, dx/dt and the mass at (x, u), the rates formed as the model forms them.
+    fn values(p: &Parameters, u: &Inputs, x: f64, rates: Rates, given: Option<&Inputs>) -> [f64; 9] {
+        let rates = match given {
+            Some(r) => Rates { speed_b: r.speed_b, length: physics::length_rate(p, u, r) },
+            None => rates,
+        };
+        let x = CompensatedSum::from_parts(x, 0.0);
+        let o = physics::outputs(p, u, x, rates, &SensorScale { speed: 60.0, force: 0.2 });
+        let rate = physics::unstretched_rate(u, o.strain);
+        [o.length, o.strain, o.tension, o.exit_force, o.stress, o.sensor_speed, o.sensor_tension, rate, physics::web_mass(&p.span_web, x.value())]
+    }
+
+    fn field(t: &Tangents) -> [f64; 9] {
+        let o = t.outputs;
+        [o.length, o.strain, o.tension, o.exit_force, o.stress, o.sensor_speed, o.sensor_tension, t.unstretched_rate, t.web_mass]
+    }
+
+    /// Every effect combination, forward and reverse flow, linear and
+    /// nonlinear web, held and given rates: each known's tangent against a
+    /// central difference of `physics` with step 1e-7 of its scale (the
+    /// functions are rational, or a cubic of the strain, on that scale:
+    /// truncation ~ 1e-14 relative; rounding ~ 1e-16 * |y| / 1e-7 ~ 1e-9 of
+    /// |y|). Tolerance 1e-6 relative plus that rounding floor; a missing term
+    /// of the equations is at least O(strain) ~ 1e-3 relative.
+    #[test]
+    fn tangents_match_central_differences_of_the_equations() {
+        let mut checked = 0;
+        for bits in 0..32u32 {
+            let flag = |i: u32| bits & (1 << i) != 0;
+            let p = Parameters {
+                span_length: 1.0,
+                incoming: web(false),
+                span_web: web(flag(4)),
+                include_damping: flag(0),
+                prevent_negative_tension: flag(1),
+                include_mass: flag(2),
+                variable_length: flag(3),
+                use_sensor: true,
+                ..Parameters::default()
+            };
+            let strain = if flag(4) { 0.015 } else { 2e-3 };
+            for (va, vb) in [(5.0, 5.02), (-3.0, -2.9)] {
+                let u = Inputs { speed_a: va, strain_a: 1e-3, speed_b: vb, frame_a: [0.1, 0.2], frame_b: [0.9, 0.8] };
+                let x = physics::span_length(&p, &u) / (1.0 + strain);
+                let rate_in = Inputs { speed_b: 3.0, frame_a: [0.02, 0.0], frame_b: [0.1, -0.05], ..Inputs::default() };
+                for given in [None, Some(&rate_in)] {
+                    let held = Rates { speed_b: 2.0, length: 0.3 };
+                    let rates = match given {
+                        Some(r) => Rates { speed_b: r.speed_b, length: physics::length_rate(&p, &u, r) },
+                        None => held,
+                    };
+                    let sensor = SensorScale { speed: 60.0, force: 0.2 };
+                    let point = Point { params: &p, inputs: &u, x: CompensatedSum::from_parts(x, 0.0), rates, given, sensor: &sensor };
+                    for k in 0..8 {
+                        let mut d = Direction::default();
+                        let (mut up, mut down) = (u, u);
+                        let (mut xu, mut xd) = (x, x);
+                        let h;
+                        if k == 7 {
+                            h = 1e-7 * x;
+                            d.x = 1.0;
+                            xu += h;
+                            xd -= h;
+                        } else {
+                            h = 1e-7 * input_mut(&mut up, k).abs().max(if k == 1 { 1e-3 } else { 1.0 });
+                            *input_mut(&mut d.u, k) = 1.0;
+                            *input_mut(&mut up, k) += h;
+                            *input_mut(&mut down, k) -= h;
+                        }
+                        let (a, b) = (values(&p, &up, xu, held, given), values(&p, &down, xd, held, given));
+                        let tangent = field(&point.tangents(&d));
+                        for i in 0..9 {
+                            let fd = (a[i] - b[i]) / (2.0 * h);
+                            let floor = 1e3 * f64::EPSILON * a[i].abs().max(b[i].abs()).max(va.abs()) / h;
+                            let err = (tangent[i] - fd).abs();
+                            assert!(err <= 1e-6 * fd.abs() + floor, "effects {bits:05b}, v_a {va}, given {}, known {k}, output {i}: {} vs {fd}", given.is_some(), tangent[i]);
+                            checked += (fd.abs() > floor * 1e6) as usize;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 1500, "only {checked} nonzero entries checked");
+    }
+
+    /// The initial state's tangent against a central difference of x_0(u) [6].
+    #[test]
+    fn initial_state_tangent_matches_a_central_difference() {
+        for (equilibrium, variable) in [(true, false), (true, true), (false, true), (false, false)] {
+            let p = Parameters { span_length: 1.0, start_at_equilibrium: equilibrium, variable_length: variable, strain_start: 2e-3, ..Parameters::default() };
+            let u = Inputs { speed_a: 5.0, strain_a: 1e-3, speed_b: 5.02, frame_a: [0.1, 0.2], frame_b: [0.9, 0.8] };
+            let x0 = |u: &Inputs| {
+                let eps = if equilibrium { physics::equilibrium_strain(u).unwrap() } else { p.strain_start };
+                physics::span_length(&p, u) / (1.0 + eps)
+            };
+            for k in 0..7 {
+                let mut d = Inputs::default();
+                let (mut up, mut down) = (u, u);
+                let h = 1e-7 * input_mut(&mut up, k).abs().max(if k == 1 { 1e-3 } else { 1.0 });
+                *input_mut(&mut d, k) = 1.0;
+                *input_mut(&mut up, k) += h;
+                *input_mut(&mut down, k) -= h;
+                let fd = (x0(&up) - x0(&down)) / (2.0 * h);
+                let got = initial_state_tangent(&p, &u, &d);
+                assert!((got - fd).abs() <= 1e-6 * fd.abs() + 1e3 * f64::EPSILON / h, "eq {equilibrium}, var {variable}, known {k}: {got} vs {fd}");
+            }
+        }
+    }
+}

@@ -26,6 +26,7 @@ pub mod parameters;
 pub mod jacobian;
 pub mod physics;
 pub mod records;
+pub mod schedule;
 pub mod sensor;
 mod slack;
 pub mod stress_strain;

@@ -2,11 +2,12 @@
 //! FMI layer calls (initialization, steps, Model Exchange, FMU states).
 
 use crate::description::{Real, DESCRIPTION};
-use crate::parameters::{Inputs, Parameters, Rates};
+use crate::parameters::{Inputs, Parameters, Rates, WebProperties};
 use crate::physics::{self, Outputs};
 use crate::sensor::SensorScale;
 use crate::stepping;
 use crate::records;
+use crate::schedule::{self, WebChange};
 use crate::jacobian::{self, Direction, Point};
 use fmi2::{Event, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use crate::stress_strain::StressStrain;
@@ -34,6 +35,10 @@ pub struct ConvertingSpan {
     tolerance: f64,
     /// Where the tension crossed zero inside the last step (slack web).
     slack_event: Option<Event>,
+    /// The time now, s, and the profile's web changes (a splice) with the next one due.
+    time: f64,
+    web_changes: Arc<[WebChange]>,
+    next_change: usize,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -75,7 +80,7 @@ impl ConvertingSpan {
         physics::outputs(p, &self.inputs, self.unstretched, rates, &self.sensor)
     }
 
-    /// d(unknown)/d(known) [14]: `known` is an input or the state, `unknown`
+    /// d(unknown)/d(known) (docs/directional-derivatives.md): `known` is an input or the state, `unknown`
     /// an output, the state or its derivative; during initialization the
     /// state is the initial state's function of the inputs.
     pub fn partial_derivative(&self, unknown: Real, known: Real, of: Jacobian) -> FmiResult<f64> {
@@ -229,7 +234,7 @@ fn check_inputs_at_end(end: &Inputs, rates: &Inputs, h: f64) -> FmiResult {
 /// (E*A, rho*A of a web of 1e300 m width) would make outputs infinite. Only
 /// the products the equations use: the span web's stiffness and linear
 /// density, and the arriving web's linear density with web mass.
-fn check_derived(p: &Parameters) -> FmiResult {
+pub(crate) fn check_derived(p: &Parameters) -> FmiResult {
     let w = &p.span_web;
     let used = [
         Some(("wp2: E*width*thickness", w.stiffness())),
@@ -243,6 +248,16 @@ fn check_derived(p: &Parameters) -> FmiResult {
 }
 
 impl ConvertingSpan {
+    /// Swaps in the webs of the changes due now; the strain carries over.
+    fn apply_due_changes(&mut self) {
+        while let Some(change) = self.web_changes.get(self.next_change).filter(|c| schedule::due(c.time, self.time)) {
+            change.apply(&mut self.params);
+            // Checked when the profile was read: the scale exists.
+            self.sensor = SensorScale::new(&self.params).unwrap_or(self.sensor);
+            self.next_change += 1;
+        }
+    }
+
     /// The span at least as long as the shortest L, and its strain within bounds.
     #[inline]
     fn configuration_valid(&self) -> FmiResult {
@@ -288,13 +303,11 @@ impl Model for ConvertingSpan {
         out.f64(self.tolerance);
         // The records' stress–strain tables: a state restores without the files.
         for web in [&self.params.incoming, &self.params.span_web] {
-            let points: Vec<[f64; 2]> = web.curve.as_ref().map_or_else(Vec::new, |c| c.points().collect());
-            out.i32(points.len() as i32);
-            for [e, s] in points {
-                out.f64(e);
-                out.f64(s);
-            }
+            save_curve(web, out);
         }
+        out.f64(self.time);
+        out.i32(self.next_change as i32);
+        schedule::save(&self.web_changes, out);
     }
 
     fn load_state(&mut self, r: &mut StateReader) -> FmiResult {
@@ -316,16 +329,15 @@ impl Model for ConvertingSpan {
         self.adaptive_step = r.finite("adaptive step")?;
         self.tolerance = r.finite("effective tolerance")?;
         for (web, what) in [(&mut self.params.incoming, "wp1 stress_strain"), (&mut self.params.span_web, "wp2 stress_strain")] {
-            let n = r.i32(what)?;
-            if !(0..=1_000_000).contains(&n) {
-                return Err(FmiError::error(format!("{what} has {n} points")));
-            }
-            let points = (0..n).map(|_| Ok([r.finite(what)?, r.finite(what)?])).collect::<FmiResult<Vec<_>>>()?;
-            web.curve = match points.is_empty() {
-                true => None,
-                false => Some(Arc::new(StressStrain::new(&points).map_err(|e| FmiError::error(format!("{what} {e}")))?)),
-            };
+            web.curve = load_curve(r, what)?;
         }
+        self.time = r.finite("time")?;
+        let next = r.i32("next web change")?;
+        self.web_changes = schedule::load_saved(r)?;
+        if !(0..=self.web_changes.len() as i64).contains(&(next as i64)) {
+            return Err(FmiError::error(format!("next web change {next} of {}", self.web_changes.len())));
+        }
+        self.next_change = next as usize;
         // Derived from the parameters; a state saved before initialization
         // ended gets the scale of its parameters, which initialization recomputes.
         self.sensor = SensorScale::new(&self.params).unwrap_or_default();
@@ -397,11 +409,27 @@ impl Model for ConvertingSpan {
         self.rates = Rates::default();
         self.previous = Previous::default();
         self.adaptive_step = 0.0;
+        self.web_changes = schedule::load(self, resources)?;
+        self.next_change = 0;
+        self.time = experiment.start_time;
         Ok(())
     }
 
+    #[inline]
+    fn set_time(&mut self, time: f64) {
+        self.time = time;
+    }
+
     fn do_step(&mut self, h: f64) -> FmiResult {
+        if self.next_change < self.web_changes.len() {
+            self.apply_due_changes();
+        }
         self.advance(h)
+    }
+
+    fn event_update(&mut self) -> fmi2::EventUpdate {
+        self.apply_due_changes();
+        fmi2::EventUpdate { next_event_time: self.web_changes.get(self.next_change).map(|c| c.time), states_changed: false }
     }
 
     /// A state saved with rollers transiently too close is still the model's
@@ -495,4 +523,44 @@ pub fn effective_tolerance(parameter: f64, experiment: Option<f64>) -> f64 {
         Some(t) if parameter == default => t,
         _ => parameter,
     }
+}
+
+/// A web's values and stress–strain table in an FMU state.
+pub(crate) fn save_web(web: &WebProperties, out: &mut StateWriter) {
+    for x in [web.modulus, web.thickness, web.width, web.density, web.retardation_time] {
+        out.f64(x);
+    }
+    save_curve(web, out);
+}
+
+pub(crate) fn load_web(r: &mut StateReader, what: &str) -> FmiResult<WebProperties> {
+    Ok(WebProperties {
+        modulus: r.finite(what)?,
+        thickness: r.finite(what)?,
+        width: r.finite(what)?,
+        density: r.finite(what)?,
+        retardation_time: r.finite(what)?,
+        curve: load_curve(r, what)?,
+    })
+}
+
+fn save_curve(web: &WebProperties, out: &mut StateWriter) {
+    let points: Vec<[f64; 2]> = web.curve.as_ref().map_or_else(Vec::new, |c| c.points().collect());
+    out.i32(points.len() as i32);
+    for [e, s] in points {
+        out.f64(e);
+        out.f64(s);
+    }
+}
+
+fn load_curve(r: &mut StateReader, what: &str) -> FmiResult<Option<Arc<StressStrain>>> {
+    let n = r.i32(what)?;
+    if !(0..=1_000_000).contains(&n) {
+        return Err(FmiError::error(format!("{what} has {n} points")));
+    }
+    let points = (0..n).map(|_| Ok([r.finite(what)?, r.finite(what)?])).collect::<FmiResult<Vec<_>>>()?;
+    Ok(match points.is_empty() {
+        true => None,
+        false => Some(Arc::new(StressStrain::new(&points).map_err(|e| FmiError::error(format!("{what} {e}")))?)),
+    })
 }

@@ -52,6 +52,8 @@ pub struct Parameters {
     pub span_record: Arc<str>,
     /// `webLibrary`: a user's JSON file of records, searched first ("": none).
     pub web_library: Arc<str>,
+    /// `profile`: a JSON file of timed web changes ("": the FMU's own, if any).
+    pub profile: Arc<str>,
     pub include_damping: bool,
     pub prevent_negative_tension: bool,
     pub include_mass: bool,

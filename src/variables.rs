@@ -62,5 +62,6 @@ fmi2::bind_variables! {
         wp1_record: param(params.incoming_record),
         wp2_record: param(params.span_record),
         webLibrary: param(params.web_library),
+        profile: param(params.profile),
     }
 }

@@ -211,7 +211,7 @@ enum Outcome {
 fn outcome(api: Api) -> Outcome {
     match api {
         Api::GetStatus | Api::GetIntegerStatus | Api::GetStringStatus => Outcome::Discard,
-        Api::GetDirectionalDerivative | Api::GetRealOutputDerivatives | Api::CancelStep => Outcome::Unsupported,
+        Api::GetRealOutputDerivatives | Api::CancelStep => Outcome::Unsupported,
         _ => Outcome::Ok,
     }
 }
@@ -1400,6 +1400,8 @@ fn perturbed_text(v: &Variable) -> String {
         "wp1.record" => "LDPE-50".into(),
         "wp2.record" => "BOPP-20".into(),
         "webLibrary" => concat!(env!("CARGO_MANIFEST_DIR"), "/tests/records/user_webs.json").into(),
+        // Changes later than the start: no initial value depends on them.
+        "profile" => concat!(env!("CARGO_MANIFEST_DIR"), "/tests/records/splice_profile.json").into(),
         other => panic!("no perturbation for {other}"),
     }
 }
@@ -1547,12 +1549,12 @@ fn initial_dependencies_are_exact() {
 
 // ================================================== 6. unsupported functions, status, NULL
 
-/// Proves that the co-simulation functions this FMU does not provide
-/// (directional derivatives, output derivatives) return fmi2Error with
-/// one line naming the function and saying "not supported" in step complete.
+/// Proves that the co-simulation function this FMU does not provide
+/// (output derivatives) returns fmi2Error with one line naming the
+/// function and saying "not supported" in step complete.
 #[test]
 fn unsupported_co_simulation_functions_say_not_supported() {
-    for api in [Api::GetDirectionalDerivative, Api::GetRealOutputDerivatives] {
+    for api in [Api::GetRealOutputDerivatives] {
         let fmu = drive(Phase::Complete);
         assert_eq!(fmu.call(api), ERROR, "{}", api.c_name());
         assert_one_error(&fmu.take_logs(), &[&api.c_name(), "not supported"]);
@@ -1599,6 +1601,50 @@ fn set_real_input_derivatives_validates_its_arguments() {
     assert_ne!(held.real("unstretchedLength"), moving.real("unstretchedLength"));
     let (x_held, x_moving) = (held.real("unstretchedLength"), moving.real("unstretchedLength"));
     assert!(relative_change(x_held, x_moving) < 1e-3, "a small rate changes the state a little");
+}
+
+/// Proves that fmi2GetDirectionalDerivative gives the model's partial
+/// derivatives summed with the seed (d(web_a.F) along web_b.v and
+/// web_a.eps: the damping term; the sum is exact to rounding), 0 for
+/// structurally independent pairs, and refuses with one line naming the
+/// argument: a parameter as known, the state as known in Co-Simulation, a
+/// non-unknown, a NaN seed, NULL arrays and one array for dvKnown and dvUnknown.
+#[test]
+fn directional_derivatives_through_the_c_api() {
+    let (f, vb, ea, x) = (Real::web_a_F.vr(), Real::web_b_v.vr(), Real::web_a_eps.vr(), Real::unstretchedLength.vr());
+    let fmu = drive(Phase::Complete);
+    let (s1, column_b) = fmu.directional_derivative(&[f, Real::v.vr()], &[vb], &[1.0]);
+    let (s2, column_e) = fmu.directional_derivative(&[f], &[ea], &[1.0]);
+    let (s3, both) = fmu.directional_derivative(&[f], &[vb, ea], &[2.0, -3.0]);
+    assert_eq!((s1, s2, s3), (OK, OK, OK), "{:?}", fmu.logs());
+    // T = EA*(eps + d_r*deps/dt), deps/dt = -(1+eps)^2/L * (v_a/(1+eps_a) - v_b/(1+eps)): by hand.
+    let (ea_stiff, d_r, length) = (2e10 * 59e-6, 0.02, 1.5);
+    let stretch = 1.0 + fmu.real("summary_Strain");
+    let (va, eps_a) = (fmu.real("web_a.v"), fmu.real("web_a.eps"));
+    let by_hand = [ea_stiff * d_r * stretch / length, ea_stiff * d_r * stretch * stretch / length * va / ((1.0 + eps_a) * (1.0 + eps_a))];
+    for (got, want) in [(column_b[0], by_hand[0]), (column_e[0], by_hand[1])] {
+        assert!((got - want).abs() <= 1e-12 * want.abs(), "{got} vs {want} (by hand)");
+    }
+    assert_eq!(column_b[1], 1.0, "v = web_b.v in m/s");
+    let sum = 2.0 * column_b[0] - 3.0 * column_e[0];
+    assert!((both[0] - sum).abs() <= 1e-15 * sum.abs().max(column_b[0].abs()), "{} vs {sum}", both[0]);
+    let cases: [(&str, &[u32], &[u32], &[f64], &str); 5] = [
+        ("parameter known", &[f], &[Real::L.vr()], &[1.0], "vKnown_ref: L (value reference 1) is not a known in Co-Simulation"),
+        ("state known in CS", &[f], &[x], &[1.0], "unstretchedLength (value reference 31) is not a known"),
+        ("input unknown", &[vb], &[ea], &[1.0], "vUnknown_ref: web_b.v (value reference 21) is not an unknown"),
+        ("no variable", &[9999], &[ea], &[1.0], "value reference 9999 (no variable)"),
+        ("NaN seed", &[f], &[vb, ea], &[1.0, f64::NAN], "dvKnown[1] = NaN"),
+    ];
+    for (what, unknowns, knowns, seed, needle) in cases {
+        let fmu = drive(Phase::Complete);
+        assert_eq!(fmu.directional_derivative(unknowns, knowns, seed).0, ERROR, "{what}");
+        assert_one_error(&fmu.take_logs(), &["fmi2GetDirectionalDerivative", needle]);
+    }
+    for (what, buffer, needle) in [("shared", Some(&mut [1.0][..]), "overlap"), ("NULL", None, "dvKnown is NULL")] {
+        let fmu = drive(Phase::Complete);
+        assert_eq!(fmu.directional_derivative_in_place(&[f], &[vb], buffer), ERROR, "{what}");
+        assert_one_error(&fmu.take_logs(), &["fmi2GetDirectionalDerivative", needle]);
+    }
 }
 
 /// Proves that fmi2CancelStep, which this FMU does not offer (steps are

@@ -307,3 +307,108 @@ def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind,
         assert len(fmu.getDirectionalDerivative([vr["T"]], [vr["web_b.v"]], [1.0])) == 1
     finally:
         fmu.freeInstance()
+
+
+# ---------------------------------------------------------------- the Roller
+# The same check on the Roller: states omega, r, y, y' (ME), inputs web_a.F,
+# web_b.F, web_a.eps, tau_m, F_load. The outputs are polynomials in the states
+# and inputs (degree <= 4 in r), so the same steps and tolerances apply.
+
+ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load")
+ROLLER_STATES = ("omega", "r", "y", "y_dot")
+ROLLER_UNKNOWNS = ("web_a.v", "web_b.v", "web_b.eps", "omega", "r", "y", "y_dot", "tau", "web_a.x", "web_a.y",
+                   "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)")
+ROLLER_POINT = {"web_a.F": 180.0, "web_b.F": 230.0, "web_a.eps": 1e-3, "tau_m": 1.5, "F_load": 400.0}
+ROLLER_PARAMS = {"J": 0.3, "R": 0.15, "b": 0.02, "v_start": 5.0, "wound.thickness": 1e-4, "wound.density": 900.0,
+                 "wound.width": 1.2, "carriage.m": 3.0, "carriage.d": 40.0, "carriage.k": 2000.0, "carriage.y_start": 0.5}
+# Tables linear over the first 10 s: the test points sit inside one piece.
+DRIVES = {
+    "idler": {},
+    "torque": {"torque": [[0, 1.0], [10, 3.0]]},
+    "tension": {"tension": [[0, 200.0], [10, 260.0]]},
+    "speed": {"speed": [[0, 5.0], [10, 6.0]]},
+}
+ROLLER_CASES = [
+    (drive, roll, carriage)
+    for drive in DRIVES
+    for roll in (0, 1, 2)
+    if not (drive == "tension" and roll == 0)  # a tension drive is an unwinder's or a winder's
+    for carriage in (False, True)
+]
+
+
+def roller_label(case):
+    drive, roll, carriage = case
+    return f"{drive}-{['roller', 'unwinder', 'winder'][roll]}{'-dancer' if carriage else ''}"
+
+
+@pytest.fixture(scope="module")
+def roller(fmus):
+    from fmpy import extract
+
+    path = fmus / "Roller.fmu"
+    md = read_model_description(str(path))
+    return md, extract(str(path)), {v.name: v.valueReference for v in md.modelVariables}
+
+
+def roller_jacobians(fmu, vr, unknowns, knowns):
+    u_refs = [vr[n] for n in unknowns]
+    states = ROLLER_STATES
+    analytic, fd, noise = {}, {}, {}
+    for k in knowns:
+        column = fmu.getDirectionalDerivative(u_refs, [vr[k]], [1.0])
+        x = fmu.getReal([vr[s] for s in states])
+        value = x[states.index(k)] if k in states else fmu.getReal([vr[k]])[0]
+        h = STEP * max(abs(value), 1e-3 if k in ("web_a.eps", "r") else 1.0)
+
+        def put(v):
+            if k in states:
+                x2 = list(x)
+                x2[states.index(k)] = v
+                fmu.setContinuousStates((fmi2Real * 4)(*x2), 4)
+            else:
+                fmu.setReal([vr[k]], [v])
+
+        put(value + h)
+        up = fmu.getReal(u_refs)
+        put(value - h)
+        down = fmu.getReal(u_refs)
+        put(value)
+        for i, n in enumerate(unknowns):
+            analytic[n, k] = column[i]
+            fd[n, k] = (up[i] - down[i]) / (2 * h)
+            noise[n, k] = ROUNDING * max(abs(up[i]), abs(down[i]), 1.0) / h
+    return analytic, fd, noise
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("case", ROLLER_CASES, ids=roller_label)
+def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
+    import json
+
+    md, unzipdir, vr = roller
+    drive, roll, carriage = case
+    profile = dict(DRIVES[drive])
+    if carriage:
+        profile["load"] = [[0, 50.0], [10, 80.0]]
+    path = tmp_path / "profile.json"
+    path.write_text(json.dumps(profile))
+    me = kind == "ModelExchange"
+    fmu = instantiate(unzipdir, md, kind)
+    try:
+        values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "profile": str(path)}
+        start(fmu, vr, values, me=me)
+        if me:
+            fmu.setTime(0.25)
+            # Away from the start values: the carriage moving, the roll grown.
+            fmu.setContinuousStates((fmi2Real * 4)(33.0, 0.16, 0.52, -0.03), 4)
+        else:
+            fmu.doStep(0.0, 0.25)
+        knowns = ROLLER_INPUTS + (ROLLER_STATES if me else ())
+        a, f, n = roller_jacobians(fmu, vr, ROLLER_UNKNOWNS, knowns)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    what = f"Roller {kind} {roller_label(case)}"
+    worst = compare(what, a, f, n)
+    print(f"{what}: max relative error {worst:.1e}")

@@ -21,7 +21,7 @@ import pytest
 from conftest import ROOT
 from fmpy import simulate_fmu
 from webline import records
-from webline.master import CoSimulation, Options
+from webline.master import run_scene
 from webline.reference import reference
 from webline.scene import parse_scene
 from webline.study import errors
@@ -132,14 +132,14 @@ SCENE = """{
 def test_a_scene_with_records_runs_in_webline(fmus, tmp_path):
     scene = parse_scene(SCENE % {"library": USER}, "records.json", fmu_dir=fmus)
     assert scene.webs["paper"].curve is not None and scene.webs["film"].record == "PET-50"
-    result = CoSimulation(scene, Options(fmu_dir=fmus)).run()
+    result = run_scene(scene, fmu_dir=fmus)
     # The same line with the linear records' numbers written out.
     film, laminate = (records.shipped_library(fmus / "ConvertingSpan.fmu")[n] for n in ("PET-50", "PET12-Al9"))
     spelled = json.loads(SCENE % {"library": USER})
     for key, r in (("film", film), ("laminate", laminate)):
         spelled["webs"][key] = {"E": f"{r.E!r} Pa", "thickness": f"{r.thickness!r} m", "width": f"{r.width!r} m",
                                 "density": f"{r.density!r} kg/m3"}
-    same = CoSimulation(parse_scene(json.dumps(spelled), "spelled.json", fmu_dir=fmus), Options(fmu_dir=fmus)).run()
+    same = run_scene(parse_scene(json.dumps(spelled), "spelled.json", fmu_dir=fmus), fmu_dir=fmus)
     assert np.array_equal(result.column("a.T"), same.column("a.T")), "linear records: bit-identical"
     # The curve span against the monolithic reference (SciPy's Radau), at this step's coupling error.
     ref = reference(scene, times=result.time)

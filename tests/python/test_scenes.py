@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 from conftest import ROOT, SCENES
-from webline.master import CoSimulation, Options
+from webline.master import run_scene
 from webline.scene import SceneError, load_scene, parse_scene
 
 
@@ -144,8 +144,8 @@ def test_runner_writes_csv_png_and_a_summary(fmus, tmp_path):
 
 def test_jacobi_and_gauss_seidel_agree_on_a_gentle_line(fmus):
     s = parse_scene(BASE, "base.json")
-    gs = CoSimulation(s, Options(fmu_dir=fmus, step=2.5e-4)).run()
-    jac = CoSimulation(s, Options(fmu_dir=fmus, step=2.5e-4, algorithm="jacobi")).run()
+    gs = run_scene(s, fmu_dir=fmus, step=2.5e-4)
+    jac = run_scene(s, fmu_dir=fmus, step=2.5e-4, algorithm="jacobi")
     for k in ("a.T", "b.T"):
         scale = np.max(np.abs(gs.column(k)))
         assert np.max(np.abs(gs.column(k) - jac.column(k))) / scale < 1e-3
@@ -168,22 +168,24 @@ def test_a_discarded_step_is_rolled_back_and_halved(fmus):
     restores every FMU and retries with half steps until they pass."""
     euler = parse_scene(ONE_SPAN.replace("SOLVER", '"solver": "euler", "substeps": 1'), "euler.json")
     exact = parse_scene(ONE_SPAN.replace("SOLVER", '"solver": "exact"'), "exact.json")
-    r = CoSimulation(euler, Options(fmu_dir=fmus)).run()
+    r = run_scene(euler, fmu_dir=fmus)
     assert r.info["rollbacks"] > 0
-    e = CoSimulation(exact, Options(fmu_dir=fmus)).run()
+    e = run_scene(exact, fmu_dir=fmus)
     assert e.info["rollbacks"] == 0
     # Euler on the halved steps (lambda*h = 1.25) is first order: near the exact step, not on it.
     scale = np.max(np.abs(e.column("s.T")))
     err = np.max(np.abs(r.column("s.T") - e.column("s.T"))) / scale
     assert 1e-6 < err < 0.05, err
     with pytest.raises(Exception, match="rollback is off"):
-        CoSimulation(euler, Options(fmu_dir=fmus, rollback=False)).run()
+        run_scene(euler, fmu_dir=fmus, rollback=False)
 
 
-def test_events_replace_instances(fmus):
+def test_events_change_parameters_inside_the_fmus(fmus):
+    """The splice's five events are `set` entries of the components' profiles:
+    one instance per component for the whole run, the state kept."""
     s = load_scene(SCENES / "splice.json", {"stop_time": "1.6 s"})
-    r = CoSimulation(s, Options(fmu_dir=fmus)).run()
-    assert r.info["replaced"] == 5
+    r = run_scene(s, fmu_dir=fmus)
+    assert len(r.info["events"]) == 5 and r.info["instances"] == 5
     # The roll's surface speed is continuous through the roll change at 1 s.
     v = r.column("unwind.v")
     i = int(np.argmin(np.abs(r.time - 1.0)))

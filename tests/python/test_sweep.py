@@ -3,7 +3,7 @@ existing scheduler's address, and each row equal to the same point run alone."""
 
 import pytest
 from conftest import SCENES
-from webline.master import CoSimulation, Options
+from webline.master import run_scene
 from webline.scene import SceneError, load_scene
 from webline.sweep import Table, parse_grid, run_sweep
 
@@ -29,7 +29,7 @@ def test_local_cluster_runs_the_grid_and_matches_single_runs(fmus, tmp_path):
     # Each row is the same co-simulation as the point run on its own.
     row = table.rows[1]
     s = load_scene(SCENE, {"stop_time": "0.4 s", "line.rewind.drive.tension": "250 N", "line.to_rewind.L": "2 m"})
-    alone = CoSimulation(s, Options(fmu_dir=fmus)).run()
+    alone = run_scene(s, fmu_dir=fmus)
     assert row["to_rewind.T_max [N]"] == float(alone.column("to_rewind.T").max())
     assert row["film.T_end [N]"] == float(alone.column("film.T")[-1])
     path = tmp_path / "sweep.csv"

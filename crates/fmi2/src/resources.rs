@@ -38,6 +38,14 @@ impl Resources {
         }
     }
 
+    /// The folder, or why there is none.
+    pub fn folder_or_why(&self) -> Result<&Path, &str> {
+        match self {
+            Resources::Folder(folder) => Ok(folder),
+            Resources::Unusable(why) => Err(why),
+        }
+    }
+
     pub fn folder(&self) -> Option<&Path> {
         match self {
             Resources::Folder(folder) => Some(folder),

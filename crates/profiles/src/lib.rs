@@ -18,7 +18,28 @@ pub use table::Table;
 
 use serde::Deserialize;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The file an FMU carries for itself, used when the `profile` parameter is empty.
+pub const OWN_PROFILE: &str = "profile.json";
+
+/// The file a `profile` parameter names: an absolute path, a name in the
+/// FMU's resources folder, or (empty) the FMU's own `resources/profile.json`
+/// if it has one (`Ok(None)`: no profile). `folder` is the resources folder,
+/// or why there is none.
+pub fn locate(name: &str, folder: Result<&Path, &str>) -> Result<Option<PathBuf>, String> {
+    if name.is_empty() {
+        return Ok(folder.ok().map(|f| f.join(OWN_PROFILE)).filter(|p| p.is_file()));
+    }
+    let path = Path::new(name);
+    if path.is_absolute() {
+        return Ok(Some(path.to_path_buf()));
+    }
+    match folder {
+        Ok(f) => Ok(Some(f.join(name))),
+        Err(why) => Err(format!("profile = {name:?}: cannot read resources/{name} of the FMU: {why}")),
+    }
+}
 
 /// Profiles are small; a larger file is refused before it is read.
 pub const MAX_FILE_BYTES: u64 = 16 << 20;

@@ -5,14 +5,10 @@ use crate::description::{Real, DESCRIPTION};
 use crate::physics::Parameters;
 use fmi2::{FmiError, FmiResult, Resources};
 use profiles::{Profile, Table, Value};
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The table keys a roller's profile may have.
 pub const TABLES: [&str; 5] = ["speed", "torque", "tension", "strain", "load"];
-
-/// The file an FMU carries for itself when `profile` is empty.
-pub const OWN_PROFILE: &str = "profile.json";
 
 /// How the roller is driven: at most one of the profile's drive tables.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,21 +38,8 @@ impl Loaded {
     }
 }
 
-/// The file `profile` names: an absolute path, a name in resources/, or
-/// (empty) the FMU's own resources/profile.json if it has one.
-fn locate(name: &str, resources: &Resources) -> FmiResult<Option<PathBuf>> {
-    if name.is_empty() {
-        return Ok(resources.folder().map(|f| f.join(OWN_PROFILE)).filter(|p| p.is_file()));
-    }
-    let path = Path::new(name);
-    if path.is_absolute() {
-        return Ok(Some(path.to_path_buf()));
-    }
-    resources.file(name).map(Some).map_err(|e| e.prefixed(&format!("profile = {name:?}")))
-}
-
 pub fn load(p: &Parameters, resources: &Resources) -> FmiResult<Option<Loaded>> {
-    let Some(path) = locate(&p.profile, resources)? else { return Ok(None) };
+    let Some(path) = profiles::locate(&p.profile, resources.folder_or_why()).map_err(FmiError::error)? else { return Ok(None) };
     let text = Profile::read_text(&path).map_err(FmiError::error)?;
     parse(p, &text).map(Some).map_err(|e| FmiError::error(format!("profile {}: {e}", path.display())))
 }

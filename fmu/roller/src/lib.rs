@@ -5,6 +5,7 @@
 //!
 //! * `physics` — the equations and their exact steps;
 //! * `drive` — the profile: the drive and the tables of time it follows;
+//! * `jacobian` — the partial derivatives of the outputs and state derivatives;
 //! * `description` — the interface generated from modelDescription.xml;
 //! * this file — the variables bound to their fields, and the FMI model hooks.
 
@@ -12,11 +13,12 @@
 
 pub mod description;
 pub mod drive;
+pub mod jacobian;
 pub mod physics;
 
 use description::{Boolean, Integer, Real, Text, DESCRIPTION};
 use drive::{Drive, Loaded};
-use fmi2::{EventUpdate, Experiment, FmiError, FmiResult, Model, Resources, StateReader, StateWriter};
+use fmi2::{EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use physics::{Inputs, Parameters, Roll};
 use profiles::Value;
 use solver::CompensatedSum;
@@ -162,8 +164,10 @@ impl Roller {
         2.0 * self.roll.radius
     }
 
+    /// Heights from the dancer's start position, up positive: 0 at the start,
+    /// so a master that starts its inputs at 0 (FMPy) still sees a valid span.
     fn contact_y(&self) -> f64 {
-        -self.carriage[0]
+        self.params.carriage_start - self.carriage[0]
     }
 
     /// d/dt of (omega, r, y, y') now [R1]–[R4], for Model Exchange.
@@ -391,6 +395,39 @@ impl Model for Roller {
     fn get_derivatives(&self, dx: &mut [f64]) -> FmiResult {
         dx.copy_from_slice(&self.derivatives());
         Ok(())
+    }
+
+    /// The initial state does not depend on the inputs, so every phase has
+    /// the same partial derivatives (the layer allows the states as knowns only in ME).
+    fn partial_derivative(&self, unknown: u32, known: u32, _of: Jacobian) -> FmiResult<f64> {
+        let real = |vr| Real::from_vr(vr).ok_or_else(|| fmi2::model::unknown_vr(vr));
+        let mut d = jacobian::Direction::default();
+        match real(known)? {
+            Real::omega => d.state[0] = 1.0,
+            Real::r => d.state[1] = 1.0,
+            Real::y => d.state[2] = 1.0,
+            Real::y_dot => d.state[3] = 1.0,
+            k => *Self::input_field(&mut d.u, k).ok_or_else(|| FmiError::error(format!("{} is not a known", k.name())))? = 1.0,
+        }
+        let t = self.tangents(&d);
+        // The same outputs as the bindings above.
+        Ok(match real(unknown)? {
+            Real::web_a_v | Real::web_b_v => t.speed,
+            Real::web_b_eps => t.strain_leaving,
+            Real::omega => d.state[0],
+            Real::r => d.state[1],
+            Real::y => d.state[2],
+            Real::y_dot => d.state[3],
+            Real::tau => t.torque,
+            Real::web_a_x => 0.0,
+            Real::web_a_y | Real::web_b_y => -d.state[2],
+            Real::web_b_x => 2.0 * d.state[1],
+            Real::der_omega => t.derivatives[0],
+            Real::der_r => t.derivatives[1],
+            Real::der_y => t.derivatives[2],
+            Real::der_y_dot => t.derivatives[3],
+            other => return Err(FmiError::error(format!("{} is not an unknown", other.name()))),
+        })
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {

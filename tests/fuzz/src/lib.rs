@@ -1871,8 +1871,9 @@ fn op_status(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     Ok(())
 }
 
-/// Model Exchange functions, directional derivatives, output derivatives
-/// and fmi2CancelStep: not offered, so fmi2Error in every state.
+/// Model Exchange functions, output derivatives and fmi2CancelStep: not
+/// offered, so fmi2Error in every state; directional derivatives with one
+/// array for dvKnown and dvUnknown: refused unless empty.
 fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let t = target(r, src);
     let which = src.pick(14);
@@ -1906,6 +1907,9 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             let nx = desc().states.len();
             let sized = !null || n == 0;
             if f == Fn::GetRealOutputDerivatives {
+                vec![OK, ERROR]
+            } else if f == Fn::GetDirectionalDerivative && n == 0 {
+                // Nothing asked: OK, or an error where outputs are not computable.
                 vec![OK, ERROR]
             } else if slot.me && f == Fn::ModelExchange && (which <= 5 || (sized && n == nx) || (which == 8 && sized)) {
                 // Model Exchange calls with arrays of the right size (nx

@@ -909,6 +909,24 @@ impl<M: Model> Fmu<M> {
         // SAFETY: live instance; three slices of vrs.len() elements.
         unsafe { fmi2SetRealInputDerivatives(self.c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), values.as_ptr()) }
     }
+
+    /// `fmi2GetDirectionalDerivative` with separate arrays: the status and dvUnknown.
+    pub fn directional_derivative(&self, unknowns: &[u32], knowns: &[u32], seed: &[f64]) -> (i32, Vec<f64>) {
+        assert_eq!(knowns.len(), seed.len());
+        let mut out = vec![f64::NAN; unknowns.len()];
+        // SAFETY: live instance; slices of the lengths passed.
+        let status = unsafe {
+            fmi2GetDirectionalDerivative(self.c, unknowns.as_ptr(), unknowns.len(), knowns.as_ptr(), knowns.len(), seed.as_ptr(), out.as_mut_ptr())
+        };
+        (status, out)
+    }
+
+    /// `fmi2GetDirectionalDerivative` with one array as dvKnown and dvUnknown (refused), or NULL ones.
+    pub fn directional_derivative_in_place(&self, unknowns: &[u32], knowns: &[u32], buffer: Option<&mut [f64]>) -> i32 {
+        let p = buffer.map_or(std::ptr::null_mut(), |b| b.as_mut_ptr());
+        // SAFETY: live instance; the FMU must refuse the shared or NULL array before it reads it.
+        unsafe { fmi2GetDirectionalDerivative(self.c, unknowns.as_ptr(), unknowns.len(), knowns.as_ptr(), knowns.len(), p, p) }
+    }
 }
 
 // The short forms the hardening tests and the fuzz harness use.

@@ -3,9 +3,10 @@
     webline run webline/scenes/lamination.json      # CSV, PNG and a summary in out/
     python -m webline --help
 
-Modules: `scene` (the JSON format, read strictly), `master` (the
-co-simulation), `reference` (the monolithic SciPy reference), `container`
-(the same line as an FMPy container FMU), `sweep` (parameter grids on Dask).
+Modules: `scene` (the JSON format, read strictly), `system` (a line as FMU
+components and connections; scenes compiled into one), `master` (runs a
+System), `reference` (the monolithic SciPy reference), `sweep` (parameter
+grids on Dask).
 """
 
 from .scene import SceneError, load_scene, parse_scene  # noqa: F401

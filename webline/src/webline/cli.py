@@ -1,10 +1,10 @@
 """The `webline` command.
 
-    webline run SCENE.json [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
-    webline check SCENE.json ...
+    webline run SCENE.json|LINE.ssp [--engine webline|libcosim|fmpy] [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
+    webline export SCENE.json -o LINE.ssp
+    webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
     webline reference SCENE.json
     webline convergence SCENE.json [--steps 2ms,1ms,0.5ms]
-    webline container SCENE.json
     webline study [SCENE.json] [--stiff STIFF.json]
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
 """
@@ -14,15 +14,18 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from . import units
 from .fmus import DEFAULT_FMU_DIR, FmuError
-from .master import ALGORITHMS, COUPLINGS, CoSimulation, CoSimulationError, Options
+from .master import ALGORITHMS, COUPLINGS, CoSimulationError, run_scene, scene_grid
 from .result import Result
+from .engines import ENGINES
 from .scene import Dancer, SceneError, Span, load_scene
+from .ssp import SspError
 
 OUT = DEFAULT_FMU_DIR  # <repo>/out
 
@@ -49,8 +52,8 @@ def add_master_options(p):
     p.add_argument("--no-rollback", action="store_true", help="do not save FMU states; a discarded step is an error")
 
 
-def options_of(args, progress=False) -> Options:
-    return Options(
+def options_of(args, progress=False) -> dict:
+    return dict(
         algorithm=args.algorithm,
         coupling=args.coupling,
         step=args.step,
@@ -65,8 +68,7 @@ def summary(scene, result: Result) -> str:
     lines = [
         f"{scene.name}: {info['method']}, step {info['step'] * 1e3:g} ms, {info['steps']} steps, "
         f"{info['rollbacks']} rollbacks, {info['instances']} FMU instances"
-        + (f" ({info['replaced']} replaced by events)" if info.get("replaced") else "")
-        + f", {info['wall_time']:.2f} s wall time",
+                + f", {info['wall_time']:.2f} s wall time",
     ]
     keys = result.keys()
     spans = [c for c in scene.line if isinstance(c, Span) and f"{c.name}.T" in keys]
@@ -94,14 +96,89 @@ def summary(scene, result: Result) -> str:
     return "\n".join(lines)
 
 
+def system_summary(result: Result) -> str:
+    """What a run of an SSP shows: each recorded column's start, range and end."""
+    info = result.info
+    lines = [f"{result.scene}: {info['method']}, step {info['step'] * 1e3:g} ms, {info['steps']} steps, "
+             f"{info['wall_time']:.2f} s wall time",
+             f"  {'variable':<28}{'start':>12}{'min':>12}{'max':>12}{'end':>12}"]
+    for c in result.columns:
+        x = result.column(c)
+        lines.append(f"  {c:<28}{x[0]:>12.6g}{x.min():>12.6g}{x.max():>12.6g}{x[-1]:>12.6g}")
+    return "\n".join(lines)
+
+
+def export_step(system) -> float:
+    """The step an export carries: the largest stable step `webline check` predicts for the engines'
+    coupling (Jacobi, held inputs), when it is smaller than the scene's; else the scene's."""
+    try:
+        from .stability import predict_step
+    except ImportError:  # the prediction is not there: the scene's step
+        return system.step
+    predicted = predict_step(system)  # NaN: no stable step found
+    return min(system.step, predicted) if math.isfinite(predicted) else system.step
+
+
+def cmd_export(args):
+    from .ssp import write_ssp
+    from .system import compile_scene
+
+    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+    system = compile_scene(scene, args.fmu_dir)
+    system.step = args.step or export_step(system)
+    path = write_ssp(system, args.output or Path(args.out) / f"{scene.name}.ssp")
+    print(f"{scene.name}: {len(system.components)} FMU components, {len(system.connections)} connections, "
+          f"step {system.step * 1e3:g} ms, stop {system.stop_time:g} s; wrote {path}")
+    return 0
+
+
+def run_other(args, progress):
+    """A run of an SSP archive (or a scene exported to one), by any engine: CSV, PNG and a summary."""
+    import tempfile
+
+    from .engines import run_fmpy, run_libcosim
+    from .master import run_system
+    from .ssp import read_ssp, write_ssp
+    from .system import compile_scene
+
+    is_ssp = args.scene.endswith(".ssp")
+    if is_ssp and args.reference:
+        raise SspError(f"{args.scene}: --reference needs a scene (the monolithic reference is computed from it)")
+    with tempfile.TemporaryDirectory(prefix="webline-ssp-") as tmp:
+        tmp = Path(tmp)
+        if is_ssp:
+            scene, archive = None, Path(args.scene)
+        else:
+            scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+            archive = write_ssp(compile_scene(scene, args.fmu_dir), tmp / f"{scene.name}.ssp")
+        system = read_ssp(archive, tmp / "extracted")
+        if args.engine == "libcosim":
+            result = run_libcosim(tmp / "extracted", system, args.step)
+        elif args.engine == "fmpy":
+            result = run_fmpy(archive, system, args.step)
+        else:
+            options = options_of(args, progress=progress)
+            options.pop("fmu_dir", None)  # the archive's FMUs run
+            result = run_system(system, **options)
+    return scene, system.name, result
+
+
 def cmd_run(args):
+    progress = sys.stderr.isatty() if args.progress is None else args.progress
+    if args.scene.endswith(".ssp") or args.engine != "webline":
+        scene, name, result = run_other(args, progress)
+        return report_run(args, scene, name, result, system_summary(result))
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     progress = sys.stderr.isatty() if args.progress is None else args.progress
-    cs = CoSimulation(scene, options_of(args, progress=progress))
-    result = cs.run()
+    result = run_scene(scene, **options_of(args, progress=progress))
+    return report_run(args, scene, scene.name, result, None)
+
+
+def report_run(args, scene, name, result, text):
+    """CSV, the summary (with the reference's errors when asked) and the PNG of a run."""
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    csv_path = out / f"{scene.name}.csv"
+    csv_path = out / f"{name}.csv"
     result.write_csv(csv_path)
     ref = None
     if args.reference:
@@ -110,7 +187,7 @@ def cmd_run(args):
 
         ref = reference(scene, times=result.time)
         errs = errors(result, ref)
-    print(summary(scene, result))
+    print(text or summary(scene, result))
     if ref is not None:
         worst = max(errs.items(), key=lambda kv: kv[1])
         print(f"  against the monolithic reference ({ref.info['method']}, {ref.info['wall_time']:.1f} s): "
@@ -120,28 +197,49 @@ def cmd_run(args):
     if not args.no_plot:
         from .plot import plot
 
-        png = out / f"{scene.name}.png"
-        plot(result, png, title=f"{scene.name}: {scene.description.split('.')[0]}" if scene.description else None, reference=ref)
+        png = out / f"{name}.png"
+        described = scene is not None and scene.description
+        plot(result, png, title=f"{name}: {scene.description.split('.')[0]}" if described else None, reference=ref)
         written.append(str(png))
     print("wrote " + ", ".join(written))
     return 0
 
 
 def cmd_check(args):
+    """Describe each scene (read strictly), then linearize its line and predict the stable steps."""
+    from .stability import StabilityError, analyse, report
+
+    status = 0
     for path in args.scenes:
-        scene = load_scene(path)
-        chain = " -> ".join(f"{c.name} ({c.type})" for c in scene.line)
-        effects = sorted({e for c in scene.spans for e in c.effects})
-        print(f"{path}: {scene.name}: {chain}; effects: {', '.join(effects) or 'none'}; "
-              f"{len(scene.events)} events; step {scene.step * 1e3:g} ms, stop {scene.stop_time:g} s")
-    return 0
+        if str(path).endswith(".ssp"):
+            from .ssp import read_ssp
+
+            system = read_ssp(Path(path), Path(tempfile.mkdtemp(prefix="webline-check-")))
+            print(f"{path}: {system.name}: {len(system.components)} components, step {system.step * 1e3:g} ms")
+        else:
+            from .system import compile_scene
+
+            scene = load_scene(path)
+            chain = " -> ".join(f"{c.name} ({c.type})" for c in scene.line)
+            effects = sorted({e for c in scene.spans for e in c.effects})
+            print(f"{path}: {scene.name}: {chain}; effects: {', '.join(effects) or 'none'}; "
+                  f"{len(scene.events)} events; step {scene.step * 1e3:g} ms, stop {scene.stop_time:g} s")
+            if args.describe_only:
+                continue
+            system = compile_scene(scene, args.fmu_dir, settle=False)
+        try:
+            print(report(system, analyse(system, method=args.method)))
+        except StabilityError as e:
+            print(f"  stability: {e}")
+            status = 2
+    return status
 
 
 def cmd_reference(args):
     from .reference import reference
 
     scene = load_scene(args.scene)
-    ref = reference(scene, times=CoSimulation.grid_of(scene, args.step or scene.step)[0])
+    ref = reference(scene, times=scene_grid(scene, args.step))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{scene.name}_reference.csv"
@@ -193,15 +291,6 @@ def cmd_study(args):
     return 0
 
 
-def cmd_container(args):
-    from .container import compare_container
-
-    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-    report = compare_container(scene, step=args.step, fmu_dir=args.fmu_dir, out=Path(args.out))
-    print(report)
-    return 0
-
-
 def cmd_sweep(args):
     from .sweep import parse_grid, run_sweep
 
@@ -220,9 +309,12 @@ def main(argv=None):
     parser = argparse.ArgumentParser(prog="webline", description="Co-simulate web lines of ConvertingSpan and Roller FMUs.")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("run", help="co-simulate a scene: CSV, PNG and a summary")
-    p.add_argument("scene")
+    p = sub.add_parser("run", help="co-simulate a scene or an SSP archive: CSV, PNG and a summary")
+    p.add_argument("scene", help="a scene (.json) or an SSP archive (.ssp)")
     add_master_options(p)
+    p.add_argument("--engine", choices=ENGINES, default="webline",
+                   help="webline (default; --algorithm and --coupling apply), or libcosim or FMPy on the SSP "
+                        "(Jacobi, held inputs, fixed step); a scene is exported to SSP first")
     p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
     p.add_argument("--no-plot", action="store_true")
     p.add_argument("--reference", action="store_true", help="also compute the monolithic reference and print the error")
@@ -231,8 +323,21 @@ def main(argv=None):
     g.add_argument("--no-progress", dest="progress", action="store_false")
     p.set_defaults(func=cmd_run)
 
-    p = sub.add_parser("check", help="read scenes strictly and describe them")
-    p.add_argument("scenes", nargs="+")
+    p = sub.add_parser("export", help="a scene as an SSP 1.0 archive (FMUs, parameter sets, step) for libcosim, FMPy, ...")
+    p.add_argument("scene")
+    p.add_argument("-o", "--output", type=Path, help="the archive (default: OUT/SCENE.ssp)")
+    p.add_argument("--step", type=time_arg, help="the step the archive carries (default: the predicted stable step, "
+                                                   "or the scene's if smaller)")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
+    p.add_argument("--out", default=str(OUT))
+    p.set_defaults(func=cmd_export)
+
+    p = sub.add_parser("check", help="describe scenes or SSP archives; predict the line's largest stable step")
+    p.add_argument("scenes", nargs="+", metavar="SCENE_OR_SSP")
+    p.add_argument("--describe-only", action="store_true", help="only read the scenes strictly and describe them")
+    p.add_argument("--method", choices=("auto", "derivatives", "differences"), default="auto",
+                   help="Jacobians from fmi2GetDirectionalDerivative or central differences (auto: the former when the FMU provides it)")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("reference", help="the monolithic SciPy reference of a scene, as CSV")
@@ -258,13 +363,6 @@ def main(argv=None):
     p.add_argument("--out", default=str(OUT))
     p.set_defaults(func=cmd_study)
 
-    p = sub.add_parser("container", help="the same line as an FMPy container FMU, simulated by FMPy and compared")
-    p.add_argument("scene")
-    p.add_argument("--step", type=time_arg)
-    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
-    p.add_argument("--out", default=str(OUT))
-    p.set_defaults(func=cmd_container)
-
     p = sub.add_parser("sweep", help="run a scene over a grid of parameters on Dask")
     p.add_argument("scene")
     p.add_argument("--grid", action="append", required=True, metavar="KEY=V1,V2,...",
@@ -279,7 +377,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (SceneError, CoSimulationError, FmuError, FileNotFoundError) as e:
+    except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError) as e:
         print(f"webline: {e}", file=sys.stderr)
         return 2
 

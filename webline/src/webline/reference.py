@@ -236,9 +236,9 @@ def reference(scene: Scene, times=None, rtol=RTOL) -> Result:
     start = clock.perf_counter()
     ode = LineODE(scene)
     if times is None:
-        from .master import CoSimulation
+        from .master import scene_grid
 
-        times, _ = CoSimulation.grid_of(scene, scene.step)
+        times = scene_grid(scene)
     times = np.asarray(times, dtype=float)
     cuts = sorted(set([0.0, scene.stop_time] + scene.breakpoints()))
     events = {}

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .master import CoSimulation, Options
+from .master import run_scene, scene_grid
 from .reference import reference
 from .result import Result
 
@@ -15,7 +15,7 @@ from .result import Result
 def union_grid(scene, steps):
     times = set()
     for h in steps:
-        times.update(CoSimulation.grid_of(scene, h)[0])
+        times.update(scene_grid(scene, h))
     return np.array(sorted(times))
 
 
@@ -67,7 +67,7 @@ def convergence(scene, steps, ref: Result | None = None, **options):
     rows = []
     for h in steps:
         try:
-            r = CoSimulation(scene, Options(step=h, **options)).run()
+            r = run_scene(scene, step=h, **options)
         except Exception as e:  # an unstable coupling fails; the study records that
             rows.append(Row(h, math.inf, math.inf, math.nan, 0, 0, failed=str(e).split(":")[0][:80]))
             continue

@@ -65,7 +65,7 @@ def _fmu_dir_on_worker(files: dict) -> str:
 
 def run_point(scene_text: str, source: str, overrides: dict, files: dict, step=None):
     """One grid point (runs on a Dask worker): the metrics of one co-simulation."""
-    from .master import CoSimulation, Options
+    from .master import run_scene
     from .scene import Span, parse_scene, set_path
 
     start = clock.perf_counter()
@@ -77,7 +77,7 @@ def run_point(scene_text: str, source: str, overrides: dict, files: dict, step=N
         label = f"{source} (with {', '.join(f'{k}={v}' for k, v in overrides.items())})"
         fmu_dir = _fmu_dir_on_worker(files)
         scene = parse_scene(json.dumps(data, indent=2), label, fmu_dir)
-        result = CoSimulation(scene, Options(step=step, fmu_dir=fmu_dir)).run()
+        result = run_scene(scene, fmu_dir=fmu_dir, step=step)
         for c in scene.line:
             key = f"{c.name}.T" if isinstance(c, Span) else f"{c.name}.v"
             if key not in result.keys():

@@ -269,11 +269,22 @@ pub unsafe fn get_directional_derivative<M: Model>(
     enter::<M>(c, call, |h| {
         let unknowns = slice(call, unknown_refs, n_unknown, "vUnknown_ref")?;
         let knowns = slice(call, known_refs, n_known, "vKnown_ref")?;
+        // A shared buffer would be read after it is written (and alias in Rust).
+        if overlap(dv_known, n_known, dv_unknown, n_unknown) {
+            return Err(FmiError::error(format!("{}: dvKnown and dvUnknown overlap; pass separate arrays", call.name())));
+        }
         let seed = slice(call, dv_known, n_known, "dvKnown")?;
         let out = slice_mut(call, dv_unknown, n_unknown, "dvUnknown")?;
         h.instance.get_directional_derivative(unknowns, knowns, seed, out)?;
         OK
     })
+}
+
+/// Whether two arrays of f64 share memory (empty and NULL ones never do).
+fn overlap(a: *const f64, na: usize, b: *mut f64, nb: usize) -> bool {
+    let (a, b) = (a as usize, b as usize);
+    let size = std::mem::size_of::<f64>();
+    na > 0 && nb > 0 && a != 0 && b != 0 && a < b.saturating_add(nb.saturating_mul(size)) && b < a.saturating_add(na.saturating_mul(size))
 }
 
 // ---- Model Exchange

@@ -22,7 +22,7 @@ impl<M: Model> Instance<M> {
         if !d.provides_directional_derivative[me as usize] {
             let interface = if me { "Model Exchange" } else { "Co-Simulation" };
             return Err(FmiError::error(format!(
-                "{}: providesDirectionalDerivative is false for {interface}",
+                "{} is not supported: providesDirectionalDerivative is false for {interface}",
                 call.name()
             )));
         }

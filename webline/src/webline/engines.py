@@ -1,0 +1,176 @@
+"""An SSP archive run by other engines: DNV's libcosim (libcosimpy) and FMPy's SSP simulation.
+
+Both couple Jacobi-style with held inputs at a fixed step. Each returns a Result on the communication
+points start + k*h, k = 1..n (the values after each step), columns "component.variable" as recorded.
+"""
+
+from __future__ import annotations
+
+import time as clock
+from pathlib import Path
+
+import numpy as np
+
+from .result import Result
+from .ssp import SSD, SspError, _variables
+from .system import System
+
+ENGINES = ("webline", "libcosim", "fmpy")
+
+
+def steps_of(system: System, step: float | None) -> tuple[float, int]:
+    h = step or system.step
+    n = int(round((system.stop_time - system.start_time) / h))
+    return h, n
+
+
+def record_columns(system: System) -> list[str]:
+    """The recorded variables as Result columns, "component.variable [unit]" (as the master names them)."""
+    variables = {c.name: _variables(Path(c.fmu))[1] for c in system.components}
+    out = []
+    for comp, var in system.record:
+        v = variables[comp][var]
+        unit = v.unit or getattr(v.declaredType, "unit", None)
+        out.append(f"{comp}.{var} [{unit or '1'}]")
+    return out
+
+
+def run_libcosim(ssd_dir: Path, system: System, step: float | None = None) -> Result:
+    """libcosim on an extracted archive (read_ssp's target folder: libcosim never unpacks an untrusted zip)."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+
+    h, n = steps_of(system, step)
+    ns = int(round(h * 1e9))  # libcosim counts time in nanoseconds
+    if abs(ns - h * 1e9) > 1e-6 * h * 1e9:
+        raise SspError(f"{system.name}: step {h} s is not a whole number of nanoseconds (libcosim's time unit)")
+    log_output_level(CosimLogLevel.ERROR)
+    t0 = clock.perf_counter()
+    try:
+        execution = CosimExecution.from_ssp_file(str(Path(ssd_dir)), step_size=ns)
+    except AssertionError:
+        raise SspError(f"{ssd_dir}: libcosim could not load {SSD} (see its log above)") from None
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    reads, order = [], []  # (slave index, value references) per component; the record's order of the values read
+    for comp in dict.fromkeys(c for c, _ in system.record):
+        index = execution.slave_index_from_instance_name(comp)
+        vr = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
+        picked = [i for i, (c, _) in enumerate(system.record) if c == comp]
+        reads.append((index, [vr[system.record[i][1]] for i in picked]))
+        order += picked
+    columns = record_columns(system)
+    rows = np.empty((n, len(columns)))
+    for k in range(n):
+        if not execution.step():
+            raise SspError(f"{system.name}: libcosim failed at step {k} (t = {system.start_time + k * h} s)")
+        rows[k, order] = [x for index, vrs in reads for x in observer.last_real_values(index, vrs)]
+    wall = clock.perf_counter() - t0
+    times = system.start_time + h * np.arange(1, n + 1)
+    return Result(scene=system.name, columns=columns, time=times, data=rows,
+                  info={"method": f"libcosim, fixed step {h * 1e3:g} ms", "step": h, "steps": n, "wall_time": wall})
+
+
+def fmpy_parameter_set(archive: Path, system_root=None):
+    """The archive's own parameter sets as one FMPy ParameterSet: names prefixed with the component,
+    Boolean literals converted (FMPy sets a Boolean as `value != 0.0`, so the text 'false' would be True)."""
+    from fmpy.ssp.ssd import ParameterSet, read_ssd, read_ssv
+
+    ssd = read_ssd(str(archive))
+    merged = ParameterSet(name="start values")
+    for comp in ssd.system.elements:
+        for binding in comp.parameterBindings:
+            sets = [read_ssv(str(archive), resource=binding.source)] if binding.source else binding.parameterValues
+            for ps in sets:
+                for p in ps.parameters:
+                    if p.type in ("String", "Enumeration", "Binary"):
+                        raise SspError(f"{archive}: {comp.name}.{p.name}: FMPy's SSP simulation cannot set a {p.type}")
+                    if p.type == "Boolean":
+                        p.value = {"true": 1.0, "false": 0.0, "1": 1.0, "0": 0.0}[p.value.strip()]
+                    p.name = f"{comp.name}.{p.name}"
+                    merged.parameters.append(p)
+    return merged
+
+
+def run_fmpy(archive: Path, system: System, step: float | None = None) -> Result:
+    """FMPy's simulate_ssp on a (checked) archive. FMPy labels its rows t but they hold the values at t + h,
+    and its first step uses 0.0 for every connected input; the times here are the true ones
+    (master.Options.fmpy() reproduces this run)."""
+    from fmpy.ssp.simulation import simulate_ssp
+
+    h, n = steps_of(system, step)
+    t0 = clock.perf_counter()
+    # As a user calls it: FMPy adds h to its time while time < stop (n or n + 1 steps).
+    out = simulate_ssp(str(archive), start_time=system.start_time, stop_time=system.stop_time,
+                       step_size=h, parameter_set=fmpy_parameter_set(archive))
+    wall = clock.perf_counter() - t0
+    keys = [f"{c}.{v}" for c, v in system.record]
+    missing = [k for k in keys if k not in out.dtype.names]
+    if missing:
+        raise SspError(f"{archive}: FMPy recorded no {', '.join(missing)} (it records connectors only)")
+    data = np.column_stack([out[k].astype(float) for k in keys])
+    return Result(scene=system.name, columns=record_columns(system), time=out["time"] + h, data=data,
+                  info={"method": f"FMPy simulate_ssp, fixed step {h * 1e3:g} ms", "step": h, "steps": len(out), "wall_time": wall})
+
+
+
+def relative_difference(a: Result, b: Result) -> dict:
+    """Per recorded column, the largest difference of `a` from `b` at their common communication points,
+    relative to the column's largest magnitude in `b` (so a strain of 1e-4 and a tension of 300 N compare alike)."""
+    h = b.info.get("step") or a.info.get("step")
+    ia, ib = [], []
+    j = 0
+    for i, t in enumerate(a.time):  # both grids sorted: a merge on times equal to within 1e-6 h
+        while j < len(b.time) and b.time[j] < t - 1e-6 * h:
+            j += 1
+        if j < len(b.time) and abs(b.time[j] - t) <= 1e-6 * h:
+            ia.append(i)
+            ib.append(j)
+    if len(ia) < 2:
+        raise ValueError(f"{a.scene}: the two runs share no communication points")
+    out = {}
+    for key in b.keys():
+        xa, xb = a.column(key)[ia], b.column(key)[ib]
+        out[key] = float(np.max(np.abs(xa - xb)) / (np.max(np.abs(xb)) or 1.0))
+    return out
+
+
+def agreement(scene_path, fmu_dir, workdir: Path) -> dict:
+    """A shipped scene exported and run by libcosim and FMPy, each against webline's master on the same
+    coupling (libcosim: Options.engine(); FMPy: Options.fmpy()) and against the monolithic reference.
+    Returns the largest relative differences over the recorded columns (docs/ssp.md, tests)."""
+    from .master import Master, Options
+    from .reference import reference
+    from .scene import load_scene
+    from .ssp import read_ssp, write_ssp
+    from .study import errors
+    from .system import compile_scene
+
+    scene = load_scene(scene_path, fmu_dir=fmu_dir)
+    archive = write_ssp(compile_scene(scene, fmu_dir), Path(workdir) / f"{scene.name}.ssp")
+    system = read_ssp(archive, Path(workdir) / scene.name)
+    runs = {
+        "libcosim": run_libcosim(Path(workdir) / scene.name, system),
+        "fmpy": run_fmpy(archive, system),
+        "webline_engine": Master(system, Options.engine()).run(),
+        "webline_fmpy": Master(system, Options.fmpy()).run(),
+    }
+    ref = reference(scene, times=runs["webline_engine"].time)
+    columns = {f"{c}.{v}": f"{c}.{q}" for (c, q), (_, v) in zip(scene.record, system.record)}
+
+    def versus_reference(result):  # the reference names columns as the scene records them
+        renamed = Result(result.scene, [columns[k] for k in result.keys()], result.time, result.data, result.info)
+        return max(errors(renamed, ref).values())
+
+    return {
+        "scene": scene.name,
+        "step": system.step,
+        "steps": runs["libcosim"].info["steps"],
+        "libcosim_vs_webline": max(relative_difference(runs["libcosim"], runs["webline_engine"]).values()),
+        "fmpy_vs_webline": max(relative_difference(runs["fmpy"], runs["webline_fmpy"]).values()),
+        "libcosim_vs_reference": versus_reference(runs["libcosim"]),
+        "fmpy_vs_reference": versus_reference(runs["fmpy"]),
+        "webline_vs_reference": versus_reference(runs["webline_engine"]),
+        "wall_time": {k: r.info["wall_time"] for k, r in runs.items()},
+    }
