@@ -9,7 +9,11 @@ package, Roller the one in fmu/roller; Roller.fmu is written next to
 ConvertingSpan.fmu. Each FMU holds its modelDescription.xml, one library per
 platform in binaries/<platform>/<modelIdentifier>.<so|dll>,
 documentation/index.html and, for the span, resources/webs.json (its library
-of webs, from fmu/resources). The documentation's variable and unit tables are
+of webs, from fmu/resources). Each model with an FMI 3.0 API also gets an FMI
+3.0 FMU, out/fmi3/<model>.fmu (one fmiVersion per FMU): the same library (it
+exports the fmi2 and the fmi3 functions) under FMI 3.0's platform folders, the
+modelDescription.xml and terminalsAndIcons.xml that fmi2-build writes from the
+FMI 2.0 description, the same documentation and resources. The documentation's variable and unit tables are
 rendered from the model description, so they never disagree with the FMU.
 Only the Python standard library is used (and binutils' objdump).
 
@@ -68,6 +72,26 @@ FMI2_FUNCTIONS = frozenset(
     """.split()
 )
 assert len(FMI2_FUNCTIONS) == 44
+# The FMI 3.0 C API (crates/fmi3): every function of the standard's headers.
+FMI3_FUNCTIONS = frozenset(
+    "fmi3" + name
+    for name in """
+    GetVersion SetDebugLogging InstantiateModelExchange InstantiateCoSimulation InstantiateScheduledExecution
+    FreeInstance EnterInitializationMode ExitInitializationMode EnterEventMode Terminate Reset
+    GetFloat32 GetFloat64 GetInt8 GetUInt8 GetInt16 GetUInt16 GetInt32 GetUInt32 GetInt64 GetUInt64
+    GetBoolean GetString GetBinary GetClock SetFloat32 SetFloat64 SetInt8 SetUInt8 SetInt16 SetUInt16
+    SetInt32 SetUInt32 SetInt64 SetUInt64 SetBoolean SetString SetBinary SetClock
+    GetNumberOfVariableDependencies GetVariableDependencies GetFMUState SetFMUState FreeFMUState
+    SerializedFMUStateSize SerializeFMUState DeserializeFMUState GetDirectionalDerivative
+    GetAdjointDerivative EnterConfigurationMode ExitConfigurationMode GetIntervalDecimal
+    GetIntervalFraction GetShiftDecimal GetShiftFraction SetIntervalDecimal SetIntervalFraction
+    SetShiftDecimal SetShiftFraction EvaluateDiscreteStates UpdateDiscreteStates EnterContinuousTimeMode
+    CompletedIntegratorStep SetTime SetContinuousStates GetContinuousStateDerivatives GetEventIndicators
+    GetContinuousStates GetNominalsOfContinuousStates GetNumberOfEventIndicators
+    GetNumberOfContinuousStates EnterStepMode GetOutputDerivatives DoStep ActivateModelPartition
+    """.split()
+)
+assert len(FMI3_FUNCTIONS) == 75
 
 
 class Platform:
@@ -96,13 +120,18 @@ PLATFORMS = {
 }
 # Libraries built elsewhere may go into these folders too (--add-binary).
 SUFFIXES = {"linux64": ".so", "win64": ".dll", "aarch64-linux": ".so", "darwin64": ".dylib", "aarch64-darwin": ".dylib"}
+# FMI 3.0 names the platform folders by architecture and system.
+FMI3_FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux",
+                "darwin64": "x86_64-darwin", "aarch64-darwin": "aarch64-darwin"}
 
 
 class Model:
     """One FMU of the workspace: its interface, documentation and library name."""
 
-    def __init__(self, name, package, crate_dir):
+    def __init__(self, name, package, crate_dir, fmi3=False):
         self.name = name
+        # The library exports the FMI 3.0 API too (crates/fmi3), and an FMI 3.0 FMU is written.
+        self.fmi3 = fmi3
         self.package = package
         self.crate = package.replace("-", "_")
         self.description = crate_dir / "modelDescription.xml"
@@ -113,8 +142,8 @@ class Model:
 
 
 MODELS = [
-    Model("ConvertingSpan", "converting-span", ROOT),
-    Model("Roller", "roller", ROOT / "fmu" / "roller"),
+    Model("ConvertingSpan", "converting-span", ROOT, fmi3=True),
+    Model("Roller", "roller", ROOT / "fmu" / "roller", fmi3=True),
 ]
 
 
@@ -192,8 +221,15 @@ def macho_exports_thin(data):
     return names
 
 
-def check_library(folder, path):
-    """A library goes into an FMU only if it exports the fmi2 API exactly and has no test hook."""
+def expected_exports(name):
+    """What the library of the model `name` exports: the fmi2 API, and the fmi3 API where the model has one."""
+    fmi3 = next(m.fmi3 for m in MODELS if m.name == name)
+    return FMI2_FUNCTIONS | FMI3_FUNCTIONS if fmi3 else FMI2_FUNCTIONS
+
+
+def check_library(folder, path, fmi3):
+    """A library goes into an FMU only if it exports the fmi2 API (and, for a
+    model with FMI 3.0, the fmi3 API) exactly and has no test hook."""
     if not path.exists():
         sys.exit(f"package.py: {path} is missing; run without --no-build")
     if not path.name.endswith(SUFFIXES[folder]):
@@ -201,10 +237,12 @@ def check_library(folder, path):
     if TEST_HOOK_MARKER in path.read_bytes():
         sys.exit(f"package.py: {path} was built with the test-only feature test-hooks; it must not ship")
     exported = exported_functions(path)
-    if exported != FMI2_FUNCTIONS:
-        missing = sorted(FMI2_FUNCTIONS - exported)
-        extra = sorted(exported - FMI2_FUNCTIONS)
-        sys.exit(f"package.py: {path} must export exactly the 44 fmi2 functions; missing {missing}, extra {extra}")
+    expected = FMI2_FUNCTIONS | FMI3_FUNCTIONS if fmi3 else FMI2_FUNCTIONS
+    if exported != expected:
+        missing = sorted(expected - exported)
+        extra = sorted(exported - expected)
+        what = "the 44 fmi2 and the 75 fmi3 functions" if fmi3 else "the 44 fmi2 functions"
+        sys.exit(f"package.py: {path} must export exactly {what}; missing {missing}, extra {extra}")
 
 
 def allowed_range(root, var, t):
@@ -278,8 +316,20 @@ def web_rows(library):
     return "\n".join(rows)
 
 
-def documentation(root, template, resources=None):
+# The FMI 3.0 FMU's page: the same text, which names the FMI 2.0 functions, with a note.
+FMI3_NOTE = (
+    "FMI 3.0 FMU for Co-Simulation and Model Exchange (one binary, the same as the FMI 2.0 FMU's). "
+    "The text below names the FMI 2.0 functions; their FMI 3.0 counterparts behave the same "
+    "(fmi2SetReal: fmi3SetFloat64; enumerations: fmi3SetInt64; fmi2SetupExperiment: the arguments "
+    "of fmi3EnterInitializationMode; fmi2SetRealInputDerivatives has none). "
+    "The ports web_a and web_b are terminals (terminalsAndIcons.xml)."
+)
+
+
+def documentation(root, template, resources=None, fmi3=False):
     text = template.read_text(encoding="utf-8")
+    if fmi3:
+        text = text.replace("FMI 2.0 FMU for Co-Simulation and Model Exchange (one binary)", html.escape(FMI3_NOTE))
     replacements = {
         "<!-- STYLE -->": STYLE.read_text(encoding="utf-8"),
         "<!-- VARIABLES -->": variable_rows(root),
@@ -304,20 +354,51 @@ def write_fmu(out, model, libraries):
     identifier = root.find("CoSimulation").get("modelIdentifier")
     if identifier != model.name:
         sys.exit(f"package.py: {model.description} names the model {identifier}, expected {model.name}")
-    out.parent.mkdir(parents=True, exist_ok=True)
     entries = [("modelDescription.xml", model.description.read_bytes())]
     for folder, library in sorted(libraries.items()):
         entries.append((f"binaries/{folder}/{identifier}{SUFFIXES[folder]}", library.read_bytes()))
     entries.append(("documentation/index.html", documentation(root, model.template, model.resources).encode("utf-8")))
     if model.resources.is_dir():
         entries += [(f"resources/{f.name}", f.read_bytes()) for f in sorted(model.resources.iterdir()) if f.is_file()]
+    write_zip(out, entries)
+    return out
+
+
+def fmi3_files(model):
+    """The FMI 3.0 modelDescription.xml and terminalsAndIcons.xml, written by
+    fmi2-build from the FMI 2.0 description into target/fmi3/<model>."""
+    folder = ROOT / "target" / "fmi3" / model.name
+    subprocess.run(["cargo", "run", "--release", "--quiet", "-p", "fmi2-build", "--bin", "fmi3-description", "--",
+                    str(model.description), str(folder)], cwd=ROOT, check=True)
+    return folder / "modelDescription.xml", folder / "terminalsAndIcons" / "terminalsAndIcons.xml"
+
+
+def write_fmu3(out, model, libraries):
+    """The FMI 3.0 FMU of `model`: libraries as for write_fmu, under FMI 3.0's folders."""
+    description, terminals = fmi3_files(model)
+    root = ET.parse(description).getroot()
+    identifier = root.find("CoSimulation").get("modelIdentifier")
+    fmi2_root = ET.parse(model.description).getroot()
+    entries = [("modelDescription.xml", description.read_bytes()),
+               ("terminalsAndIcons/terminalsAndIcons.xml", terminals.read_bytes())]
+    for folder, library in sorted(libraries.items()):
+        entries.append((f"binaries/{FMI3_FOLDERS[folder]}/{identifier}{SUFFIXES[folder]}", library.read_bytes()))
+    page = documentation(fmi2_root, model.template, model.resources, fmi3=True)
+    entries.append(("documentation/index.html", page.encode("utf-8")))
+    if model.resources.is_dir():
+        entries += [(f"resources/{f.name}", f.read_bytes()) for f in sorted(model.resources.iterdir()) if f.is_file()]
+    write_zip(out, entries)
+    return out
+
+
+def write_zip(out, entries):
+    out.parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
         for name, data in entries:
             info = zipfile.ZipInfo(name, ZIP_TIME)
             info.compress_type = zipfile.ZIP_DEFLATED
             info.external_attr = 0o644 << 16
             zf.writestr(info, data)
-    return out
 
 
 def added_binary(text):
@@ -385,12 +466,15 @@ def main():
         if not libraries:
             sys.exit("package.py: no platform chosen")
         for folder, library in libraries.items():
-            check_library(folder, library)
+            check_library(folder, library, model.fmi3)
         out = span_out if model.name == "ConvertingSpan" else span_out.parent / f"{model.name}.fmu"
-        write_fmu(out, model, libraries)
+        written = [write_fmu(out, model, libraries)]
+        if model.fmi3:
+            written.append(write_fmu3(span_out.parent / "fmi3" / f"{model.name}.fmu", model, libraries))
         sizes = ", ".join(f"{folder} {library.stat().st_size} bytes" for folder, library in sorted(libraries.items()))
         kind = " (host build, not portable)" if args.host_build else ""
-        print(f"wrote {out} ({out.stat().st_size} bytes; {sizes}){kind}")
+        for fmu in written:
+            print(f"wrote {fmu} ({fmu.stat().st_size} bytes; {sizes}){kind}")
     for folder, path in args.add_binary:
         # tests/run.sh runs the platforms built here; an added library only its own platform can run.
         print(f"added binaries/{folder} from {path}: its exports are checked, but it was not run here; "

@@ -16,7 +16,7 @@
 //! * `description` — the interface generated from modelDescription.xml;
 //! * `model` — the model's data, one step, and the FMI hooks.
 //!
-//! The FMI layer (crate `fmi2`) holds all unsafe code; this crate has none.
+//! The FMI layers (crates `fmi2` and `fmi3`) hold all unsafe code; this crate has none.
 
 #![deny(unsafe_code)]
 
@@ -38,3 +38,5 @@ pub use parameters::Rates;
 pub use physics::Outputs;
 
 fmi2::export_fmi2!(crate::ConvertingSpan);
+// The FMI 3.0 API from the same library: the FMI 3.0 FMU ships this binary too.
+fmi3::export_fmi3!(crate::ConvertingSpan);

@@ -58,8 +58,8 @@ def test_imports_only_windows_own_dlls(shipped_dll):
     print(f"\n{shipped_dll.name}: imports {', '.join(imported_dlls(listing))}")
 
 
-def test_exports_exactly_the_fmi2_functions(shipped_dll):
-    assert package.exported_functions(shipped_dll) == package.FMI2_FUNCTIONS
+def test_exports_exactly_the_fmi_functions(shipped_dll):
+    assert package.exported_functions(shipped_dll) == package.expected_exports(shipped_dll.stem)
 
 
 def test_the_check_flags_the_mingw_runtime_and_other_dlls():

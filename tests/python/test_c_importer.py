@@ -207,3 +207,56 @@ def test_state_restore_and_deserialization_continue_identically(run, defaults):
     scenario = "C importer: continuation after the FMU state tests"
     compare(scenario, "T", [float(r[3]) for r in cont], ref["tension"][1:], ABS_STRAIN * EA, times=times)
     compare(scenario, "summary_Strain", [float(r[4]) for r in cont], ref["strain"][1:], ABS_STRAIN, times=times)
+
+
+# --------------------------------------------------------------------------
+# The FMI 3.0 FMU through tests/c_importer/importer3.c (FMPy's FMI 3.0 headers)
+
+SOURCE3 = SOURCE.parent / "importer3.c"
+
+
+@pytest.fixture(scope="module")
+def run3(tmp_path_factory):
+    from fmpy import extract, read_model_description
+
+    from conftest import ROOT, _packaged
+
+    fmu3 = _packaged(ROOT / "out" / "fmi3" / "ConvertingSpan.fmu")
+    md = read_model_description(str(fmu3))
+    out = tmp_path_factory.mktemp("c_importer3") / "importer3"
+    build = subprocess.run(["gcc", "-Wall", "-Werror", "-O1", "-I", str(HEADERS), str(SOURCE3), "-o", str(out), "-ldl"],
+                           capture_output=True, text=True)
+    assert build.returncode == 0 and build.stderr == "", f"importer3.c does not compile cleanly:\n{build.stderr}"
+    library = Path(extract(str(fmu3))) / "binaries" / "x86_64-linux" / f"{md.coSimulation.modelIdentifier}.so"
+    vrs = {v.name: v.valueReference for v in md.modelVariables}
+    proc = subprocess.run([str(out), str(library), md.instantiationToken] + [f"{n}={vrs[n]}" for n in NAMES],
+                          capture_output=True, text=True, timeout=60)
+    return proc, [line.split(",") for line in proc.stdout.splitlines()]
+
+
+def test_fmi3_importer_runs_the_same_scene_bit_identically(run, run3):
+    proc3, lines3 = run3
+    assert proc3.returncode == 0, f"importer3 exit code {proc3.returncode}\n{proc3.stdout[-2000:]}\n{proc3.stderr[-2000:]}"
+    bad = [(label, s) for label, s in records(lines3, "status") if int(s) != FMI2_OK]
+    assert not bad, f"calls that must succeed failed: {bad}"
+    failed = [name for name, ok in records(lines3, "check") if ok != "1"]
+    assert not failed, f"checks in importer3.c failed: {failed}"
+    assert dict(records(lines3, "info"))["version"] == "3.0"
+    # %.17g round-trips a double: equal text is equal bits.
+    rows2, rows3 = records(run[1], "row"), records(lines3, "row")
+    assert len(rows3) == N_STEPS + 1 and rows3 == rows2
+
+
+def test_fmi3_importer_bad_calls_return_fmi3Error_with_a_log_line_each(run3):
+    proc3, lines3 = run3
+    illegal = records(lines3, "illegal")
+    assert len(illegal) >= 25
+    wrong = {label: s for label, s in illegal if int(s) != FMI2_ERROR}  # fmi3Error is 3 too
+    assert not wrong, f"refused calls that did not return fmi3Error: {wrong}"
+    errors = [line for line in proc3.stderr.splitlines() if line.startswith("log,3,")]
+    # One line per refusal on an instance (NULL and foreign pointers have no logger to reach).
+    assert len(errors) >= len(illegal) - 2
+    assert "fmi2" not in proc3.stderr
+    for needle in ("fmi3SetBoolean: includeDamping = 2 is not a Boolean", "fmi3DoStep: earlyReturn is NULL",
+                   "fmi3SetInt32: toUnitV (value reference", "is not the current time", "checksum mismatch"):
+        assert needle in proc3.stderr, needle

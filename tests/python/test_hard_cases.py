@@ -18,7 +18,11 @@ through the model core. Here:
   refused answers fmi2Discard on that step with the catalogue's message,
   outputs unchanged and fmi2LastSuccessfulTime at the step's start; then the
   case's checks;
-* two cases that only FMPy has: the input table through `simulate_fmu`.
+* two cases that only FMPy has: the input table through `simulate_fmu`;
+* `test_case_fmi3`: each run again through the FMI 3.0 FMU (out/fmi3/), whose
+  every output at every point must equal the FMI 2.0 run's bit for bit (so it
+  passes the same checks); runs that set input derivatives are skipped there,
+  FMI 3.0 has no fmi2SetRealInputDerivatives.
 
 A summary of the worst error per solver ends the run.
 """
@@ -31,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description, simulate_fmu
+from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2Discard, fmi2LastSuccessfulTime
 from fmpy.simulation import instantiate_fmu
@@ -39,6 +43,7 @@ from fmpy.simulation import instantiate_fmu
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests" / "hard_cases"))
 import reference as R  # noqa: E402
+from conftest import simulate_fmu  # noqa: E402  (the FMI 2.0 FMU, then its FMI 3.0 twin: bit-identical)
 
 STORED = json.loads(R.REFERENCES.read_text())
 CATALOGUE = json.loads(R.CATALOGUE.read_text())
@@ -138,6 +143,62 @@ class Fmu:
             fmu.freeInstance()
         arr = np.array(rows, dtype=float)
         return Result(np.array(times), {n: arr[:, i] for i, n in enumerate(OUTPUTS)}, discard)
+
+
+class Fmu3(Fmu):
+    """The FMI 3.0 FMU: the same schedule through FMPy's FMU3Slave."""
+
+    def _set(self, fmu, values):
+        for name, value in values.items():
+            v = self.var[name]
+            setter = {"Float64": fmu.setFloat64, "Boolean": fmu.setBoolean, "Enumeration": fmu.setInt64,
+                      "Int32": fmu.setInt32}[v.type]
+            setter([v.valueReference], [bool(value) if v.type == "Boolean" else value if v.type == "Float64" else int(value)])
+
+    def run(self, parameters, initial, entries):
+        messages = []
+        fmu = instantiate_fmu(self.unzipdir, self.md, "CoSimulation",
+                              logger=lambda env, status, category, message: messages.append(message.decode()))
+        out_vrs = [self.var[n].valueReference for n in OUTPUTS]
+        time_vr = self.var["time"].valueReference
+        rows, times, discard, last = [], [0.0], None, None
+        try:
+            self._set(fmu, parameters)
+            self._set(fmu, initial)
+            fmu.enterInitializationMode(startTime=0.0)
+            fmu.exitInitializationMode()
+            rows.append(fmu.getFloat64(out_vrs))
+            t, k = 0.0, 0
+            for s in (e for e in entries for _ in range(e.get("n", 1))):
+                self._set(fmu, s.get("set", {}) if s is not last else {})
+                last = s
+                try:
+                    fmu.doStep(t, s["h"])
+                except FMICallException as e:
+                    if e.status != FMI3_DISCARD:
+                        raise AssertionError(f"step {k} at t = {t}: status {e.status}\n" + "\n".join(messages)) from e
+                    discard = Discard(k, t, dict(zip(OUTPUTS, rows[-1])), dict(zip(OUTPUTS, fmu.getFloat64(out_vrs))),
+                                      fmu.getFloat64([time_vr])[0], "\n".join(messages))
+                    break
+                t += s["h"]
+                k += 1
+                times.append(t)
+                rows.append(fmu.getFloat64(out_vrs))
+        finally:
+            fmu.freeInstance()
+        arr = np.array(rows, dtype=float)
+        return Result(np.array(times), {n: arr[:, i] for i, n in enumerate(OUTPUTS)}, discard)
+
+
+FMI3_DISCARD = 2
+
+
+@pytest.fixture(scope="module")
+def span3(tmp_path_factory):
+    from conftest import _packaged
+
+    fmu3 = _packaged(ROOT / "out" / "fmi3" / "ConvertingSpan.fmu")
+    return Fmu3(fmu3, extract(str(fmu3), unzipdir=str(tmp_path_factory.mktemp("hard_cases3"))))
 
 
 @pytest.fixture(scope="module")
@@ -271,6 +332,24 @@ def test_case(span, case, run):
     record(case.get("report_as", run["solver"]), case["name"], worst, ratio)
     for c in case.get("checks", []):
         run_check(c, res, case["reference"], run["solver"])
+
+
+@pytest.mark.parametrize("case, run", RUNS, ids=[f"{c['name']} [{r['solver']}]" for c, r in RUNS])
+def test_case_fmi3(span, span3, case, run):
+    if any("du" in s for s in case["steps"]):
+        pytest.skip("sets input derivatives, which FMI 3.0 does not have")
+    parameters = {**case["parameters"], **run["parameters"]}
+    two = span.run(parameters, case["initial"], case["steps"])
+    three = span3.run(parameters, case["initial"], case["steps"])
+    assert three.t.tobytes() == two.t.tobytes()
+    for name in OUTPUTS:
+        assert three.out[name].tobytes() == two.out[name].tobytes(), name
+    assert (three.discard is None) == (two.discard is None)
+    if two.discard is not None:
+        d2, d3 = two.discard, three.discard
+        assert (d3.step, d3.time, d3.before, d3.after, d3.last_successful_time) == (
+            d2.step, d2.time, d2.before, d2.after, d2.last_successful_time)
+        assert run["message"] in d3.message and "fmi3DoStep" in d3.message, d3.message
 
 
 def _same(a, b, loose, path="", scale=None):

@@ -11,10 +11,9 @@ the tension to that tolerance magnified by (1+eps)/eps.
 import mpmath
 import numpy as np
 import pytest
-from fmpy import simulate_fmu
 from fmpy.fmi1 import FMICallException
 
-from conftest import exact_solution, step_table
+from conftest import simulate_fmu, exact_solution, step_table
 
 # CVode's global error stays within a small multiple of its local tolerance
 # on this well-damped linear problem (measured: 1x to 8x from rtol 1e-6 to

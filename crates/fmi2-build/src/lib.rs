@@ -9,6 +9,9 @@
 //!
 //! A problem in the XML stops the build with a message that names the line.
 
+mod fmi3;
+pub use fmi3::{fmi3_files, WEB_PORT_KIND};
+
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::Reader;
 use std::collections::{BTreeMap, BTreeSet};

@@ -24,6 +24,8 @@ use profiles::Value;
 use solver::CompensatedSum;
 
 fmi2::export_fmi2!(crate::Roller);
+// The FMI 3.0 API from the same library (out/fmi3/Roller.fmu ships it too).
+fmi3::export_fmi3!(crate::Roller);
 
 fmi2::bind_variables! {
     model: Roller,
