@@ -1961,7 +1961,7 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             slot.st = St::StepFailed;
         }
         ERROR => {
-            if slot.armed && !slot.me && h_ok && t_ok && st_before == St::StepComplete && !poisoned_before {
+            if slot.armed && !slot.me && h_ok && t_ok && !null_outs && st_before == St::StepComplete && !poisoned_before {
                 slot.armed = false;
                 slot.poisoned = true;
                 r.out.panics_caught += 1;
