@@ -21,6 +21,7 @@ aarch64 gcc, Wine (WINEPREFIX with the test-only ProcessPrng shim) and QEMU.
 
 import math
 import os
+import re
 import struct
 import subprocess
 import sys
@@ -353,7 +354,9 @@ def test_the_fmi3_importers_scene_is_bit_identical(importers3, platform, tmp_pat
             results[folder] = proc
     assert "row," in results[platform].stdout
     assert results[platform].stdout == results[REFERENCE].stdout
-    assert log_lines(results[platform].stderr) == log_lines(results[REFERENCE].stderr)
+    # (Messages naming a foreign FMU state print its address, which differs.)
+    logs = {f: [re.sub(r"0x[0-9a-fA-F]+", "0x...", l) for l in log_lines(r.stderr)] for f, r in results.items()}
+    assert logs[platform] == logs[REFERENCE]
 
 
 @pytest.mark.parametrize("model", MODELS)
