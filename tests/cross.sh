@@ -6,9 +6,11 @@
 #      CARGO_TARGET_<TRIPLE>_RUNNER, set by fmu/cross_toolchain.sh): the model
 #      core and its solvers, the FMI layer, the C API, the hard cases, the
 #      panic boundary, the Roller's tests
-#   2. the fuzz harness tests/fuzz built for each target: FUZZ_SEQUENCES each
+#   2. the fuzz harness tests/fuzz built for each target: FUZZ_SEQUENCES each,
+#      and FUZZ3_SEQUENCES through its FMI 3 mode
 #   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
-#      the packaged FMUs, bit for bit against Linux x86-64
+#      the packaged FMUs, bit for bit against Linux x86-64; importer3.c's scene
+#      through the FMI 3 FMU likewise
 #
 # Each target builds std with rustc-web into target/cross-test once (profile
 # cross-test, with the test hooks: apart from the shipped libraries of
@@ -19,6 +21,7 @@ source "$(dirname "$0")/../fmu/env.sh"
 cd "$ROOT"
 export RUST_BACKTRACE=0 # the panic-boundary tests panic on purpose
 FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}"
+FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-5000}"
 OUT=target/platforms
 mkdir -p "$OUT"
 SUMMARY="$OUT/summary.txt"
@@ -53,13 +56,17 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     "${!runner_var}" "$exe" --sequences "$FUZZ_SEQUENCES" --seed 3 | tr -d '\r' | tee "$OUT/fuzz-$target.log"
     grep -q "^$FUZZ_SEQUENCES passed, 0 failed" "$OUT/fuzz-$target.log" || { echo "fuzz violations on $target"; exit 1; }
     note "fuzz on ${NAME[$target]}: $(grep '^fuzzed' "$OUT/fuzz-$target.log"), 0 violations ($((SECONDS - t0)) s with the build)"
+    t0=$SECONDS
+    "${!runner_var}" "$exe" --fmi3 --sequences "$FUZZ3_SEQUENCES" --seed 3 | tr -d '\r' | tee "$OUT/fuzz3-$target.log"
+    grep -q "^$FUZZ3_SEQUENCES passed, 0 failed" "$OUT/fuzz3-$target.log" || { echo "FMI 3 fuzz violations on $target"; exit 1; }
+    note "fuzz (FMI 3) on ${NAME[$target]}: $(grep '^fuzzed' "$OUT/fuzz3-$target.log"), 0 violations ($((SECONDS - t0)) s)"
 done
 
 echo "== importer.c on every platform's binary"
 t0=$SECONDS
 python3 fmu/package.py
 "$PY" -m pytest tests/cross -q -p no:cacheprovider
-note "importer.c scenes on win64, aarch64-linux, linux64: passed in $((SECONDS - t0)) s"
+note "importer.c and importer3.c scenes on win64, aarch64-linux, linux64: passed in $((SECONDS - t0)) s"
 note "cross-platform tests took $((SECONDS - START)) s"
 echo
 cat "$SUMMARY"

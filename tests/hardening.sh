@@ -14,9 +14,10 @@
 #   1. the packaged FMU's .so: glibc <= 2.17, only glibc + libgcc_s, no test hook
 #      (pytest tests/hardening)
 #   2. panic boundary through the C API (cargo test --features test-hooks)
-#   3. fuzz harness tests/fuzz, property-based, --strict: 50,000 / 1,000,000 sequences
+#   3. fuzz harness tests/fuzz, property-based, --strict: 50,000 / 1,000,000 sequences;
+#      its FMI 3 mode (--fmi3): 5,000 / 1,000,000
 #   4. the same harness built with AddressSanitizer (LeakSanitizer included):
-#      10,000 / 200,000 sequences
+#      10,000 / 200,000 sequences; FMI 3: 2,000 / 100,000
 #   5. the same harness under valgrind memcheck: 200 / 5,000 sequences
 #   6. tests/hardening/dlopen_cycles.c on the shipped .so, with ASan+UBSan:
 #      1,000 / 1,000 cycles; under valgrind: 100 / 1,000 cycles
@@ -43,8 +44,10 @@ case "${1:-}" in
 esac
 if [ "$MODE" = full ]; then
     SEQ=1000000 SEQ_ASAN=200000 SEQ_VALGRIND=5000 CYCLES_VALGRIND=1000 PANIC_VALGRIND=200
+    SEQ3=1000000 SEQ3_ASAN=100000
 else
     SEQ=50000 SEQ_ASAN=10000 SEQ_VALGRIND=200 CYCLES_VALGRIND=100 PANIC_VALGRIND=20
+    SEQ3=5000 SEQ3_ASAN=2000
 fi
 CYCLES_ASAN=1000
 
@@ -120,6 +123,8 @@ step "3. fuzz harness, strict (a non-finite output after accepted values fails t
 build_fuzz
 "$FUZZ" --sequences "$SEQ" --strict | tee "$OUT/fuzz.log"
 note "fuzz: $(grep '^fuzzed' "$OUT/fuzz.log")"
+"$FUZZ" --fmi3 --sequences "$SEQ3" --strict | tee "$OUT/fuzz3.log"
+note "fuzz: $(grep '^fuzzed' "$OUT/fuzz3.log")"
 
 step "4. fuzz harness with AddressSanitizer: $SEQ_ASAN sequences"
 # -Zsanitizer needs a nightly flag: RUSTC_BOOTSTRAP=1 lets this stable toolchain take it.
@@ -129,6 +134,9 @@ RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" \
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 \
     target/fuzz-asan/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences --sequences "$SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan.log"
 note "fuzz under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan.log"), no ASan/LSan report"
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 \
+    target/fuzz-asan/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences --fmi3 --sequences "$SEQ3_ASAN" --seed 7 | tee "$OUT/fuzz3-asan.log"
+note "fuzz under ASan: $(grep '^fuzzed' "$OUT/fuzz3-asan.log"), no ASan/LSan report"
 
 VALGRIND=(valgrind --tool=memcheck --leak-check=full --show-leak-kinds=definite,indirect,possible
     --errors-for-leak-kinds=definite,indirect,possible --error-exitcode=99)

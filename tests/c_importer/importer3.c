@@ -6,7 +6,7 @@
  *
  *     gcc -Wall -Werror -I <fmpy>/c-code importer3.c -o importer3 -ldl
  *
- * and runs it as
+ * (tests/cross/test_platforms.py also for win64 and aarch64) and runs it as
  *
  *     importer3 <binaries/x86_64-linux/ConvertingSpan.so> <instantiationToken> name=vr ...
  *
@@ -17,12 +17,12 @@
  * that must succeed did, 1 otherwise, 2 on a usage or loading problem.
  */
 
-#include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi3Functions.h"
+#include "library.h"
 
 /* ---- the API, looked up by name and typed with the header's TYPEs ---- */
 
@@ -39,10 +39,10 @@ typedef struct {
     API(FIELD)
 } Api;
 
-static int load_api(void *lib, Api *api)
+static int load_api(Library lib, Api *api)
 {
 #define LOAD(name)                                                                                                \
-    api->name = (fmi3##name##TYPE *)dlsym(lib, "fmi3" #name);                                                     \
+    api->name = (fmi3##name##TYPE *)find_symbol(lib, "fmi3" #name);                                                     \
     if (api->name == NULL) {                                                                                      \
         fprintf(stderr, "importer3: fmi3" #name " is missing\n");                                                 \
         return 0;                                                                                                 \
@@ -174,10 +174,10 @@ int main(int argc, char **argv)
     const char *token = argv[2];
     n_refs = argc - 3;
     ref_args = argv + 3;
-    void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    Library lib = open_library(argv[1]);
     Api api_storage, *api = &api_storage;
     if (lib == NULL || !load_api(lib, api)) {
-        fprintf(stderr, "importer3: loading %s failed: %s\n", argv[1], lib ? "" : dlerror());
+        fprintf(stderr, "importer3: loading %s failed: %s\n", argv[1], lib ? "" : library_error());
         return 2;
     }
     printf("info,version,%s\n", api->GetVersion());
@@ -333,7 +333,7 @@ int main(int argc, char **argv)
         illegal("getContinuousStates with 2", api->GetContinuousStates(me, states, 2));
         api->FreeInstance(me);
     }
-    dlclose(lib);
+    close_library(lib);
     printf("check,failures,%d\n", failures == 0);
     return failures == 0 ? 0 : 1;
 }

@@ -21,6 +21,7 @@ aarch64 gcc, Wine (WINEPREFIX with the test-only ProcessPrng shim) and QEMU.
 
 import math
 import os
+import re
 import struct
 import subprocess
 import sys
@@ -33,6 +34,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / "tests" / "c_importer" / "importer.c"
+SOURCE3 = ROOT / "tests" / "c_importer" / "importer3.c"
 HEADERS = Path(fmpy.__file__).resolve().parent / "c-code"
 OUT = ROOT / "out"
 SUMMARY = ROOT / "target" / "platforms" / "summary.txt"
@@ -81,18 +83,27 @@ def cross_tools():
         pytest.fail("the cross tools are not set up: run through tests/run.sh, or `source fmu/env.sh` first")
 
 
-@pytest.fixture(scope="session")
-def importers(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("importers")
+def build_importers(source, folder):
+    """{platform folder: the C importer `source` compiled for it}."""
     built = {}
     for p in PLATFORMS:
-        exe = folder / f"importer-{p.folder}{'.exe' if p.suffix == '.dll' else ''}"
+        exe = folder / f"{source.stem}-{p.folder}{'.exe' if p.suffix == '.dll' else ''}"
         libs = [] if p.suffix == ".dll" else ["-ldl"]
-        build = subprocess.run([*p.compiler, "-Wall", "-Werror", "-O1", "-I", str(HEADERS), str(SOURCE), "-o", str(exe), *libs],
+        build = subprocess.run([*p.compiler, "-Wall", "-Werror", "-O1", "-I", str(HEADERS), str(source), "-o", str(exe), *libs],
                                capture_output=True, text=True)
-        assert build.returncode == 0 and build.stderr == "", f"{p.folder}: importer.c does not compile cleanly:\n{build.stderr}"
+        assert build.returncode == 0 and build.stderr == "", f"{p.folder}: {source.name} does not compile cleanly:\n{build.stderr}"
         built[p.folder] = exe
     return built
+
+
+@pytest.fixture(scope="session")
+def importers(tmp_path_factory):
+    return build_importers(SOURCE, tmp_path_factory.mktemp("importers"))
+
+
+@pytest.fixture(scope="session")
+def importers3(tmp_path_factory):
+    return build_importers(SOURCE3, tmp_path_factory.mktemp("importers3"))
 
 
 @pytest.fixture(scope="session")
@@ -314,6 +325,38 @@ def test_the_c_importers_scene_is_bit_identical(importers, binaries, description
         results[folder] = proc
     assert results[platform].stdout == results[REFERENCE].stdout
     assert log_lines(results[platform].stderr) == log_lines(results[REFERENCE].stderr)
+
+
+# FMI 3.0's names of the platform folders.
+FMI3_FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
+
+
+@pytest.mark.parametrize("platform", OTHERS)
+def test_the_fmi3_importers_scene_is_bit_identical(importers3, platform, tmp_path):
+    """importer3.c's scene through the FMI 3.0 FMU (importer.c's scene, FMU
+    states, refused calls): the same output text and log lines as Linux x86-64."""
+    sys.path.insert(0, str(ROOT / "tests" / "python"))
+    from test_c_importer import NAMES
+
+    fmu = OUT / "fmi3" / "ConvertingSpan.fmu"
+    assert fmu.exists(), f"{fmu} is missing: run python3 fmu/package.py"
+    with zipfile.ZipFile(fmu) as zf:
+        root = ET.fromstring(zf.read("modelDescription.xml"))
+        vrs = {v.get("name"): v.get("valueReference") for v in root.find("ModelVariables")}
+        results = {}
+        for folder in (REFERENCE, platform):
+            p = BY_FOLDER[folder]
+            library = tmp_path / f"{folder}{p.suffix}"
+            library.write_bytes(zf.read(f"binaries/{FMI3_FOLDERS[folder]}/ConvertingSpan{p.suffix}"))
+            proc = run({folder: importers3[folder]}, folder, library, root.get("instantiationToken"),
+                       [f"{n}={vrs[n]}" for n in NAMES], tmp_path)
+            assert proc.returncode == 0, f"{folder}: exit {proc.returncode}\n{proc.stderr[-3000:]}"
+            results[folder] = proc
+    assert "row," in results[platform].stdout
+    assert results[platform].stdout == results[REFERENCE].stdout
+    # (Messages naming a foreign FMU state print its address, which differs.)
+    logs = {f: [re.sub(r"0x[0-9a-fA-F]+", "0x...", l) for l in log_lines(r.stderr)] for f, r in results.items()}
+    assert logs[platform] == logs[REFERENCE]
 
 
 @pytest.mark.parametrize("model", MODELS)

@@ -29,6 +29,13 @@
 //!   NULL, that a serialized state deserializes to one that serializes to
 //!   the same bytes, and that a restored state continues where it was saved.
 //!
+//! `run(Api::Fmi3, bytes)` makes the same calls through the `fmi3*` entry
+//! points (see api.rs) with FMI 3.0's own bad inputs beside: value counts that
+//! differ from the number of value references, NULL out-arguments of
+//! fmi3DoStep, bytes other than 0 and 1 for Booleans, Int64 values beyond the
+//! enumerations, the functions this FMU refuses; the oracle is the same, as
+//! FMI 3.0's states are FMI 2.0's for these calls (Step Mode is "step complete").
+//!
 //! Memory errors are not seen by the oracle: run the harness under
 //! AddressSanitizer or valgrind for those (tests/hardening.sh does both).
 //!
@@ -39,14 +46,17 @@
 
 #![allow(clippy::missing_safety_doc)]
 
+mod api;
 
+pub use api::Api;
+use api::{Instance, Int};
 use fmi2::description::{
     Causality, Initial, Kind, ModelDescription, Variability, Variable,
 };
 use fmi2::instance::TEST_PANIC_CATEGORY;
 use fmi2::Model;
 use fmi2_harness::*;
-use std::ffi::{c_char, CString};
+use std::ffi::CString;
 use std::ptr::null_mut;
 
 type Desc = &'static ModelDescription;
@@ -344,9 +354,12 @@ fn magnitude(x: f64) -> Values {
 
 /// One instance slot of a sequence.
 struct Slot {
-    c: fmi2Component,
+    c: Instance,
     log: Box<Log>,
-    _functions: Box<fmi2CallbackFunctions>,
+    /// FMI 2.0's callbacks (FMI 3.0 passes the logger itself).
+    _functions: Option<Box<fmi2CallbackFunctions>>,
+    /// Instantiated without a logger (FMI 3.0): no log lines to check.
+    silent: bool,
     name: String,
     st: St,
     time: f64,
@@ -405,6 +418,7 @@ pub struct Outcome {
 }
 
 struct Run {
+    api: Api,
     slots: [Option<Slot>; 2],
     /// Pointers of FMU states that were freed (for double frees).
     dead_states: Vec<usize>,
@@ -461,7 +475,8 @@ impl Run {
             if !desc().log_categories.contains(&l.category.as_str()) {
                 return fail(format!("{what}: log line with unknown category {l:?}"));
             }
-            if l.instance != slot.name {
+            // (FMI 3.0's logger is given no instance name.)
+            if self.api == Api::Fmi2 && l.instance != slot.name {
                 return fail(format!(
                     "{what}: log line names instance {:?}, not {:?}",
                     l.instance, slot.name
@@ -469,7 +484,7 @@ impl Run {
             }
         }
         if (WARNING..=ERROR).contains(&s) {
-            let on = slot.log_all || slot.status_log[(s - WARNING) as usize];
+            let on = !slot.silent && (slot.log_all || slot.status_log[(s - WARNING) as usize]);
             if on && !lines.iter().any(|l| l.status == s) {
                 return fail(format!(
                     "{what}: returned {} without a log line saying why: {lines:?}",
@@ -514,9 +529,10 @@ impl Run {
     }
 }
 
-/// Runs one sequence. `Err` is a broken rule.
-pub fn run(bytes: &[u8]) -> Result<Outcome, Violation> {
+/// Runs one sequence through `api`. `Err` is a broken rule.
+pub fn run(api: Api, bytes: &[u8]) -> Result<Outcome, Violation> {
     let mut r = Run {
+        api,
         slots: [None, None],
         dead_states: Vec::new(),
         blobs: Vec::new(),
@@ -538,7 +554,7 @@ pub fn run(bytes: &[u8]) -> Result<Outcome, Violation> {
     // Free what is left, whatever happened.
     for slot in r.slots.iter_mut() {
         if let Some(s) = slot.take() {
-            unsafe { fmi2FreeInstance(s.c) };
+            unsafe { api.free_instance(s.c) };
         }
     }
     result.map(|()| r.out)
@@ -546,15 +562,16 @@ pub fn run(bytes: &[u8]) -> Result<Outcome, Violation> {
 
 fn new_slot(
     name: String,
-    c: fmi2Component,
+    c: Instance,
     log: Box<Log>,
-    functions: Box<fmi2CallbackFunctions>,
+    functions: Option<Box<fmi2CallbackFunctions>>,
     logging_on: bool,
 ) -> Slot {
     Slot {
         c,
         log,
         _functions: functions,
+        silent: false,
         name,
         st: St::Instantiated,
         time: 0.0,
@@ -595,11 +612,11 @@ fn target(r: &Run, src: &mut Source) -> Target {
     }
 }
 
-fn component(r: &Run, t: &Target) -> fmi2Component {
+fn component(r: &Run, t: &Target) -> Instance {
     match t {
         Target::Slot(i) => r.slot(*i).c,
         Target::Null => null_mut(),
-        Target::Foreign => r.foreign.as_ptr() as fmi2Component,
+        Target::Foreign => r.foreign.as_ptr() as Instance,
     }
 }
 
@@ -616,7 +633,7 @@ fn call_on<F, E>(
     call: F,
 ) -> Result<Option<(usize, i32)>, Violation>
 where
-    F: std::ops::FnOnce(fmi2Component) -> i32,
+    F: std::ops::FnOnce(Instance) -> i32,
     E: std::ops::FnOnce(&Slot) -> Vec<i32>,
 {
     let c = component(r, &t);
@@ -639,9 +656,11 @@ where
     let slot = r.slot(i);
     let expected = if slot.poisoned && f != Fn::Reset {
         vec![ERROR]
-    } else if slot.me {
+    } else if slot.me || matches!(slot.st, St::Event | St::Continuous) {
         // Model Exchange: invalid arguments must still give fmi2Error; a
         // valid call may be refused for the (unpredicted) state it is in.
+        // (A co-simulation instance reaches these states only by forged
+        // bytes; FMI 3.0 allows sets in Event Mode.)
         let mut e = expect(slot);
         if !e.contains(&ERROR) {
             e.push(ERROR);
@@ -713,6 +732,9 @@ fn step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 }
 
 fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    if r.api == Api::Fmi3 {
+        return op_instantiate3(r, src);
+    }
     let i = src.pick(2);
     if let Some(old) = r.slots[i].take() {
         unsafe { fmi2FreeInstance(old.c) };
@@ -791,21 +813,89 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     if r.trace {
         eprintln!("{} -> slot {i} = {c:?}", r.what);
     }
-    let mut slot = new_slot(name, c, log, functions, logging_on != 0);
+    let mut slot = new_slot(name, c, log, Some(functions), logging_on != 0);
     slot.me = fmu_type == 0;
     r.slots[i] = Some(slot);
     Ok(())
 }
 
+/// FMI 3.0's instantiation: Co-Simulation or Model Exchange, with a wrong or
+/// NULL token, NULL strings, required intermediate variables (refused: none
+/// has intermediateUpdate), with or without a logger.
+fn op_instantiate3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let i = src.pick(2);
+    if let Some(old) = r.slots[i].take() {
+        unsafe { r.api.free_instance(old.c) };
+    }
+    let log = Box::<Log>::default();
+    let model_exchange = desc().model_exchange && src.chance(64);
+    let token_kind = src.pick(24);
+    let name = format!("fuzz{}", src.u8());
+    let name_c = CString::new(name.clone()).unwrap();
+    let token_c = CString::new(match token_kind {
+        0 => "{00000000-0000-0000-0000-000000000000}".to_string(),
+        1 => String::new(),
+        _ => guid::<converting_span::ConvertingSpan>().to_string(),
+    })
+    .unwrap();
+    let null_token = token_kind >= 2 && src.chance(16);
+    let token_ok = token_kind >= 2 && !null_token;
+    // The repository's fmu/resources, as a path (FMI 3.0 passes no URI).
+    let resources = CString::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fmu/resources/")).unwrap();
+    let required: Vec<u32> = if src.chance(12) { vec![vr(src, |_| true)] } else { Vec::new() };
+    let no_logger = src.chance(12);
+    let logging_on = src.chance(128);
+    let args = api::Instantiate3 {
+        model_exchange,
+        name: if src.chance(8) { std::ptr::null() } else { name_c.as_ptr() },
+        token: if null_token { std::ptr::null() } else { token_c.as_ptr() },
+        resource_path: if src.chance(16) { std::ptr::null() } else { resources.as_ptr() },
+        logging_on,
+        event_mode_used: src.chance(16),
+        required: &required,
+        log: (!no_logger).then_some(&*log),
+    };
+    let c = unsafe { api::instantiate3(&args) };
+    r.what = format!(
+        "{}(token ok {token_ok}, required {required:?}, logger {})",
+        if model_exchange { "fmi3InstantiateModelExchange" } else { "fmi3InstantiateCoSimulation" },
+        !no_logger
+    );
+    r.out.calls += 1;
+    let should = token_ok && (model_exchange || required.is_empty());
+    if c.is_null() == should {
+        if !c.is_null() {
+            unsafe { r.api.free_instance(c) };
+        }
+        return fail(format!("{}: returned {c:?}", r.what));
+    }
+    let lines = log.take();
+    if c.is_null() {
+        if !no_logger && !lines.iter().any(|l| l.status == ERROR) {
+            return fail(format!("{}: refused without saying why: {lines:?}", r.what));
+        }
+        return Ok(());
+    }
+    if r.trace {
+        eprintln!("{} -> slot {i} = {c:?}", r.what);
+    }
+    let mut slot = new_slot(name, c, log, None, logging_on);
+    slot.me = model_exchange;
+    slot.silent = no_logger;
+    r.slots[i] = Some(slot);
+    Ok(())
+}
+
 fn op_free_instance(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     match src.pick(6) {
-        0 => unsafe { fmi2FreeInstance(null_mut()) },
-        1 => unsafe { fmi2FreeInstance(r.foreign.as_ptr() as fmi2Component) },
+        0 => unsafe { api.free_instance(null_mut()) },
+        1 => unsafe { api.free_instance(r.foreign.as_ptr() as Instance) },
         k => {
             if let Some(slot) = r.slots[k % 2].take() {
                 // Its states go with it: their pointers are dead from now on.
                 r.dead_states.extend(slot.states.iter().map(|s| s.ptr));
-                unsafe { fmi2FreeInstance(slot.c) };
+                unsafe { api.free_instance(slot.c) };
             }
         }
     }
@@ -824,17 +914,31 @@ fn op_setup(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let bad = !start.is_finite()
         || (stop_def != 0 && !(stop.is_finite() && stop >= start))
         || (tol_def != 0 && !(tol.is_finite() && tol > 0.0));
+    // FMI 3.0 sets the experiment in fmi3EnterInitializationMode.
+    let api = r.api;
+    let (f, name) = match api {
+        Api::Fmi2 => (Fn::SetupExperiment, "fmi2SetupExperiment"),
+        Api::Fmi3 => (Fn::EnterInit, "fmi3EnterInitializationMode"),
+    };
     let res = call_on(
         r,
         t,
-        Fn::SetupExperiment,
-        &format!("fmi2SetupExperiment({tol_def}, {tol:e}, {start:e}, {stop_def}, {stop:e})"),
+        f,
+        &format!("{name}({tol_def}, {tol:e}, {start:e}, {stop_def}, {stop:e})"),
         |_| if bad { vec![ERROR] } else { vec![OK] },
-        |c| unsafe { fmi2SetupExperiment(c, tol_def, tol, start, stop_def, stop) },
+        |c| unsafe {
+            match api {
+                Api::Fmi2 => fmi2SetupExperiment(c, tol_def, tol, start, stop_def, stop),
+                Api::Fmi3 => api.enter_init(c, (tol_def, tol, start, stop_def, stop)),
+            }
+        },
     )?;
     if let Some((i, OK)) = res {
         let slot = r.slot_mut(i);
         slot.time = start;
+        if api == Api::Fmi3 {
+            slot.st = St::Init;
+        }
         if !sane {
             slot.values = slot
                 .values
@@ -850,11 +954,12 @@ fn op_setup(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 
 fn op_simple(r: &mut Run, src: &mut Source, f: Fn) -> Result<(), Violation> {
     let t = target(r, src);
-    let (name, call): (&str, unsafe extern "C" fn(fmi2Component) -> i32) = match f {
-        Fn::EnterInit => ("fmi2EnterInitializationMode", fmi2EnterInitializationMode),
-        Fn::ExitInit => ("fmi2ExitInitializationMode", fmi2ExitInitializationMode),
-        Fn::Terminate => ("fmi2Terminate", fmi2Terminate),
-        _ => ("fmi2Reset", fmi2Reset),
+    let api = r.api;
+    let name = match f {
+        Fn::EnterInit => api.name("fmi2EnterInitializationMode", "fmi3EnterInitializationMode"),
+        Fn::ExitInit => api.name("fmi2ExitInitializationMode", "fmi3ExitInitializationMode"),
+        Fn::Terminate => api.name("fmi2Terminate", "fmi3Terminate"),
+        _ => api.name("fmi2Reset", "fmi3Reset"),
     };
     let res = call_on(
         r,
@@ -866,12 +971,25 @@ fn op_simple(r: &mut Run, src: &mut Source, f: Fn) -> Result<(), Violation> {
             Fn::ExitInit if slot.values != Values::Pristine => vec![OK, ERROR],
             _ => vec![OK],
         },
-        |c| unsafe { call(c) },
+        |c| unsafe {
+            match f {
+                // (FMI 3.0: a plain experiment from time 0.)
+                Fn::EnterInit => api.enter_init(c, (0, 0.0, 0.0, 0, 0.0)),
+                Fn::ExitInit => api.exit_init(c),
+                Fn::Terminate => api.terminate(c),
+                _ => api.reset(c),
+            }
+        },
     )?;
     if let Some((i, OK)) = res {
         let slot = r.slot_mut(i);
         match f {
-            Fn::EnterInit => slot.st = St::Init,
+            Fn::EnterInit => {
+                slot.st = St::Init;
+                if api == Api::Fmi3 {
+                    slot.time = 0.0;
+                }
+            }
             Fn::ExitInit => {
                 slot.st = St::StepComplete;
                 slot.initialized = true;
@@ -889,23 +1007,73 @@ fn op_simple(r: &mut Run, src: &mut Source, f: Fn) -> Result<(), Violation> {
     Ok(())
 }
 
+/// The number of values an FMI 3.0 get or set is told: mostly `n`, at times
+/// one more or one less (refused: every variable is a scalar).
+fn count(api: Api, src: &mut Source, n: usize) -> usize {
+    match api {
+        Api::Fmi3 if src.chance(10) => if n > 0 && src.chance(128) { n - 1 } else { n + 1 },
+        _ => n,
+    }
+}
+
+/// FMI 3.0's integer function for an Integer-family variable: Int64 for
+/// enumerations, Int32 for the rest; at times the wrong one.
+fn int_type(api: Api, src: &mut Source, vrs: &[u32]) -> Int {
+    let enumeration = vrs
+        .first()
+        .and_then(|&x| var(x, Family::Integer))
+        .is_some_and(|v| matches!(v.kind, Kind::Enumeration { .. }));
+    if enumeration != (api == Api::Fmi3 && src.chance(24)) {
+        Int::Int64
+    } else {
+        Int::Int32
+    }
+}
+
+/// Does `v` travel through `int` in FMI 3.0 (always, in FMI 2.0)?
+fn int_fits(api: Api, int: Int, v: &Variable) -> bool {
+    api == Api::Fmi2 || matches!((int, v.kind), (Int::Int64, Kind::Enumeration { .. }) | (Int::Int32, Kind::Integer))
+}
+
 fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let n = src.pick(6);
-    let vrs: Vec<u32> = (0..n).map(|_| vr(src, |v| family(v) == fam)).collect();
+    let d = desc();
+    let mut vrs: Vec<u32> = (0..n).map(|_| vr(src, |v| family(v) == fam)).collect();
+    if api == Api::Fmi3 && fam == Family::Real && n > 0 && src.chance(48) {
+        // FMI 3.0's added Float64 variables: time, and the event indicators.
+        let k = src.pick(n);
+        vrs[k] = match src.pick(d.number_of_event_indicators + 1) {
+            0 => fmi3::types::TIME_VR,
+            e => fmi3::types::first_event_indicator(d) + e as u32 - 1,
+        };
+    }
+    let added = |x: u32| api == Api::Fmi3 && fam == Family::Real && fmi3::types::added(d, x).is_some();
+    let int = int_type(api, src, &vrs);
+    let nv = count(api, src, n);
     let null_vr = n > 0 && src.chance(10);
     let null_values = n > 0 && src.chance(10);
-    let known = vrs.iter().all(|&x| var(x, fam).is_some());
+    let known = vrs
+        .iter()
+        .all(|&x| var(x, fam).is_some_and(|v| fam != Family::Integer || int_fits(api, int, v)) || added(x));
+    let any_indicator = vrs.iter().any(|&x| added(x) && x != fmi3::types::TIME_VR);
     let name = format!(
-        "fmi2Get{}({vrs:?}{}{})",
-        match fam {
-            Family::Real => "Real",
-            Family::Integer => "Integer",
-            Family::Boolean => "Boolean",
-            Family::String => "String",
+        "{}({vrs:?}{}{}{})",
+        match (fam, api) {
+            (Family::Real, Api::Fmi2) => "fmi2GetReal",
+            (Family::Integer, Api::Fmi2) => "fmi2GetInteger",
+            (Family::Boolean, Api::Fmi2) => "fmi2GetBoolean",
+            (Family::String, Api::Fmi2) => "fmi2GetString",
+            (Family::Real, Api::Fmi3) => "fmi3GetFloat64",
+            (Family::Integer, Api::Fmi3) if int == Int::Int32 => "fmi3GetInt32",
+            (Family::Integer, Api::Fmi3) => "fmi3GetInt64",
+            (Family::Boolean, Api::Fmi3) => "fmi3GetBoolean",
+            (Family::String, Api::Fmi3) => "fmi3GetString",
         },
         if null_vr { ", vr NULL" } else { "" },
-        if null_values { ", value NULL" } else { "" }
+        if null_values { ", value NULL" } else { "" },
+        if nv != n { format!(", {nv} values") } else { String::new() }
     );
     let mut reals = vec![f64::NAN; n];
     let mut ints = vec![-7i32; n];
@@ -921,7 +1089,7 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
         Fn::Get,
         &name,
         |slot| {
-            if null_vr || null_values || !known {
+            if null_vr || null_values || !known || nv != n {
                 vec![ERROR]
             } else if slot.st == St::Init && slot.values != Values::Pristine {
                 // In initialization mode the outputs are computed first,
@@ -932,57 +1100,34 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
                 // the model can compute them (values set before a failed
                 // initialization may not allow it); the FMU says why.
                 vec![OK, ERROR]
+            } else if any_indicator && !slot.me {
+                // Event indicators are Model Exchange's.
+                vec![OK, ERROR]
             } else {
                 vec![OK]
             }
         },
         |c| unsafe {
             match fam {
-                Family::Real => fmi2GetReal(
-                    c,
-                    vr_ptr,
-                    n,
-                    if null_values {
-                        null_mut()
-                    } else {
-                        reals.as_mut_ptr()
-                    },
-                ),
-                Family::Integer => fmi2GetInteger(
-                    c,
-                    vr_ptr,
-                    n,
-                    if null_values {
-                        null_mut()
-                    } else {
-                        ints.as_mut_ptr()
-                    },
-                ),
-                Family::Boolean => fmi2GetBoolean(
-                    c,
-                    vr_ptr,
-                    n,
-                    if null_values {
-                        null_mut()
-                    } else {
-                        ints.as_mut_ptr()
-                    },
-                ),
-                Family::String => fmi2GetString(
-                    c,
-                    vr_ptr,
-                    n,
-                    if null_values {
-                        null_mut()
-                    } else {
-                        strs.as_mut_ptr()
-                    },
-                ),
+                Family::Real => api.get_real(c, vr_ptr, n, if null_values { null_mut() } else { reals.as_mut_ptr() }, nv),
+                Family::Integer => {
+                    api.get_integer(int, c, vr_ptr, n, if null_values { null_mut() } else { ints.as_mut_ptr() }, nv)
+                }
+                Family::Boolean => api.get_boolean(c, vr_ptr, n, if null_values { null_mut() } else { ints.as_mut_ptr() }, nv),
+                Family::String => api.get_string(c, vr_ptr, n, if null_values { null_mut() } else { strs.as_mut_ptr() }, nv),
             }
         },
     )?;
     if let Some((i, OK)) = res {
         for (k, &x) in vrs.iter().enumerate() {
+            if added(x) {
+                let time = r.slot(i).time;
+                if x == fmi3::types::TIME_VR && !r.slot(i).me && reals[k].to_bits() != time.to_bits() {
+                    return fail(format!("{}: time = {}, expected {time}", r.what, reals[k]));
+                }
+                r.finite(i, reals[k], "an added Float64")?;
+                continue;
+            }
             let v = var(x, fam).expect("known");
             match fam {
                 Family::Real => r.finite(i, reals[k], v.name)?,
@@ -1002,6 +1147,9 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
                         }
                     }
                 }
+                Family::String if strs[k].is_null() => {
+                    return fail(format!("{}: {} is a NULL string", r.what, v.name))
+                }
                 _ => {}
             }
         }
@@ -1011,6 +1159,7 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
 
 /// Frame of the three numeric setters: checks every (vr, value) pair.
 fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let n = src.pick(5);
     let mut vrs = Vec::new();
@@ -1028,6 +1177,7 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         vrs.push(x);
         values.push(value);
     }
+    let nv = count(api, src, n);
     let null_vr = n > 0 && src.chance(8);
     let null_values = n > 0 && src.chance(8);
     let vr_ptr = if null_vr {
@@ -1046,12 +1196,14 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         t,
         Fn::Set,
         &format!(
-            "fmi2SetReal({pairs:?}{}{})",
+            "{}({pairs:?}{}{}, {nv} values)",
+            api.name("fmi2SetReal", "fmi3SetFloat64"),
             if null_vr { ", vr NULL" } else { "" },
             if null_values { ", value NULL" } else { "" }
         ),
         |slot| {
-            let ok = !null_vr
+            let ok = nv == n
+                && !null_vr
                 && !null_values
                 && pairs.iter().all(|&(x, value)| match var(x, Family::Real) {
                     Some(v) => {
@@ -1063,7 +1215,7 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 });
             vec![if ok { OK } else { ERROR }]
         },
-        |c| unsafe { fmi2SetReal(c, vr_ptr, n, value_ptr) },
+        |c| unsafe { api.set_real(c, vr_ptr, n, value_ptr, nv) },
     )?;
     if let Some((i, OK)) = res {
         let slot = r.slot_mut(i);
@@ -1078,21 +1230,27 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 }
 
 fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let n = src.pick(4);
     let mut vrs = Vec::new();
-    let mut values = Vec::new();
+    let mut values: Vec<i64> = Vec::new();
     for _ in 0..n {
         let x = vr(src, |v| {
             family(v) == fam && v.causality == Causality::Parameter
         });
         vrs.push(x);
         values.push(if fam == Family::Boolean {
-            boolean(src)
+            boolean(src) as i64
+        } else if api == Api::Fmi3 && src.chance(16) {
+            // Beyond any Int32 (FMI 3.0 gives enumerations 64 bits).
+            [i64::MAX, i64::MIN, 1 << 32, -(1 << 31) - 1][src.pick(4)]
         } else {
-            integer(src, var(x, fam))
+            integer(src, var(x, fam)) as i64
         });
     }
+    let int = int_type(api, src, &vrs);
+    let nv = count(api, src, n);
     let null_vr = n > 0 && src.chance(8);
     let null_values = n > 0 && src.chance(8);
     let vr_ptr = if null_vr {
@@ -1100,35 +1258,45 @@ fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violatio
     } else {
         vrs.as_ptr()
     };
-    let value_ptr = if null_values {
-        std::ptr::null()
+    let narrow: Vec<i32> = values.iter().map(|&x| x as i32).collect();
+    let (value_ptr, narrow_ptr) = if null_values {
+        (std::ptr::null(), std::ptr::null())
     } else {
-        values.as_ptr()
+        (values.as_ptr(), narrow.as_ptr())
     };
-    let pairs: Vec<(u32, i32)> = vrs.iter().copied().zip(values.iter().copied()).collect();
-    let name = if fam == Family::Boolean {
-        "fmi2SetBoolean"
-    } else {
-        "fmi2SetInteger"
+    let pairs: Vec<(u32, i64)> = vrs.iter().copied().zip(values.iter().copied()).collect();
+    let name = match (fam, api, int) {
+        (Family::Boolean, _, _) => api.name("fmi2SetBoolean", "fmi3SetBoolean"),
+        (_, Api::Fmi2, _) => "fmi2SetInteger",
+        (_, _, Int::Int32) => "fmi3SetInt32",
+        _ => "fmi3SetInt64",
     };
     let res = call_on(
         r,
         t,
         Fn::Set,
         &format!(
-            "{name}({pairs:?}{}{})",
+            "{name}({pairs:?}{}{}, {nv} values)",
             if null_vr { ", vr NULL" } else { "" },
             if null_values { ", value NULL" } else { "" }
         ),
         |slot| {
-            let ok = !null_vr
+            let ok = nv == n
+                && !null_vr
                 && !null_values
                 && pairs.iter().all(|&(x, value)| match var(x, fam) {
                     Some(v) => {
+                        // What the FMU is given: FMI 2.0's Integer is 32 bits; FMI 3.0's Boolean a byte.
+                        let value = match (fam, api, int) {
+                            (Family::Boolean, _, _) => api.boolean_value(value as i32) as i64,
+                            (_, Api::Fmi3, Int::Int64) => value,
+                            _ => value as i32 as i64,
+                        };
                         settable(v, slot.st)
+                            && (fam == Family::Boolean || int_fits(api, int, v))
                             && match v.kind {
                                 Kind::Boolean => value == 0 || value == 1,
-                                Kind::Enumeration { values, .. } => values.contains(&value),
+                                Kind::Enumeration { values, .. } => values.iter().any(|&e| e as i64 == value),
                                 _ => true,
                             }
                     }
@@ -1138,9 +1306,9 @@ fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violatio
         },
         |c| unsafe {
             if fam == Family::Boolean {
-                fmi2SetBoolean(c, vr_ptr, n, value_ptr)
+                api.set_boolean(c, vr_ptr, n, narrow_ptr, nv)
             } else {
-                fmi2SetInteger(c, vr_ptr, n, value_ptr)
+                api.set_integer(int, c, vr_ptr, n, value_ptr, nv)
             }
         },
     )?;
@@ -1154,6 +1322,7 @@ fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violatio
 }
 
 fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let n = src.pick(3);
     let vrs: Vec<u32> = (0..n)
@@ -1175,7 +1344,8 @@ fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         .collect();
     let vr_ptr = maybe_null(src, &vrs);
     let value_ptr = maybe_null(src, &values);
-    let ok_args = n == 0 || (!vr_ptr.is_null() && !value_ptr.is_null());
+    let nv = count(api, src, n);
+    let ok_args = nv == n && (n == 0 || (!vr_ptr.is_null() && !value_ptr.is_null()));
     let known = vrs
         .iter()
         .all(|&x| var(x, Family::String).is_some_and(|v| v.causality != Causality::Output));
@@ -1183,7 +1353,7 @@ fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         r,
         t,
         Fn::Set,
-        &format!("fmi2SetString({vrs:?})"),
+        &format!("{}({vrs:?}, {nv} values)", api.name("fmi2SetString", "fmi3SetString")),
         |_| {
             if ok_args && (n == 0 || known) {
                 vec![OK, ERROR]
@@ -1191,7 +1361,7 @@ fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 vec![ERROR]
             }
         },
-        |c| unsafe { fmi2SetString(c, vr_ptr, n, value_ptr) },
+        |c| unsafe { api.set_string(c, vr_ptr, n, value_ptr, nv) },
     )?;
     // A record (or a library path) may fail initialization, like any changed value.
     if let Some((i, OK)) = res {
@@ -1238,6 +1408,7 @@ fn owns(r: &Run, i: usize, p: usize) -> Option<usize> {
 }
 
 fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let i = slot_of(&t);
     let initial = if src.chance(180) {
@@ -1246,8 +1417,8 @@ fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         any_state(r, src, i)
     };
     let null_slot = src.chance(8);
-    let mut slot_value = initial as fmi2FMUstate;
-    let slot_ptr: *mut fmi2FMUstate = if null_slot {
+    let mut slot_value = initial as api::State;
+    let slot_ptr: *mut api::State = if null_slot {
         null_mut()
     } else {
         &mut slot_value
@@ -1258,7 +1429,8 @@ fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         t,
         Fn::StateOp,
         &format!(
-            "fmi2GetFMUstate(*state = {initial:#x}{})",
+            "{}(*state = {initial:#x}{})",
+            api.name("fmi2GetFMUstate", "fmi3GetFMUState"),
             if null_slot { ", state NULL" } else { "" }
         ),
         |_| {
@@ -1268,7 +1440,7 @@ fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 ERROR
             }]
         },
-        |c| unsafe { fmi2GetFMUstate(c, slot_ptr) },
+        |c| unsafe { api.get_state(c, slot_ptr) },
     )?;
     if let Some((i, s)) = res {
         let got = slot_value as usize;
@@ -1305,6 +1477,7 @@ fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 }
 
 fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let i = slot_of(&t);
     let p = any_state(r, src, i);
@@ -1313,7 +1486,7 @@ fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         r,
         t,
         Fn::StateOp,
-        &format!("fmi2SetFMUstate({p:#x})"),
+        &format!("{}({p:#x})", api.name("fmi2SetFMUstate", "fmi3SetFMUState")),
         // A state of the other interface (ME/CS) is refused.
         |slot| match owned.map(|k| &slot.states[k]) {
             // A forged state may have any interface byte: either answer.
@@ -1321,7 +1494,7 @@ fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             Some(state) if state.me == slot.me => vec![OK],
             _ => vec![ERROR],
         },
-        |c| unsafe { fmi2SetFMUstate(c, p as fmi2FMUstate) },
+        |c| unsafe { api.set_state(c, p as api::State) },
     )?;
     if let (Some((i, OK)), Some(k)) = (res, owned) {
         let slot = r.slot_mut(i);
@@ -1333,8 +1506,7 @@ fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         // (fmi2OK means the interface matched.)
         // A restored state continues where it was saved.
         if !info.me && allowed(Fn::GetStatus, info.st) {
-            let mut t = f64::NAN;
-            let s = unsafe { fmi2GetRealStatus(slot.c, 2, &mut t) };
+            let (s, t) = unsafe { api.last_successful_time(slot.c) };
             slot.log.take();
             if s != OK || t.to_bits() != info.time.to_bits() {
                 return fail(format!(
@@ -1348,12 +1520,13 @@ fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 }
 
 fn op_free_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let i = slot_of(&t);
     let p = any_state(r, src, i);
     let null_slot = src.chance(8);
-    let mut slot_value = p as fmi2FMUstate;
-    let slot_ptr: *mut fmi2FMUstate = if null_slot {
+    let mut slot_value = p as api::State;
+    let slot_ptr: *mut api::State = if null_slot {
         null_mut()
     } else {
         &mut slot_value
@@ -1364,7 +1537,8 @@ fn op_free_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         t,
         Fn::StateOp,
         &format!(
-            "fmi2FreeFMUstate(*state = {p:#x}{})",
+            "{}(*state = {p:#x}{})",
+            api.name("fmi2FreeFMUstate", "fmi3FreeFMUState"),
             if null_slot { ", state NULL" } else { "" }
         ),
         |_| {
@@ -1374,7 +1548,7 @@ fn op_free_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 ERROR
             }]
         },
-        |c| unsafe { fmi2FreeFMUstate(c, slot_ptr) },
+        |c| unsafe { api.free_state(c, slot_ptr) },
     )?;
     if let Some((i, s)) = res {
         if s == OK {
@@ -1396,6 +1570,7 @@ fn op_free_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 }
 
 fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let i = slot_of(&t);
     let p = any_state(r, src, i);
@@ -1407,7 +1582,7 @@ fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         r,
         t,
         Fn::StateOp,
-        &format!("fmi2SerializedFMUstateSize({p:#x})"),
+        &format!("{}({p:#x})", api.name("fmi2SerializedFMUstateSize", "fmi3SerializedFMUStateSize")),
         |_| {
             vec![if owned.is_some() && !null_size {
                 OK
@@ -1415,7 +1590,7 @@ fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 ERROR
             }]
         },
-        |c| unsafe { fmi2SerializedFMUstateSize(c, p as fmi2FMUstate, size_ptr) },
+        |c| unsafe { api.state_size(c, p as api::State, size_ptr) },
     )?;
     let Some((i, OK)) = res else { return Ok(()) };
     if size == 0 || size > 1 << 20 {
@@ -1430,14 +1605,11 @@ fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         _ => (size, false),
     };
     let mut buf = vec![0xa5u8; buf_len.max(1)];
-    let buf_ptr: *mut fmi2Byte = if null_buf {
-        null_mut()
-    } else {
-        buf.as_mut_ptr() as *mut c_char
-    };
+    let buf_ptr: *mut u8 = if null_buf { null_mut() } else { buf.as_mut_ptr() };
     let (c, poisoned) = (r.slot(i).c, r.slot(i).poisoned);
     r.what = format!(
-        "fmi2SerializeFMUstate(size {buf_len} for {size}{})",
+        "{}(size {buf_len} for {size}{})",
+        api.name("fmi2SerializeFMUstate", "fmi3SerializeFMUState"),
         if null_buf { ", NULL buffer" } else { "" }
     );
     let expected = if poisoned || buf_len < size || null_buf {
@@ -1445,7 +1617,7 @@ fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     } else {
         OK
     };
-    let s = unsafe { fmi2SerializeFMUstate(c, p as fmi2FMUstate, buf_ptr, buf_len) };
+    let s = unsafe { api.serialize(c, p as api::State, buf_ptr, buf_len) };
     r.check_status(s, &[expected])?;
     r.after(i, s)?;
     if s == OK {
@@ -1489,6 +1661,7 @@ enum Bytes {
 }
 
 fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     let (mut bytes, mut kind, info) = if r.blobs.is_empty() || src.chance(40) {
         let n = src.pick(80);
         (
@@ -1557,17 +1730,13 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let owned = i.and_then(|i| owns(r, i, initial));
     let null_bytes = src.chance(8);
     let null_slot = src.chance(8);
-    let mut slot_value = initial as fmi2FMUstate;
-    let slot_ptr: *mut fmi2FMUstate = if null_slot {
+    let mut slot_value = initial as api::State;
+    let slot_ptr: *mut api::State = if null_slot {
         null_mut()
     } else {
         &mut slot_value
     };
-    let bytes_ptr = if null_bytes {
-        std::ptr::null()
-    } else {
-        bytes.as_ptr() as *const c_char
-    };
+    let bytes_ptr = if null_bytes { std::ptr::null() } else { bytes.as_ptr() };
     let args_ok =
         !null_slot && (initial == 0 || owned.is_some()) && (!null_bytes || bytes.is_empty());
     let slot_me = i.is_some_and(|i| r.slot(i).me);
@@ -1582,7 +1751,8 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         t,
         Fn::StateOp,
         &format!(
-            "fmi2DeSerializeFMUstate({kind:?}, {} bytes, *state = {initial:#x})",
+            "{}({kind:?}, {} bytes, *state = {initial:#x})",
+            api.name("fmi2DeSerializeFMUstate", "fmi3DeserializeFMUState"),
             bytes.len()
         ),
         |_| match (&kind, args_ok) {
@@ -1593,7 +1763,7 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             (Bytes::Genuine, true) => vec![OK, ERROR],
             _ => vec![OK, ERROR],
         },
-        |c| unsafe { fmi2DeSerializeFMUstate(c, bytes_ptr, bytes.len(), slot_ptr) },
+        |c| unsafe { api.deserialize(c, bytes_ptr, bytes.len(), slot_ptr) },
     )?;
     let Some((i, s)) = res else { return Ok(()) };
     let got = slot_value as usize;
@@ -1650,14 +1820,9 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         let mut size = 0usize;
         let mut again = vec![0u8; bytes.len()];
         let ok = unsafe {
-            fmi2SerializedFMUstateSize(c, got as fmi2FMUstate, &mut size) == OK
+            api.state_size(c, got as api::State, &mut size) == OK
                 && size == bytes.len()
-                && fmi2SerializeFMUstate(
-                    c,
-                    got as fmi2FMUstate,
-                    again.as_mut_ptr() as *mut c_char,
-                    size,
-                ) == OK
+                && api.serialize(c, got as api::State, again.as_mut_ptr(), size) == OK
         };
         let poisoned = r.slot(i).poisoned;
         r.slot(i).log.take();
@@ -1683,11 +1848,13 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 }
 
 fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let name = api.name("fmi2DoStep", "fmi3DoStep");
     let t = target(r, src);
     let Some(i) = slot_of(&t) else {
         let c = component(r, &t);
-        r.what = "fmi2DoStep on NULL/foreign".into();
-        let s = unsafe { fmi2DoStep(c, 0.0, 0.1, 1) };
+        r.what = format!("{name} on NULL/foreign");
+        let (s, _) = unsafe { api.do_step(c, 0.0, 0.1, 1, false) };
         return r.check_status(s, &[ERROR]);
     };
     let (time, st_before, poisoned_before) = (r.slot(i).time, r.slot(i).st, r.slot(i).poisoned);
@@ -1703,6 +1870,9 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         _ => [1e-3, 0.01, 0.1, 0.5][src.pick(4)],
     };
     let no_prior = boolean(src);
+    // FMI 3.0's out-arguments are required.
+    let null_outs = api == Api::Fmi3 && src.chance(8);
+    let mut answered = None;
     let tol = STEP_TOLERANCE * tc.abs().max(time.abs()).max(1.0);
     let t_ok = tc.is_finite() && (t_exact || (tc - time).abs() <= 0.5 * tol);
     let t_bad = !tc.is_finite() || (tc - time).abs() > 2.0 * tol;
@@ -1711,9 +1881,9 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         r,
         t,
         Fn::DoStep,
-        &format!("fmi2DoStep({tc:e}, {h:e}) at time {time:e}"),
+        &format!("{name}({tc:e}, {h:e}{}) at time {time:e}", if null_outs { ", NULL out-arguments" } else { "" }),
         |slot| {
-            if !h_ok || t_bad {
+            if !h_ok || t_bad || null_outs {
                 vec![ERROR]
             } else if !t_ok {
                 vec![OK, DISCARD, ERROR]
@@ -1726,7 +1896,11 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 vec![OK, DISCARD, ERROR]
             }
         },
-        |c| unsafe { fmi2DoStep(c, tc, h, no_prior) },
+        |c| unsafe {
+            let (s, outs) = api.do_step(c, tc, h, no_prior, null_outs);
+            answered = outs;
+            s
+        },
     )?;
     let Some((i, s)) = res else { return Ok(()) };
     let slot = r.slot_mut(i);
@@ -1740,8 +1914,13 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             }
             r.out.steps_ok += 1;
             let c = r.slot(i).c;
-            let mut last = f64::NAN;
-            let st = unsafe { fmi2GetRealStatus(c, 2, &mut last) };
+            if let Some((flags, reached)) = answered {
+                // No event, no stop, no early return: a step is whole.
+                if flags != [0; 3] || reached.to_bits() != (tc + h).to_bits() {
+                    return fail(format!("{}: answered flags {flags:?}, lastSuccessfulTime {reached}", r.what));
+                }
+            }
+            let (st, last) = unsafe { api.last_successful_time(c) };
             r.slot(i).log.take();
             if st != OK || last.to_bits() != (tc + h).to_bits() {
                 // t + h can overflow to infinity: that is a finding of its own.
@@ -1764,7 +1943,7 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 .collect();
             let vrs: Vec<u32> = reals.iter().map(|v| v.vr).collect();
             let mut values = vec![f64::NAN; vrs.len()];
-            let gs = unsafe { fmi2GetReal(c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr()) };
+            let gs = unsafe { api.get_real(c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr(), vrs.len()) };
             r.slot(i).log.take();
             if gs != OK {
                 return fail(format!(
@@ -1784,7 +1963,7 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             slot.st = St::StepFailed;
         }
         ERROR => {
-            if slot.armed && !slot.me && h_ok && t_ok && st_before == St::StepComplete && !poisoned_before {
+            if slot.armed && !slot.me && h_ok && t_ok && !null_outs && st_before == St::StepComplete && !poisoned_before {
                 slot.armed = false;
                 slot.poisoned = true;
                 r.out.panics_caught += 1;
@@ -1796,6 +1975,10 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 }
 
 fn op_status(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    if r.api == Api::Fmi3 {
+        // FMI 3.0 has no status functions.
+        return op_unsupported3(r, src);
+    }
     let t = target(r, src);
     let which = src.pick(5);
     let kind = match src.pick(4) {
@@ -1875,6 +2058,9 @@ fn op_status(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 /// offered, so fmi2Error in every state; directional derivatives with one
 /// array for dvKnown and dvUnknown: refused unless empty.
 fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    if r.api == Api::Fmi3 {
+        return op_unsupported3(r, src);
+    }
     let t = target(r, src);
     let which = src.pick(14);
     let n = src.pick(4);
@@ -1974,7 +2160,161 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     Ok(())
 }
 
+/// FMI 3.0's other functions: Model Exchange's (refused by a co-simulation
+/// instance), directional derivatives with value counts, the counts of
+/// states and event indicators, and those this FMU refuses in every state
+/// (clocks, configuration mode, Step Mode's event mode, output and adjoint
+/// derivatives, Scheduled Execution); the types it has no variables of accept
+/// only empty calls.
+fn op_unsupported3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    use converting_span::fmi3_exports as c3;
+    let which = src.pick(22);
+    if which == 21 {
+        let s = unsafe {
+            c3::fmi3InstantiateScheduledExecution(
+                c"fuzz".as_ptr(),
+                std::ptr::null(),
+                std::ptr::null(),
+                0,
+                0,
+                null_mut(),
+                None,
+                None,
+                None,
+                None,
+            )
+        };
+        r.out.calls += 1;
+        if !s.is_null() {
+            return fail(format!("fmi3InstantiateScheduledExecution returned {s:?}"));
+        }
+        return Ok(());
+    }
+    let t = target(r, src);
+    let n = src.pick(4);
+    let m = src.pick(4);
+    let unknowns: Vec<u32> = (0..n).map(|_| vr(src, |v| v.causality == Causality::Output)).collect();
+    let knowns: Vec<u32> = (0..m).map(|_| vr(src, |v| v.causality == Causality::Input)).collect();
+    let (n_seed, n_sens) = (count(Api::Fmi3, src, m), count(Api::Fmi3, src, n));
+    let mut buf = vec![0.0f64; 8];
+    for x in buf.iter_mut() {
+        *x = if src.chance(128) { 1.0 - (src.u8() as f64) * 1e-5 } else { real(src) };
+    }
+    let set_states = buf.clone();
+    let seed = vec![1.0f64; 8];
+    let null = src.chance(64);
+    let p = if null { null_mut() } else { buf.as_mut_ptr() };
+    let x = real(src);
+    let mut flags = [0u8; 6];
+    let mut next = f64::NAN;
+    let mut number = usize::MAX;
+    let (f, name) = match which {
+        0 => (Fn::GetDirectionalDerivative, "fmi3GetDirectionalDerivative"),
+        16 => (Fn::Get, "fmi3GetFloat32"),
+        17 => (Fn::Set, "fmi3SetUInt8"),
+        _ => (Fn::ModelExchange, "another fmi3 function"),
+    };
+    let (nx, nz) = (desc().states.len(), desc().number_of_event_indicators);
+    let res = call_on(
+        r,
+        t,
+        f,
+        &format!("{name} (#{which}, n = {n}, m = {m}{})", if null { ", NULL array" } else { "" }),
+        |slot| {
+            let sized = !null || n == 0;
+            match which {
+                0 if n_seed != m || n_sens != n || (null && n > 0) => vec![ERROR],
+                // Unknowns and knowns the FMU has no derivative of are refused.
+                0 => vec![OK, ERROR],
+                1..=10 if !slot.me => vec![ERROR],
+                2 | 4 if null => vec![ERROR],
+                1..=5 => vec![OK, DISCARD],
+                6..=10 if sized && (n == nx || (which == 8 && n == nz)) => vec![OK, DISCARD],
+                11 | 12 if slot.me && !null => vec![OK],
+                16 | 17 if n == 0 => vec![OK],
+                _ => vec![ERROR],
+            }
+        },
+        |c| unsafe {
+            let [a, b, e, d, g, h] = &mut flags;
+            let number = if null { null_mut() } else { &mut number as *mut usize };
+            match which {
+                0 => c3::fmi3GetDirectionalDerivative(
+                    c,
+                    unknowns.as_ptr(),
+                    n,
+                    knowns.as_ptr(),
+                    m,
+                    seed.as_ptr(),
+                    n_seed,
+                    p,
+                    n_sens,
+                ),
+                1 => c3::fmi3EnterEventMode(c),
+                2 if null => c3::fmi3UpdateDiscreteStates(c, a, b, null_mut(), d, g, &mut next),
+                2 => c3::fmi3UpdateDiscreteStates(c, a, b, e, d, g, &mut next),
+                3 => c3::fmi3EnterContinuousTimeMode(c),
+                4 => c3::fmi3CompletedIntegratorStep(c, 1, a, if null { null_mut() } else { h }),
+                5 => c3::fmi3SetTime(c, x),
+                6 => c3::fmi3SetContinuousStates(c, p, n),
+                7 => c3::fmi3GetContinuousStateDerivatives(c, p, n),
+                8 => c3::fmi3GetEventIndicators(c, p, n),
+                9 => c3::fmi3GetContinuousStates(c, p, n),
+                10 => c3::fmi3GetNominalsOfContinuousStates(c, p, n),
+                11 => c3::fmi3GetNumberOfContinuousStates(c, number),
+                12 => c3::fmi3GetNumberOfEventIndicators(c, number),
+                13 => c3::fmi3EnterStepMode(c),
+                14 => c3::fmi3GetOutputDerivatives(c, unknowns.as_ptr(), n, [1i32; 4].as_ptr(), p, n),
+                15 => c3::fmi3GetClock(c, unknowns.as_ptr(), n, a),
+                16 => c3::fmi3GetFloat32(c, unknowns.as_ptr(), n, [0f32; 4].as_mut_ptr(), n),
+                17 => c3::fmi3SetUInt8(c, knowns.as_ptr(), n, [0u8; 4].as_ptr(), n),
+                18 => c3::fmi3EnterConfigurationMode(c),
+                19 => c3::fmi3GetAdjointDerivative(c, unknowns.as_ptr(), n, knowns.as_ptr(), m, seed.as_ptr(), m, p, n),
+                _ => c3::fmi3EvaluateDiscreteStates(c),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        let what = match which {
+            6 => {
+                if let Some(x) = set_states.iter().take(n).find(|x| !x.is_finite()) {
+                    return fail(format!("{}: accepted the continuous state {x}", r.what));
+                }
+                let slot = r.slot_mut(i);
+                for &x in set_states.iter().take(n) {
+                    slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
+                }
+                return Ok(());
+            }
+            5 => {
+                let slot = r.slot_mut(i);
+                slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
+                return Ok(());
+            }
+            11 | 12 if number != [nx, nz][which - 11] => {
+                return fail(format!("{}: answered {number}", r.what));
+            }
+            0 => "a directional derivative",
+            7 => "a derivative",
+            8 => "an event indicator",
+            9 => "a continuous state",
+            10 => "a nominal",
+            _ => return Ok(()),
+        };
+        if !null {
+            for &v in &buf[..n] {
+                r.finite(i, v, what)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 fn op_input_derivatives(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    if r.api == Api::Fmi3 {
+        // FMI 3.0 has no input derivatives.
+        return op_unsupported3(r, src);
+    }
     let t = target(r, src);
     let n = src.pick(4);
     let vrs: Vec<u32> = (0..n)
@@ -2047,6 +2387,7 @@ fn op_input_derivatives(r: &mut Run, src: &mut Source) -> Result<(), Violation> 
 }
 
 fn op_debug_logging(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
     let t = target(r, src);
     let cats = desc().log_categories;
     let n = src.pick(4);
@@ -2074,9 +2415,9 @@ fn op_debug_logging(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         r,
         t,
         Fn::SetDebugLogging,
-        &format!("fmi2SetDebugLogging({on}, {strs:?})"),
+        &format!("{}({on}, {strs:?})", api.name("fmi2SetDebugLogging", "fmi3SetDebugLogging")),
         |_| vec![if ok { OK } else { ERROR }],
-        |c| unsafe { fmi2SetDebugLogging(c, on, n, array) },
+        |c| unsafe { api.set_debug_logging(c, on, n, array) },
     )?;
     if let Some((i, OK)) = res {
         let slot = r.slot_mut(i);
@@ -2106,13 +2447,14 @@ fn op_arm_panic(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     }
     let cat = CString::new(TEST_PANIC_CATEGORY).unwrap();
     let p = cat.as_ptr();
+    let api = r.api;
     let res = call_on(
         r,
         t,
         Fn::SetDebugLogging,
         "arm the panic hook",
         |_| vec![OK],
-        |c| unsafe { fmi2SetDebugLogging(c, 1, 1, &p) },
+        |c| unsafe { api.set_debug_logging(c, 1, 1, &p) },
     )?;
     if let Some((i, OK)) = res {
         r.slot_mut(i).armed = true;
@@ -2124,30 +2466,37 @@ fn op_arm_panic(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 /// slot is in, with sane arguments. Keeps random sequences going deep.
 fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let i = src.pick(2);
+    let api = r.api;
     let Some(slot) = r.slots[i].as_ref() else {
         let log = Box::<Log>::default();
         let functions = Box::new(callbacks(&log));
         let name = CString::new(format!("fuzz{i}")).unwrap();
         let g = CString::new(guid::<converting_span::ConvertingSpan>()).unwrap();
         let c = unsafe {
-            fmi2Instantiate(
-                name.as_ptr(),
-                1,
-                g.as_ptr(),
-                std::ptr::null(),
-                &*functions,
-                0,
-                0,
-            )
+            match api {
+                Api::Fmi2 => fmi2Instantiate(name.as_ptr(), 1, g.as_ptr(), std::ptr::null(), &*functions, 0, 0),
+                Api::Fmi3 => api::instantiate3(&api::Instantiate3 {
+                    model_exchange: false,
+                    name: name.as_ptr(),
+                    token: g.as_ptr(),
+                    resource_path: std::ptr::null(),
+                    logging_on: false,
+                    event_mode_used: false,
+                    required: &[],
+                    log: Some(&*log),
+                }),
+            }
         };
         r.out.calls += 1;
         if c.is_null() {
             return fail(format!(
-                "fmi2Instantiate with valid arguments returned NULL: {:?}",
+                "{} with valid arguments returned NULL: {:?}",
+                api.name("fmi2Instantiate", "fmi3InstantiateCoSimulation"),
                 log.take()
             ));
         }
         log.take();
+        let functions = (api == Api::Fmi2).then_some(functions);
         r.slots[i] = Some(new_slot(format!("fuzz{i}"), c, log, functions, false));
         return Ok(());
     };
@@ -2164,24 +2513,26 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     r.what = format!("lifecycle move [slot {i}, state {st:?}]");
     let (s, expected, next): (i32, Vec<i32>, Option<St>) = unsafe {
         if poisoned || matches!(st, St::Error | St::Terminated | St::StepFailed) {
-            (fmi2Reset(c), vec![OK], Some(St::Instantiated))
+            (api.reset(c), vec![OK], Some(St::Instantiated))
         } else {
             match st {
                 St::Instantiated => {
-                    let s = fmi2SetupExperiment(c, 0, 0.0, time, 0, 0.0);
-                    r.check_status(s, &[OK])?;
-                    r.after(i, s)?;
-                    (fmi2EnterInitializationMode(c), vec![OK], Some(St::Init))
+                    if api == Api::Fmi2 {
+                        let s = fmi2SetupExperiment(c, 0, 0.0, time, 0, 0.0);
+                        r.check_status(s, &[OK])?;
+                        r.after(i, s)?;
+                    }
+                    (api.enter_init(c, (0, 0.0, time, 0, 0.0)), vec![OK], Some(St::Init))
                 }
                 St::Init => (
-                    fmi2ExitInitializationMode(c),
+                    api.exit_init(c),
                     if pristine { vec![OK] } else { vec![OK, ERROR] },
                     Some(St::StepComplete),
                 ),
                 _ => {
                     // A few ordinary steps.
                     let armed = r.slot(i).armed;
-                    let s = fmi2DoStep(c, time, 0.01, 1);
+                    let (s, _) = api.do_step(c, time, 0.01, 1, false);
                     let expected = if armed {
                         vec![ERROR, DISCARD]
                     } else if pristine {
@@ -2232,26 +2583,37 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 /// oracle does not predict the ME state machine); states, derivatives and
 /// event indicators that come back with OK must be finite.
 fn me_integration(r: &mut Run, i: usize) -> Result<(), Violation> {
-    let c = r.slot(i).c;
+    let (c, api) = (r.slot(i).c, r.api);
     let nx = desc().states.len();
     let nz = desc().number_of_event_indicators;
     let mut x = vec![f64::NAN; nx];
     let mut dx = vec![f64::NAN; nx];
     let mut z = vec![f64::NAN; nz];
     let t = r.slot(i).time;
-    let mut flags = [0i32; 2];
     for k in 0..6 {
         let (name, s) = unsafe {
             match k {
-                0 => ("fmi2EnterContinuousTimeMode", fmi2EnterContinuousTimeMode(c)),
-                1 => ("fmi2SetTime", fmi2SetTime(c, t + 1e-3)),
-                2 => ("fmi2GetContinuousStates", fmi2GetContinuousStates(c, x.as_mut_ptr(), nx)),
-                3 => ("fmi2GetDerivatives", fmi2GetDerivatives(c, dx.as_mut_ptr(), nx)),
-                4 => ("fmi2GetEventIndicators", fmi2GetEventIndicators(c, z.as_mut_ptr(), nz)),
-                _ => {
-                    let [a, b] = &mut flags;
-                    ("fmi2CompletedIntegratorStep", fmi2CompletedIntegratorStep(c, 1, a, b))
-                }
+                0 => (
+                    api.name("fmi2EnterContinuousTimeMode", "fmi3EnterContinuousTimeMode"),
+                    api.enter_continuous_time_mode(c),
+                ),
+                1 => (api.name("fmi2SetTime", "fmi3SetTime"), api.set_time(c, t + 1e-3)),
+                2 => (
+                    api.name("fmi2GetContinuousStates", "fmi3GetContinuousStates"),
+                    api.get_continuous_states(c, x.as_mut_ptr(), nx),
+                ),
+                3 => (
+                    api.name("fmi2GetDerivatives", "fmi3GetContinuousStateDerivatives"),
+                    api.get_derivatives(c, dx.as_mut_ptr(), nx),
+                ),
+                4 => (
+                    api.name("fmi2GetEventIndicators", "fmi3GetEventIndicators"),
+                    api.get_event_indicators(c, z.as_mut_ptr(), nz),
+                ),
+                _ => (
+                    api.name("fmi2CompletedIntegratorStep", "fmi3CompletedIntegratorStep"),
+                    api.completed_integrator_step(c),
+                ),
             }
         };
         r.what = format!("ME integration: {name}");

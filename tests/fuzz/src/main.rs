@@ -1,14 +1,16 @@
 //! Property-based driver of the fuzz harness: random byte strings from a
 //! seeded generator, one call sequence each (see lib.rs), on all cores.
 //!
-//!   fuzz_sequences [--sequences N] [--seed S] [--threads T] [--strict]
-//!   fuzz_sequences --replay FILE...     (one sequence per file, e.g. AFL crashes)
+//!   fuzz_sequences [--fmi3] [--sequences N] [--seed S] [--threads T] [--strict]
+//!   fuzz_sequences [--fmi3] --replay FILE...  (one sequence per file, e.g. AFL crashes)
+//!
+//! `--fmi3` makes the calls through the FMI 3.0 C API instead of FMI 2.0's.
 //!
 //! Sequence k of a run is a function of (seed, k) alone, so a failure is
 //! reproduced by its file or by `--seed S --only k`. Exits 1 on a violation
 //! (and with --strict also on a finding), printing the call and the rule.
 
-use converting_span_fuzz::{run, Finding, Outcome};
+use converting_span_fuzz::{run, Api, Finding, Outcome};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -99,11 +101,12 @@ fn main() {
             .map(|i| args[i + 1].clone())
     };
     let strict = args.iter().any(|a| a == "--strict");
+    let api = if args.iter().any(|a| a == "--fmi3") { Api::Fmi3 } else { Api::Fmi2 };
     if let Some(i) = args.iter().position(|a| a == "--replay") {
         let mut failed = false;
         for file in &args[i + 1..] {
             let bytes = std::fs::read(file).expect("read the sequence file");
-            match run(&bytes) {
+            match run(api, &bytes) {
                 Ok(o) => println!("{file}: ok, {} calls, findings {:?}", o.calls, o.findings),
                 Err(v) => {
                     println!("{file}: VIOLATION {}", v.0);
@@ -139,7 +142,7 @@ fn main() {
                 break;
             }
             let bytes = sequence(seed, k);
-            match run(&bytes) {
+            match run(api, &bytes) {
                 Ok(o) => totals.add(o, k),
                 Err(v) => {
                     std::fs::create_dir_all(&failed_dir).ok();
@@ -178,7 +181,7 @@ fn main() {
     let secs = start.elapsed().as_secs_f64();
     let t = &totals;
     println!(
-        "fuzzed {} sequences ({} calls) in {secs:.1} s on {threads} threads: {:.0} sequences/s",
+        "fuzzed {} sequences ({} calls, {api:?}) in {secs:.1} s on {threads} threads: {:.0} sequences/s",
         t.sequences,
         t.calls,
         t.sequences as f64 / secs
