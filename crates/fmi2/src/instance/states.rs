@@ -32,6 +32,13 @@ impl<M: Model> Instance<M> {
     /// would have: Booleans and enumerations always, inputs against their
     /// ranges, parameters against theirs once initialization has ended.
     pub fn check_snapshot(snapshot: &Snapshot<M>) -> FmiResult {
+        // A phase of the other interface is no state this instance could have saved.
+        let me_phase = matches!(snapshot.phase, Phase::EventMode | Phase::ContinuousTimeMode);
+        let cs_phase = matches!(snapshot.phase, Phase::StepComplete | Phase::StepFailed);
+        if (me_phase && !snapshot.experiment.model_exchange) || (cs_phase && snapshot.experiment.model_exchange) {
+            let kind = if snapshot.experiment.model_exchange { "a Model Exchange" } else { "a Co-Simulation" };
+            return Err(FmiError::error(format!("the state's phase \"{}\" cannot belong to {kind} instance", snapshot.phase.name())));
+        }
         // Phases reached only through a finished initialization; the error
         // state may have been entered before it.
         let initialized = matches!(
