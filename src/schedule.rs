@@ -40,7 +40,7 @@ pub fn due(event: f64, now: f64) -> bool {
 
 /// The span's profile file, its events resolved in time order.
 pub fn load(model: &ConvertingSpan, resources: &Resources) -> FmiResult<Arc<[WebChange]>> {
-    let Some(path) = profiles::locate(&model.params.profile, resources.folder_or_why()).map_err(FmiError::error)? else {
+    let Some(path) = profiles::locate(&model.params.profile, resources.folder_or_why(), resources.instance()).map_err(FmiError::error)? else {
         return Ok(Arc::new([]));
     };
     let text = Profile::read_text(&path).map_err(FmiError::error)?;

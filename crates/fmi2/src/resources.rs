@@ -3,14 +3,22 @@
 //! `file:///abs/path`, `file:/abs/path`, `file://localhost/abs/path`, with
 //! percent-encoded characters, and on Windows `file:///C:/dir` or a UNC host.
 //! A location that cannot be used is kept as the reason why, and becomes an
-//! error only when a model actually needs a file.
+//! error only when a model actually needs a file. The instance name comes
+//! along: an FMU shared by several instances (libcosim unpacks one copy per
+//! GUID) finds each instance's own files by it.
 
 use super::status::{FmiError, FmiResult};
 use percent_encoding::percent_decode_str;
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Resources {
+pub struct Resources {
+    place: Place,
+    instance: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Place {
     Folder(PathBuf),
     /// Why the importer's location is no folder this FMU can read.
     Unusable(String),
@@ -18,7 +26,13 @@ pub enum Resources {
 
 impl Default for Resources {
     fn default() -> Self {
-        Resources::Unusable("no resource location was given".into())
+        Place::Unusable("no resource location was given".into()).into()
+    }
+}
+
+impl From<Place> for Resources {
+    fn from(place: Place) -> Self {
+        Resources { place, instance: String::new() }
     }
 }
 
@@ -28,11 +42,21 @@ impl Resources {
         parse(location, cfg!(windows))
     }
 
+    /// The same location, for the instance `fmi2Instantiate` named.
+    pub fn for_instance(self, instance: &str) -> Self {
+        Resources { instance: instance.to_string(), ..self }
+    }
+
+    /// The instance name the importer gave ("" when none).
+    pub fn instance(&self) -> &str {
+        &self.instance
+    }
+
     /// The path of a file in `resources/`; the error says why there is none.
     pub fn file(&self, name: &str) -> FmiResult<PathBuf> {
-        match self {
-            Resources::Folder(folder) => Ok(folder.join(name)),
-            Resources::Unusable(why) => {
+        match &self.place {
+            Place::Folder(folder) => Ok(folder.join(name)),
+            Place::Unusable(why) => {
                 Err(FmiError::error(format!("cannot read resources/{name} of the FMU: {why}")))
             }
         }
@@ -40,16 +64,16 @@ impl Resources {
 
     /// The folder, or why there is none.
     pub fn folder_or_why(&self) -> Result<&Path, &str> {
-        match self {
-            Resources::Folder(folder) => Ok(folder),
-            Resources::Unusable(why) => Err(why),
+        match &self.place {
+            Place::Folder(folder) => Ok(folder),
+            Place::Unusable(why) => Err(why),
         }
     }
 
     pub fn folder(&self) -> Option<&Path> {
-        match self {
-            Resources::Folder(folder) => Some(folder),
-            Resources::Unusable(_) => None,
+        match &self.place {
+            Place::Folder(folder) => Some(folder),
+            Place::Unusable(_) => None,
         }
     }
 }
@@ -57,10 +81,14 @@ impl Resources {
 /// The URI rules of RFC 8089 that importers use; `windows` selects how a
 /// drive letter and a host name become a path.
 fn parse(location: Option<&str>, windows: bool) -> Resources {
+    place(location, windows).into()
+}
+
+fn place(location: Option<&str>, windows: bool) -> Place {
     let Some(uri) = location else {
-        return Resources::Unusable("the importer passed no fmuResourceLocation (NULL)".into());
+        return Place::Unusable("the importer passed no fmuResourceLocation (NULL)".into());
     };
-    let unusable = |why: &str| Resources::Unusable(format!("fmuResourceLocation \"{uri}\" {why}"));
+    let unusable = |why: &str| Place::Unusable(format!("fmuResourceLocation \"{uri}\" {why}"));
     let Some(rest) = uri.get(..5).filter(|s| s.eq_ignore_ascii_case("file:")).map(|_| &uri[5..]) else {
         return unusable("is not a file: URI");
     };
@@ -84,13 +112,13 @@ fn parse(location: Option<&str>, windows: bool) -> Resources {
         let drive = path.as_bytes();
         let has_drive = drive.len() >= 3 && drive[1].is_ascii_alphabetic() && drive[2] == b':';
         match (local, has_drive) {
-            (true, true) => Resources::Folder(PathBuf::from(&path[1..])),
-            (true, false) => Resources::Folder(PathBuf::from(path)),
+            (true, true) => Place::Folder(PathBuf::from(&path[1..])),
+            (true, false) => Place::Folder(PathBuf::from(path)),
             // A share on another machine: \\host\share\...
-            (false, _) => Resources::Folder(PathBuf::from(format!("\\\\{host}{}", path.replace('/', "\\")))),
+            (false, _) => Place::Folder(PathBuf::from(format!("\\\\{host}{}", path.replace('/', "\\")))),
         }
     } else if local {
-        Resources::Folder(PathBuf::from(path))
+        Place::Folder(PathBuf::from(path))
     } else {
         unusable(&format!("names the host \"{host}\"; only local files can be read"))
     }
@@ -101,9 +129,9 @@ mod tests {
     use super::*;
 
     fn folder(location: &str, windows: bool) -> PathBuf {
-        match parse(Some(location), windows) {
-            Resources::Folder(p) => p,
-            Resources::Unusable(why) => panic!("{location}: {why}"),
+        match parse(Some(location), windows).folder_or_why() {
+            Ok(p) => p.to_path_buf(),
+            Err(why) => panic!("{location}: {why}"),
         }
     }
 
@@ -142,7 +170,7 @@ mod tests {
             (Some("file:///tmp/%FF%FE/"), "not UTF-8"),
         ] {
             let r = parse(location, false);
-            let Resources::Unusable(message) = &r else { panic!("{location:?} was accepted") };
+            let Err(message) = r.folder_or_why() else { panic!("{location:?} was accepted") };
             assert!(message.contains(why), "{location:?}: {message}");
             let e = r.file("webs.json").unwrap_err();
             assert!(e.message.contains("resources/webs.json") && e.message.contains(why), "{}", e.message);

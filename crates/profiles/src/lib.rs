@@ -24,12 +24,15 @@ use std::path::{Path, PathBuf};
 pub const OWN_PROFILE: &str = "profile.json";
 
 /// The file a `profile` parameter names: an absolute path, a name in the
-/// FMU's resources folder, or (empty) the FMU's own `resources/profile.json`
-/// if it has one (`Ok(None)`: no profile). `folder` is the resources folder,
-/// or why there is none.
-pub fn locate(name: &str, folder: Result<&Path, &str>) -> Result<Option<PathBuf>, String> {
+/// FMU's resources folder, or (empty) the instance's own profile if the FMU
+/// carries one: `resources/<instance>.json`, else `resources/profile.json`
+/// (`Ok(None)`: no profile). `folder` is the resources folder, or why there
+/// is none. One FMU thus serves a whole line (libcosim unpacks one copy per GUID).
+pub fn locate(name: &str, folder: Result<&Path, &str>, instance: &str) -> Result<Option<PathBuf>, String> {
     if name.is_empty() {
-        return Ok(folder.ok().map(|f| f.join(OWN_PROFILE)).filter(|p| p.is_file()));
+        let Ok(folder) = folder else { return Ok(None) };
+        let own = own_file(instance).map(|f| folder.join(f)).filter(|p| p.is_file());
+        return Ok(own.or_else(|| Some(folder.join(OWN_PROFILE)).filter(|p| p.is_file())));
     }
     let path = Path::new(name);
     if path.is_absolute() {
@@ -39,6 +42,14 @@ pub fn locate(name: &str, folder: Result<&Path, &str>) -> Result<Option<PathBuf>
         Ok(f) => Ok(Some(f.join(name))),
         Err(why) => Err(format!("profile = {name:?}: cannot read resources/{name} of the FMU: {why}")),
     }
+}
+
+/// `<instance>.json` when the instance name is a plain file name (no path, no dots only).
+fn own_file(instance: &str) -> Option<String> {
+    let plain = !instance.is_empty()
+        && instance.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+        && !instance.starts_with('.');
+    plain.then(|| format!("{instance}.json"))
 }
 
 /// Profiles are small; a larger file is refused before it is read.
@@ -148,6 +159,24 @@ fn event(i: usize, e: EventFile) -> Result<SetEvent, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_instance_finds_its_own_profile_before_the_shared_one() {
+        let dir = std::env::temp_dir().join(format!("profiles-locate-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let found = |instance| locate("", Ok(&dir), instance).unwrap();
+        assert_eq!(found("nip"), None);
+        std::fs::write(dir.join(OWN_PROFILE), "{}").unwrap();
+        assert_eq!(found("nip"), Some(dir.join(OWN_PROFILE)));
+        std::fs::write(dir.join("nip.json"), "{}").unwrap();
+        assert_eq!(found("nip"), Some(dir.join("nip.json")));
+        assert_eq!(found("other"), Some(dir.join(OWN_PROFILE)));
+        // A name with a path is no file name here: the shared profile.
+        std::fs::write(dir.join("..json"), "{}").unwrap();
+        assert_eq!(found("."), Some(dir.join(OWN_PROFILE)));
+        assert_eq!(found("../nip"), Some(dir.join(OWN_PROFILE)));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn reads_tables_and_events_in_time_order() {

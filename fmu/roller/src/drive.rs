@@ -39,7 +39,7 @@ impl Loaded {
 }
 
 pub fn load(p: &Parameters, resources: &Resources) -> FmiResult<Option<Loaded>> {
-    let Some(path) = profiles::locate(&p.profile, resources.folder_or_why()).map_err(FmiError::error)? else { return Ok(None) };
+    let Some(path) = profiles::locate(&p.profile, resources.folder_or_why(), resources.instance()).map_err(FmiError::error)? else { return Ok(None) };
     let text = Profile::read_text(&path).map_err(FmiError::error)?;
     parse(p, &text).map(Some).map_err(|e| FmiError::error(format!("profile {}: {e}", path.display())))
 }

@@ -108,19 +108,9 @@ def system_summary(result: Result) -> str:
     return "\n".join(lines)
 
 
-def export_step(system) -> float:
-    """The step an export carries: the largest stable step `webline check` predicts for the engines'
-    coupling (Jacobi, held inputs), when it is smaller than the scene's; else the scene's."""
-    try:
-        from .stability import predict_step
-    except ImportError:  # the prediction is not there: the scene's step
-        return system.step
-    predicted = predict_step(system)  # NaN: no stable step found
-    return min(system.step, predicted) if math.isfinite(predicted) else system.step
-
-
 def cmd_export(args):
     from .ssp import write_ssp
+    from .stability import export_step
     from .system import compile_scene
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
@@ -149,8 +139,12 @@ def run_other(args, progress):
         if is_ssp:
             scene, archive = None, Path(args.scene)
         else:
+            from .stability import export_step
+
             scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-            archive = write_ssp(compile_scene(scene, args.fmu_dir), tmp / f"{scene.name}.ssp")
+            system = compile_scene(scene, args.fmu_dir)
+            system.step = export_step(system)
+            archive = write_ssp(system, tmp / f"{scene.name}.ssp")
         system = read_ssp(archive, tmp / "extracted")
         if args.engine == "libcosim":
             result = run_libcosim(tmp / "extracted", system, args.step)

@@ -136,19 +136,25 @@ def relative_difference(a: Result, b: Result) -> dict:
     return out
 
 
-def agreement(scene_path, fmu_dir, workdir: Path) -> dict:
-    """A shipped scene exported and run by libcosim and FMPy, each against webline's master on the same
-    coupling (libcosim: Options.engine(); FMPy: Options.fmpy()) and against the monolithic reference.
-    Returns the largest relative differences over the recorded columns (docs/ssp.md, tests)."""
+def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None) -> dict:
+    """A shipped scene exported (at the step the export predicts) and run by libcosim and FMPy, each against
+    webline's master on the same coupling (libcosim: Options.engine(); FMPy: Options.fmpy()) and against the
+    monolithic reference. `stop_time` shortens the exported run. Returns the largest relative differences
+    over the recorded columns (docs/ssp.md, tests)."""
     from .master import Master, Options
     from .reference import reference
     from .scene import load_scene
     from .ssp import read_ssp, write_ssp
+    from .stability import export_step
     from .study import errors
     from .system import compile_scene
 
     scene = load_scene(scene_path, fmu_dir=fmu_dir)
-    archive = write_ssp(compile_scene(scene, fmu_dir), Path(workdir) / f"{scene.name}.ssp")
+    if stop_time is not None:
+        scene.stop_time = stop_time
+    exported = compile_scene(scene, fmu_dir)
+    exported.step = export_step(exported)
+    archive = write_ssp(exported, Path(workdir) / f"{scene.name}.ssp")
     system = read_ssp(archive, Path(workdir) / scene.name)
     runs = {
         "libcosim": run_libcosim(Path(workdir) / scene.name, system),
@@ -160,7 +166,8 @@ def agreement(scene_path, fmu_dir, workdir: Path) -> dict:
     columns = {f"{c}.{v}": f"{c}.{q}" for (c, q), (_, v) in zip(scene.record, system.record)}
 
     def versus_reference(result):  # the reference names columns as the scene records them
-        renamed = Result(result.scene, [columns[k] for k in result.keys()], result.time, result.data, result.info)
+        within = result.time <= ref.time[-1] + 1e-6 * system.step  # FMPy may step once past the stop time
+        renamed = Result(result.scene, [columns[k] for k in result.keys()], result.time[within], result.data[within], result.info)
         return max(errors(renamed, ref).values())
 
     return {

@@ -1,9 +1,10 @@
 """A line as an SSP 1.0 archive: `write_ssp(system, path)` and `read_ssp(path, target_dir) -> System`.
 
 The archive holds SystemStructure.ssd, one parameter set per component (resources/<component>.ssv, bound
-to the component, names unprefixed: what libcosim applies) and the FMUs under resources/ (a component with a
-profile gets its own copy carrying resources/profile.json). The step is the DefaultExperiment's OSP
-annotation (osp:FixedStepAlgorithm baseStepSize), which libcosim reads and `ssp_step` reads for others.
+to the component, names unprefixed: what libcosim applies) and the FMUs under resources/, one per kind,
+carrying each component's profile as resources/<component>.json: an instance reads the file of its own name.
+(libcosim unpacks one copy per GUID, so per-component copies of an FMU would share the first one's resources.)
+The step is the DefaultExperiment's OSP annotation (osp:FixedStepAlgorithm baseStepSize), which libcosim reads and `ssp_step` reads for others.
 Exports set no String or Enumeration variable: FMPy cannot set them and libcosim ignores Enumerations.
 An archive read is untrusted input (archive.py); every error names the file and the entry.
 """
@@ -19,7 +20,7 @@ from pathlib import Path
 from lxml import etree
 
 from .archive import ArchiveError, check_archive, extract
-from .system import Component, Connection, System, fmu_with_profile
+from .system import Component, Connection, System, fmu_with_profiles
 
 NS = {
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -33,7 +34,7 @@ WEBLINE = "com.convertingspan.webline"  # our annotation: the recorded variables
 SSD = "SystemStructure.ssd"
 FMU_TYPE = "application/x-fmu-sharedlibrary"
 KINDS = {"ConvertingSpan": "span", "Roller": "roller"}  # modelName -> System kind
-PROFILE = "resources/profile.json"
+PROFILE = "resources/profile.json"  # an instance's profile when the FMU holds no resources/<instance>.json
 PROFILE_BYTES = 16 << 20
 XML_PARSER = etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=False, remove_comments=True)
 
@@ -90,7 +91,7 @@ def _literal(where: str, var, value) -> tuple[str, str]:
         return "Boolean", "true" if value else "false"
     raise SspError(f"{where}: a {t} variable: FMPy's SSP simulation cannot set String or Enumeration variables and "
                    f"libcosim ignores Enumerations; give a profile as the component's profile "
-                   f"(resources/profile.json of its FMU), other choices as Integer or Boolean parameters")
+                   f"(resources/<component>.json of its FMU), other choices as Integer or Boolean parameters")
 
 
 def E(prefix: str, tag: str, parent=None, **attrs):
@@ -177,17 +178,15 @@ def write_ssp(system: System, path) -> Path:
             if not fmu.is_file():
                 raise SspError(f"{system.name}: {comp.name}: FMU {fmu} is missing")
             _, variables[comp.name] = _variables(fmu)
-            if comp.profile is not None:
-                sources[comp.name] = f"resources/{comp.name}.fmu"
-                files[sources[comp.name]] = fmu_with_profile(fmu, comp.profile, tmp)
-            else:
-                shared = next((k for k, f in files.items() if f == fmu), None)
-                if shared is None:
-                    shared = f"resources/{fmu.name}"
-                    while shared in files:
-                        shared = shared[:-4] + "_.fmu"
-                    files[shared] = fmu
-                sources[comp.name] = shared
+        for fmu in dict.fromkeys(Path(c.fmu) for c in system.components):
+            users = [c for c in system.components if Path(c.fmu) == fmu]
+            profiles = {f"{c.name}.json": c.profile for c in users if c.profile is not None}
+            name = f"resources/{fmu.name}"
+            while name in files:
+                name = name[:-4] + "_.fmu"
+            files[name] = fmu_with_profiles(fmu, profiles, tmp) if profiles else fmu
+            for c in users:
+                sources[c.name] = name
         for c in system.connections:
             for end, causality in ((c.source, "output"), (c.target, "input")):
                 v = variables.get(end[0], {}).get(end[1])
@@ -320,13 +319,14 @@ def read_ssp(path, target_dir) -> System:
             raise SspError(f"{w}: {el.get('source')} is a {model!r}, not one of this project's FMUs ({', '.join(KINDS)})")
         profile = None
         with zipfile.ZipFile(fmu) as zf:
-            if PROFILE in zf.namelist():
-                if zf.getinfo(PROFILE).file_size > PROFILE_BYTES:
-                    raise SspError(f"{w}: {el.get('source')}: {PROFILE} is larger than {PROFILE_BYTES} bytes")
+            own = next((f for f in (f"resources/{name}.json", PROFILE) if f in zf.namelist()), None)
+            if own is not None:
+                if zf.getinfo(own).file_size > PROFILE_BYTES:
+                    raise SspError(f"{w}: {el.get('source')}: {own} is larger than {PROFILE_BYTES} bytes")
                 try:
-                    profile = json.loads(zf.read(PROFILE))
+                    profile = json.loads(zf.read(own))
                 except ValueError as e:
-                    raise SspError(f"{w}: {el.get('source')}: {PROFILE} is not JSON ({e})") from None
+                    raise SspError(f"{w}: {el.get('source')}: {own} is not JSON ({e})") from None
         components.append(Component(name=name, kind=KINDS[model], fmu=fmu,
                                     start=_start_values(root, el, variables[name], w), profile=profile))
     if not components:

@@ -15,7 +15,7 @@ scheme is stable when that map's spectral radius is at most 1.
   master (docs/stability.md, "The one-step map"); `spectral_radius` of it.
 - `stable_step(line, algorithm, coupling)`: the first h, from small h up,
   where the radius passes 1 (a scan, then bisection).
-- `predict_step(system)`: the step the SSP export writes.
+- `predict_step(system)`, `export_step(system)`: the step the SSP export writes.
 """
 
 from __future__ import annotations
@@ -364,6 +364,13 @@ def predict_step(system) -> float:
     of ten. The half is for what the linearization at the start does not see: speeds and tensions that change
     the modes along the run. NaN when no variant has a stable step."""
     return analyse(system).step()
+
+
+def export_step(system) -> float:
+    """The step an export carries (and the engines' agreement runs at): `predict_step` when it is smaller
+    than the scene's step, else the scene's."""
+    predicted = predict_step(system)  # NaN: no stable step found
+    return min(system.step, predicted) if math.isfinite(predicted) else system.step
 
 
 def _ms(h):

@@ -273,14 +273,16 @@ def profile_text(profile: dict) -> str:
     return json.dumps(profile, indent=1, sort_keys=True) + "\n"
 
 
-def fmu_with_profile(fmu: Path, profile: dict, cache_dir: Path) -> Path:
-    """A copy of `fmu` with resources/profile.json added, in `cache_dir`
-    (named by the content, so equal copies are written once)."""
+def fmu_with_profiles(fmu: Path, profiles: dict, cache_dir: Path) -> Path:
+    """A copy of `fmu` with profiles added as resources/<file> ({file name: profile}), in `cache_dir`
+    (named by the content, so equal copies are written once). An instance reads resources/<its name>.json,
+    else resources/profile.json: one FMU can carry the profiles of a whole line."""
     fmu = Path(fmu)
-    text = profile_text(profile).encode()
+    texts = {f"resources/{name}": profile_text(p).encode() for name, p in sorted(profiles.items())}
     h = hashlib.sha256()
     h.update(fmu.read_bytes())
-    h.update(text)
+    for name, text in texts.items():
+        h.update(name.encode() + b"\0" + text)
     path = Path(cache_dir) / f"{fmu.stem}-{h.hexdigest()[:16]}.fmu"
     if path.exists():
         return path
@@ -288,14 +290,17 @@ def fmu_with_profile(fmu: Path, profile: dict, cache_dir: Path) -> Path:
     tmp = path.with_suffix(".part")
     with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as dst:
         for item in src.infolist():
-            if item.filename != "resources/profile.json":
+            if item.filename not in texts:
                 dst.writestr(item, src.read(item))
-        dst.writestr("resources/profile.json", text)
+        for name, text in texts.items():
+            dst.writestr(name, text)
     tmp.replace(path)
     return path
 
 
 def component_fmus(system: System, cache_dir: Path) -> dict:
-    """Component name -> the FMU it runs from: a per-component copy carrying its
-    profile, or the plain FMU (shared) when it has none."""
-    return {c.name: fmu_with_profile(c.fmu, c.profile, cache_dir) if c.profile else Path(c.fmu) for c in system.components}
+    """Component name -> the FMU it runs from: a per-component copy carrying its profile (as
+    resources/profile.json and resources/<component>.json, which an archive's FMU may already hold),
+    or the FMU itself when it has none."""
+    return {c.name: fmu_with_profiles(c.fmu, {"profile.json": c.profile, f"{c.name}.json": c.profile}, cache_dir)
+            if c.profile else Path(c.fmu) for c in system.components}

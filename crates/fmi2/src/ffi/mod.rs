@@ -249,7 +249,7 @@ unsafe fn checked_instance<M: Model>(
             ));
         }
     }
-    let resources = Resources::from_location(text(resource_location).as_deref());
+    let resources = Resources::from_location(text(resource_location).as_deref()).for_instance(&name);
     let instance = Instance::<M>::new(Box::new(logger), logging_on != 0, model_exchange, resources);
     Box::into_raw(Box::new(Handle { tag: TAG, instance, states: Vec::new(), strings: Vec::new(), poisoned: false })) as fmi2Component
 }
