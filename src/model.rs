@@ -250,7 +250,7 @@ pub(crate) fn check_derived(p: &Parameters) -> FmiResult {
 impl ConvertingSpan {
     /// Swaps in the webs of the changes due now; the strain carries over.
     fn apply_due_changes(&mut self) {
-        while let Some(change) = self.web_changes.get(self.next_change).filter(|c| schedule::due(c.time, self.time)) {
+        while let Some(change) = self.web_changes.get(self.next_change).filter(|c| profiles::due(c.time, self.time)) {
             change.apply(&mut self.params);
             // Checked when the profile was read: the scale exists.
             self.sensor = SensorScale::new(&self.params).unwrap_or(self.sensor);

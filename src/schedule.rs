@@ -32,12 +32,6 @@ impl WebChange {
     }
 }
 
-/// Events this close to a communication point (relative to the time) fall
-/// on it: masters that add up their steps land a few ulps off.
-pub fn due(event: f64, now: f64) -> bool {
-    event <= now + 1e-9 * now.abs().max(1.0)
-}
-
 /// The span's profile file, its events resolved in time order.
 pub fn load(model: &ConvertingSpan, resources: &Resources) -> FmiResult<Arc<[WebChange]>> {
     let Some(path) = profiles::locate(&model.params.profile, resources.folder_or_why(), resources.instance()).map_err(FmiError::error)? else {

@@ -271,18 +271,20 @@ def test_every_shipped_scene_runs_unchanged_in_libcosim_and_fmpy(scene, fmus, tm
 
 
 # At the predicted step (0.02 ms) these scenes take 75,000 and 125,000 steps per engine. The test stops
-# the dancer after the start of its disturbance (0.3 s), the splice before its splice (1 s); the full runs
-# are in docs/ssp.md's table (bench/ssp_agreement.py).
-STOP = {"dancer": 0.4, "splice": 0.25}
+# the dancer after the start of its disturbance (0.3 s), the splice after the new roll (1 s) and the
+# splice's entry into the first span (1 s, 1.15 s); the full runs are in docs/ssp.md's table
+# (bench/ssp_agreement.py).
+STOP = {"dancer": 0.4, "splice": 1.2}
 
 # docs/ssp.md: the error against the monolithic reference, largest over the recorded columns relative to each
 # column's largest magnitude, measured at the exported step (and the STOP above), times 2 rounded up, at
 # least 1e-6. (Jacobi with held inputs, libcosim and webline alike; FMPy's own: its first step with 0.0 on
-# every connected input, e.g. the dancer's span frames at (0, 0), is a start transient the others lack.)
+# every connected input, is a start transient the others lack: forces 0 on the rollers, speeds 0 on the
+# spans, which with web mass read as a sudden acceleration.)
 COUPLING_ERROR = {  # scene: (libcosim and webline, FMPy); measured in the comment
-    "dancer": (2e-3, 50.0),  # 8.4e-4, 22 (up_leg.T's first row: 4661 N for 201 N)
+    "dancer": (2e-3, 2e-2),  # 8.4e-4, 7.7e-3
     "emergency_stop": (0.7, 0.7),  # 0.32, 0.33 (the nip's stop: held inputs lag a steep transient)
     "lamination": (3e-3, 4e-2),  # 1.5e-3, 1.6e-2
-    "splice": (1e-6, 3e-3),  # 2.4e-16, 1.2e-3 (before the splice the line is steady)
+    "splice": (5e-3, 5e-3),  # 2.2e-3, 2.3e-3
     "stiff_line": (2e-4, 0.2),  # 6.4e-5, 9.4e-2
 }

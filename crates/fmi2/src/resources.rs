@@ -42,6 +42,14 @@ impl Resources {
         parse(location, cfg!(windows))
     }
 
+    /// A folder given as a path (FMI 3.0's `resourcePath`), or why there is none.
+    pub fn from_path(path: Option<&str>) -> Self {
+        match path {
+            Some(p) if !p.is_empty() => Place::Folder(PathBuf::from(p)).into(),
+            _ => Place::Unusable("the importer passed no resourcePath".into()).into(),
+        }
+    }
+
     /// The same location, for the instance `fmi2Instantiate` named.
     pub fn for_instance(self, instance: &str) -> Self {
         Resources { instance: instance.to_string(), ..self }

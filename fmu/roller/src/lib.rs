@@ -196,7 +196,7 @@ impl Roller {
     fn apply_due(&mut self, t: f64) -> bool {
         let Some(loaded) = self.profile.clone() else { return false };
         let mut rolled = false;
-        while let Some(event) = loaded.profile.events.get(self.next_event).filter(|e| e.time <= t) {
+        while let Some(event) = loaded.profile.events.get(self.next_event).filter(|e| profiles::due(e.time, t)) {
             let speed = physics::surface_speed(self.roll.radius, self.omega.value());
             let mut new_roll = false;
             for (name, value) in &event.changes {
@@ -270,13 +270,15 @@ impl Roller {
     }
 
     /// A communication step [time, time+h], split where a table kinks or jumps
-    /// and where a `set` event falls (one at the end applies at the next start).
+    /// and where a `set` event falls; one at the end (within the profiles'
+    /// tolerance) applies at the start of the next step.
     fn advance(&mut self, h: f64) -> FmiResult {
         let end = self.time + h;
+        let last = end - profiles::tolerance(end);
         let mut t = self.time;
         loop {
             self.apply_due(t);
-            let stop = self.profile.as_ref().and_then(|l| l.profile.next_break(t)).map_or(end, |b| b.min(end));
+            let stop = self.profile.as_ref().and_then(|l| l.profile.next_break(t)).filter(|&b| b < last).unwrap_or(end);
             if stop > t {
                 self.piece(t, stop - t)?;
             }

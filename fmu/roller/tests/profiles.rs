@@ -219,3 +219,25 @@ fn model_exchange_derivatives_match_the_steps() {
     assert!((dw - d[0]).abs() < 1e-5 * d[0].abs(), "{dw} {}", d[0]);
     assert!((dr - d[1]).abs() < 1e-5 * d[1].abs(), "{dr} {}", d[1]);
 }
+
+#[test]
+fn an_event_a_few_ulps_from_a_communication_point_falls_on_it() {
+    // One master computes t = k*h, another adds h up (FMPy): with 0.01 s steps the sum's
+    // 19th step ends at 0.19000000000000003, the other's at 0.19. The new roll at 0.19 s
+    // must land on the same step in both.
+    let text = r#"{"set": [{"time": 0.19, "J": 6, "R": 0.3}], "torque": [[0, 1], [0.19, 1], [0.19, 2]]}"#;
+    let make = || roller(&[(Real::J, 0.5), (Real::R, 0.1), (Real::v_start, 4.0)], Some(text), |_| {}).unwrap();
+    let (mut exact, mut summed) = (make(), make());
+    let mut t_summed = 0.0;
+    for k in 0..25 {
+        let t = k as f64 * 0.01;
+        exact.set_time(t);
+        exact.do_step(0.01).unwrap();
+        summed.set_time(t_summed);
+        summed.do_step(0.01).unwrap();
+        t_summed += 0.01;
+        let (a, b) = (exact.omega(), summed.omega());
+        assert!((a - b).abs() <= 1e-12 * a.abs(), "after step {k}: {a} vs {b}");
+        assert_eq!(get(&exact, Real::J), get(&summed, Real::J), "after step {k}");
+    }
+}

@@ -11,8 +11,8 @@ Ports (a roller's match a span's): span.web_a.v <- roller.web_b.v,
 roller.web_b.F <- span.web_a.F, span.web_b.v <- roller.web_a.v,
 roller.web_a.F <- span.web_b.F; the strain goes span to span
 (span2.web_a.eps <- span1.web_b.eps), the first span's from the line's
-first roller (web_b.eps); spans on a dancer take their frames from its
-tangent points (web_a.x/.y, web_b.x/.y).
+first roller (web_b.eps); spans on a dancer take the height of their moving
+end from its tangent points (web_a.y, web_b.y; the x are constants).
 """
 
 from __future__ import annotations
@@ -183,10 +183,13 @@ def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict) -> 
     if dancer is not None:
         # The span's fixed end, y_start above the dancer's start position (the
         # Roller's contact points are measured from there, up positive).
+        # The x of the moving end is a constant too, so not connected: an engine
+        # that starts its inputs at 0 (FMPy) then sees the right geometry.
         if scene.downstream(span) is dancer:
-            start.update({"frame_a.x": 0.0, "frame_a.y": float(dancer.y_start)})
+            start.update({"frame_a.x": 0.0, "frame_a.y": float(dancer.y_start), "frame_b.x": 0.0})
         else:
-            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(dancer.y_start)})
+            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(dancer.y_start),
+                          "frame_a.x": 2.0 * float(dancer.R)})
     sets = []
     webs = {"wp1": span.wp1, "wp2": span.wp2}
     for e in scene.events:
@@ -242,10 +245,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
             connect(scene.line[sp.index - 2].name, "web_b.eps", sp.name, "web_a.eps")
         connect(down.name, "web_a.v", sp.name, "web_b.v")
         if isinstance(down, Dancer):
-            connect(down.name, "web_a.x", sp.name, "frame_b.x")
             connect(down.name, "web_a.y", sp.name, "frame_b.y")
         if isinstance(up, Dancer):
-            connect(up.name, "web_b.x", sp.name, "frame_a.x")
             connect(up.name, "web_b.y", sp.name, "frame_a.y")
         connect(sp.name, "web_a.F", up.name, "web_b.F")
         connect(sp.name, "web_b.F", down.name, "web_a.F")

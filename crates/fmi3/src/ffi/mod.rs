@@ -27,7 +27,6 @@ use fmi2::{FmiError, FmiResult, Model, Resources, Status};
 pub use calls::*;
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::path::PathBuf;
 
 pub type fmi3Instance = *mut c_void;
 pub type fmi3InstanceEnvironment = *mut c_void;
@@ -208,12 +207,10 @@ unsafe fn instantiate<M: Model>(
                 ));
             }
         }
-        let _ = text(instance_name);
-        // FMI 3.0 passes the resources folder as a path, not a URI.
-        let resources = match text(resource_path) {
-            Some(path) if !path.is_empty() => Resources::Folder(PathBuf::from(path)),
-            _ => Resources::Unusable("the importer passed no resourcePath".into()),
-        };
+        // FMI 3.0 passes the resources folder as a path, not a URI; the instance
+        // name finds the instance's own profile there.
+        let instance_name = text(instance_name).unwrap_or_default();
+        let resources = Resources::from_path(text(resource_path).as_deref()).for_instance(&instance_name);
         let instance = Instance::<M>::new(Box::new(logger), logging_on != 0, model_exchange, resources);
         let handle =
             Handle { tag: TAG, instance, model_exchange, states: Vec::new(), strings: Vec::new(), poisoned: false };
