@@ -17,6 +17,7 @@
 #[doc(hidden)]
 pub mod calls;
 mod exports;
+pub mod state_store;
 
 use super::instance::Instance;
 use super::logging::Log;
@@ -24,6 +25,7 @@ use super::model::Model;
 use super::phase::Call;
 use super::resources::Resources;
 use super::snapshot::Snapshot;
+use state_store::StateStore;
 use super::status::{FmiError, FmiResult, Status};
 #[doc(hidden)]
 pub use calls::*;
@@ -127,7 +129,7 @@ const TAG: u64 = 0x434f_4e56_5350_414e;
 struct Handle<M: Model> {
     tag: u64,
     instance: Instance<M>,
-    states: Vec<*mut Snapshot<M>>,
+    states: StateStore<M>,
     /// The texts `fmi2GetString` last returned: they stay valid until the next call.
     strings: Vec<CString>,
     /// Set when a panic was caught inside a call: the instance may be half
@@ -137,64 +139,24 @@ struct Handle<M: Model> {
 }
 
 impl<M: Model> Handle<M> {
-    fn owns(&self, state: fmi2FMUstate) -> bool {
-        !state.is_null() && self.states.contains(&(state as *mut Snapshot<M>))
-    }
-
     fn own_state(&self, call: Call, state: fmi2FMUstate) -> FmiResult<&Snapshot<M>> {
-        if self.owns(state) {
-            // SAFETY: in `states`, so allocated by `keep_state` and not yet freed.
-            Ok(unsafe { &*(state as *const Snapshot<M>) })
-        } else {
-            Err(FmiError::error(format!(
-                "{}: {state:?} is not an FMU state of this instance (NULL, freed, or from another instance)",
-                call.name()
-            )))
-        }
+        self.states.get(call.name(), state)
     }
 
-    /// Stores `snapshot` in `*slot`: in place when the slot already holds a
-    /// state of this instance, otherwise in a new allocation.
     fn keep_state(&mut self, call: Call, slot: *mut fmi2FMUstate, snapshot: Snapshot<M>) -> FmiResult {
         let slot = out_ref(call, slot, "FMUstate")?;
-        if self.owns(*slot) {
-            // SAFETY: owned, see `own_state`; no other reference is alive.
-            unsafe { *(*slot as *mut Snapshot<M>) = snapshot };
-        } else if slot.is_null() {
-            let raw = Box::into_raw(Box::new(snapshot));
-            self.states.push(raw);
-            *slot = raw as fmi2FMUstate;
-        } else {
-            return Err(FmiError::error(format!(
-                "{}: *FMUstate = {:?} is neither NULL nor an FMU state of this instance",
-                call.name(),
-                *slot
-            )));
-        }
-        Ok(())
+        self.states.keep(call.name(), "FMUstate", slot, snapshot)
     }
 
     fn free_state(&mut self, call: Call, slot: *mut fmi2FMUstate) -> FmiResult {
         let slot = out_ref(call, slot, "FMUstate")?;
-        if slot.is_null() {
-            return Ok(());
-        }
-        self.own_state(call, *slot)?;
-        self.states.retain(|&s| s as fmi2FMUstate != *slot);
-        // SAFETY: owned and now removed from `states`, so dropped exactly once.
-        drop(unsafe { Box::from_raw(*slot as *mut Snapshot<M>) });
-        *slot = std::ptr::null_mut();
-        Ok(())
+        self.states.free(call.name(), slot)
     }
 }
 
 impl<M: Model> Drop for Handle<M> {
     fn drop(&mut self) {
         self.tag = 0;
-        for state in self.states.drain(..) {
-            // SAFETY: every entry came from `Box::into_raw` and is dropped once.
-            drop(unsafe { Box::from_raw(state) });
-        }
     }
 }
 
@@ -251,7 +213,7 @@ unsafe fn checked_instance<M: Model>(
     }
     let resources = Resources::from_location(text(resource_location).as_deref()).for_instance(&name);
     let instance = Instance::<M>::new(Box::new(logger), logging_on != 0, model_exchange, resources);
-    Box::into_raw(Box::new(Handle { tag: TAG, instance, states: Vec::new(), strings: Vec::new(), poisoned: false })) as fmi2Component
+    Box::into_raw(Box::new(Handle { tag: TAG, instance, states: StateStore::default(), strings: Vec::new(), poisoned: false })) as fmi2Component
 }
 
 /// `fmi2FreeInstance`.

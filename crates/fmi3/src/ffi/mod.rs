@@ -22,6 +22,7 @@ use fmi2::phase::Phase;
 use fmi2::instance::Instance;
 use fmi2::logging::Log;
 use fmi2::snapshot::Snapshot;
+use fmi2::ffi::state_store::StateStore;
 use fmi2::{FmiError, FmiResult, Model, Resources, Status};
 #[doc(hidden)]
 pub use calls::*;
@@ -106,7 +107,7 @@ struct Handle<M: Model> {
     tag: u64,
     instance: Instance<M>,
     model_exchange: bool,
-    states: Vec<*mut Snapshot<M>>,
+    states: StateStore<M>,
     /// The texts `fmi3GetString` last returned: they stay valid until the next call.
     strings: Vec<CString>,
     /// A panic was caught inside a call: only `fmi3Reset` and `fmi3FreeInstance` now.
@@ -114,64 +115,24 @@ struct Handle<M: Model> {
 }
 
 impl<M: Model> Handle<M> {
-    fn owns(&self, state: fmi3FMUState) -> bool {
-        !state.is_null() && self.states.contains(&(state as *mut Snapshot<M>))
-    }
-
     fn own_state(&self, call: Call, state: fmi3FMUState) -> FmiResult<&Snapshot<M>> {
-        if self.owns(state) {
-            // SAFETY: in `states`, so allocated by `keep_state` and not yet freed.
-            Ok(unsafe { &*(state as *const Snapshot<M>) })
-        } else {
-            Err(FmiError::error(format!(
-                "{}: {state:?} is not an FMU state of this instance (NULL, freed, or from another instance)",
-                call.name()
-            )))
-        }
+        self.states.get(call.name(), state)
     }
 
-    /// Stores `snapshot` in `*slot`: in place when the slot already holds a
-    /// state of this instance, otherwise in a new allocation.
     fn keep_state(&mut self, call: Call, slot: *mut fmi3FMUState, snapshot: Snapshot<M>) -> FmiResult {
         let slot = out_ref(call, slot, "FMUState")?;
-        if self.owns(*slot) {
-            // SAFETY: owned, see `own_state`; no other reference is alive.
-            unsafe { *(*slot as *mut Snapshot<M>) = snapshot };
-        } else if slot.is_null() {
-            let raw = Box::into_raw(Box::new(snapshot));
-            self.states.push(raw);
-            *slot = raw as fmi3FMUState;
-        } else {
-            return Err(FmiError::error(format!(
-                "{}: *FMUState = {:?} is neither NULL nor an FMU state of this instance",
-                call.name(),
-                *slot
-            )));
-        }
-        Ok(())
+        self.states.keep(call.name(), "FMUState", slot, snapshot)
     }
 
     fn free_state(&mut self, call: Call, slot: *mut fmi3FMUState) -> FmiResult {
         let slot = out_ref(call, slot, "FMUState")?;
-        if slot.is_null() {
-            return Ok(());
-        }
-        self.own_state(call, *slot)?;
-        self.states.retain(|&s| s as fmi3FMUState != *slot);
-        // SAFETY: owned and now removed from `states`, so dropped exactly once.
-        drop(unsafe { Box::from_raw(*slot as *mut Snapshot<M>) });
-        *slot = std::ptr::null_mut();
-        Ok(())
+        self.states.free(call.name(), slot)
     }
 }
 
 impl<M: Model> Drop for Handle<M> {
     fn drop(&mut self) {
         self.tag = 0;
-        for state in self.states.drain(..) {
-            // SAFETY: every entry came from `Box::into_raw` and is dropped once.
-            drop(unsafe { Box::from_raw(state) });
-        }
     }
 }
 
@@ -213,7 +174,7 @@ unsafe fn instantiate<M: Model>(
         let resources = Resources::from_path(text(resource_path).as_deref()).for_instance(&instance_name);
         let instance = Instance::<M>::new(Box::new(logger), logging_on != 0, model_exchange, resources);
         let handle =
-            Handle { tag: TAG, instance, model_exchange, states: Vec::new(), strings: Vec::new(), poisoned: false };
+            Handle { tag: TAG, instance, model_exchange, states: StateStore::default(), strings: Vec::new(), poisoned: false };
         Box::into_raw(Box::new(handle)) as fmi3Instance
     };
     catch_unwind(AssertUnwindSafe(checked)).unwrap_or(std::ptr::null_mut())
