@@ -174,7 +174,7 @@ pub unsafe fn set_string<M: Model>(
         let texts = slice(call, value, nvr, "value")?
             .iter()
             .enumerate()
-            .map(|(i, &s)| utf8(call, s, i))
+            .map(|(i, &s)| utf8(call, s, "value", i))
             .collect::<FmiResult<Vec<_>>>()?;
         h.instance.set_strings(vrs, &texts)?;
         OK

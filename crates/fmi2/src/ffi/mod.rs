@@ -17,6 +17,7 @@
 #[doc(hidden)]
 pub mod calls;
 mod exports;
+pub mod raw;
 pub mod state_store;
 
 use super::instance::Instance;
@@ -25,11 +26,12 @@ use super::model::Model;
 use super::phase::Call;
 use super::resources::Resources;
 use super::snapshot::Snapshot;
+use raw::{out_ref, slice, slice_mut, text, utf8};
 use state_store::StateStore;
 use super::status::{FmiError, FmiResult, Status};
 #[doc(hidden)]
 pub use calls::*;
-use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::ffi::{c_char, c_int, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 pub type fmi2Component = *mut c_void;
@@ -272,52 +274,3 @@ unsafe fn unsupported<M: Model>(c: fmi2Component, call: Call, why: &str) -> fmi2
     enter::<M>(c, call, |_| Err(FmiError::error(format!("{} is not supported: {why}", call.name()))))
 }
 
-/// `n` elements from the importer; NULL is fine only for `n == 0`.
-#[inline]
-unsafe fn slice<'a, T>(call: Call, ptr: *const T, n: usize, what: &str) -> FmiResult<&'a [T]> {
-    if n == 0 {
-        Ok(&[])
-    } else if ptr.is_null() {
-        Err(null_argument(call, what))
-    } else {
-        Ok(std::slice::from_raw_parts(ptr, n))
-    }
-}
-
-#[inline]
-unsafe fn slice_mut<'a, T>(call: Call, ptr: *mut T, n: usize, what: &str) -> FmiResult<&'a mut [T]> {
-    if n == 0 {
-        Ok(&mut [])
-    } else if ptr.is_null() {
-        Err(null_argument(call, what))
-    } else {
-        Ok(std::slice::from_raw_parts_mut(ptr, n))
-    }
-}
-
-#[inline]
-fn out_ref<'a, T>(call: Call, ptr: *mut T, what: &str) -> FmiResult<&'a mut T> {
-    // SAFETY: the importer passes a valid pointer or NULL, as the standard requires.
-    unsafe { ptr.as_mut() }.ok_or_else(|| null_argument(call, what))
-}
-
-#[cold]
-fn null_argument(call: Call, what: &str) -> FmiError {
-    FmiError::error(format!("{}: {what} is NULL", call.name()))
-}
-
-/// A String value: `Ok(None)` for NULL, an error for bytes that are not UTF-8.
-unsafe fn utf8<'a>(call: Call, s: fmi2String, i: usize) -> FmiResult<Option<&'a str>> {
-    if s.is_null() {
-        return Ok(None);
-    }
-    CStr::from_ptr(s)
-        .to_str()
-        .map(Some)
-        .map_err(|_| FmiError::error(format!("{}: value[{i}] is not UTF-8 text", call.name())))
-}
-
-/// A copy of a C string (lossy UTF-8); `None` for NULL.
-unsafe fn text(s: fmi2String) -> Option<String> {
-    (!s.is_null()).then(|| CStr::from_ptr(s).to_string_lossy().into_owned())
-}

@@ -328,7 +328,7 @@ pub unsafe fn set_string<M: Model>(
         let texts = slice(call, values, nvr, "values")?
             .iter()
             .enumerate()
-            .map(|(i, &s)| utf8(call, s, i))
+            .map(|(i, &s)| utf8(call, s, "values", i))
             .collect::<FmiResult<Vec<_>>>()?;
         h.instance.set_strings(vrs, &texts)
     })

@@ -18,15 +18,22 @@ pub mod calls;
 mod exports;
 
 use crate::call::{state_name, Call};
+
+impl CallName for Call {
+    fn name(self) -> &'static str {
+        Call::name(self)
+    }
+}
 use fmi2::phase::Phase;
 use fmi2::instance::Instance;
 use fmi2::logging::Log;
 use fmi2::snapshot::Snapshot;
+use fmi2::ffi::raw::{out_ref, slice, slice_mut, text, utf8, CallName};
 use fmi2::ffi::state_store::StateStore;
 use fmi2::{FmiError, FmiResult, Model, Resources, Status};
 #[doc(hidden)]
 pub use calls::*;
-use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::ffi::{c_char, c_int, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 pub type fmi3Instance = *mut c_void;
@@ -263,52 +270,3 @@ unsafe fn unsupported<M: Model>(c: fmi3Instance, call: Call, why: &str) -> fmi3S
     enter::<M>(c, call, |_| Err(FmiError::error(format!("{} is not supported: {why}", call.name()))))
 }
 
-/// `n` elements from the importer; NULL is fine only for `n == 0`.
-#[inline]
-unsafe fn slice<'a, T>(call: Call, ptr: *const T, n: usize, what: &str) -> FmiResult<&'a [T]> {
-    if n == 0 {
-        Ok(&[])
-    } else if ptr.is_null() {
-        Err(null_argument(call, what))
-    } else {
-        Ok(std::slice::from_raw_parts(ptr, n))
-    }
-}
-
-#[inline]
-unsafe fn slice_mut<'a, T>(call: Call, ptr: *mut T, n: usize, what: &str) -> FmiResult<&'a mut [T]> {
-    if n == 0 {
-        Ok(&mut [])
-    } else if ptr.is_null() {
-        Err(null_argument(call, what))
-    } else {
-        Ok(std::slice::from_raw_parts_mut(ptr, n))
-    }
-}
-
-#[inline]
-fn out_ref<'a, T>(call: Call, ptr: *mut T, what: &str) -> FmiResult<&'a mut T> {
-    // SAFETY: the importer passes a valid pointer or NULL, as the standard requires.
-    unsafe { ptr.as_mut() }.ok_or_else(|| null_argument(call, what))
-}
-
-#[cold]
-fn null_argument(call: Call, what: &str) -> FmiError {
-    FmiError::error(format!("{}: {what} is NULL", call.name()))
-}
-
-/// A String value: `Ok(None)` for NULL, an error for bytes that are not UTF-8.
-unsafe fn utf8<'a>(call: Call, s: fmi3String, i: usize) -> FmiResult<Option<&'a str>> {
-    if s.is_null() {
-        return Ok(None);
-    }
-    CStr::from_ptr(s)
-        .to_str()
-        .map(Some)
-        .map_err(|_| FmiError::error(format!("{}: values[{i}] is not UTF-8 text", call.name())))
-}
-
-/// A copy of a C string (lossy UTF-8); `None` for NULL.
-unsafe fn text(s: fmi3String) -> Option<String> {
-    (!s.is_null()).then(|| CStr::from_ptr(s).to_string_lossy().into_owned())
-}
