@@ -133,7 +133,8 @@ class Roller(Component):
 class Dancer(Component):
     """A dancer: a roller (Roller FMU) on a carriage loaded with a force.
     The two spans next to it hang from it: their length is the carriage
-    position y; m*y'' = load - F_up - F_down - damping*y' - stiffness*(y - y_start)."""
+    position y; m*y'' = load - F_a - F_b - damping*y' - stiffness*(y - y_start), F_a and F_b the
+    tensions of the spans before and after."""
 
     J: float = 0.0
     R: float = 0.0
