@@ -105,7 +105,7 @@ def test_add_binary_refuses_a_library_without_the_fmi2_api(tmp_path):
         ["python3", "fmu/package.py", "--no-build", "--platforms", "linux64", "--out", str(tmp_path / "x" / "ConvertingSpan.fmu"),
          "--add-binary", f"aarch64-linux={wrong}"], cwd=ROOT, capture_output=True, text=True)
     assert proc.returncode != 0
-    assert "must export exactly the 44 fmi2 functions" in proc.stderr
+    assert "must export exactly the 44 fmi2 and the 75 fmi3 functions" in proc.stderr
 
 
 def test_the_mach_o_reader_finds_external_defined_symbols(tmp_path):
