@@ -1,6 +1,6 @@
 """The Windows DLL in each packaged FMU imports only what Windows 10 and later
 guarantee (system DLLs; no MinGW runtime such as libgcc_s_seh-1.dll or
-libwinpthread-1.dll) and exports exactly the 44 fmi2 functions, read from its
+libwinpthread-1.dll) and exports exactly the 44 fmi2 and 75 fmi3 functions, read from its
 PE tables with objdump -p. (test_portable_so.py: the Linux binaries.) And
 fmu/package.py's --add-binary merges libraries built elsewhere after the same
 export check: tried here with the binaries built here.

@@ -2,7 +2,7 @@
 (binaries/linux64, x86-64, and binaries/aarch64-linux, ARM64) needs no glibc
 symbol version newer than 2.17 and links nothing but glibc's own libraries and
 libgcc_s (read with objdump -T and readelf -d, binutils). It exports exactly
-the 44 fmi2 functions and does not contain the test-only hook.
+the 44 fmi2 and 75 fmi3 functions and does not contain the test-only hook.
 (test_binaries.py: the Windows DLL.)
 
     .venv/bin/python -m pytest tests/hardening -q     (after python3 fmu/package.py)
@@ -24,7 +24,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "fmu"))
-import package  # noqa: E402  (the export check and the list of the 44 functions)
+import package  # noqa: E402  (the export check and the lists of the functions)
 FMUS = (
     [Path(os.environ["FMU"])]
     if "FMU" in os.environ
