@@ -188,12 +188,13 @@ fn bad_profiles_are_refused_naming_the_file_and_the_problem() {
     assert!(err(r#"{"set": [{"time": 1, "v_start": 2}]}"#, 0).contains("\"v_start\" cannot change during a run"));
     assert!(err(r#"{"set": [{"time": 1, "J": -2}]}"#, 0).contains("J = -2 is outside"));
     let e = err(r#"{"speed": [[1, 1], [0, 2]]}"#, 0);
-    assert!(e.starts_with("profile /") && e.contains(".json: speed: entry 1"), "{e}");
-    // A missing file names itself.
+    assert!(e.starts_with("profile ") && e.contains(".json: speed: entry 1"), "{e}");
+    // A missing file names itself (an absolute path on every platform).
+    let missing = std::env::temp_dir().join("no such folder").join("line.json");
     let mut m = Roller::at_start_values();
-    m.set_string(Text::profile.vr(), "/nonexistent/line.json").unwrap();
+    m.set_string(Text::profile.vr(), missing.to_str().unwrap()).unwrap();
     let e = m.initialize(&Experiment::default(), &Resources::default()).unwrap_err().message;
-    assert!(e.contains("profile /nonexistent/line.json"), "{e}");
+    assert!(e.contains(&format!("profile {}", missing.display())), "{e}");
     // A name in resources/ with no resource folder says why.
     m.set_string(Text::profile.vr(), "line.json").unwrap();
     let e = m.initialize(&Experiment::default(), &Resources::default()).unwrap_err().message;
