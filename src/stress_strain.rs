@@ -64,15 +64,7 @@ impl StressStrain {
         if eps >= last {
             return (self.stress[n - 1] + self.slope[n - 1] * (eps - last), self.slope[n - 1]);
         }
-        // The interval [k, k+1] that holds eps.
-        let k = self.strain.partition_point(|&e| e <= eps) - 1;
-        let h = self.strain[k + 1] - self.strain[k];
-        let chord = (self.stress[k + 1] - self.stress[k]) / h;
-        let (d0, d1) = (self.slope[k], self.slope[k + 1]);
-        // The interval's cubic in powers of t = eps - eps_k, as SciPy stores it.
-        let c3 = (d0 + d1 - 2.0 * chord) / (h * h);
-        let c2 = (3.0 * chord - 2.0 * d0 - d1) / h;
-        let t = eps - self.strain[k];
+        let Cubic { k, t, d0, c2, c3 } = self.cubic(eps);
         let sigma = ((c3 * t + c2) * t + d0) * t + self.stress[k];
         let tangent = (3.0 * c3 * t + 2.0 * c2) * t + d0;
         (sigma, tangent)
@@ -85,13 +77,24 @@ impl StressStrain {
         if !(eps > self.strain[0]) || eps >= self.strain[n - 1] {
             return 0.0;
         }
+        let Cubic { t, c2, c3, .. } = self.cubic(eps);
+        6.0 * c3 * t + 2.0 * c2
+    }
+
+    /// The cubic of the interval [k, k+1] that holds `eps` (inside the table),
+    /// in powers of t = eps - eps_k, as SciPy stores it: sigma_k + d0*t + c2*t^2 + c3*t^3.
+    fn cubic(&self, eps: f64) -> Cubic {
         let k = self.strain.partition_point(|&e| e <= eps) - 1;
         let h = self.strain[k + 1] - self.strain[k];
         let chord = (self.stress[k + 1] - self.stress[k]) / h;
         let (d0, d1) = (self.slope[k], self.slope[k + 1]);
-        let c3 = (d0 + d1 - 2.0 * chord) / (h * h);
-        let c2 = (3.0 * chord - 2.0 * d0 - d1) / h;
-        6.0 * c3 * (eps - self.strain[k]) + 2.0 * c2
+        Cubic {
+            k,
+            t: eps - self.strain[k],
+            d0,
+            c2: (3.0 * chord - 2.0 * d0 - d1) / h,
+            c3: (d0 + d1 - 2.0 * chord) / (h * h),
+        }
     }
 
     /// The steepest chord of the table, Pa: the stiffest the web gets, which
@@ -148,6 +151,15 @@ fn sign(x: f64) -> f64 {
     } else {
         x.signum()
     }
+}
+
+/// One interval's cubic, see `StressStrain::cubic`.
+struct Cubic {
+    k: usize,
+    t: f64,
+    d0: f64,
+    c2: f64,
+    c3: f64,
 }
 
 #[cfg(test)]
