@@ -121,20 +121,17 @@ impl Roller {
         self.table("strain").map_or(self.inputs.strain_a, |t| t.value(self.time))
     }
 
-    /// The drive's torque at time t, and its rate (a speed drive: 0, see `drive_torque`).
+    /// The drive's torque at time t, and its rate (a speed drive: 0, see
+    /// `drive_torque`). The profile has at most one drive table.
     fn torque_at(&self, t: f64) -> (f64, f64) {
         let tau_m = self.inputs.torque;
-        match self.drive() {
-            Drive::TorqueTable => {
-                let table = self.table("torque").expect("a torque drive has its table");
-                (tau_m + table.value(t), table.slope(t))
-            }
-            Drive::Tension => {
-                let table = self.table("tension").expect("a tension drive has its table");
-                let s = self.params.roll_sign() * self.roll.radius;
-                (tau_m + s * table.value(t), s * table.slope(t))
-            }
-            Drive::Torque | Drive::Speed => (tau_m, 0.0),
+        if let Some(table) = self.table("torque") {
+            (tau_m + table.value(t), table.slope(t))
+        } else if let Some(table) = self.table("tension") {
+            let s = self.params.roll_sign() * self.roll.radius;
+            (tau_m + s * table.value(t), s * table.slope(t))
+        } else {
+            (tau_m, 0.0)
         }
     }
 

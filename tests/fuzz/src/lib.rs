@@ -2128,22 +2128,7 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     )?;
     if let Some((i, OK)) = res {
         let what = match which {
-            6 => {
-                // Continuous states were accepted: they must have been finite.
-                if let Some(x) = set_states.iter().take(n).find(|x| !x.is_finite()) {
-                    return fail(format!("{}: accepted the continuous state {x}", r.what));
-                }
-                let slot = r.slot_mut(i);
-                for &x in set_states.iter().take(n) {
-                    slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
-                }
-                return Ok(());
-            }
-            5 => {
-                let slot = r.slot_mut(i);
-                slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
-                return Ok(());
-            }
+            5 | 6 => return accepted_set(r, i, which, &set_states[..n.min(set_states.len())], x),
             7 => "a derivative",
             8 => "an event indicator",
             9 => "a continuous state",
@@ -2156,6 +2141,23 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 r.finite(i, v, what)?;
             }
         }
+    }
+    Ok(())
+}
+
+/// A time (#5) or continuous states (#6) the FMU accepted, in either
+/// interface: states must have been finite; the instance's values now span
+/// what was set.
+fn accepted_set(r: &mut Run, i: usize, which: usize, states: &[f64], time: f64) -> Result<(), Violation> {
+    if which == 6 {
+        if let Some(x) = states.iter().find(|x| !x.is_finite()) {
+            return fail(format!("{}: accepted the continuous state {x}", r.what));
+        }
+    }
+    let set: &[f64] = if which == 6 { states } else { std::slice::from_ref(&time) };
+    let slot = r.slot_mut(i);
+    for &x in set {
+        slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
     }
     Ok(())
 }
@@ -2276,21 +2278,7 @@ fn op_unsupported3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     )?;
     if let Some((i, OK)) = res {
         let what = match which {
-            6 => {
-                if let Some(x) = set_states.iter().take(n).find(|x| !x.is_finite()) {
-                    return fail(format!("{}: accepted the continuous state {x}", r.what));
-                }
-                let slot = r.slot_mut(i);
-                for &x in set_states.iter().take(n) {
-                    slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
-                }
-                return Ok(());
-            }
-            5 => {
-                let slot = r.slot_mut(i);
-                slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
-                return Ok(());
-            }
+            5 | 6 => return accepted_set(r, i, which, &set_states[..n.min(set_states.len())], x),
             11 | 12 if number != [nx, nz][which - 11] => {
                 return fail(format!("{}: answered {number}", r.what));
             }
