@@ -1,83 +1,154 @@
-# Sourced by fmu/toolchain.sh: the tools for the Windows and ARM64 Linux
-# binaries, and the emulators that run them here. Installed once; the Rust
-# compiler is cached beside zig in $CONVERTING_SPAN_TOOLS.
+# Sourced by fmu/toolchain.sh: the compiler and linker of the Windows and
+# ARM64 Linux binaries. What runs them (Wine, QEMU) is the tests' business
+# (tests/tools.sh); building needs only this.
 #
-#   rust-web/      Debian bookworm-security's rustc-web, cargo-web and
-#                  rust-web-src (the standard library's source, dependencies
-#                  vendored), fetched with `apt-get download` and unpacked
-#                  with `dpkg-deb -x`: installing rustc-web would replace
-#                  Debian's rustc. It builds std for each target
-#                  (-Zbuild-std), as rustup can add no target here.
-#   apt            x86_64-w64-mingw32-gcc and aarch64-linux-gnu-gcc (linkers,
-#                  and the compilers of the test importer), wine64 (Wine 8)
-#                  and qemu-user-static (qemu-aarch64-static).
-#   wine-prefix/   the Wine prefix of the tests, with a test-only
-#                  bcryptprimitives.dll (tests/cross/bcryptprimitives.c):
-#                  Wine 8 lacks ProcessPrng, which Rust's std imports.
-#                  Windows 10 and later have it; the shim never ships.
+#   rust-web-VERSION/  Debian's rustc-web, cargo-web, rust-web-src (std's
+#                      source, dependencies vendored) and libstd-rust-web,
+#                      fetched with `apt-get download` and unpacked with
+#                      `dpkg-deb -x`: installing rustc-web would replace
+#                      Debian's rustc. It builds std for each target
+#                      (-Zbuild-std), as rustup can add no target here.
+#   apt                the libraries those packages declare in their own
+#                      Depends (`apt-get satisfy`), and the MinGW-w64 linker.
 #
-# Exports CROSS_CARGO and CROSS_RUSTC (cargo-web, rustc-web), WINEPREFIX, and the cargo
-# linkers and runners of both targets (CARGO_TARGET_<TRIPLE>_...).
-# The rustc-web that bookworm-security ships now (a security update replaces it
-# there, and a new one is unpacked beside the old); its std and LLVM packages
-# carry the version in their names, so they are read from its dependencies.
-candidate() { apt-cache policy "$1" 2>/dev/null | awk '/Candidate:/ && $2 != "(none)" {print $2}'; }
-RUST_WEB_VERSION="$(candidate rustc-web)"
-if [ -z "$RUST_WEB_VERSION" ]; then
-    apt-get update -qq -o DPkg::Lock::Timeout=300 || true
-    RUST_WEB_VERSION="$(candidate rustc-web)"
-fi
-[ -n "$RUST_WEB_VERSION" ] || { echo "cross_toolchain.sh: apt knows no rustc-web (is bookworm-security in the sources?)" >&2; return 1; }
-RUST_WEB="$TOOLS/rust-web-$RUST_WEB_VERSION"
-STD_PACKAGE="$(apt-cache depends "libstd-rust-web-dev=$RUST_WEB_VERSION" | awk '/Depends: libstd-rust-web-[0-9]/ {print $2}')"
-LLVM_PACKAGE="$(apt-cache depends "$STD_PACKAGE=$RUST_WEB_VERSION" | awk '/Depends: libllvm[0-9]/ {print $2}')"
+# The version is the newest rustc-web that apt offers once its lists are
+# updated (bookworm-security carries it); it is resolved once, on the run
+# that fills the cache, and recorded in $TOOLS/rust-web.version. Before first
+# use, every shared library of cargo and rustc must resolve (ldd), or the run
+# stops with one line naming the library and the package that ships it.
+#
+# Exports CROSS_CARGO and CROSS_RUSTC and the Windows target's linker.
+# APT_OPTIONS (e.g. "-o Dir::State::Lists=DIR") points apt at another state:
+# the tests resolve against a partial one (tests/setup/test_toolchain.py).
 
-APT_PACKAGES=(gcc-mingw-w64-x86-64 gcc-aarch64-linux-gnu wine64 qemu-user-static libgit2-1.5 libssh2-1 "$LLVM_PACKAGE")
-installed() { [ "$(dpkg-query -W -f='${Status}\n' "$@" 2>/dev/null | grep -c '^install ok installed$')" = "$#" ]; }
-if ! installed "${APT_PACKAGES[@]}"; then
-    echo "cross_toolchain.sh: installing mingw-w64, aarch64 gcc, Wine and QEMU (apt, about 2 GB, once)"
-    # libgit2, libssh2 (for cargo-web) and libllvm (for rustc-web): libraries only.
-    apt_install "${APT_PACKAGES[@]}"
-fi
+APT_OPTIONS="${APT_OPTIONS:-}"
+RUST_WEB_UNPACKED=(rustc-web cargo-web rust-web-src libstd-rust-web-dev)
+MINGW_PACKAGE=gcc-mingw-w64-x86-64
+say() { echo "cross_toolchain.sh: $*" >&2; }
 
-if ! [ -x "$RUST_WEB/bin/cargo" ]; then
-    echo "cross_toolchain.sh: unpacking rustc-web $RUST_WEB_VERSION (apt-get download) into $RUST_WEB"
+# Sets RUST_WEB_VERSION to the rustc-web apt offers after updating its
+# lists: stale lists name an older one (bookworm main's, which needed a
+# library nothing installed).
+rust_web_resolve() {
+    if [ "$(id -u)" = 0 ]; then
+        apt-get $APT_OPTIONS update -qq -o DPkg::Lock::Timeout=300 >/dev/null 2>&1 || {
+            say "could not update the apt lists (apt-get update); check that Debian's mirrors are reachable, then run again"
+            return 1
+        }
+        [ -n "$APT_OPTIONS" ] || APT_LISTS_UPDATED=1
+    else
+        say "not root: using apt's lists as they are (run once as root for the current rustc-web)"
+    fi
+    RUST_WEB_VERSION="$(apt-cache $APT_OPTIONS policy rustc-web 2>/dev/null | awk '/Candidate:/ && $2 != "(none)" {print $2}')"
+    [ -n "$RUST_WEB_VERSION" ] || { say "apt offers no rustc-web: add bookworm-security to apt's sources, then run again"; return 1; }
+}
+
+# The Debian package that ships a shared library, by Debian's naming policy
+# (libpcre.so.3 -> libpcre3, libfoo1.2.so.0 -> libfoo1.2-0), if apt knows it.
+library_package() {
+    local name="${1%%.so*}" version="${1#*.so.}" package
+    version="${version%%.*}"
+    if [[ "$name" =~ [0-9]$ ]]; then package="$name-$version"; else package="$name$version"; fi
+    package="$(echo "$package" | tr 'A-Z_' 'a-z-')"
+    if apt-cache $APT_OPTIONS show "$package" >/dev/null 2>&1; then echo "$package"; fi
+}
+
+# Every shared library of the given executables and libraries resolves
+# (LD_LIBRARY_PATH as they will run); otherwise one line names the first
+# that does not, and the package to install.
+check_libraries() { # LIBRARY_PATH OWNER FILE...
+    local path="$1" owner="$2" file missing package
+    shift 2
+    for file in "$@"; do
+        missing="$(LD_LIBRARY_PATH="$path" ldd "$file" 2>&1 | awk '/=> not found/ {print $1; exit}')"
+        if [ -n "$missing" ]; then
+            package="$(library_package "$missing")"
+            say "$owner's $(basename "$file") needs $missing, which is not installed${package:+ (Debian package $package: apt-get install $package)}"
+            return 1
+        fi
+    done
+}
+
+# Installs (as root) what the unpacked packages declare in their Depends,
+# apart from each other: apt-get satisfy reads the fields as written
+# (versions, alternatives, virtual packages).
+satisfy_depends() { # DEPENDS-FILE
+    local wanted
+    wanted="$(paste -sd, "$1")"
+    [ -n "$wanted" ] || return 0
+    if apt-get satisfy -s -qq "$wanted" 2>/dev/null | grep -q '^Inst '; then
+        say "installing the libraries rustc-web and cargo-web depend on (apt)"
+        apt_install_satisfy "$wanted" || {
+            say "apt-get satisfy \"$wanted\" failed; install those packages, then run again"
+            return 1
+        }
+    fi
+}
+
+rust_web_unpack() { # VERSION DIR
+    local version="$1" dir="$2" debs std
+    std="$(apt-cache $APT_OPTIONS depends "libstd-rust-web-dev=$version" | awk '/Depends: libstd-rust-web-[0-9]/ {print $2; exit}')"
+    [ -n "$std" ] || { say "apt knows no standard library package for rustc-web $version"; return 1; }
+    say "unpacking rustc-web $version (apt-get download) into $dir"
     debs="$(mktemp -d)"
-    (cd "$debs" && apt-get download -qq -o APT::Sandbox::User=root $(for p in rustc-web cargo-web rust-web-src libstd-rust-web-dev "$STD_PACKAGE"; do
-        echo "$p=$RUST_WEB_VERSION"; done))
-    rm -rf "$RUST_WEB.tmp" && mkdir -p "$RUST_WEB.tmp/bin"
-    for deb in "$debs"/*.deb; do dpkg-deb -x "$deb" "$RUST_WEB.tmp"; done
+    (cd "$debs" && apt-get $APT_OPTIONS download -qq -o APT::Sandbox::User=root \
+        $(for p in "${RUST_WEB_UNPACKED[@]}" "$std"; do echo "$p=$version"; done)) || {
+        say "apt-get download of rustc-web $version failed; check that Debian's mirrors are reachable, then run again"
+        rm -rf "$debs"; return 1
+    }
+    rm -rf "$dir.tmp" && mkdir -p "$dir.tmp/bin"
+    local deb own
+    own="$(printf '%s\n' "${RUST_WEB_UNPACKED[@]}" "$std" | paste -sd'|')"
+    for deb in "$debs"/*.deb; do
+        dpkg-deb -x "$deb" "$dir.tmp"
+        # Each Depends clause, minus those the unpacked packages meet themselves.
+        dpkg-deb -f "$deb" Depends | tr ',' '\n' | sed 's/^ *//; s/ *$//' | grep -v '^$' \
+            | grep -Ev "^($own)( |$)" >> "$dir.tmp/DEPENDS" || true
+    done
+    sort -u -o "$dir.tmp/DEPENDS" "$dir.tmp/DEPENDS"
     rm -rf "$debs"
     # rustc finds its sysroot from its own path (usr/); its driver library is beside it.
-    cat > "$RUST_WEB.tmp/bin/rustc" <<EOF
+    cat > "$dir.tmp/bin/rustc" <<EOF
 #!/bin/sh
-LD_LIBRARY_PATH="$RUST_WEB/usr/lib/x86_64-linux-gnu\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}" exec "$RUST_WEB/usr/bin/rustc" "\$@"
+LD_LIBRARY_PATH="$dir/usr/lib/x86_64-linux-gnu\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}" exec "$dir/usr/bin/rustc" "\$@"
 EOF
     # -Zbuild-std is unstable: RUSTC_BOOTSTRAP=1 lets this stable cargo take it.
-    cat > "$RUST_WEB.tmp/bin/cargo" <<EOF
+    cat > "$dir.tmp/bin/cargo" <<EOF
 #!/bin/sh
-RUSTC="$RUST_WEB/bin/rustc" RUSTDOC=false RUSTC_BOOTSTRAP=1 exec "$RUST_WEB/usr/bin/cargo" "\$@"
+RUSTC="$dir/bin/rustc" RUSTDOC=false RUSTC_BOOTSTRAP=1 exec "$dir/usr/bin/cargo" "\$@"
 EOF
-    chmod +x "$RUST_WEB.tmp/bin/rustc" "$RUST_WEB.tmp/bin/cargo"
-    rm -rf "$RUST_WEB" && mv "$RUST_WEB.tmp" "$RUST_WEB"
-fi
-export CROSS_CARGO="$RUST_WEB/bin/cargo" CROSS_RUSTC="$RUST_WEB/bin/rustc"
+    chmod +x "$dir.tmp/bin/rustc" "$dir.tmp/bin/cargo"
+    rm -rf "$dir" && mv "$dir.tmp" "$dir"
+}
 
-export CARGO_TARGET_X86_64_PC_WINDOWS_GNU_LINKER=x86_64-w64-mingw32-gcc
-export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
-export WINEPREFIX="$TOOLS/wine-prefix"
-export WINEDEBUG=-all
-export CARGO_TARGET_X86_64_PC_WINDOWS_GNU_RUNNER=/usr/lib/wine/wine64
-export QEMU_LD_PREFIX=/usr/aarch64-linux-gnu
-export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER=qemu-aarch64-static
+# cargo, rustc and rustc's driver library, as the build will run them.
+rust_web_check() { # DIR
+    local dir="$1"
+    [ -x "$dir/usr/bin/cargo" ] && [ -x "$dir/usr/bin/rustc" ] || { say "$dir lacks cargo or rustc: remove it, then run again"; return 1; }
+    check_libraries "$dir/usr/lib/x86_64-linux-gnu" "rustc-web $(basename "$dir" | sed 's/^rust-web-//')" \
+        "$dir/usr/bin/cargo" "$dir/usr/bin/rustc" "$dir"/usr/lib/x86_64-linux-gnu/librustc_driver-*.so
+}
 
-SHIM_SOURCE="$ROOT/tests/cross/bcryptprimitives.c"
-SHIM="$WINEPREFIX/drive_c/windows/system32/bcryptprimitives.dll"
-if ! [ -f "$WINEPREFIX/system.reg" ]; then
-    echo "cross_toolchain.sh: creating the Wine prefix $WINEPREFIX"
-    /usr/lib/wine/wine64 wineboot --init >/dev/null 2>&1
-    /usr/lib/wine/wineserver -w
-fi
-if ! [ -f "$SHIM" ] || [ "$SHIM_SOURCE" -nt "$SHIM" ]; then
-    x86_64-w64-mingw32-gcc -O2 -shared -o "$SHIM" "$SHIM_SOURCE" -ladvapi32
+# The one entry: a cached toolchain if there is one, else resolve and unpack.
+rust_web_setup() {
+    local dir
+    RUST_WEB_VERSION="$(cat "$TOOLS/rust-web.version" 2>/dev/null || true)"
+    if [ -z "$RUST_WEB_VERSION" ] || ! [ -f "$TOOLS/rust-web-$RUST_WEB_VERSION/DEPENDS" ]; then
+        rust_web_resolve || return 1
+        rust_web_unpack "$RUST_WEB_VERSION" "$TOOLS/rust-web-$RUST_WEB_VERSION" || return 1
+        echo "$RUST_WEB_VERSION" > "$TOOLS/rust-web.version"
+    fi
+    dir="$TOOLS/rust-web-$RUST_WEB_VERSION"
+    satisfy_depends "$dir/DEPENDS" || return 1
+    rust_web_check "$dir" || return 1
+    export CROSS_CARGO="$dir/bin/cargo" CROSS_RUSTC="$dir/bin/rustc"
+}
+
+if [ "${CROSS_TOOLCHAIN_FUNCTIONS_ONLY:-}" != 1 ]; then
+    rust_web_setup || return 1
+    if ! command -v x86_64-w64-mingw32-gcc >/dev/null; then
+        say "installing the MinGW-w64 linker of the Windows binary (apt, once)"
+        apt_install "$MINGW_PACKAGE" || return 1
+    fi
+    export CARGO_TARGET_X86_64_PC_WINDOWS_GNU_LINKER=x86_64-w64-mingw32-gcc
 fi

@@ -1,42 +1,75 @@
-# Sourced by fmu/main.sh and tests/run.sh: makes sure the tools are there.
-# Creates .venv (FMPy, pytest, mpmath, numpy, matplotlib, the webline runner) on first use and
-# installs the Debian packages the tests compile with, if they are missing.
+# Sourced by fmu/main.sh, tests/run.sh and the other scripts: makes sure the
+# tools of the main job are there (tests/tools.sh adds the tests' own).
+# Creates .venv (fmu/requirements.txt and the webline runner) on first use,
+# then the build toolchain (fmu/toolchain.sh). Every step that fails says
+# which step, why, and what to do, in one line, and stops the run.
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="$ROOT/.venv"
 PY="$VENV/bin/python"
 
-apt_install() {
-    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-        apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$@" >/dev/null
-    else
-        echo "env.sh: please install the Debian packages: $*" >&2
-        return 1
-    fi
+# One line naming the failed step and the way out; stops the calling script.
+setup_failed() { # SCRIPT STEP WHY WHAT-TO-DO
+    echo "$1: $2 failed: $3. $4" >&2
+    exit 1
 }
 
-command -v cargo >/dev/null || { echo "env.sh: cargo (the Rust toolchain) is needed" >&2; exit 1; }
-command -v gcc >/dev/null || apt_install gcc libc6-dev
+# apt's lists are updated once per run, before the first install: a
+# machine's lists may be months old.
+apt_lists_update() {
+    [ -n "${APT_LISTS_UPDATED:-}" ] && return 0
+    apt-get update -qq -o DPkg::Lock::Timeout=300 >/dev/null && APT_LISTS_UPDATED=1
+}
+apt_can_install() {
+    [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null
+}
+apt_install() { # PACKAGE...
+    if ! apt_can_install; then
+        echo "env.sh: please install the Debian packages $*, then run again" >&2
+        return 1
+    fi
+    apt_lists_update && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq -o DPkg::Lock::Timeout=300 "$@" >/dev/null
+}
+apt_install_satisfy() { # "DEPENDS, FIELD"
+    if ! apt_can_install; then
+        echo "env.sh: please install what this Depends field names: $1" >&2
+        return 1
+    fi
+    apt_lists_update && DEBIAN_FRONTEND=noninteractive apt-get satisfy -y -qq -o DPkg::Lock::Timeout=300 "$1" >/dev/null
+}
 
-# The venv is (re)filled whenever fmu/requirements.txt changes: a stamp in
+command -v cargo >/dev/null || setup_failed env.sh "finding cargo" "the Rust toolchain is not on PATH" \
+    "Install it with rustup (https://rustup.rs), then run again."
+command -v gcc >/dev/null || apt_install gcc libc6-dev \
+    || setup_failed env.sh "installing gcc" "apt-get could not install gcc and libc6-dev" "Install them, then run again."
+
+# The venv is (re)filled whenever a requirements file changes: a stamp in
 # the venv holds the checksum of the requirements it was installed from.
-STAMP="$VENV/.requirements.sha256"
-WANT="$(sha256sum "$ROOT/fmu/requirements.txt" | cut -d' ' -f1)"
+requirements_installed() { # STAMP-NAME FILE
+    local stamp="$VENV/.$1.sha256" want
+    want="$(sha256sum "$2" | cut -d' ' -f1)"
+    [ "$(cat "$stamp" 2>/dev/null)" = "$want" ] && return 0
+    echo "env.sh: installing the Python tools of ${2#"$ROOT"/} into $VENV"
+    "$PY" -m pip install --quiet --disable-pip-version-check -r "$2" \
+        || setup_failed env.sh "pip install -r ${2#"$ROOT"/}" "pip could not install a package (its message is above)" \
+            "Check that PyPI is reachable, then run again."
+    echo "$want" > "$stamp"
+}
 if [ ! -x "$PY" ]; then
     echo "env.sh: creating $VENV"
-    python3 -m venv "$VENV" 2>/dev/null || { apt_install python3-venv && python3 -m venv "$VENV"; }
+    python3 -m venv "$VENV" 2>/dev/null || { apt_install python3-venv && python3 -m venv "$VENV"; } \
+        || setup_failed env.sh "creating $VENV" "python3 -m venv does not work here" \
+            "Install Debian's python3-venv, then run again."
 fi
-if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ]; then
-    echo "env.sh: installing the Python tools into $VENV (fmu/requirements.txt)"
-    (cd "$ROOT/fmu" && "$PY" -m pip install --quiet --disable-pip-version-check -r requirements.txt)
-    echo "$WANT" > "$STAMP"
-fi
+requirements_installed requirements "$ROOT/fmu/requirements.txt"
 # The webline runner (webline/) and its `webline` command, installed editable;
 # again when the installed one is not this folder's (e.g. after a move).
 if [ "$("$PY" -c 'import webline, os; print(os.path.dirname(os.path.dirname(webline.__file__)))' 2>/dev/null)" != "$ROOT/webline/src" ] \
     || [ ! -x "$VENV/bin/webline" ]; then
     echo "env.sh: installing the webline runner into $VENV (pip install -e webline)"
-    "$PY" -m pip install --quiet --disable-pip-version-check -e "$ROOT/webline"
+    "$PY" -m pip install --quiet --disable-pip-version-check -e "$ROOT/webline" \
+        || setup_failed env.sh "pip install -e webline" "pip could not install the webline runner (its message is above)" \
+            "Check that PyPI is reachable, then run again."
 fi
 export MPLBACKEND=Agg
-# zig and cargo-zigbuild for the portable FMU binary (cached; see the file).
+# zig, cargo-zigbuild and the cross compiler for the FMU's binaries (cached; see the file).
 source "$ROOT/fmu/toolchain.sh"

@@ -151,8 +151,26 @@ def packages():
     return [arg for model in MODELS for arg in ("-p", model.package)]
 
 
+class StepFailed(Exception):
+    """A step of packaging failed: the one line the user reads instead of a traceback."""
+
+
+def run(step, command, **kwargs):
+    """Runs one tool of a packaging step; its failure becomes StepFailed naming the step."""
+    try:
+        return subprocess.run(command, cwd=ROOT, check=True, **kwargs)
+    except FileNotFoundError:
+        raise StepFailed(f"{step} failed: {command[0]} is not installed. Run through fmu/env.sh "
+                         "(bash fmu/main.sh does), which installs it.") from None
+    except subprocess.CalledProcessError as error:
+        why = "it could not start a program or load a shared library" if error.returncode in (126, 127) else \
+            f"{Path(command[0]).name} exited with status {error.returncode}"
+        raise StepFailed(f"{step} failed: {why}; its own message is above. Fix what it names, then run again "
+                         "(a broken cached toolchain: remove the folder CONVERTING_SPAN_TOOLS names).") from None
+
+
 def build_host():
-    subprocess.run(["cargo", "build", "--release", "--lib", "--quiet", *packages()], cwd=ROOT, check=True)
+    run("building the host libraries", ["cargo", "build", "--release", "--lib", "--quiet", *packages()])
 
 
 def build(platform):
@@ -170,7 +188,7 @@ def build(platform):
             env.pop("CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER", None)
             env.update(CARGO=command[0], RUSTC=os.environ["CROSS_RUSTC"], RUSTC_BOOTSTRAP="1")
             command[0:2] = ["cargo-zigbuild", "build"]
-    subprocess.run(command, cwd=ROOT, check=True, env=env)
+    run(f"building the {platform.folder} libraries", command, env=env)
 
 
 def exported_functions(path):
@@ -178,11 +196,11 @@ def exported_functions(path):
     table of an ELF object, the export table of a PE DLL."""
     data = path.read_bytes()[:4]
     if data == b"\x7fELF":
-        listing = subprocess.run(["objdump", "-T", str(path)], check=True, capture_output=True, text=True).stdout
+        listing = run(f"reading the exports of {path}", ["objdump", "-T", str(path)], capture_output=True, text=True).stdout
         # defined (not *UND*) global symbols in .text
         return set(re.findall(r"^\S+\s+g\s+DF\s+\.text\s+\S+\s+(?:\S+\s+)?(\w+)$", listing, re.M))
     if data[:2] == b"MZ":
-        listing = subprocess.run(["objdump", "-p", str(path)], check=True, capture_output=True, text=True).stdout
+        listing = run(f"reading the exports of {path}", ["objdump", "-p", str(path)], capture_output=True, text=True).stdout
         table = listing.split("[Ordinal/Name Pointer] Table", 1)[1].split("\n\n", 1)[0]
         return set(re.findall(r"^\s+\[\s*\d+\]\s+(\S+)$", table, re.M))
     if data in (b"\xcf\xfa\xed\xfe", b"\xca\xfe\xba\xbe"):
@@ -368,8 +386,8 @@ def fmi3_files(model):
     """The FMI 3.0 modelDescription.xml and terminalsAndIcons.xml, written by
     fmi2-build from the FMI 2.0 description into target/fmi3/<model>."""
     folder = ROOT / "target" / "fmi3" / model.name
-    subprocess.run(["cargo", "run", "--release", "--quiet", "-p", "fmi2-build", "--bin", "fmi3-description", "--",
-                    str(model.description), str(folder)], cwd=ROOT, check=True)
+    run(f"writing {model.name}'s FMI 3.0 description", ["cargo", "run", "--release", "--quiet", "-p", "fmi2-build",
+        "--bin", "fmi3-description", "--", str(model.description), str(folder)])
     return folder / "modelDescription.xml", folder / "terminalsAndIcons" / "terminalsAndIcons.xml"
 
 
@@ -486,4 +504,7 @@ if __name__ == "__main__":
     # them in the environment, run again through it.
     if "CROSS_CARGO" not in os.environ and "--host-build" not in sys.argv and "--no-build" not in sys.argv:
         os.execvp("bash", ["bash", "-c", 'source "$0/fmu/env.sh" >&2 && exec python3 "$0/fmu/package.py" "$@"', str(ROOT), *sys.argv[1:]])
-    main()
+    try:
+        main()
+    except StepFailed as failure:
+        sys.exit(f"package.py: {failure}")

@@ -18,6 +18,7 @@
 # A summary is printed at the end and written to target/platforms/summary.txt.
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
+source "$ROOT/tests/tools.sh"
 cd "$ROOT"
 export RUST_BACKTRACE=0 # the panic-boundary tests panic on purpose
 FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}"

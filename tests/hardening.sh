@@ -28,6 +28,7 @@
 # A summary is printed at the end and written to target/hardening/summary.txt.
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
+source "$ROOT/tests/tools.sh"
 cd "$ROOT"
 # A panic the FMU catches still goes through Rust's default panic hook, which
 # prints it (and, with RUST_BACKTRACE set, symbolizes a backtrace: very slow
@@ -50,9 +51,6 @@ else
     SEQ3=5000 SEQ3_ASAN=2000
 fi
 CYCLES_ASAN=1000
-
-command -v valgrind >/dev/null || apt_install valgrind
-command -v objdump >/dev/null || apt_install binutils
 
 OUT=target/hardening
 mkdir -p "$OUT"

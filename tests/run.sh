@@ -4,6 +4,7 @@
 # Windows and ARM64 binaries under Wine and QEMU (tests/cross.sh).
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
+source "$ROOT/tests/tools.sh"
 cd "$ROOT"
 # Every package of the workspace but the fuzz harness (tests/hardening.sh builds it with
 # its own profile): the span and the Roller (model and C API),
@@ -11,8 +12,6 @@ cd "$ROOT"
 cargo test --release --quiet --workspace --exclude converting-span-fuzz
 python3 fmu/package.py
 "$PY" fmu/compat.py out
-# fmi-sim for the importer tests (cached; see the file).
-source tests/importers.sh
 "$PY" -m pytest tests/python -q
 # Hardening, CI size (tests/hardening.sh --full for the long runs): the
 # portable .so, the panic boundary, the fuzzed C API, AddressSanitizer and
