@@ -31,7 +31,7 @@ say() { echo "cross_toolchain.sh: $*" >&2; }
 # library nothing installed).
 rust_web_resolve() {
     if [ "$(id -u)" = 0 ]; then
-        apt-get $APT_OPTIONS update -qq -o DPkg::Lock::Timeout=300 >/dev/null 2>&1 || {
+        apt_quiet $APT_OPTIONS update || {
             say "could not update the apt lists (apt-get update); check that Debian's mirrors are reachable, then run again"
             return 1
         }

@@ -13,11 +13,20 @@ setup_failed() { # SCRIPT STEP WHY WHAT-TO-DO
     exit 1
 }
 
+# apt runs quietly; its own messages are shown only when it fails.
+apt_quiet() { # apt-get ARGUMENTS...
+    local log status=0
+    log="$(mktemp)"
+    DEBIAN_FRONTEND=noninteractive apt-get -qq -o DPkg::Lock::Timeout=300 "$@" >"$log" 2>&1 || status=$?
+    [ "$status" = 0 ] || cat "$log" >&2
+    rm -f "$log"
+    return "$status"
+}
 # apt's lists are updated once per run, before the first install: a
 # machine's lists may be months old.
 apt_lists_update() {
     [ -n "${APT_LISTS_UPDATED:-}" ] && return 0
-    apt-get update -qq -o DPkg::Lock::Timeout=300 >/dev/null && APT_LISTS_UPDATED=1
+    apt_quiet update && APT_LISTS_UPDATED=1
 }
 apt_can_install() {
     [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null
@@ -27,14 +36,14 @@ apt_install() { # PACKAGE...
         echo "env.sh: please install the Debian packages $*, then run again" >&2
         return 1
     fi
-    apt_lists_update && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq -o DPkg::Lock::Timeout=300 "$@" >/dev/null
+    apt_lists_update && apt_quiet install -y "$@"
 }
 apt_install_satisfy() { # "DEPENDS, FIELD"
     if ! apt_can_install; then
         echo "env.sh: please install what this Depends field names: $1" >&2
         return 1
     fi
-    apt_lists_update && DEBIAN_FRONTEND=noninteractive apt-get satisfy -y -qq -o DPkg::Lock::Timeout=300 "$1" >/dev/null
+    apt_lists_update && apt_quiet satisfy -y "$1"
 }
 
 command -v cargo >/dev/null || setup_failed env.sh "finding cargo" "the Rust toolchain is not on PATH" \

@@ -12,7 +12,7 @@ cd "$ROOT"
 cargo test --release --quiet --workspace --exclude converting-span-fuzz
 python3 fmu/package.py
 "$PY" fmu/compat.py out
-"$PY" -m pytest tests/python -q
+"$PY" -m pytest tests/python fmu/tests -q
 # Hardening, CI size (tests/hardening.sh --full for the long runs): the
 # portable .so, the panic boundary, the fuzzed C API, AddressSanitizer and
 # valgrind, dlopen/dlclose cycles.
