@@ -1,5 +1,5 @@
 // The interface of ConvertingSpan comes from modelDescription.xml alone:
 // the shared generator checks it and emits the tables `src/description.rs` includes.
 fn main() {
-    fmi2_build::generate("modelDescription.xml", "model_description.rs");
+    fmi_build::generate("modelDescription.xml", "model_description.rs");
 }

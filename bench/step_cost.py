@@ -83,7 +83,7 @@ GROUPS = [
      r"|<\w+ as Model>::(get|set)_real\b|Variables for \w+>::(get|set)_real\b|ConvertingSpan::(real|real_field|set_real_var)$|input_field"
      r"|<(Causality|Variability|Initial|Kind) as PartialEq>"),
     ("get/set loops", r"Instance::(get_reals|set_reals|set_all)$"),
-    ("model arithmetic: the step and the outputs (libm included)", r"^src/|^crates/solver/|^libm"),
+    ("model arithmetic: the step and the outputs (libm included)", r"^src/|^numerics/|^libm"),
 ]
 OTHER = "other"
 

@@ -4,15 +4,17 @@
     python3 fmu/package.py [--out out/ConvertingSpan.fmu] [--platforms linux64,win64,aarch64-linux]
                            [--add-binary PLATFORM=PATH ...] [--no-build] [--host-build]
 
-Each FMU is one package of the cargo workspace: ConvertingSpan the root
-package, Roller the one in fmu/roller; Roller.fmu is written next to
-ConvertingSpan.fmu. Each FMU holds its modelDescription.xml, one library per
-platform in binaries/<platform>/<modelIdentifier>.<so|dll>,
-documentation/index.html and, for the span, resources/webs.json (its library
-of webs, from fmu/resources). Each model with an FMI 3.0 API also gets an FMI
-3.0 FMU, out/fmi3/<model>.fmu (one fmiVersion per FMU): the same library (it
-exports the fmi2 and the fmi3 functions) under FMI 3.0's platform folders, the
-modelDescription.xml and terminalsAndIcons.xml that fmi2-build writes from the
+Each FMU is one model of the cargo workspace, and every model has the same
+shape (Cargo.toml, src/, modelDescription.xml, build.rs, documentation/,
+resources/): ConvertingSpan the root package, Roller the one in models/roller;
+Roller.fmu is written next to ConvertingSpan.fmu. Each FMU holds its
+modelDescription.xml, one library per platform in
+binaries/<platform>/<modelIdentifier>.<so|dll>, documentation/index.html and
+the files of the model's resources/ (the span's library of webs). Each model
+with an FMI 3.0 API also gets an FMI 3.0 FMU, out/fmi3/<model>.fmu (one
+fmiVersion per FMU): the same library (it exports the fmi2 and the fmi3
+functions) under FMI 3.0's platform folders, the
+modelDescription.xml and terminalsAndIcons.xml that fmi-build writes from the
 FMI 2.0 description, the same documentation and resources. The documentation's variable and unit tables are
 rendered from the model description, so they never disagree with the FMU.
 Only the Python standard library is used (and binutils' objdump).
@@ -51,7 +53,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 # One stylesheet for every FMU's documentation page (inlined: a page stays one file).
-STYLE = ROOT / "fmu" / "documentation" / "style.css"
+STYLE = ROOT / "fmu" / "style.css"
 RANGE_TOOL = "ConvertingSpan.range"
 # Fixed timestamp: the same inputs give the same archive bytes.
 ZIP_TIME = (2026, 1, 1, 0, 0, 0)
@@ -72,7 +74,7 @@ FMI2_FUNCTIONS = frozenset(
     """.split()
 )
 assert len(FMI2_FUNCTIONS) == 44
-# The FMI 3.0 C API (crates/fmi3): every function of the standard's headers.
+# The FMI 3.0 C API (fmi/abi): every function of the standard's headers.
 FMI3_FUNCTIONS = frozenset(
     "fmi3" + name
     for name in """
@@ -130,20 +132,20 @@ class Model:
 
     def __init__(self, name, package, crate_dir, fmi3=False):
         self.name = name
-        # The library exports the FMI 3.0 API too (crates/fmi3), and an FMI 3.0 FMU is written.
+        # The library exports the FMI 3.0 API too (fmi/abi), and an FMI 3.0 FMU is written.
         self.fmi3 = fmi3
         self.package = package
         self.crate = package.replace("-", "_")
         self.description = crate_dir / "modelDescription.xml"
-        self.template = crate_dir / ("fmu/documentation" if crate_dir == ROOT else "documentation") / "index.html"
+        self.template = crate_dir / "documentation" / "index.html"
         # Files shipped in the FMU's resources/ folder (the span's library of webs).
-        self.resources = crate_dir / ("fmu/resources" if crate_dir == ROOT else "resources")
+        self.resources = crate_dir / "resources"
         self.host_library = ROOT / "target" / "release" / f"lib{self.crate}.so"
 
 
 MODELS = [
     Model("ConvertingSpan", "converting-span", ROOT, fmi3=True),
-    Model("Roller", "roller", ROOT / "fmu" / "roller", fmi3=True),
+    Model("Roller", "roller", ROOT / "models" / "roller", fmi3=True),
 ]
 
 
@@ -384,9 +386,9 @@ def write_fmu(out, model, libraries):
 
 def fmi3_files(model):
     """The FMI 3.0 modelDescription.xml and terminalsAndIcons.xml, written by
-    fmi2-build from the FMI 2.0 description into target/fmi3/<model>."""
+    fmi-build from the FMI 2.0 description into target/fmi3/<model>."""
     folder = ROOT / "target" / "fmi3" / model.name
-    run(f"writing {model.name}'s FMI 3.0 description", ["cargo", "run", "--release", "--quiet", "-p", "fmi2-build",
+    run(f"writing {model.name}'s FMI 3.0 description", ["cargo", "run", "--release", "--quiet", "-p", "fmi-build",
         "--bin", "fmi3-description", "--", str(model.description), str(folder)])
     return folder / "modelDescription.xml", folder / "terminalsAndIcons" / "terminalsAndIcons.xml"
 

@@ -1,4 +1,4 @@
-//! ConvertingSpan: an FMI 2.0 FMU of a converting web span, the free web
+//! ConvertingSpan: an FMU (FMI 2.0 and 3.0) of a converting web span, the free web
 //! between two rollers where the web's properties change from wp1
 //! (arriving) to wp2 (in the span).
 //!
@@ -16,7 +16,8 @@
 //! * `description` — the interface generated from modelDescription.xml;
 //! * `model` — the model's data, one step, and the FMI hooks.
 //!
-//! The FMI layers (crates `fmi2` and `fmi3`) hold all unsafe code; this crate has none.
+//! The FMI standard is `fmi-core`'s and the C API `fmi-abi`'s, which holds all
+//! unsafe code; this crate has none.
 
 #![deny(unsafe_code)]
 
@@ -37,6 +38,6 @@ pub use model::{effective_tolerance, ConvertingSpan};
 pub use parameters::Rates;
 pub use physics::Outputs;
 
-fmi2::export_fmi2!(crate::ConvertingSpan);
+fmi_abi::export_fmi2!(crate::ConvertingSpan);
 // The FMI 3.0 API from the same library: the FMI 3.0 FMU ships this binary too.
-fmi3::export_fmi3!(crate::ConvertingSpan);
+fmi_abi::export_fmi3!(crate::ConvertingSpan);

@@ -9,7 +9,7 @@ use crate::stepping;
 use crate::records;
 use crate::schedule::{self, WebChange};
 use crate::jacobian::{self, Direction, Point};
-use fmi2::{Event, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
+use fmi_core::{Event, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use crate::stress_strain::StressStrain;
 use solver::CompensatedSum;
 use std::sync::Arc;
@@ -282,7 +282,7 @@ impl ConvertingSpan {
 }
 
 impl Model for ConvertingSpan {
-    fn description() -> &'static fmi2::description::ModelDescription {
+    fn description() -> &'static fmi_core::description::ModelDescription {
         &DESCRIPTION
     }
 
@@ -345,7 +345,7 @@ impl Model for ConvertingSpan {
     }
 
     fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult {
-        let var = Real::from_vr(vr).ok_or_else(|| fmi2::model::unknown_vr(vr))?;
+        let var = Real::from_vr(vr).ok_or_else(|| fmi_core::model::unknown_vr(vr))?;
         if value != 0.0 {
             stepping::method(self.params.solver, true).map_err(|e| e.prefixed(&format!("derivative of {} = {value}", var.name())))?;
         }
@@ -427,9 +427,9 @@ impl Model for ConvertingSpan {
         self.advance(h)
     }
 
-    fn event_update(&mut self) -> fmi2::EventUpdate {
+    fn event_update(&mut self) -> fmi_core::EventUpdate {
         self.apply_due_changes();
-        fmi2::EventUpdate { next_event_time: self.web_changes.get(self.next_change).map(|c| c.time), states_changed: false }
+        fmi_core::EventUpdate { next_event_time: self.web_changes.get(self.next_change).map(|c| c.time), states_changed: false }
     }
 
     /// A state saved with rollers transiently too close is still the model's
@@ -466,7 +466,7 @@ impl Model for ConvertingSpan {
     // Model Exchange [13]: the importer integrates the unstretched length.
 
     fn partial_derivative(&self, unknown: u32, known: u32, of: Jacobian) -> FmiResult<f64> {
-        let real = |vr| Real::from_vr(vr).ok_or_else(|| fmi2::model::unknown_vr(vr));
+        let real = |vr| Real::from_vr(vr).ok_or_else(|| fmi_core::model::unknown_vr(vr));
         ConvertingSpan::partial_derivative(self, real(unknown)?, real(known)?, of)
     }
 
@@ -516,7 +516,7 @@ impl Model for ConvertingSpan {
 /// importer gave one.
 pub fn effective_tolerance(parameter: f64, experiment: Option<f64>) -> f64 {
     let default = match DESCRIPTION.variable(Real::tolerance.vr()).map(|v| v.start) {
-        Some(fmi2::description::Start::Real(x)) => x,
+        Some(fmi_core::description::Start::Real(x)) => x,
         _ => parameter,
     };
     match experiment {

@@ -1,5 +1,5 @@
 //! The equations of the converting span. Numbers in brackets refer to the
-//! equations of the model documentation (fmu/documentation/index.html).
+//! equations of the model documentation (documentation/index.html).
 //!
 //! The state is the unstretched length of web in the span, x = L/(1+eps_b).
 

@@ -8,8 +8,8 @@
 use crate::description::{Real, DESCRIPTION};
 use crate::parameters::{Parameters, WebProperties};
 use crate::stress_strain::StressStrain;
-use fmi2::description::Start;
-use fmi2::{FmiError, FmiResult, Resources};
+use fmi_core::description::Start;
+use fmi_core::{FmiError, FmiResult, Resources};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

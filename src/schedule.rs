@@ -8,8 +8,8 @@ use crate::description::DESCRIPTION;
 use crate::parameters::{Parameters, WebProperties};
 use crate::records;
 use crate::ConvertingSpan;
-use fmi2::description::Start;
-use fmi2::{FmiError, FmiResult, Resources, StateReader, StateWriter, Variables};
+use fmi_core::description::Start;
+use fmi_core::{FmiError, FmiResult, Resources, StateReader, StateWriter, Variables};
 use profiles::{Profile, Value};
 use std::sync::Arc;
 

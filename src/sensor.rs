@@ -4,7 +4,7 @@
 
 use crate::description::{FORCE_UNIT, SPEED_UNIT};
 use crate::parameters::Parameters;
-use fmi2::description::UnitChoice;
+use fmi_core::description::UnitChoice;
 
 /// The unit that force units per width of web derive from.
 const PER_WIDTH: &str = "N/m";

@@ -3,7 +3,7 @@
 
 use crate::parameters::Inputs;
 use crate::{physics, ConvertingSpan};
-use fmi2::Event;
+use fmi_core::Event;
 use solver::CompensatedSum;
 
 impl ConvertingSpan {

@@ -8,7 +8,7 @@
 use crate::description::Solver;
 use crate::parameters::{Inputs, Parameters};
 use crate::physics;
-use fmi2::{FmiError, FmiResult};
+use fmi_core::{FmiError, FmiResult};
 use solver::fixed::{self, Method};
 use solver::{dopri5, rosenbrock, CompensatedSum, Control, Failure, Ode};
 

@@ -1,13 +1,13 @@
 //! Each variable of modelDescription.xml bound to its field, once: get,
 //! set, the FMU state and input derivatives follow from this table (see
-//! `fmi2::bind_variables!`). Ranges and types come from the XML; equations
+//! `fmi_core::bind_variables!`). Ranges and types come from the XML; equations
 //! for computed variables live in `physics`.
 
 use crate::description::{Boolean, Integer, Real, Text};
 use crate::parameters::Inputs;
 use crate::ConvertingSpan;
 
-fmi2::bind_variables! {
+fmi_core::bind_variables! {
     model: ConvertingSpan,
     inputs: Inputs,
     real {

@@ -5,20 +5,20 @@
 //! defect of the product: they fail today and pass once it is fixed
 //! (`cargo test --release --test c_api -- --ignored`).
 
-type Fmu = fmi2_harness::Fmu<ConvertingSpan>;
-type Setup = fmi2_harness::Setup<ConvertingSpan>;
+type Fmu = fmi_testkit::Fmu<ConvertingSpan>;
+type Setup = fmi_testkit::Setup<ConvertingSpan>;
 
-use fmi2_harness::*;
-use fmi2::description::{Causality, Kind, Variable};
+use fmi_testkit::*;
+use fmi_core::description::{Causality, Kind, Variable};
 use converting_span::description::{Real, DESCRIPTION};
 use converting_span::ConvertingSpan;
 
 fn vr(name: &str) -> u32 {
-    fmi2_harness::vr::<ConvertingSpan>(name)
+    fmi_testkit::vr::<ConvertingSpan>(name)
 }
 
 fn var(name: &str) -> &'static Variable {
-    fmi2_harness::var::<ConvertingSpan>(name)
+    fmi_testkit::var::<ConvertingSpan>(name)
 }
 
 // ====================================================================== helpers
@@ -1307,7 +1307,7 @@ const FRAMES: [(&str, f64); 4] = [("frame_a.x", 0.1), ("frame_a.y", 0.2), ("fram
 /// more than `significant` in some configuration; an unlisted one must
 /// never change it by more than `rounding`.
 fn dependency_problems(
-    unknowns: &[fmi2::description::Dependency],
+    unknowns: &[fmi_core::description::Dependency],
     knowns: &[&Variable],
     largest: &[Vec<f64>],
     significant: f64,

@@ -50,7 +50,7 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     echo "== fuzz harness for $target: $FUZZ_SEQUENCES sequences"
     t0=$SECONDS
     # the tests' target directory: std and the FMU are already built there
-    cross build --profile cross-test --target-dir target/cross-test --target "$target" -p converting-span-fuzz --bin fuzz_sequences
+    cross build --profile cross-test --target-dir target/cross-test --target "$target" -p fmi-fuzz --bin fuzz_sequences
     runner_var="CARGO_TARGET_$(echo "$target" | tr 'a-z-' 'A-Z_')_RUNNER"
     exe="target/cross-test/$target/cross-test/fuzz_sequences"
     [ -f "$exe.exe" ] && exe="$exe.exe"

@@ -1,14 +1,14 @@
-//! Product issues the fuzz harness (tests/fuzz) found, each as a small test.
+//! Product issues the fuzz harness (fmi/testkit/fuzz) found, each as a small test.
 //! They failed until the product was fixed; now they guard against the
 //! same faults coming back.
 
-type Fmu = fmi2_harness::Fmu<converting_span::ConvertingSpan>;
+type Fmu = fmi_testkit::Fmu<converting_span::ConvertingSpan>;
 
-use fmi2_harness::*;
+use fmi_testkit::*;
 
 fn output_vrs() -> Vec<u32> {
-    use fmi2::description::{Causality, Kind};
-    use fmi2::Model;
+    use fmi_core::description::{Causality, Kind};
+    use fmi_core::Model;
     <converting_span::ConvertingSpan as Model>::description()
         .variables
         .iter()
@@ -91,7 +91,7 @@ fn a_forged_state_with_an_out_of_range_parameter_is_refused() {
     }
     let mut bytes = vec![0u8; size];
     assert_eq!(unsafe { fmi2SerializeFMUstate(fmu.c, state, bytes.as_mut_ptr() as *mut _, size) }, OK);
-    // Reals are stored as their little-endian bits (crates/fmi2/src/snapshot.rs).
+    // Reals are stored as their little-endian bits (fmi/core/src/snapshot.rs).
     let l_at = bytes.windows(8).position(|w| w == marker.to_le_bytes()).expect("L in the serialized state");
     bytes[l_at..l_at + 8].copy_from_slice(&(-1.0f64).to_le_bytes());
     let n = bytes.len() - 8;

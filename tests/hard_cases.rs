@@ -19,8 +19,8 @@
 //! was. Then the case's checks (catalogue.json).
 
 use converting_span::ConvertingSpan;
-use fmi2::description::{Causality, Kind};
-use fmi2::{Experiment, Model, Status, Variables};
+use fmi_core::description::{Causality, Kind};
+use fmi_core::{Experiment, Model, Status, Variables};
 
 use serde::Deserialize;
 use serde_json::Value;

@@ -63,7 +63,7 @@ START=$SECONDS
 FUZZ_DIR=target/fuzz
 FUZZ="$FUZZ_DIR/fuzz/fuzz_sequences"
 build_fuzz() {
-    cargo build --profile fuzz --quiet -p converting-span-fuzz --target-dir "$FUZZ_DIR"
+    cargo build --profile fuzz --quiet -p fmi-fuzz --target-dir "$FUZZ_DIR"
 }
 
 if [ "$MODE" = afl ]; then
@@ -73,7 +73,7 @@ if [ "$MODE" = afl ]; then
     fi
     cargo afl config --build 2>/dev/null || true # "already built" is fine
     step "AFL++ (cargo-afl), $AFL_SECONDS s"
-    cargo afl build --profile fuzz --quiet --features afl -p converting-span-fuzz --target-dir target/fuzz-afl
+    cargo afl build --profile fuzz --quiet --features afl -p fmi-fuzz --target-dir target/fuzz-afl
     build_fuzz
     mkdir -p "$OUT/afl-seeds"
     # Seeds: a few sequences of the property driver's generator.
@@ -128,7 +128,7 @@ step "4. fuzz harness with AddressSanitizer: $SEQ_ASAN sequences"
 # -Zsanitizer needs a nightly flag: RUSTC_BOOTSTRAP=1 lets this stable toolchain take it.
 RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" \
     cargo build --quiet --target x86_64-unknown-linux-gnu \
-    --profile fuzz -p converting-span-fuzz --target-dir target/fuzz-asan
+    --profile fuzz -p fmi-fuzz --target-dir target/fuzz-asan
 ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 \
     target/fuzz-asan/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences --sequences "$SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan.log"
 note "fuzz under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan.log"), no ASan/LSan report"

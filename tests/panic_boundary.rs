@@ -10,10 +10,10 @@
 //! (tests/run.sh uses a separate target directory, so that the feature never
 //! reaches the library that fmu/package.py ships).
 
-type Fmu = fmi2_harness::Fmu<converting_span::ConvertingSpan>;
+type Fmu = fmi_testkit::Fmu<converting_span::ConvertingSpan>;
 
-use fmi2::instance::TEST_PANIC_CATEGORY;
-use fmi2_harness::*;
+use fmi_core::instance::TEST_PANIC_CATEGORY;
+use fmi_testkit::*;
 use std::ffi::CString;
 
 fn arm(fmu: &Fmu) -> i32 {
@@ -67,7 +67,7 @@ fn a_poisoned_instance_refuses_everything_but_reset_and_free() {
             ("fmi2SetDebugLogging", fmi2SetDebugLogging(fmu.c, 0, 0, all_off.as_ptr())),
             // Illegal in the error state anyway:
             ("fmi2DoStep", fmi2DoStep(fmu.c, 0.0, 0.1, 1)),
-            ("fmi2SetReal", fmi2SetReal(fmu.c, &fmi2_harness::vr::<converting_span::ConvertingSpan>("web_b.v"), 1, &5.0)),
+            ("fmi2SetReal", fmi2SetReal(fmu.c, &fmi_testkit::vr::<converting_span::ConvertingSpan>("web_b.v"), 1, &5.0)),
             ("fmi2Terminate", fmi2Terminate(fmu.c)),
             ("fmi2GetBooleanStatus", fmi2GetBooleanStatus(fmu.c, 3, &mut flag)),
         ]

@@ -2,13 +2,13 @@
 //! value wins, every bad file and name, the resource location, FMU states.
 
 use converting_span::ConvertingSpan;
-use fmi2_harness::*;
+use fmi_testkit::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-type Fmu = fmi2_harness::Fmu<ConvertingSpan>;
+type Fmu = fmi_testkit::Fmu<ConvertingSpan>;
 
-const SHIPPED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fmu/resources/webs.json");
+const SHIPPED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/resources/webs.json");
 const USER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/records/user_webs.json");
 /// A record's fields, each also the name of a `wpN.` parameter.
 const FIELDS: [&str; 5] = ["E", "thickness", "width", "density", "d_r"];
@@ -113,7 +113,7 @@ fn values_at_their_start_or_equal_to_the_record_are_accepted() {
     let fmu = Fmu::new();
     assert_eq!(fmu.set_text("wp2.record", "steel-0.3"), OK);
     let start = |name: &str| match converting_span::description::DESCRIPTION.variables.iter().find(|v| v.name == name).unwrap().start {
-        fmi2::description::Start::Real(x) => x,
+        fmi_core::description::Start::Real(x) => x,
         _ => unreachable!(),
     };
     fmu.set_all(&[("wp2.E", start("wp2.E")), ("wp2.thickness", 0.3e-3), ("wp2.density", 7850.0)]);

@@ -9,7 +9,7 @@ cd "$ROOT"
 # Every package of the workspace but the fuzz harness (tests/hardening.sh builds it with
 # its own profile): the span and the Roller (model and C API),
 # the FMI layer, the generator, the solvers.
-cargo test --release --quiet --workspace --exclude converting-span-fuzz
+cargo test --release --quiet --workspace --exclude fmi-fuzz
 python3 fmu/package.py
 "$PY" fmu/compat.py out
 "$PY" -m pytest tests/python fmu/tests -q

@@ -11,7 +11,7 @@
 //! tiny absolute floor", and the floor only matters where the strain passes
 //! through zero.
 
-use fmi2::{Experiment, Model, Variables};
+use fmi_core::{Experiment, Model, Variables};
 use converting_span::description::{Boolean, Integer, Real, FORCE_UNIT, SPEED_UNIT};
 use converting_span::ConvertingSpan;
 
@@ -183,7 +183,7 @@ fn web_fed_from_both_ends_is_discarded_not_infinite() {
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let before = m.clone();
     let err = m.do_step(1e4).unwrap_err();
-    assert_eq!(err.status, fmi2::Status::Discard);
+    assert_eq!(err.status, fmi_core::Status::Discard);
     assert_eq!(m, before, "a discarded step leaves the state as it was");
 }
 
@@ -301,7 +301,7 @@ fn summary_outputs_are_consistent() {
 
 #[test]
 fn start_values_come_from_the_model_description() {
-    use fmi2::description::Start;
+    use fmi_core::description::Start;
     let m = ConvertingSpan::at_start_values();
     for v in ConvertingSpan::description().variables {
         match v.start {
@@ -323,14 +323,14 @@ fn saved_fields_load_back_identically() {
     m.params.force_unit = 6;
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
     m.do_step(0.123).unwrap();
-    let snapshot = fmi2::snapshot::Snapshot {
-        phase: fmi2::phase::Phase::StepComplete,
+    let snapshot = fmi_core::snapshot::Snapshot {
+        phase: fmi_core::phase::Phase::StepComplete,
         time: 0.123,
         experiment: Experiment { tolerance: Some(1e-9), ..Experiment::default() },
         model: m.clone(),
     };
     let bytes = snapshot.to_bytes(ConvertingSpan::description());
-    let back = fmi2::snapshot::Snapshot::<ConvertingSpan>::from_bytes(&bytes, ConvertingSpan::description()).unwrap();
+    let back = fmi_core::snapshot::Snapshot::<ConvertingSpan>::from_bytes(&bytes, ConvertingSpan::description()).unwrap();
     assert_eq!(back, snapshot, "every field survives save and load");
 }
 
@@ -411,7 +411,7 @@ fn a_state_the_equations_cannot_hold_is_discarded_never_a_nan() {
                 }
             }
             Err(e) => {
-                assert_eq!(e.status, fmi2::Status::Discard);
+                assert_eq!(e.status, fmi_core::Status::Discard);
                 assert_eq!(m, before, "a discarded step changes nothing");
                 discarded = true;
                 break;

@@ -5,7 +5,7 @@
 //! integrating-factor solution of the linear balance, evaluated by
 //! composite Gauss–Legendre quadrature (independent of every integrator).
 
-use fmi2::{Experiment, Model};
+use fmi_core::{Experiment, Model};
 use converting_span::description::Real;
 use converting_span::ConvertingSpan;
 
@@ -15,7 +15,7 @@ fn span(solver: i32) -> ConvertingSpan {
     m.set_real_var(Real::web_a_v, 5.0).unwrap();
     m.set_real_var(Real::web_a_eps, 1e-3).unwrap();
     m.set_real_var(Real::web_b_v, 5.0).unwrap();
-    m.params.solver = fmi2::IntegerValue::from_i32(solver).expect("a solver");
+    m.params.solver = fmi_core::IntegerValue::from_i32(solver).expect("a solver");
     m
 }
 
@@ -143,7 +143,7 @@ fn explicit_solvers_refuse_unstable_steps_with_discard() {
         m.initialize(&Experiment::default(), &Default::default()).unwrap();
         let before = m.clone();
         let err = m.do_step(0.1).unwrap_err();
-        assert_eq!(err.status, fmi2::Status::Discard);
+        assert_eq!(err.status, fmi_core::Status::Discard);
         assert!(err.message.contains("substeps >= "), "{}", err.message);
         assert_eq!(m, before, "a refused step changes nothing");
     }
@@ -161,7 +161,7 @@ fn dopri5_gives_up_with_discard_when_the_work_is_unbounded() {
     m.set_real_var(Real::web_b_v, 30.03).unwrap();
     let before = m.clone();
     let err = m.do_step(1e4).unwrap_err();
-    assert_eq!(err.status, fmi2::Status::Discard);
+    assert_eq!(err.status, fmi_core::Status::Discard);
     assert_eq!(m, before);
 }
 

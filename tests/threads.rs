@@ -6,11 +6,11 @@
 //! control that shows the binary check does catch a static Atomic, a
 //! `static mut` and a thread-local).
 
-type Fmu = fmi2_harness::Fmu<converting_span::ConvertingSpan>;
+type Fmu = fmi_testkit::Fmu<converting_span::ConvertingSpan>;
 
-use fmi2::description::{Kind, Start};
-use fmi2::Model;
-use fmi2_harness::*;
+use fmi_core::description::{Kind, Start};
+use fmi_core::Model;
+use fmi_testkit::*;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Barrier;
@@ -18,7 +18,7 @@ use std::sync::Barrier;
 const THREADS: usize = 8;
 const STEPS: usize = 3000;
 
-fn description() -> &'static fmi2::description::ModelDescription {
+fn description() -> &'static fmi_core::description::ModelDescription {
     <converting_span::ConvertingSpan as Model>::description()
 }
 

@@ -7,10 +7,10 @@
 //! (bit for bit), except where noted.
 
 use converting_span::ConvertingSpan;
-use fmi2_harness::*;
+use fmi_testkit::*;
 use std::path::PathBuf;
 
-type Fmu = fmi2_harness::Fmu<ConvertingSpan>;
+type Fmu = fmi_testkit::Fmu<ConvertingSpan>;
 
 fn profile(tag: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("converting-span-profiles-{}", std::process::id()));

@@ -129,7 +129,7 @@ def binaries(tmp_path_factory):
 def descriptions():
     """{model: (guid, {name: (vr, type element)})}."""
     out = {}
-    for model, path in (("ConvertingSpan", ROOT / "modelDescription.xml"), ("Roller", ROOT / "fmu/roller/modelDescription.xml")):
+    for model, path in (("ConvertingSpan", ROOT / "modelDescription.xml"), ("Roller", ROOT / "models/roller/modelDescription.xml")):
         root = ET.parse(path).getroot()
         variables = {v.get("name"): v for v in root.iter("ScalarVariable")}
         out[model] = (root.get("guid"), variables)

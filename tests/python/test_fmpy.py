@@ -80,7 +80,7 @@ def test_the_library_exports_the_44_fmi2_and_75_fmi3_functions_and_nothing_else(
     out = subprocess.run([nm, "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
     symbols = [line.split()[-1] for line in out.splitlines() if line.strip()]
     types = {line.split()[-1]: line.split()[-2] for line in out.splitlines() if line.strip()}
-    # The same library serves the FMI 3.0 FMU (crates/fmi3): its functions are exported too.
+    # The same library serves the FMI 3.0 FMU (fmi/abi): its functions are exported too.
     expected = sorted(set(FMI2_FUNCTIONS) | FMI3_FUNCTIONS)
     assert sorted(symbols) == expected, (
         f"extra: {sorted(set(symbols) - set(expected))}, missing: {sorted(set(expected) - set(symbols))}"

@@ -1,0 +1,93 @@
+//! FMI 2.0's C types and logger, the bodies of its 44 functions (`calls`),
+//! and the one list of their C signatures (`exports`, [`export_fmi2!`](crate::export_fmi2)).
+
+#[doc(hidden)]
+pub mod calls;
+mod exports;
+
+use crate::raw::c_text;
+use fmi_core::logging::Log;
+use fmi_core::Status;
+use std::ffi::{c_char, c_int, c_void, CString};
+
+pub type fmi2Component = *mut c_void;
+pub type fmi2ComponentEnvironment = *mut c_void;
+pub type fmi2FMUstate = *mut c_void;
+pub type fmi2ValueReference = u32;
+pub type fmi2Real = f64;
+pub type fmi2Integer = c_int;
+pub type fmi2Boolean = c_int;
+pub type fmi2String = *const c_char;
+pub type fmi2Byte = c_char;
+/// `fmi2Status`, `fmi2Type` and `fmi2StatusKind` are C enums: taken as plain
+/// integers so that an out-of-range value from the importer is not UB.
+pub type fmi2Status = c_int;
+pub type fmi2Type = c_int;
+pub type fmi2StatusKind = c_int;
+
+pub const fmi2ModelExchange: fmi2Type = 0;
+pub const fmi2CoSimulation: fmi2Type = 1;
+
+/// The logger is variadic in C; this FMU formats its messages itself and
+/// passes none of the variadic arguments.
+pub type fmi2CallbackLogger = unsafe extern "C" fn(
+    fmi2ComponentEnvironment,
+    fmi2String,
+    fmi2Status,
+    fmi2String,
+    fmi2String,
+    ...
+);
+pub type fmi2CallbackAllocateMemory = unsafe extern "C" fn(usize, usize) -> *mut c_void;
+pub type fmi2CallbackFreeMemory = unsafe extern "C" fn(*mut c_void);
+pub type fmi2StepFinished = unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2Status);
+
+#[repr(C)]
+pub struct fmi2CallbackFunctions {
+    pub logger: Option<fmi2CallbackLogger>,
+    pub allocateMemory: Option<fmi2CallbackAllocateMemory>,
+    pub freeMemory: Option<fmi2CallbackFreeMemory>,
+    pub stepFinished: Option<fmi2StepFinished>,
+    pub componentEnvironment: fmi2ComponentEnvironment,
+}
+
+#[repr(C)]
+#[derive(Default)]
+pub struct fmi2EventInfo {
+    pub newDiscreteStatesNeeded: fmi2Boolean,
+    pub terminateSimulation: fmi2Boolean,
+    pub nominalsOfContinuousStatesChanged: fmi2Boolean,
+    pub valuesOfContinuousStatesChanged: fmi2Boolean,
+    pub nextEventTimeDefined: fmi2Boolean,
+    pub nextEventTime: fmi2Real,
+}
+
+/// The importer's logger, copied out of `fmi2CallbackFunctions`.
+pub struct Logger {
+    callback: Option<fmi2CallbackLogger>,
+    environment: fmi2ComponentEnvironment,
+    instance_name: CString,
+}
+
+impl Logger {
+    fn new(functions: &fmi2CallbackFunctions, instance_name: &str) -> Self {
+        Logger {
+            callback: functions.logger,
+            environment: functions.componentEnvironment,
+            instance_name: c_text(instance_name),
+        }
+    }
+}
+
+impl Log for Logger {
+    fn log(&self, status: Status, category: &str, message: &str) {
+        let Some(callback) = self.callback else { return };
+        // Loggers treat the message as a printf format: escape '%'.
+        let message = c_text(&message.replace('%', "%%"));
+        let category = c_text(category);
+        // SAFETY: the importer handed us this callback for the instance's lifetime.
+        unsafe {
+            callback(self.environment, self.instance_name.as_ptr(), status as fmi2Status, category.as_ptr(), message.as_ptr())
+        }
+    }
+}

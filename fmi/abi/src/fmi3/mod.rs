@@ -1,0 +1,71 @@
+//! FMI 3.0's C types and logger, the bodies of its functions (`calls`), and
+//! the one list of their C signatures (`exports`, [`export_fmi3!`](crate::export_fmi3)).
+
+#[doc(hidden)]
+pub mod calls;
+mod exports;
+
+use crate::raw::c_text;
+use fmi_core::logging::Log;
+use fmi_core::Status;
+use std::ffi::{c_char, c_int, c_void};
+
+pub type fmi3Instance = *mut c_void;
+pub type fmi3InstanceEnvironment = *mut c_void;
+pub type fmi3FMUState = *mut c_void;
+pub type fmi3ValueReference = u32;
+pub type fmi3Float32 = f32;
+pub type fmi3Float64 = f64;
+pub type fmi3Int8 = i8;
+pub type fmi3UInt8 = u8;
+pub type fmi3Int16 = i16;
+pub type fmi3UInt16 = u16;
+pub type fmi3Int32 = i32;
+pub type fmi3UInt32 = u32;
+pub type fmi3Int64 = i64;
+pub type fmi3UInt64 = u64;
+/// C `bool`: taken as a byte, so that a value other than 0 or 1 from the importer is an error, not UB.
+pub type fmi3Boolean = u8;
+pub type fmi3Char = c_char;
+pub type fmi3String = *const c_char;
+pub type fmi3Byte = u8;
+pub type fmi3Binary = *const u8;
+pub type fmi3Clock = u8;
+/// `fmi3Status`, `fmi3DependencyKind` and `fmi3IntervalQualifier` are C
+/// enums: taken as plain integers so that an out-of-range value is not UB.
+pub type fmi3Status = c_int;
+pub type fmi3DependencyKind = c_int;
+pub type fmi3IntervalQualifier = c_int;
+
+
+pub type fmi3LogMessageCallback =
+    unsafe extern "C" fn(fmi3InstanceEnvironment, fmi3Status, fmi3String, fmi3String);
+pub type fmi3IntermediateUpdateCallback = unsafe extern "C" fn(
+    fmi3InstanceEnvironment,
+    fmi3Float64,
+    fmi3Boolean,
+    fmi3Boolean,
+    fmi3Boolean,
+    fmi3Boolean,
+    *mut fmi3Boolean,
+    *mut fmi3Float64,
+);
+pub type fmi3ClockUpdateCallback = unsafe extern "C" fn(fmi3InstanceEnvironment);
+pub type fmi3LockPreemptionCallback = unsafe extern "C" fn();
+pub type fmi3UnlockPreemptionCallback = unsafe extern "C" fn();
+
+/// The importer's logger and environment, from the instantiate call.
+pub struct Logger {
+    callback: Option<fmi3LogMessageCallback>,
+    environment: fmi3InstanceEnvironment,
+}
+
+impl Log for Logger {
+    fn log(&self, status: Status, category: &str, message: &str) {
+        let Some(callback) = self.callback else { return };
+        // FMI 3.0's logger is not variadic: the message goes as it is.
+        let (category, message) = (c_text(category), c_text(message));
+        // SAFETY: the importer handed us this callback for the instance's lifetime.
+        unsafe { callback(self.environment, status as fmi3Status, category.as_ptr(), message.as_ptr()) }
+    }
+}

@@ -1,0 +1,23 @@
+//! The one C boundary of the project's FMUs, and its only unsafe code: the
+//! FMI 2.0 and FMI 3.0 C APIs over [`fmi_core`], for any model. Knows C, not
+//! the model.
+//!
+//! * `handle` — what an instance pointer points to, and the one entry path
+//!   every export goes through: tag and pointer check, `catch_unwind`,
+//!   poisoning, the state machine, a status plus one log line;
+//! * `raw` — the importer's pointers made into slices, references and texts;
+//! * `state_store` — the FMU states an instance has handed out;
+//! * `library` — the library's own reference to itself while instances live;
+//! * `fmi2`, `fmi3` — each standard's C types, the bodies of its functions,
+//!   and the one list of its C signatures (`export_fmi2!`, `export_fmi3!`).
+
+#![allow(non_camel_case_types, non_snake_case, non_upper_case_globals, clippy::missing_safety_doc)]
+
+pub mod fmi2;
+pub mod fmi3;
+mod handle;
+mod library;
+pub mod raw;
+mod state_store;
+
+pub use fmi_core;

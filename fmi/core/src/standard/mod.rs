@@ -1,0 +1,48 @@
+//! The two standards an instance can serve, each with its own functions, the
+//! states each function is allowed in, and its own words for the phases: the
+//! instance checks and reports in the words of the standard it was
+//! instantiated through.
+
+pub mod fmi2;
+pub mod fmi3;
+pub mod fmi3_types;
+
+use crate::phase::Phase;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Standard {
+    Fmi2,
+    Fmi3,
+}
+
+impl Standard {
+    /// A phase as a message names it: `the state "step complete"` (FMI 2.0), `Step Mode` (FMI 3.0).
+    pub fn state(self, phase: Phase) -> String {
+        match self {
+            Standard::Fmi2 => format!("the state \"{}\"", phase.name()),
+            Standard::Fmi3 => fmi3::state_name(phase).to_string(),
+        }
+    }
+}
+
+/// A function of one standard that takes an instance.
+pub trait Call: Copy + PartialEq + std::fmt::Debug + 'static {
+    const STANDARD: Standard;
+
+    /// The C name, for log messages.
+    fn name(self) -> &'static str;
+
+    /// The whole check of the state machine, as cheap as one mask test:
+    /// one of this interface's functions, and allowed in this phase.
+    fn is_allowed(self, phase: Phase, model_exchange: bool) -> bool;
+
+    /// Why the call is refused in this phase, if it is.
+    fn refusal(self, phase: Phase, model_exchange: bool) -> Option<String>;
+
+    /// After a caught panic only these calls are accepted: the instance may
+    /// be half updated (the reset rebuilds it and clears the poison).
+    fn is_allowed_when_poisoned(self) -> bool;
+
+    /// The call that rebuilds the instance from its start values.
+    fn is_reset(self) -> bool;
+}

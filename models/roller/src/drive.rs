@@ -1,0 +1,81 @@
+//! The roller's profile: which drive it has and the tables of time it
+//! follows, read from the JSON file `profile` names (crate `profiles`).
+
+use crate::description::{Real, DESCRIPTION};
+use crate::physics::Parameters;
+use fmi_core::{FmiError, FmiResult, Resources};
+use profiles::{Profile, Table, Value};
+use std::sync::Arc;
+
+/// The table keys a roller's profile may have.
+pub const TABLES: [&str; 5] = ["speed", "torque", "tension", "strain", "load"];
+
+/// How the roller is driven: at most one of the profile's drive tables.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Drive {
+    /// No drive table: tau_m only (0 for an idler).
+    Torque,
+    /// The torque table, plus tau_m.
+    TorqueTable,
+    /// A tension drive: -/+ r*T (unwinder/winder), plus tau_m.
+    Tension,
+    /// The surface speed follows the table exactly.
+    Speed,
+}
+
+/// A checked profile and its text (kept for FMU states, which restore
+/// without the file).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Loaded {
+    pub profile: Arc<Profile>,
+    pub text: Arc<str>,
+    pub drive: Drive,
+}
+
+impl Loaded {
+    pub fn table(&self, key: &str) -> Option<&Table> {
+        self.profile.table(key)
+    }
+}
+
+pub fn load(p: &Parameters, resources: &Resources) -> FmiResult<Option<Loaded>> {
+    let Some(path) = profiles::locate(&p.profile, resources.folder_or_why(), resources.instance()).map_err(FmiError::error)? else { return Ok(None) };
+    let text = Profile::read_text(&path).map_err(FmiError::error)?;
+    parse(p, &text).map(Some).map_err(|e| FmiError::error(format!("profile {}: {e}", path.display())))
+}
+
+/// Parses and checks a profile against the roller's parameters.
+pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
+    let profile = Profile::parse(text, &TABLES)?;
+    let drives: Vec<&str> = ["speed", "torque", "tension"].into_iter().filter(|k| profile.table(k).is_some()).collect();
+    let drive = match drives.as_slice() {
+        [] => Drive::Torque,
+        ["speed"] => Drive::Speed,
+        ["torque"] => Drive::TorqueTable,
+        ["tension"] => Drive::Tension,
+        _ => return Err(format!("{} tables: a roller has at most one drive (speed, torque or tension)", drives.join(" and "))),
+    };
+    if drive == Drive::Tension && p.roll_sign() == 0.0 {
+        return Err(format!("a tension drive needs roll = 1 (unwinder) or 2 (winder), roll is {}", p.roll));
+    }
+    if profile.table("load").is_some() && !p.carriage {
+        return Err("a load table needs carriage = true".into());
+    }
+    for e in &profile.events {
+        for (name, value) in &e.changes {
+            let var = match name.as_str() {
+                "J" => Real::J,
+                "R" => Real::R,
+                "b" => Real::b,
+                _ => return Err(format!("set at {} s: {name:?} cannot change during a run (J, R and b can)", e.time)),
+            };
+            let range = &DESCRIPTION.variable(var.vr()).expect("J, R, b are described").range;
+            match value {
+                Value::Number(x) if range.contains(*x) => {}
+                Value::Number(x) => return Err(format!("set at {} s: {name} = {x} is outside {range}", e.time)),
+                Value::Text(t) => return Err(format!("set at {} s: {name} = {t:?} must be a number", e.time)),
+            }
+        }
+    }
+    Ok(Loaded { profile: Arc::new(profile), text: text.into(), drive })
+}

@@ -1,0 +1,454 @@
+//! Roller: an FMU (FMI 2.0 and 3.0) of every part of a web line that is not
+//! a span — idler, driven roller, source, sink, unwinder, winder, dancer —
+//! built like the span: `fmi-core` and `fmi-abi` do the standard and the C
+//! API, this crate only the model.
+//!
+//! * `physics` — the equations and their exact steps;
+//! * `drive` — the profile: the drive and the tables of time it follows;
+//! * `jacobian` — the partial derivatives of the outputs and state derivatives;
+//! * `description` — the interface generated from modelDescription.xml;
+//! * this file — the variables bound to their fields, and the FMI model hooks.
+
+#![deny(unsafe_code)]
+
+pub mod description;
+pub mod drive;
+pub mod jacobian;
+pub mod physics;
+
+use description::{Boolean, Integer, Real, Text, DESCRIPTION};
+use drive::{Drive, Loaded};
+use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
+use physics::{Inputs, Parameters, Roll};
+use profiles::Value;
+use solver::CompensatedSum;
+
+fmi_abi::export_fmi2!(crate::Roller);
+// The FMI 3.0 API from the same library (out/fmi3/Roller.fmu ships it too).
+fmi_abi::export_fmi3!(crate::Roller);
+
+fmi_core::bind_variables! {
+    model: Roller,
+    inputs: Inputs,
+    real {
+        J: param(params.inertia),
+        R: param(params.radius),
+        b: param(params.damping),
+        v_start: param(params.speed_start),
+        wound_thickness: param(params.wound_thickness),
+        wound_density: param(params.wound_density),
+        wound_width: param(params.wound_width),
+        carriage_m: param(params.carriage_mass),
+        carriage_d: param(params.carriage_damping),
+        carriage_k: param(params.carriage_stiffness),
+        carriage_y_start: param(params.carriage_start),
+        web_a_F: input(force_a),
+        web_b_F: input(force_b),
+        web_a_eps: input(strain_a),
+        tau_m: input(torque),
+        F_load: input(load),
+        web_a_v: computed(surface_speed()),
+        web_b_v: computed(surface_speed()),
+        web_b_eps: computed(strain_leaving()),
+        omega: computed(omega()),
+        r: computed(radius()),
+        y: computed(carriage[0]),
+        y_dot: computed(carriage[1]),
+        tau: computed(drive_torque()),
+        web_a_x: computed(contact_a_x()),
+        web_a_y: computed(contact_y()),
+        web_b_x: computed(contact_b_x()),
+        web_b_y: computed(contact_y()),
+        der_omega: computed(derivatives()[0]),
+        der_r: computed(derivatives()[1]),
+        der_y: computed(derivatives()[2]),
+        der_y_dot: computed(derivatives()[3]),
+    }
+    integer {
+        roll: param(params.roll),
+    }
+    boolean {
+        carriage: param(params.carriage),
+    }
+    string {
+        profile: param(params.profile),
+    }
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Roller {
+    pub params: Parameters,
+    pub inputs: Inputs,
+    /// Angular speed, rad/s, a compensated sum: a million tiny steps do not drift.
+    omega: CompensatedSum,
+    roll: Roll,
+    /// Carriage travel y (down positive) and speed.
+    carriage: [f64; 2],
+    /// The time now, s: profiles are tables of it.
+    time: f64,
+    /// The profile's next `set` event not yet applied.
+    next_event: usize,
+    profile: Option<Loaded>,
+}
+
+impl Roller {
+    pub fn omega(&self) -> f64 {
+        self.omega.value()
+    }
+
+    pub fn radius(&self) -> f64 {
+        self.roll.radius
+    }
+
+    fn drive(&self) -> Drive {
+        self.profile.as_ref().map_or(Drive::Torque, |l| l.drive)
+    }
+
+    fn table(&self, key: &str) -> Option<&profiles::Table> {
+        self.profile.as_ref().and_then(|l| l.table(key))
+    }
+
+    /// v [R2]; a speed drive's profile at the time now.
+    pub fn surface_speed(&self) -> f64 {
+        match (self.drive(), self.table("speed")) {
+            (Drive::Speed, Some(t)) => t.value(self.time),
+            _ => physics::surface_speed(self.roll.radius, self.omega.value()),
+        }
+    }
+
+    /// The strain of the leaving web: the profile's, else the arriving one's.
+    pub fn strain_leaving(&self) -> f64 {
+        self.table("strain").map_or(self.inputs.strain_a, |t| t.value(self.time))
+    }
+
+    /// The drive's torque at time t, and its rate (a speed drive: 0, see
+    /// `drive_torque`). The profile has at most one drive table.
+    fn torque_at(&self, t: f64) -> (f64, f64) {
+        let tau_m = self.inputs.torque;
+        if let Some(table) = self.table("torque") {
+            (tau_m + table.value(t), table.slope(t))
+        } else if let Some(table) = self.table("tension") {
+            let s = self.params.roll_sign() * self.roll.radius;
+            (tau_m + s * table.value(t), s * table.slope(t))
+        } else {
+            (tau_m, 0.0)
+        }
+    }
+
+    /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
+    pub fn drive_torque(&self) -> f64 {
+        match (self.drive(), self.table("speed")) {
+            (Drive::Speed, Some(t)) => {
+                let (j, r, omega) = (self.roll.inertia, self.roll.radius, self.omega.value());
+                j * t.slope(self.time) / r + self.params.damping * omega - physics::web_torque(r, &self.inputs)
+            }
+            _ => self.torque_at(self.time).0,
+        }
+    }
+
+    /// The carriage's force (load minus the spans' pull) at t, and its rate.
+    fn carriage_force(&self, t: f64) -> (f64, f64) {
+        let u = &self.inputs;
+        let (load, rate) = self.table("load").map_or((0.0, 0.0), |l| (l.value(t), l.slope(t)));
+        (u.load + load - u.force_a - u.force_b, rate)
+    }
+
+    fn contact_a_x(&self) -> f64 {
+        0.0
+    }
+
+    fn contact_b_x(&self) -> f64 {
+        2.0 * self.roll.radius
+    }
+
+    /// Heights from the dancer's start position, up positive: 0 at the start,
+    /// so a master that starts its inputs at 0 (FMPy) still sees a valid span.
+    fn contact_y(&self) -> f64 {
+        self.params.carriage_start - self.carriage[0]
+    }
+
+    /// d/dt of (omega, r, y, y') now [R1]–[R4], for Model Exchange.
+    pub fn derivatives(&self) -> [f64; 4] {
+        let p = &self.params;
+        let (r, omega) = (self.roll.radius, self.omega.value());
+        let v = self.surface_speed();
+        let (radius_rate, inertia_rate) =
+            if p.winding() { (self.roll.radius_rate(p, v), self.roll.inertia_rate(p, v)) } else { (0.0, 0.0) };
+        let omega_rate = match (self.drive(), self.table("speed")) {
+            (Drive::Speed, Some(t)) => t.slope(self.time) / r - v * radius_rate / (r * r),
+            _ => {
+                let torque = physics::web_torque(r, &self.inputs) + self.torque_at(self.time).0;
+                (torque - p.damping * omega - inertia_rate * omega) / self.roll.inertia
+            }
+        };
+        let carriage = if p.carriage {
+            [self.carriage[1], physics::carriage_acceleration(p, self.carriage, self.carriage_force(self.time).0)]
+        } else {
+            [0.0, 0.0]
+        };
+        [omega_rate, radius_rate, carriage[0], carriage[1]]
+    }
+
+    /// Applies the `set` events due at t; whether one changed the roll.
+    fn apply_due(&mut self, t: f64) -> bool {
+        let Some(loaded) = self.profile.clone() else { return false };
+        let mut rolled = false;
+        while let Some(event) = loaded.profile.events.get(self.next_event).filter(|e| profiles::due(e.time, t)) {
+            let speed = physics::surface_speed(self.roll.radius, self.omega.value());
+            let mut new_roll = false;
+            for (name, value) in &event.changes {
+                let Value::Number(x) = *value else { continue }; // checked when the profile was read
+                match name.as_str() {
+                    "J" => (self.params.inertia, new_roll) = (x, true),
+                    "R" => (self.params.radius, new_roll) = (x, true),
+                    _ => self.params.damping = x,
+                }
+            }
+            if new_roll {
+                // A new roll at the same web speed.
+                self.roll = Roll::new(self.params.radius, self.params.inertia);
+                self.omega = CompensatedSum::from_parts(speed / self.roll.radius, 0.0);
+                rolled = true;
+            }
+            self.next_event += 1;
+        }
+        rolled
+    }
+
+    /// One piece of a step, [t, t+h], over which every table is linear.
+    fn piece(&mut self, t: f64, h: f64) -> FmiResult {
+        let p = &self.params;
+        let r = self.roll.radius;
+        let speed_table = self.table("speed").filter(|_| self.drive() == Drive::Speed);
+        let (omega, travel) = match &speed_table {
+            Some(table) => {
+                let (v0, slope) = (table.value(t), table.slope(t));
+                let v1 = v0 + slope * h; // the left limit at a jump that ends the piece
+                (CompensatedSum::from_parts(v1 / r, 0.0), 0.5 * (v0 + v1) * h)
+            }
+            None => {
+                let (tau0, tau1) = self.torque_at(t);
+                let next = physics::rotation_step(p, &self.roll, &self.inputs, self.omega, tau0, tau1, h);
+                (next, 0.5 * r * (self.omega.value() + next.value()) * h)
+            }
+        };
+        let (mut omega, mut roll) = (omega, self.roll);
+        if p.winding() {
+            let radius = physics::wound_radius(p, r, travel).ok_or_else(|| {
+                FmiError::discard(format!("the roll ran empty: its radius {r} m would fall to 0 after {travel} m of web; check R and wound.thickness"))
+            })?;
+            let inertia = roll.inertia_at(p, radius);
+            omega = match &speed_table {
+                Some(_) => CompensatedSum::from_parts(omega.value() * r / radius, 0.0),
+                // [R1] keeps J*omega across the change of J.
+                None => CompensatedSum::from_parts(omega.value() * roll.inertia / inertia, 0.0),
+            };
+            roll = Roll { radius, inertia, ..roll };
+        }
+        let carriage = if p.carriage {
+            let (g0, g1) = self.carriage_force(t);
+            physics::carriage_step(p, self.carriage, g0, g1, h)
+        } else {
+            self.carriage
+        };
+        if !(omega.value().is_finite() && physics::surface_speed(roll.radius, omega.value()).is_finite() && carriage.iter().all(|x| x.is_finite())) {
+            return Err(FmiError::discard(format!(
+                "the roller would reach omega = {} rad/s, carriage (y, y') = ({}, {}) (J = {} kg.m2, web torque {} N.m): \
+                 take a shorter step or check the inputs",
+                omega.value(),
+                carriage[0],
+                carriage[1],
+                roll.inertia,
+                physics::web_torque(r, &self.inputs)
+            )));
+        }
+        (self.omega, self.roll, self.carriage) = (omega, roll, carriage);
+        Ok(())
+    }
+
+    /// A communication step [time, time+h], split where a table kinks or jumps
+    /// and where a `set` event falls; one at the end (within the profiles'
+    /// tolerance) applies at the start of the next step.
+    fn advance(&mut self, h: f64) -> FmiResult {
+        let end = self.time + h;
+        let last = end - profiles::tolerance(end);
+        let mut t = self.time;
+        loop {
+            self.apply_due(t);
+            let stop = self.profile.as_ref().and_then(|l| l.profile.next_break(t)).filter(|&b| b < last).unwrap_or(end);
+            if stop > t {
+                self.piece(t, stop - t)?;
+            }
+            t = stop;
+            if t >= end {
+                break;
+            }
+        }
+        self.time = end;
+        Ok(())
+    }
+
+    fn start(&mut self, time: f64) {
+        let p = &self.params;
+        self.roll = Roll::new(p.radius, p.inertia);
+        let speed = match (self.drive(), self.table("speed")) {
+            (Drive::Speed, Some(t)) => t.value(time),
+            _ => p.speed_start,
+        };
+        self.omega = CompensatedSum::from_parts(speed / p.radius, 0.0);
+        self.carriage = [p.carriage_start, 0.0];
+        self.time = time;
+        self.next_event = 0;
+    }
+}
+
+impl Model for Roller {
+    fn description() -> &'static fmi_core::description::ModelDescription {
+        &DESCRIPTION
+    }
+
+    fn save_state(&self, out: &mut StateWriter) {
+        out.f64(self.omega.hi());
+        out.f64(self.omega.lo());
+        let r = &self.roll;
+        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.time] {
+            out.f64(x);
+        }
+        out.i32(self.next_event as i32);
+        out.str(self.profile.as_ref().map_or("", |l| &l.text));
+    }
+
+    fn load_state(&mut self, r: &mut StateReader) -> FmiResult {
+        self.omega = CompensatedSum::from_parts(r.finite("omega")?, r.finite("omega carry")?);
+        self.roll = Roll {
+            radius: r.finite("r")?,
+            inertia: r.finite("J")?,
+            reference_radius: r.finite("reference r")?,
+            reference_inertia: r.finite("reference J")?,
+        };
+        self.carriage = [r.finite("y")?, r.finite("y_dot")?];
+        self.time = r.finite("time")?;
+        let next = r.i32("next event")?;
+        let text = r.string("profile")?;
+        self.profile = match text {
+            "" => None,
+            text => Some(drive::parse(&self.params, text).map_err(|e| FmiError::error(format!("profile in the FMU state: {e}")))?),
+        };
+        let events = self.profile.as_ref().map_or(0, |l| l.profile.events.len());
+        if !(0..=events as i64).contains(&(next as i64)) || !(self.roll.radius > 0.0 && self.roll.inertia > 0.0) {
+            return Err(FmiError::error(format!("the FMU state's roll (r = {}, J = {}) or next event ({next} of {events}) is not valid", self.roll.radius, self.roll.inertia)));
+        }
+        self.next_event = next as usize;
+        Ok(())
+    }
+
+    /// `canInterpolateInputs="false"`: the layer refuses input derivatives
+    /// before they reach the model.
+    fn set_input_derivative(&mut self, vr: u32, _value: f64) -> FmiResult {
+        Err(FmiError::error(format!(
+            "value reference {vr}: the roller holds its inputs over a step (canInterpolateInputs = false)"
+        )))
+    }
+
+    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult {
+        let loaded = drive::load(&self.params, resources)?;
+        self.profile = loaded;
+        self.start(experiment.start_time);
+        Ok(())
+    }
+
+    fn provisional_state(&mut self) {
+        self.start(0.0);
+    }
+
+    fn set_time(&mut self, time: f64) {
+        self.time = time;
+    }
+
+    fn do_step(&mut self, h: f64) -> FmiResult {
+        // Work on a copy (no heap: the profile is shared): a failed step changes nothing.
+        let mut next = self.clone();
+        next.advance(h)?;
+        *self = next;
+        Ok(())
+    }
+
+    // Model Exchange: the importer integrates (omega, r, y, y').
+
+    fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
+        x.copy_from_slice(&[self.omega.value(), self.roll.radius, self.carriage[0], self.carriage[1]]);
+        Ok(())
+    }
+
+    fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
+        if !(x[1] > 0.0) {
+            return Err(FmiError::discard(format!("r = {} m is not a radius (it must be > 0)", x[1])));
+        }
+        let inertia = if self.params.winding() { self.roll.inertia_at(&self.params, x[1]) } else { self.roll.inertia };
+        self.omega = CompensatedSum::from_parts(x[0], 0.0);
+        self.roll = Roll { radius: x[1], inertia, ..self.roll };
+        self.carriage = [x[2], x[3]];
+        Ok(())
+    }
+
+    fn get_derivatives(&self, dx: &mut [f64]) -> FmiResult {
+        dx.copy_from_slice(&self.derivatives());
+        Ok(())
+    }
+
+    /// The initial state does not depend on the inputs, so every phase has
+    /// the same partial derivatives (the layer allows the states as knowns only in ME).
+    fn partial_derivative(&self, unknown: u32, known: u32, _of: Jacobian) -> FmiResult<f64> {
+        let real = |vr| Real::from_vr(vr).ok_or_else(|| fmi_core::model::unknown_vr(vr));
+        let mut d = jacobian::Direction::default();
+        match real(known)? {
+            Real::omega => d.state[0] = 1.0,
+            Real::r => d.state[1] = 1.0,
+            Real::y => d.state[2] = 1.0,
+            Real::y_dot => d.state[3] = 1.0,
+            k => *Self::input_field(&mut d.u, k).ok_or_else(|| FmiError::error(format!("{} is not a known", k.name())))? = 1.0,
+        }
+        let t = self.tangents(&d);
+        // The same outputs as the bindings above.
+        Ok(match real(unknown)? {
+            Real::web_a_v | Real::web_b_v => t.speed,
+            Real::web_b_eps => t.strain_leaving,
+            Real::omega => d.state[0],
+            Real::r => d.state[1],
+            Real::y => d.state[2],
+            Real::y_dot => d.state[3],
+            Real::tau => t.torque,
+            Real::web_a_x => 0.0,
+            Real::web_a_y | Real::web_b_y => -d.state[2],
+            Real::web_b_x => 2.0 * d.state[1],
+            Real::der_omega => t.derivatives[0],
+            Real::der_r => t.derivatives[1],
+            Real::der_y => t.derivatives[2],
+            Real::der_y_dot => t.derivatives[3],
+            other => return Err(FmiError::error(format!("{} is not an unknown", other.name()))),
+        })
+    }
+
+    fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
+        nominals.copy_from_slice(&[1.0, self.params.radius, 1.0, 1.0]);
+        Ok(())
+    }
+
+    fn get_event_indicators(&self, _z: &mut [f64]) -> FmiResult {
+        Ok(())
+    }
+
+    /// Time events: the profile's entries (a jump, or a kink the integrator
+    /// should not step over) and its `set` events.
+    fn event_update(&mut self) -> EventUpdate {
+        let rolled = self.apply_due(self.time);
+        let speed_drive = self.drive() == Drive::Speed;
+        if speed_drive {
+            self.omega = CompensatedSum::from_parts(self.surface_speed() / self.roll.radius, 0.0);
+        }
+        EventUpdate {
+            next_event_time: self.profile.as_ref().and_then(|l| l.profile.next_break(self.time)),
+            states_changed: rolled || speed_drive,
+        }
+    }
+}

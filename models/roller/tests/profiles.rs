@@ -1,0 +1,244 @@
+//! The Roller's drives, rolls and carriage, each against an exact solution,
+//! and its profile files (`cargo test -p roller --test profiles`).
+//!
+//! Tolerances: every piece of a step is a closed form, so agreement with an
+//! independent evaluation is a few ulps per step; 1e-12 relative after
+//! hundreds of steps leaves room for their accumulation and no more.
+
+use fmi_core::snapshot::Snapshot;
+use fmi_core::phase::Phase;
+use fmi_core::{Experiment, Model, Resources, Variables};
+use roller::description::{Boolean, Integer, Real, Text, DESCRIPTION};
+use roller::Roller;
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+fn profile_file(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("roller-profiles-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A roller with the given parameters and a profile (text, or none).
+fn roller(reals: &[(Real, f64)], profile: Option<&str>, setup: impl FnOnce(&mut Roller)) -> Result<Roller, String> {
+    let mut m = Roller::at_start_values();
+    for (var, x) in reals {
+        m.set_real(var.vr(), *x).unwrap();
+    }
+    setup(&mut m);
+    if let Some(text) = profile {
+        let path = profile_file(&format!("{:x}.json", text.len() * 7919 + text.bytes().map(|b| b as usize).sum::<usize>()), text);
+        m.set_string(Text::profile.vr(), path.to_str().unwrap()).unwrap();
+    }
+    m.initialize(&Experiment::default(), &Resources::default()).map_err(|e| e.message)?;
+    Ok(m)
+}
+
+fn get(m: &Roller, var: Real) -> f64 {
+    m.get_real(var.vr()).unwrap()
+}
+
+fn step_to(m: &mut Roller, t: &mut f64, end: f64, h: f64) {
+    while *t < end - 1e-12 {
+        let hh = h.min(end - *t);
+        m.set_time(*t);
+        m.do_step(hh).unwrap();
+        *t += hh;
+    }
+}
+
+#[test]
+fn a_speed_drive_follows_its_table_through_kinks_and_jumps() {
+    let text = r#"{"speed": [[0, 1], [0.25, 2], [0.5, 2], [0.5, 3]]}"#;
+    let mut m = roller(&[(Real::R, 0.1), (Real::J, 0.2), (Real::b, 0.1)], Some(text), |_| {}).unwrap();
+    assert_eq!(get(&m, Real::web_a_v), 1.0);
+    let mut t = 0.0;
+    // Steps of 0.03 s straddle the kink at 0.25 s and the jump at 0.5 s.
+    step_to(&mut m, &mut t, 0.24, 0.03);
+    assert!((get(&m, Real::web_b_v) - (1.0 + 4.0 * 0.24)).abs() < 1e-14);
+    step_to(&mut m, &mut t, 0.51, 0.03);
+    assert_eq!(get(&m, Real::web_a_v), 3.0);
+    // The torque that holds the speed: J*dv/dt/R + b*omega - R*(F_b - F_a).
+    m.set_real(Real::web_a_F.vr(), 50.0).unwrap();
+    assert!((get(&m, Real::tau) - (0.1 * 30.0 + 0.1 * 50.0)).abs() < 1e-12, "{}", get(&m, Real::tau));
+}
+
+#[test]
+fn a_torque_ramp_is_integrated_exactly_across_steps_and_breakpoints() {
+    // J w' = tau(t) - b w, tau a ramp from 0 to 2 N.m over [0.1, 0.6] s, then held.
+    let (j, b) = (0.5, 0.2);
+    let text = r#"{"torque": [[0.1, 0], [0.6, 2]]}"#;
+    let mut m = roller(&[(Real::J, j), (Real::b, b), (Real::R, 1.0), (Real::v_start, 3.0)], Some(text), |_| {}).unwrap();
+    let mut t = 0.0;
+    step_to(&mut m, &mut t, 1.3, 0.07);
+    // Independent: integrate piecewise in closed form.
+    let k = b / j;
+    let free = |w0: f64, h: f64| w0 * (-k * h).exp();
+    let ramp = |w0: f64, a0: f64, a1: f64, h: f64| {
+        // w' = a0 + a1 s - k w
+        let c = w0 - a0 / k + a1 / (k * k);
+        a0 / k + a1 * (h / k - 1.0 / (k * k)) + c * (-k * h).exp()
+    };
+    let w = free(3.0, 0.1);
+    let w = ramp(w, 0.0, 4.0 / j, 0.5);
+    let w = ramp(w, 2.0 / j, 0.0, 0.7);
+    assert!((m.omega() - w).abs() < 1e-12 * w, "{} {w}", m.omega());
+}
+
+#[test]
+fn an_unwinder_at_constant_speed_loses_radius_as_thickness_times_travel_over_pi() {
+    let (r0, h_w, v, rho, w) = (0.3, 50e-6, 4.0, 1390.0, 1.2);
+    let text = r#"{"speed": [[0, 4]]}"#;
+    let mut m = roller(
+        &[(Real::R, r0), (Real::J, 6.0), (Real::wound_thickness, h_w), (Real::wound_density, rho), (Real::wound_width, w)],
+        Some(text),
+        |m| m.set_integer(Integer::roll.vr(), 1).unwrap(),
+    )
+    .unwrap();
+    let mut t = 0.0;
+    step_to(&mut m, &mut t, 10.0, 0.01);
+    let r = (r0 * r0 - h_w * v * 10.0 / PI).sqrt();
+    assert!((get(&m, Real::r) - r).abs() < 1e-14, "{} {r}", get(&m, Real::r));
+    assert!((m.omega() - v / r).abs() < 1e-12 * v / r);
+}
+
+#[test]
+fn a_free_winder_keeps_its_angular_momentum_as_its_inertia_grows() {
+    // No torque, no damping: d(J*omega)/dt = 0, while the radius grows.
+    let (r0, j0) = (0.1, 0.05);
+    let mut m = roller(
+        &[(Real::R, r0), (Real::J, j0), (Real::v_start, 5.0), (Real::wound_thickness, 1e-3), (Real::wound_density, 1000.0)],
+        None,
+        |m| m.set_integer(Integer::roll.vr(), 2).unwrap(),
+    )
+    .unwrap();
+    let momentum = j0 * 5.0 / r0;
+    let mut t = 0.0;
+    step_to(&mut m, &mut t, 2.0, 0.001);
+    let r = get(&m, Real::r);
+    let j = j0 + 0.5 * PI * 1000.0 * 1.0 * (r.powi(4) - r0.powi(4));
+    assert!(r > 0.105, "the roll grew to {r} m");
+    assert!((j * m.omega() - momentum).abs() < 1e-12 * momentum, "{} {momentum}", j * m.omega());
+}
+
+#[test]
+fn a_dancer_carriage_follows_the_damped_oscillator() {
+    // m y'' = load - F_a - F_b - d y' - k (y - y0); constant forces from rest.
+    let (mass, d, k, y0, load) = (5.0, 30.0, 2000.0, 0.5, 500.0);
+    let mut m = roller(
+        &[(Real::carriage_m, mass), (Real::carriage_d, d), (Real::carriage_k, k), (Real::carriage_y_start, y0), (Real::F_load, load)],
+        Some(r#"{"load": [[0, -100]]}"#),
+        |m| m.set_boolean(Boolean::carriage.vr(), true).unwrap(),
+    )
+    .unwrap();
+    m.set_real(Real::web_a_F.vr(), 100.0).unwrap();
+    m.set_real(Real::web_b_F.vr(), 100.0).unwrap();
+    let g = load - 100.0 - 200.0;
+    let mut t = 0.0;
+    step_to(&mut m, &mut t, 0.3, 0.0007);
+    let (alpha, beta) = (d / (2.0 * mass), (k / mass - (d / (2.0 * mass)).powi(2)).sqrt());
+    let y = y0 + g / k - g / k * (-alpha * t).exp() * ((beta * t).cos() + alpha / beta * (beta * t).sin());
+    assert!((get(&m, Real::y) - y).abs() < 1e-13, "{} {y}", get(&m, Real::y));
+    assert_eq!(get(&m, Real::web_a_y), y0 - get(&m, Real::y));
+    assert_eq!(get(&m, Real::web_b_x), 2.0 * get(&m, Real::r));
+}
+
+#[test]
+fn set_events_change_the_roll_at_the_same_surface_speed_and_the_brake_mid_step() {
+    let text = r#"{"set": [{"time": 0.25, "b": 2}, {"time": 0.5, "J": 6, "R": 0.3}]}"#;
+    let (j, r, w0) = (0.5, 0.1, 40.0);
+    let mut m = roller(&[(Real::J, j), (Real::R, r), (Real::v_start, w0 * r)], Some(text), |_| {}).unwrap();
+    let mut t = 0.0;
+    step_to(&mut m, &mut t, 0.5, 0.1); // the brake engages inside the step [0.2, 0.3]
+    let w = w0 * (-2.0 / j * 0.25).exp();
+    assert!((m.omega() - w).abs() < 1e-13 * w, "{} {w}", m.omega());
+    let v = r * m.omega();
+    step_to(&mut m, &mut t, 0.6, 0.1); // the new roll from 0.5 s, braked: J w' = -b w
+    let w_new = v / 0.3 * (-2.0f64 / 6.0 * 0.1).exp();
+    assert!((m.omega() - w_new).abs() < 1e-13 * w_new, "{} {w_new}", m.omega());
+    assert_eq!((get(&m, Real::J), get(&m, Real::R), get(&m, Real::b)), (6.0, 0.3, 2.0));
+}
+
+#[test]
+fn an_fmu_state_carries_the_profile_and_continues_bit_identically() {
+    let text = r#"{"tension": [[0, 200], [0.5, 200], [0.5, 0]], "strain": [[0, 1e-3]], "set": [{"time": 0.7, "b": 20}]}"#;
+    let mut m = roller(&[(Real::J, 8.0), (Real::R, 0.35), (Real::v_start, 5.0)], Some(text), |m| m.set_integer(Integer::roll.vr(), 1).unwrap()).unwrap();
+    let mut t = 0.0;
+    step_to(&mut m, &mut t, 0.3, 0.1);
+    assert_eq!(get(&m, Real::web_b_eps), 1e-3);
+    let snapshot = Snapshot { phase: Phase::StepComplete, time: t, experiment: Default::default(), model: m.clone() };
+    let back = Snapshot::<Roller>::from_bytes(&snapshot.to_bytes(&DESCRIPTION), &DESCRIPTION).unwrap();
+    let mut copy = back.model;
+    let (mut t1, mut t2) = (t, t);
+    step_to(&mut m, &mut t1, 1.0, 0.1);
+    step_to(&mut copy, &mut t2, 1.0, 0.1);
+    assert_eq!(m.omega().to_bits(), copy.omega().to_bits());
+    assert_eq!(get(&copy, Real::b), 20.0);
+}
+
+#[test]
+fn bad_profiles_are_refused_naming_the_file_and_the_problem() {
+    let err = |text: &str, roll: i32| roller(&[], Some(text), |m| m.set_integer(Integer::roll.vr(), roll).unwrap()).unwrap_err();
+    assert!(err(r#"{"speed": [[0, 1]], "torque": [[0, 1]]}"#, 0).contains("speed and torque tables: a roller has at most one drive"));
+    assert!(err(r#"{"tension": [[0, 1]]}"#, 0).contains("a tension drive needs roll = 1 (unwinder) or 2 (winder)"));
+    assert!(err(r#"{"load": [[0, 1]]}"#, 0).contains("a load table needs carriage = true"));
+    assert!(err(r#"{"sped": [[0, 1]]}"#, 0).contains("unknown key \"sped\""));
+    assert!(err(r#"{"set": [{"time": 1, "v_start": 2}]}"#, 0).contains("\"v_start\" cannot change during a run"));
+    assert!(err(r#"{"set": [{"time": 1, "J": -2}]}"#, 0).contains("J = -2 is outside"));
+    let e = err(r#"{"speed": [[1, 1], [0, 2]]}"#, 0);
+    assert!(e.starts_with("profile ") && e.contains(".json: speed: entry 1"), "{e}");
+    // A missing file names itself (an absolute path on every platform).
+    let missing = std::env::temp_dir().join("no such folder").join("line.json");
+    let mut m = Roller::at_start_values();
+    m.set_string(Text::profile.vr(), missing.to_str().unwrap()).unwrap();
+    let e = m.initialize(&Experiment::default(), &Resources::default()).unwrap_err().message;
+    assert!(e.contains(&format!("profile {}", missing.display())), "{e}");
+    // A name in resources/ with no resource folder says why.
+    m.set_string(Text::profile.vr(), "line.json").unwrap();
+    let e = m.initialize(&Experiment::default(), &Resources::default()).unwrap_err().message;
+    assert!(e.contains("profile = \"line.json\": cannot read resources/line.json"), "{e}");
+}
+
+#[test]
+fn model_exchange_derivatives_match_the_steps() {
+    // The ME right-hand side against a difference quotient of the CS step.
+    let mut m = roller(
+        &[(Real::J, 0.4), (Real::R, 0.2), (Real::b, 0.05), (Real::v_start, 2.0), (Real::wound_thickness, 1e-4), (Real::wound_density, 900.0)],
+        Some(r#"{"tension": [[0, 100], [1, 150]]}"#),
+        |m| m.set_integer(Integer::roll.vr(), 2).unwrap(),
+    )
+    .unwrap();
+    m.set_real(Real::web_a_F.vr(), 120.0).unwrap();
+    let d = m.derivatives();
+    let (w0, r0) = (m.omega(), get(&m, Real::r));
+    let h = 1e-6;
+    m.set_time(0.0);
+    m.do_step(h).unwrap();
+    let (dw, dr) = ((m.omega() - w0) / h, (get(&m, Real::r) - r0) / h);
+    assert!((dw - d[0]).abs() < 1e-5 * d[0].abs(), "{dw} {}", d[0]);
+    assert!((dr - d[1]).abs() < 1e-5 * d[1].abs(), "{dr} {}", d[1]);
+}
+
+#[test]
+fn an_event_a_few_ulps_from_a_communication_point_falls_on_it() {
+    // One master computes t = k*h, another adds h up (FMPy): with 0.01 s steps the sum's
+    // 19th step ends at 0.19000000000000003, the other's at 0.19. The new roll at 0.19 s
+    // must land on the same step in both.
+    let text = r#"{"set": [{"time": 0.19, "J": 6, "R": 0.3}], "torque": [[0, 1], [0.19, 1], [0.19, 2]]}"#;
+    let make = || roller(&[(Real::J, 0.5), (Real::R, 0.1), (Real::v_start, 4.0)], Some(text), |_| {}).unwrap();
+    let (mut exact, mut summed) = (make(), make());
+    let mut t_summed = 0.0;
+    for k in 0..25 {
+        let t = k as f64 * 0.01;
+        exact.set_time(t);
+        exact.do_step(0.01).unwrap();
+        summed.set_time(t_summed);
+        summed.do_step(0.01).unwrap();
+        t_summed += 0.01;
+        let (a, b) = (exact.omega(), summed.omega());
+        assert!((a - b).abs() <= 1e-12 * a.abs(), "after step {k}: {a} vs {b}");
+        assert_eq!(get(&exact, Real::J), get(&summed, Real::J), "after step {k}");
+    }
+}
