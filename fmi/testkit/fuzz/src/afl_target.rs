@@ -6,7 +6,7 @@
 //! Build and run: bash tests/hardening.sh --afl SECONDS
 fn main() {
     afl::fuzz_nohook!(|data: &[u8]| {
-        if let Err(v) = converting_span_fuzz::run(converting_span_fuzz::Api::Fmi2, data) {
+        if let Err(v) = fmi_fuzz::run(fmi_fuzz::Api::Fmi2, data) {
             panic!("violation: {}", v.0);
         }
     });

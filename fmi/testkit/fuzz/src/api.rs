@@ -4,9 +4,10 @@
 //! doStep's out-arguments) the call takes them and FMI 2.0 ignores them.
 //!
 //! FMI 3.0 calls go straight to the `#[no_mangle]` functions that
-//! `fmi3::export_fmi3!` writes into the span's crate: the C entry points.
+//! `fmi_abi::export_fmi3!` writes into the fuzzed model's crate: the C entry
+//! points, declared by the test kit from the same list of signatures.
 
-use converting_span::fmi3_exports as c3;
+use fmi_testkit::fmi3 as c3;
 use fmi_testkit::*;
 use std::ffi::{c_char, c_void};
 use std::ptr::null_mut;

@@ -10,7 +10,7 @@
 //! reproduced by its file or by `--seed S --only k`. Exits 1 on a violation
 //! (and with --strict also on a finding), printing the call and the rule.
 
-use converting_span_fuzz::{run, Api, Finding, Outcome};
+use fmi_fuzz::{run, Api, Finding, Outcome};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
