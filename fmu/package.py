@@ -55,6 +55,7 @@ ROOT = Path(__file__).resolve().parent.parent
 # One stylesheet for every FMU's documentation page (inlined: a page stays one file).
 STYLE = ROOT / "fmu" / "style.css"
 RANGE_TOOL = "ConvertingSpan.range"
+EFFECT_TOOL = "ConvertingSpan.effects"
 # Fixed timestamp: the same inputs give the same archive bytes.
 ZIP_TIME = (2026, 1, 1, 0, 0, 0)
 # Present only in a library built with the test-only feature `test-hooks`.
@@ -314,6 +315,16 @@ def variable_rows(root):
     return "\n".join(rows)
 
 
+def effect_rows(root):
+    """The model's effects (the ConvertingSpan.effects tool of the description) with what each adds."""
+    variables = {v.get("name"): v for v in root.find("ModelVariables")}
+    return "\n".join(
+        f"<tr><td><code>{html.escape(e.get('variable'))}</code></td>"
+        f"<td>{html.escape(variables[e.get('variable')].get('description', ''))}</td></tr>"
+        for e in root.findall(f"./VendorAnnotations/Tool[@name='{EFFECT_TOOL}']/Effects/Effect")
+    )
+
+
 def unit_rows(root):
     rows = []
     for st in root.iter("SimpleType"):
@@ -358,6 +369,9 @@ def documentation(root, template, resources=None, fmi3=False):
     }
     if resources is not None and (resources / "webs.json").exists():
         replacements["<!-- WEBS -->"] = web_rows(resources / "webs.json")
+    # A model with effects lists them from its description.
+    if root.find(f"./VendorAnnotations/Tool[@name='{EFFECT_TOOL}']") is not None:
+        replacements["<!-- EFFECTS -->"] = effect_rows(root)
     # A model with enumerations (unit choices) documents them.
     if root.find("TypeDefinitions") is not None:
         replacements["<!-- UNIT_CHOICES -->"] = unit_rows(root)

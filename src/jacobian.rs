@@ -4,10 +4,22 @@
 //! output moves along it. The input rates the outputs read (dv_b/dt, the
 //! given derivatives of the roller positions) are held: they are not inputs.
 
+use crate::description::Effect;
 use crate::parameters::{Inputs, Parameters, Rates};
 use crate::physics::{self, Outputs};
 use crate::sensor::SensorScale;
 use solver::CompensatedSum;
+
+/// Where each effect enters the tangents of `Point::tangents`: a new effect
+/// in the XML stops the build here until its terms are written there.
+pub const fn tangent_terms(effect: Effect) -> &'static str {
+    match effect {
+        Effect::includeDamping => "d_force: d_r times the tangent of the strain rate [4], [5]",
+        Effect::preventNegativeTension => "d_tension: zero on the slack side of the clamp [5]",
+        Effect::includeMass => "d_exit_force: the momentum terms [10]",
+        Effect::variableLength => "d_length and d_length_rate: the roller positions [9]",
+    }
+}
 
 /// A direction in the knowns: d(unstretched length) and d(inputs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -45,7 +57,7 @@ impl Point<'_> {
         let length = physics::span_length(p, u);
         let [sx, sy] = u.span_vector();
         let [dsx, dsy] = d.u.span_vector();
-        let d_length = if p.variable_length { (sx * dsx + sy * dsy) / length } else { 0.0 };
+        let d_length = if p.effects.variable_length { (sx * dsx + sy * dsy) / length } else { 0.0 };
         // [1]: 1 + eps_b = L/x.
         let strain = physics::strain(length, self.x, 0.0);
         let stretch = 1.0 + strain;
@@ -61,7 +73,7 @@ impl Point<'_> {
         // [9]: dL/dt = (r_b - r_a).(given rates)/L moves with the positions; an estimate is held.
         let length_rate = self.rates.length;
         let d_length_rate = match self.given {
-            Some(r) if p.variable_length => {
+            Some(r) if p.effects.variable_length => {
                 let [rx, ry] = r.span_vector();
                 ((dsx * rx + dsy * ry) - length_rate * d_length) / length
             }
@@ -74,7 +86,7 @@ impl Point<'_> {
         let d_strain_rate = d_length_rate / x - length_rate * d.x / (x * x) - (d_factor * rate + factor * d_rate);
         // [5], [5a].
         let web = &p.span_web;
-        let damping = if p.include_damping { web.retardation_time } else { 0.0 };
+        let damping = if p.effects.include_damping { web.retardation_time } else { 0.0 };
         let d_force = match &web.curve {
             None => web.stiffness() * (d_strain + damping * d_strain_rate),
             Some(curve) => {
@@ -85,9 +97,9 @@ impl Point<'_> {
         };
         let force = physics::web_force(p, u, length, x, strain, length_rate);
         // The slack clamp: at a force of exactly 0 the slack side (derivative 0).
-        let d_tension = if !p.prevent_negative_tension || force > 0.0 { d_force } else { 0.0 };
+        let d_tension = if !p.effects.prevent_negative_tension || force > 0.0 { d_force } else { 0.0 };
         // [10]: F_b - F_a = q_a (rho_l2 v_b - rho_in v_a) + rho_l2 x dv_b/dt, dv_b/dt held.
-        let d_exit_force = if p.include_mass {
+        let d_exit_force = if p.effects.include_mass {
             let rho_span = web.linear_density();
             let rho_in = if forward { p.incoming.linear_density() } else { rho_span };
             d_tension
@@ -120,7 +132,7 @@ pub fn initial_state_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
     let length = physics::span_length(p, u);
     let [sx, sy] = u.span_vector();
     let [dsx, dsy] = d.span_vector();
-    let d_length = if p.variable_length { (sx * dsx + sy * dsy) / length } else { 0.0 };
+    let d_length = if p.effects.variable_length { (sx * dsx + sy * dsy) / length } else { 0.0 };
     let (strain, d_strain) = match p.start_at_equilibrium.then(|| physics::equilibrium_strain(u)).flatten() {
         None => (p.strain_start, 0.0),
         // At v_a = 0 exactly the start is eps_a (the derivative of that branch).
@@ -137,6 +149,7 @@ pub fn initial_state_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::description::Effects;
     use crate::stress_strain::StressStrain;
     use std::sync::Arc;
 
@@ -192,20 +205,16 @@ mod tests {
     #[test]
     fn tangents_match_central_differences_of_the_equations() {
         let mut checked = 0;
-        for bits in 0..32u32 {
-            let flag = |i: u32| bits & (1 << i) != 0;
+        for (effects, nonlinear) in Effects::every_combination().flat_map(|e| [(e, false), (e, true)]) {
             let p = Parameters {
                 span_length: 1.0,
                 incoming: web(false),
-                span_web: web(flag(4)),
-                include_damping: flag(0),
-                prevent_negative_tension: flag(1),
-                include_mass: flag(2),
-                variable_length: flag(3),
+                span_web: web(nonlinear),
+                effects,
                 use_sensor: true,
                 ..Parameters::default()
             };
-            let strain = if flag(4) { 0.015 } else { 2e-3 };
+            let strain = if nonlinear { 0.015 } else { 2e-3 };
             for (va, vb) in [(5.0, 5.02), (-3.0, -2.9)] {
                 let u = Inputs { speed_a: va, strain_a: 1e-3, speed_b: vb, frame_a: [0.1, 0.2], frame_b: [0.9, 0.8] };
                 let x = physics::span_length(&p, &u) / (1.0 + strain);
@@ -240,7 +249,7 @@ mod tests {
                             let fd = (a[i] - b[i]) / (2.0 * h);
                             let floor = 1e3 * f64::EPSILON * a[i].abs().max(b[i].abs()).max(va.abs()) / h;
                             let err = (tangent[i] - fd).abs();
-                            assert!(err <= 1e-6 * fd.abs() + floor, "effects {bits:05b}, v_a {va}, given {}, known {k}, output {i}: {} vs {fd}", given.is_some(), tangent[i]);
+                            assert!(err <= 1e-6 * fd.abs() + floor, "{effects:?}, nonlinear {nonlinear}, v_a {va}, given {}, known {k}, output {i}: {} vs {fd}", given.is_some(), tangent[i]);
                             checked += (fd.abs() > floor * 1e6) as usize;
                         }
                     }
@@ -254,7 +263,8 @@ mod tests {
     #[test]
     fn initial_state_tangent_matches_a_central_difference() {
         for (equilibrium, variable) in [(true, false), (true, true), (false, true), (false, false)] {
-            let p = Parameters { span_length: 1.0, start_at_equilibrium: equilibrium, variable_length: variable, strain_start: 2e-3, ..Parameters::default() };
+            let effects = Effects { variable_length: variable, ..Effects::default() };
+            let p = Parameters { span_length: 1.0, start_at_equilibrium: equilibrium, effects, strain_start: 2e-3, ..Parameters::default() };
             let u = Inputs { speed_a: 5.0, strain_a: 1e-3, speed_b: 5.02, frame_a: [0.1, 0.2], frame_b: [0.9, 0.8] };
             let x0 = |u: &Inputs| {
                 let eps = if equilibrium { physics::equilibrium_strain(u).unwrap() } else { p.strain_start };

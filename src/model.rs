@@ -76,7 +76,7 @@ impl ConvertingSpan {
     #[inline(always)]
     pub fn outputs(&self) -> Outputs {
         let p = &self.params;
-        let rates = if p.include_damping || p.include_mass { self.input_rates() } else { Rates::default() };
+        let rates = if physics::needs_input_rates(&p.effects) { self.input_rates() } else { Rates::default() };
         physics::outputs(p, &self.inputs, self.unstretched, rates, &self.sensor)
     }
 
@@ -94,7 +94,7 @@ impl ConvertingSpan {
             d.x = jacobian::initial_state_tangent(&self.params, &self.inputs, &d.u);
         }
         let p = &self.params;
-        let effects = p.include_damping || p.include_mass;
+        let effects = physics::needs_input_rates(&p.effects);
         let point = Point {
             params: p,
             inputs: &self.inputs,
@@ -148,7 +148,7 @@ impl ConvertingSpan {
             None => start,
         };
         let length_after = physics::span_length(&self.params, &end);
-        if self.params.variable_length && !(length_after >= physics::min_length()) {
+        if self.params.effects.variable_length && !(length_after >= physics::min_length()) {
             return Err(FmiError::discard(format!(
                 "variableLength: the rollers would come {length_after} m apart by the end of the step, closer than \
                  the shortest span L may be ({} m); take a shorter step",
@@ -170,12 +170,12 @@ impl ConvertingSpan {
             )));
         }
         // Commit: nothing above changed the model.
-        self.slack_event = if self.params.prevent_negative_tension {
+        self.slack_event = if self.params.effects.prevent_negative_tension {
             self.slack_crossing(&start, rates.as_ref(), next, h)
         } else {
             None
         };
-        if self.params.include_mass || self.params.include_damping {
+        if physics::needs_input_rates(&self.params.effects) {
             self.update_rates(&start, rates.as_ref(), h);
         }
         if let Some(r) = rates {
@@ -239,7 +239,7 @@ pub(crate) fn check_derived(p: &Parameters) -> FmiResult {
     let used = [
         Some(("wp2: E*width*thickness", w.stiffness())),
         Some(("wp2: density*width*thickness", w.linear_density())),
-        p.include_mass.then(|| ("wp1: density*width*thickness", p.incoming.linear_density())),
+        p.effects.include_mass.then(|| ("wp1: density*width*thickness", p.incoming.linear_density())),
     ];
     match used.into_iter().flatten().find(|(_, value)| !value.is_finite()) {
         Some((what, value)) => Err(FmiError::error(format!("{what} = {value} overflows: the parameters are each in range, not together"))),
@@ -388,13 +388,13 @@ impl Model for ConvertingSpan {
         }
         if experiment.model_exchange {
             // Model Exchange gives the current inputs only, not their rates.
-            if p.include_mass {
+            if p.effects.include_mass {
                 return Err(FmiError::error(
                     "includeMass needs dv_b/dt (web_b.v's rate), which Model Exchange does not provide: \
                      use Co-Simulation (input derivatives or the documented estimate) or set includeMass = false",
                 ));
             }
-            if p.include_damping && p.variable_length {
+            if p.effects.include_damping && p.effects.variable_length {
                 return Err(FmiError::error(
                     "includeDamping with variableLength needs dL/dt (the rollers' speeds), which Model Exchange \
                      does not provide: use Co-Simulation or switch one of them off",
@@ -436,7 +436,7 @@ impl Model for ConvertingSpan {
     /// own: with a moving span the configuration is the inputs' (`inputs_valid`).
     fn outputs_defined(&self) -> FmiResult {
         check_derived(&self.params)?;
-        if self.params.variable_length {
+        if self.params.effects.variable_length {
             Ok(())
         } else {
             self.configuration_valid()
@@ -447,7 +447,7 @@ impl Model for ConvertingSpan {
     /// initialization is valid; moving rollers can make it invalid.
     #[inline]
     fn inputs_valid(&self) -> FmiResult {
-        if self.params.variable_length {
+        if self.params.effects.variable_length {
             self.configuration_valid()
         } else {
             Ok(())
@@ -502,7 +502,7 @@ impl Model for ConvertingSpan {
     /// The web's pull for a slack web (it crosses zero where the web goes
     /// slack or takes up tension again); a constant 1 (never an event) otherwise.
     fn get_event_indicators(&self, z: &mut [f64]) -> FmiResult {
-        z[0] = if self.params.prevent_negative_tension {
+        z[0] = if self.params.effects.prevent_negative_tension {
             self.web_force_at(self.unstretched, &self.inputs, 0.0)
         } else {
             1.0

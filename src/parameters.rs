@@ -1,6 +1,6 @@
 //! Parameters and inputs of the span, in SI units.
 
-use crate::description::Solver;
+use crate::description::{Effects, Solver};
 use crate::stress_strain::StressStrain;
 use std::sync::Arc;
 
@@ -54,10 +54,8 @@ pub struct Parameters {
     pub web_library: Arc<str>,
     /// `profile`: a JSON file of timed web changes ("": the FMU's own, if any).
     pub profile: Arc<str>,
-    pub include_damping: bool,
-    pub prevent_negative_tension: bool,
-    pub include_mass: bool,
-    pub variable_length: bool,
+    /// The effects on (one field each, named after their Boolean parameters).
+    pub effects: Effects,
     pub start_at_equilibrium: bool,
     /// Initial span strain when not starting at equilibrium.
     pub strain_start: f64,

@@ -3,7 +3,7 @@
 //!
 //! The state is the unstretched length of web in the span, x = L/(1+eps_b).
 
-use crate::description::{Real, DESCRIPTION};
+use crate::description::{Effect, Effects, Real, DESCRIPTION};
 use crate::parameters::{Inputs, Parameters, Rates, WebProperties};
 use crate::sensor::SensorScale;
 use solver::{decay_integral, CompensatedSum};
@@ -34,7 +34,7 @@ pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sens
     let strain = strain(length, x, 0.0);
     let tension = tension(p, web_force(p, u, length, x.value(), strain, rates.length));
     let exit_force =
-        if p.include_mass { tension + momentum_difference(p, u, strain, x.value(), rates.speed_b) } else { tension };
+        if p.effects.include_mass { tension + momentum_difference(p, u, strain, x.value(), rates.speed_b) } else { tension };
     let sensor_on = |value: f64| if p.use_sensor { value } else { 0.0 };
     Outputs {
         length,
@@ -55,19 +55,39 @@ pub fn web_force(p: &Parameters, u: &Inputs, length: f64, x: f64, strain_b: f64,
     let web = &p.span_web;
     let rate = || strain_rate(length, length_rate, x, strain_b, unstretched_rate(u, strain_b));
     match &web.curve {
-        None if p.include_damping => web.stiffness() * (strain_b + web.retardation_time * rate()),
+        None if p.effects.include_damping => web.stiffness() * (strain_b + web.retardation_time * rate()),
         None => web.stiffness() * strain_b,
         Some(curve) => {
             let (sigma, tangent) = curve.at(strain_b);
-            let damping = if p.include_damping { web.retardation_time * tangent * rate() } else { 0.0 };
+            let damping = if p.effects.include_damping { web.retardation_time * tangent * rate() } else { 0.0 };
             web.area() * (sigma + damping)
         }
     }
 }
 
+/// Whether an effect's equation reads the input rates dv_b/dt and dL/dt [11]:
+/// decided here for every effect, so a new one in the XML stops the build
+/// until it is placed (only the effects that read the rates pay for them).
+pub const fn reads_input_rates(effect: Effect) -> bool {
+    match effect {
+        Effect::includeDamping | Effect::includeMass => true,
+        Effect::preventNegativeTension | Effect::variableLength => false,
+    }
+}
+
+/// Whether any effect that is on reads the input rates.
+#[inline(always)]
+pub fn needs_input_rates(effects: &Effects) -> bool {
+    let mut any = false;
+    for effect in Effect::ALL {
+        any |= reads_input_rates(effect) && effects.get(effect);
+    }
+    any
+}
+
 /// Span length [9]: the parameter L, or |r_b - r_a| with `variableLength`.
 pub fn span_length(p: &Parameters, u: &Inputs) -> f64 {
-    if p.variable_length {
+    if p.effects.variable_length {
         let [dx, dy] = u.span_vector();
         dx.hypot(dy)
     } else {
@@ -77,7 +97,7 @@ pub fn span_length(p: &Parameters, u: &Inputs) -> f64 {
 
 /// dL/dt [9] when the roller positions move at `rates` (0 for a fixed L).
 pub fn length_rate(p: &Parameters, u: &Inputs, rates: &Inputs) -> f64 {
-    if !p.variable_length {
+    if !p.effects.variable_length {
         return 0.0;
     }
     let [dx, dy] = u.span_vector();
@@ -178,7 +198,7 @@ pub fn strain_rate(length: f64, length_rate: f64, x: f64, strain_b: f64, unstret
 /// `preventNegativeTension`.
 pub fn tension(p: &Parameters, web_force: f64) -> f64 {
     let t = web_force;
-    if p.prevent_negative_tension {
+    if p.effects.prevent_negative_tension {
         t.max(0.0)
     } else {
         t

@@ -107,7 +107,7 @@ impl Step<'_> {
     pub fn shortest_length(&self) -> f64 {
         let p = self.params;
         let now = physics::span_length(p, &self.start);
-        let Some(rates) = self.rates.filter(|_| p.variable_length) else { return now };
+        let Some(rates) = self.rates.filter(|_| p.effects.variable_length) else { return now };
         let end = physics::span_length(p, &self.start.advanced(&rates, self.h));
         let [dx, dy] = self.start.span_vector();
         let [rx, ry] = rates.span_vector();

@@ -3,7 +3,7 @@
 //! `fmi_core::bind_variables!`). Ranges and types come from the XML; equations
 //! for computed variables live in `physics`.
 
-use crate::description::{Boolean, Integer, Real, Text};
+use crate::description::{Boolean, BooleanKind, Effect, Integer, Real, Switch, Text};
 use crate::parameters::Inputs;
 use crate::ConvertingSpan;
 
@@ -51,10 +51,7 @@ fmi_core::bind_variables! {
         substeps: param(params.substeps),
     }
     boolean {
-        includeDamping: param(params.include_damping),
-        preventNegativeTension: param(params.prevent_negative_tension),
-        includeMass: param(params.include_mass),
-        variableLength: param(params.variable_length),
+        @effects(params.effects),
         startAtEquilibrium: param(params.start_at_equilibrium),
         useSensor: param(params.use_sensor),
     }

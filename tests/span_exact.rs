@@ -191,7 +191,7 @@ fn web_fed_from_both_ends_is_discarded_not_infinite() {
 fn damping_feeds_speed_steps_through_to_the_tension_at_once() {
     let u = Held { va: 5.0, eps_a: 1e-3, vb: 5.0 };
     let mut m = span(1.0, u);
-    m.params.include_damping = true;
+    m.params.effects.include_damping = true;
     m.set_real_var(Real::wp2_d_r, 0.1).unwrap();
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let ea = stiffness(&m);
@@ -211,7 +211,7 @@ fn damping_feeds_speed_steps_through_to_the_tension_at_once() {
 fn slack_web_carries_no_compression_and_re_tensions() {
     let u = Held { va: 5.0, eps_a: 1e-3, vb: 5.0 };
     let mut m = span(1.0, u);
-    m.params.prevent_negative_tension = true;
+    m.params.effects.prevent_negative_tension = true;
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
     // Downstream roller 1 % slower: the strain heads for about -9e-3.
     set_inputs(&mut m, Held { vb: 4.95, ..u });
@@ -312,14 +312,14 @@ fn start_values_come_from_the_model_description() {
             Start::None => {}
         }
     }
-    assert!(m.params.start_at_equilibrium && m.params.use_sensor && !m.params.include_damping);
+    assert!(m.params.start_at_equilibrium && m.params.use_sensor && !m.params.effects.include_damping);
     assert_eq!((m.get_integer(Integer::toUnitV.vr()).unwrap(), m.get_boolean(Boolean::useSensor.vr()).unwrap()), (1, true));
 }
 
 #[test]
 fn saved_fields_load_back_identically() {
     let mut m = span(1.7, Held { va: 3.0, eps_a: 1.5e-3, vb: 3.1 });
-    m.params.include_damping = true;
+    m.params.effects.include_damping = true;
     m.params.force_unit = 6;
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
     m.do_step(0.123).unwrap();
@@ -341,7 +341,7 @@ fn slack_crossings_are_located_inside_the_step() {
     // the exact trajectory: to 1e-9 s here (64 halvings of a 0.5 s step).
     let (l, u) = (1.0, Held { va: 5.0, eps_a: 1e-3, vb: 4.95 });
     let mut m = span(l, Held { vb: 5.0, ..u });
-    m.params.prevent_negative_tension = true;
+    m.params.effects.prevent_negative_tension = true;
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let x0 = m.unstretched_length();
     set_inputs(&mut m, u);
@@ -373,7 +373,7 @@ fn slack_crossings_with_moving_inputs_use_the_step_interpolant() {
     // O(h^4), about 2e-6 s of crossing time here.
     let locate = |h: f64| -> f64 {
         let mut m = span(1.0, Held { va: 5.0, eps_a: 1e-3, vb: 5.0 });
-        m.params.prevent_negative_tension = true;
+        m.params.effects.prevent_negative_tension = true;
         m.params.tolerance = 1e-12;
         m.initialize(&Experiment::default(), &Default::default()).unwrap();
         let mut t = 0.0;
@@ -398,7 +398,7 @@ fn a_state_the_equations_cannot_hold_is_discarded_never_a_nan() {
     // strain is -1 to double precision and the damping term would be 0 * inf:
     // the step must be discarded, and every accepted step's outputs finite.
     let mut m = span(0.8, Held { va: 1.975, eps_a: 0.0010235, vb: -20350.0 });
-    m.params.include_damping = true;
+    m.params.effects.include_damping = true;
     m.params.start_at_equilibrium = false;
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let mut discarded = false;

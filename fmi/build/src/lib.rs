@@ -27,6 +27,13 @@ use std::path::Path;
 /// `<Annotations>` inside a `ScalarVariable`.
 const RANGE_TOOL: &str = "ConvertingSpan.range";
 
+/// Tool of the model-level `<VendorAnnotations>` that names the model's
+/// effects: `<Effects>` holding one `<Effect variable=".."/>` per fixed
+/// Boolean parameter that switches a part of the physics on. The generator
+/// gives them an `Effect` enum and an `Effects` set, bound without a line of
+/// code per effect; webline and the documentation read the same list.
+pub const EFFECT_TOOL: &str = "ConvertingSpan.effects";
+
 /// For a build script: checks `source` (a modelDescription.xml, relative to
 /// the package) and writes the generated Rust into `$OUT_DIR/generated`.
 pub fn generate(source: &str, generated: &str) {
@@ -65,6 +72,8 @@ struct ModelDescription {
     variables: Vec<Variable>,
     /// The `RANGE_TOOL` entries: (line, variable name, attributes).
     strict_ranges: Vec<(usize, String, BTreeMap<String, String>)>,
+    /// The `EFFECT_TOOL` entries: (line, variable name), in the XML's order.
+    effects: Vec<(usize, String)>,
     outputs: Vec<Unknown>,
     derivatives: Vec<Unknown>,
     initial_unknowns: Vec<Unknown>,
@@ -247,6 +256,10 @@ fn parse(xml: &str) -> Result<ModelDescription, String> {
                 let name = attrs.get("variable").cloned().ok_or(format!("line {line}: a {RANGE_TOOL} Range needs variable=\"...\""))?;
                 md.strict_ranges.push((line, name, attrs));
             }
+            ("Effects", "Effect") if tool.as_deref() == Some(EFFECT_TOOL) => {
+                let name = attrs.get("variable").cloned().ok_or(format!("line {line}: an {EFFECT_TOOL} Effect needs variable=\"...\""))?;
+                md.effects.push((line, name));
+            }
             ("Outputs" | "Derivatives" | "InitialUnknowns", "Unknown") => {
                 let index = attrs
                     .get("index")
@@ -311,8 +324,26 @@ const RUST_KEYWORDS: &[&str] = &[
     "while", "async", "await", "dyn",
 ];
 
-fn check(md: &ModelDescription) -> Vec<String> {
+/// An effect is a fixed Boolean parameter, listed once.
+fn check_effects(md: &ModelDescription) -> Vec<String> {
     let mut problems = Vec::new();
+    for (k, (line, name)) in md.effects.iter().enumerate() {
+        match md.variables.iter().find(|v| v.name() == name) {
+            None => problems.push(format!("line {line}: {EFFECT_TOOL} names \"{name}\", which is not a variable")),
+            Some(v) if v.kind != "Boolean" || v.causality() != "parameter" || v.variability() != "fixed" => {
+                problems.push(format!("line {line}: the effect \"{name}\" must be a fixed Boolean parameter"))
+            }
+            Some(_) if md.effects[..k].iter().any(|(_, n)| n == name) => {
+                problems.push(format!("line {line}: {EFFECT_TOOL} lists \"{name}\" twice"))
+            }
+            Some(_) => {}
+        }
+    }
+    problems
+}
+
+fn check(md: &ModelDescription) -> Vec<String> {
+    let mut problems = check_effects(md);
     let attr = |k: &str| md.attrs.get(k).map(String::as_str).unwrap_or("");
     if attr("fmiVersion") != "2.0" {
         problems.push(format!("fmiVersion must be \"2.0\", found \"{}\"", attr("fmiVersion")));
@@ -678,6 +709,8 @@ fn emit(md: &ModelDescription, source: &str) -> String {
         writeln!(w, "}}\n").unwrap();
     }
 
+    effects(w, md);
+
     // Unit enumerations: every item names a unit or display unit.
     for (ty, items) in &md.enumerations {
         let resolved: Option<Vec<String>> = items
@@ -698,6 +731,77 @@ fn emit(md: &ModelDescription, source: &str) -> String {
         }
     }
     s
+}
+
+/// `includeDamping` -> `include_damping`.
+fn snake(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.chars() {
+        if c.is_ascii_uppercase() {
+            out.push('_');
+            out.push(c.to_ascii_lowercase());
+        } else {
+            out.push(if c.is_ascii_alphanumeric() { c } else { '_' });
+        }
+    }
+    out
+}
+
+/// The effects (`EFFECT_TOOL`): the `Effect` enum, the `Effects` set (one
+/// field each, so physics reads `effects.include_damping`), and the Boolean
+/// variables split into effects and the other switches, for the bindings.
+fn effects(w: &mut String, md: &ModelDescription) {
+    let effect_vars: Vec<&Variable> =
+        md.effects.iter().filter_map(|(_, n)| md.variables.iter().find(|v| v.name() == n)).collect();
+    let switches: Vec<&Variable> =
+        md.variables.iter().filter(|v| v.kind == "Boolean" && !md.effects.iter().any(|(_, n)| n == v.name())).collect();
+    let names = |vars: &[&Variable], ty: &str| vars.iter().map(|v| format!("{ty}::{}", v.rust_name())).collect::<Vec<_>>().join(", ");
+    writeln!(w, "/// The model's effects ({EFFECT_TOOL} in the model description), in its order.").unwrap();
+    writeln!(w, "#[allow(non_camel_case_types)]\n#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]\npub enum Effect {{").unwrap();
+    for v in &effect_vars {
+        writeln!(w, "    /// {}\n    {},", v.attrs.get("description").cloned().unwrap_or_default(), v.rust_name()).unwrap();
+    }
+    writeln!(w, "}}\n\nimpl Effect {{").unwrap();
+    writeln!(w, "    pub const ALL: [Effect; {}] = [{}];", effect_vars.len(), names(&effect_vars, "Effect")).unwrap();
+    writeln!(w, "    /// Its Boolean parameter.\n    pub const fn var(self) -> Boolean {{\n        match self {{").unwrap();
+    for v in &effect_vars {
+        writeln!(w, "            Effect::{0} => Boolean::{0},", v.rust_name()).unwrap();
+    }
+    writeln!(w, "        }}\n    }}\n    pub fn name(self) -> &'static str {{ self.var().name() }}\n}}\n").unwrap();
+    writeln!(w, "/// Which effects are on: one field per effect.\n#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]\npub struct Effects {{").unwrap();
+    for v in &effect_vars {
+        writeln!(w, "    pub {}: bool,", snake(v.name())).unwrap();
+    }
+    writeln!(w, "}}\n\nimpl Effects {{").unwrap();
+    writeln!(w, "    #[inline]\n    pub fn get(&self, effect: Effect) -> bool {{\n        match effect {{").unwrap();
+    for v in &effect_vars {
+        writeln!(w, "            Effect::{} => self.{},", v.rust_name(), snake(v.name())).unwrap();
+    }
+    writeln!(w, "        }}\n    }}\n    #[inline]\n    pub fn get_mut(&mut self, effect: Effect) -> &mut bool {{\n        match effect {{").unwrap();
+    for v in &effect_vars {
+        writeln!(w, "            Effect::{} => &mut self.{},", v.rust_name(), snake(v.name())).unwrap();
+    }
+    writeln!(w, "        }}\n    }}").unwrap();
+    writeln!(w, "    /// Every combination of the effects, each once: bit k of the index is `Effect::ALL[k]`.").unwrap();
+    writeln!(w, "    pub fn every_combination() -> impl Iterator<Item = Effects> {{").unwrap();
+    writeln!(w, "        (0..1u32 << Effect::ALL.len()).map(|bits| {{\n            let mut e = Effects::default();").unwrap();
+    writeln!(w, "            for (k, effect) in Effect::ALL.into_iter().enumerate() {{ *e.get_mut(effect) = bits & (1 << k) != 0; }}").unwrap();
+    writeln!(w, "            e\n        }})\n    }}\n}}\n").unwrap();
+    writeln!(w, "/// The Boolean variables that are not effects.").unwrap();
+    writeln!(w, "#[allow(non_camel_case_types)]\n#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]\npub enum Switch {{").unwrap();
+    for v in &switches {
+        writeln!(w, "    {},", v.rust_name()).unwrap();
+    }
+    writeln!(w, "}}\n\nimpl Switch {{\n    pub const ALL: [Switch; {}] = [{}];\n}}\n", switches.len(), names(&switches, "Switch")).unwrap();
+    writeln!(w, "/// A Boolean variable: an effect or another switch.\n#[derive(Clone, Copy, Debug, PartialEq, Eq)]\npub enum BooleanKind {{\n    Effect(Effect),\n    Switch(Switch),\n}}\n").unwrap();
+    writeln!(w, "impl Boolean {{\n    #[inline]\n    pub const fn kind(self) -> BooleanKind {{\n        match self {{").unwrap();
+    for v in &effect_vars {
+        writeln!(w, "            Boolean::{0} => BooleanKind::Effect(Effect::{0}),", v.rust_name()).unwrap();
+    }
+    for v in &switches {
+        writeln!(w, "            Boolean::{0} => BooleanKind::Switch(Switch::{0}),", v.rust_name()).unwrap();
+    }
+    writeln!(w, "        }}\n    }}\n}}\n").unwrap();
 }
 
 fn is_identifier(s: &str) -> bool {

@@ -11,10 +11,16 @@
 //!   derivatives land at the same path in a value of the `inputs` type;
 //! * `computed(expr)` — a value computed as `self.expr` (outputs, locals).
 //!
+//! The Boolean block may begin with `@effects(path)`: the model's effects
+//! (the generated `Effects` set at `self.path`) are then bound all at once,
+//! and the block lists the other Booleans (the generated `Switch`es). A new
+//! effect in the XML needs no line here.
+//!
 //! String parameters are stored as `Arc<str>`: cloning a model (which the
 //! layer does to make a call all-or-nothing) then never allocates.
 //!
-//! The caller has the generated `Real`, `Integer`, `Boolean` and `Text` in scope.
+//! The caller has the generated `Real`, `Integer`, `Boolean`, `Text`, `Effect`,
+//! `Switch` and `BooleanKind` in scope.
 
 /// Writes the `Variables` impl and the inherent `real`, `integer`,
 /// `boolean` and `input_field` functions of a model from its bindings.
@@ -25,7 +31,7 @@ macro_rules! bind_variables {
         inputs: $inputs:ty,
         real { $($r:ident: $rk:ident($($rf:tt)+)),* $(,)? }
         integer { $($i:ident: $ik:ident($($if:tt)+)),* $(,)? }
-        boolean { $($b:ident: $bk:ident($($bf:tt)+)),* $(,)? }
+        boolean { $(@effects($($ef:tt)+),)? $($b:ident: $bk:ident($($bf:tt)+)),* $(,)? }
         string { $($s:ident: $sk:ident($($sf:tt)+)),* $(,)? }
     ) => {
         impl $model {
@@ -47,7 +53,10 @@ macro_rules! bind_variables {
             }
 
             pub fn boolean(&self, var: Boolean) -> bool {
-                match var { $(Boolean::$b => $crate::__bound!(self, $bk, $($bf)+),)* }
+                match var.kind() {
+                    BooleanKind::Effect(effect) => $crate::__effects!(get, self, effect; $($($ef)+)?),
+                    BooleanKind::Switch(switch) => match switch { $(Switch::$b => $crate::__bound!(self, $bk, $($bf)+),)* },
+                }
             }
 
             /// The field of an input in a set of input values or of their
@@ -89,7 +98,10 @@ macro_rules! bind_variables {
 
             fn set_boolean(&mut self, vr: u32, value: bool) -> $crate::FmiResult {
                 let var = Boolean::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))?;
-                match var { $(Boolean::$b => $crate::__bound_set!(self, var, value, $bk, $($bf)+),)* }
+                match var.kind() {
+                    BooleanKind::Effect(effect) => $crate::__effects!(set, self, effect, value; $($($ef)+)?),
+                    BooleanKind::Switch(switch) => match switch { $(Switch::$b => $crate::__bound_set!(self, var, value, $bk, $($bf)+),)* },
+                }
             }
 
             fn get_string(&self, vr: u32) -> $crate::FmiResult<&str> {
@@ -106,6 +118,7 @@ macro_rules! bind_variables {
             fn save_variables(&self, out: &mut $crate::StateWriter) {
                 $($crate::__bound_save!(out.f64, self, $rk, ::core::convert::identity, $($rf)+);)*
                 $($crate::__bound_save!(out.i32, self, $ik, $crate::IntegerValue::to_i32, $($if)+);)*
+                $crate::__effects!(save, self, out; $($($ef)+)?);
                 $($crate::__bound_save!(out.bool, self, $bk, ::core::convert::identity, $($bf)+);)*
                 $($crate::__bound_save!(out.str, self, $sk, @ref, $($sf)+);)*
             }
@@ -114,6 +127,7 @@ macro_rules! bind_variables {
                 $($crate::__bound_load!(self, $rk, input.finite(Real::$r.name())?, $($rf)+);)*
                 $($crate::__bound_load!(self, $ik,
                     $crate::model::integer_value(Integer::$i.name(), input.i32(Integer::$i.name())?)?, $($if)+);)*
+                $crate::__effects!(load, self, input; $($($ef)+)?);
                 $($crate::__bound_load!(self, $bk, input.bool(Boolean::$b.name())?, $($bf)+);)*
                 $($crate::__bound_load!(self, $sk, ::std::sync::Arc::from(input.string(Text::$s.name())?), $($sf)+);)*
                 Ok(())
@@ -160,4 +174,21 @@ macro_rules! __bound_load {
     ($s:tt, param, $value:expr, $($f:tt)+) => { $s.$($f)+ = $value };
     ($s:tt, input, $value:expr, $($f:tt)+) => { $s.inputs.$($f)+ = $value };
     ($s:tt, computed, $value:expr, $($f:tt)+) => { () };
+}
+
+/// The effects' part of a binding: every effect through the `Effects` set
+/// at the given path (in `Effect::ALL`'s order), or none when there is no path.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __effects {
+    (get, $s:tt, $e:ident;) => { match $e {} };
+    (get, $s:tt, $e:ident; $($f:tt)+) => { $s.$($f)+.get($e) };
+    (set, $s:tt, $e:ident, $v:expr;) => { match $e {} };
+    (set, $s:tt, $e:ident, $v:expr; $($f:tt)+) => {{ *$s.$($f)+.get_mut($e) = $v; Ok(()) }};
+    (save, $s:tt, $out:ident;) => { () };
+    (save, $s:tt, $out:ident; $($f:tt)+) => { for effect in Effect::ALL { $out.bool($s.$($f)+.get(effect)) } };
+    (load, $s:tt, $input:ident;) => { () };
+    (load, $s:tt, $input:ident; $($f:tt)+) => {
+        for effect in Effect::ALL { *$s.$($f)+.get_mut(effect) = $input.bool(effect.name())? }
+    };
 }

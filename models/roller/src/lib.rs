@@ -16,7 +16,7 @@ pub mod drive;
 pub mod jacobian;
 pub mod physics;
 
-use description::{Boolean, Integer, Real, Text, DESCRIPTION};
+use description::{Boolean, BooleanKind, Integer, Real, Switch, Text, DESCRIPTION};
 use drive::{Drive, Loaded};
 use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use physics::{Inputs, Parameters, Roll};
