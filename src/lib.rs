@@ -14,6 +14,7 @@
 //! * `slack` — where inside a step a slack web's tension crosses zero;
 //! * `variables` — each variable of modelDescription.xml bound to its field;
 //! * `description` — the interface generated from modelDescription.xml;
+//! * `web_state` — a web in an FMU state (values and stress–strain table);
 //! * `model` — the model's data, one step, and the FMI hooks.
 //!
 //! The FMI standard is `fmi-core`'s and the C API `fmi-abi`'s, which holds all
@@ -33,6 +34,7 @@ mod slack;
 pub mod stress_strain;
 pub mod stepping;
 mod variables;
+pub mod web_state;
 
 pub use model::{effective_tolerance, ConvertingSpan};
 pub use parameters::Rates;

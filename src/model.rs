@@ -2,7 +2,7 @@
 //! FMI layer calls (initialization, steps, Model Exchange, FMU states).
 
 use crate::description::{Real, DESCRIPTION};
-use crate::parameters::{Inputs, Parameters, Rates, WebProperties};
+use crate::parameters::{Inputs, Parameters, Rates};
 use crate::physics::{self, Outputs};
 use crate::sensor::SensorScale;
 use crate::stepping;
@@ -10,7 +10,7 @@ use crate::records;
 use crate::schedule::{self, WebChange};
 use crate::jacobian::{self, Direction, Point};
 use fmi_core::{Event, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
-use crate::stress_strain::StressStrain;
+use crate::web_state;
 use solver::CompensatedSum;
 use std::sync::Arc;
 
@@ -230,23 +230,6 @@ fn check_inputs_at_end(end: &Inputs, rates: &Inputs, h: f64) -> FmiResult {
     Ok(())
 }
 
-/// Products of parameters that are each in range but together overflow
-/// (E*A, rho*A of a web of 1e300 m width) would make outputs infinite. Only
-/// the products the equations use: the span web's stiffness and linear
-/// density, and the arriving web's linear density with web mass.
-pub(crate) fn check_derived(p: &Parameters) -> FmiResult {
-    let w = &p.span_web;
-    let used = [
-        Some(("wp2: E*width*thickness", w.stiffness())),
-        Some(("wp2: density*width*thickness", w.linear_density())),
-        p.effects.include_mass.then(|| ("wp1: density*width*thickness", p.incoming.linear_density())),
-    ];
-    match used.into_iter().flatten().find(|(_, value)| !value.is_finite()) {
-        Some((what, value)) => Err(FmiError::error(format!("{what} = {value} overflows: the parameters are each in range, not together"))),
-        None => Ok(()),
-    }
-}
-
 impl ConvertingSpan {
     /// Swaps in the webs of the changes due now; the strain carries over.
     fn apply_due_changes(&mut self) {
@@ -303,7 +286,7 @@ impl Model for ConvertingSpan {
         out.f64(self.tolerance);
         // The records' stress–strain tables: a state restores without the files.
         for web in [&self.params.incoming, &self.params.span_web] {
-            save_curve(web, out);
+            web_state::save_curve(web, out);
         }
         out.f64(self.time);
         out.i32(self.next_change as i32);
@@ -329,7 +312,7 @@ impl Model for ConvertingSpan {
         self.adaptive_step = r.finite("adaptive step")?;
         self.tolerance = r.finite("effective tolerance")?;
         for (web, what) in [(&mut self.params.incoming, "wp1 stress_strain"), (&mut self.params.span_web, "wp2 stress_strain")] {
-            web.curve = load_curve(r, what)?;
+            web.curve = web_state::load_curve(r, what)?;
         }
         self.time = r.finite("time")?;
         let next = r.i32("next web change")?;
@@ -366,7 +349,7 @@ impl Model for ConvertingSpan {
                 physics::min_length()
             )));
         }
-        check_derived(p)?;
+        crate::parameters::check_derived(p)?;
         let strain = if p.start_at_equilibrium {
             physics::equilibrium_strain(&self.inputs).ok_or_else(|| {
                 FmiError::error(format!(
@@ -409,7 +392,7 @@ impl Model for ConvertingSpan {
         self.rates = Rates::default();
         self.previous = Previous::default();
         self.adaptive_step = 0.0;
-        self.web_changes = schedule::load(self, resources)?;
+        self.web_changes = schedule::load(self, |m| &mut m.params, resources)?;
         self.next_change = 0;
         self.time = experiment.start_time;
         Ok(())
@@ -435,7 +418,7 @@ impl Model for ConvertingSpan {
     /// A state saved with rollers transiently too close is still the model's
     /// own: with a moving span the configuration is the inputs' (`inputs_valid`).
     fn outputs_defined(&self) -> FmiResult {
-        check_derived(&self.params)?;
+        crate::parameters::check_derived(&self.params)?;
         if self.params.effects.variable_length {
             Ok(())
         } else {
@@ -523,44 +506,4 @@ pub fn effective_tolerance(parameter: f64, experiment: Option<f64>) -> f64 {
         Some(t) if parameter == default => t,
         _ => parameter,
     }
-}
-
-/// A web's values and stress–strain table in an FMU state.
-pub(crate) fn save_web(web: &WebProperties, out: &mut StateWriter) {
-    for x in [web.modulus, web.thickness, web.width, web.density, web.retardation_time] {
-        out.f64(x);
-    }
-    save_curve(web, out);
-}
-
-pub(crate) fn load_web(r: &mut StateReader, what: &str) -> FmiResult<WebProperties> {
-    Ok(WebProperties {
-        modulus: r.finite(what)?,
-        thickness: r.finite(what)?,
-        width: r.finite(what)?,
-        density: r.finite(what)?,
-        retardation_time: r.finite(what)?,
-        curve: load_curve(r, what)?,
-    })
-}
-
-fn save_curve(web: &WebProperties, out: &mut StateWriter) {
-    let points: Vec<[f64; 2]> = web.curve.as_ref().map_or_else(Vec::new, |c| c.points().collect());
-    out.i32(points.len() as i32);
-    for [e, s] in points {
-        out.f64(e);
-        out.f64(s);
-    }
-}
-
-fn load_curve(r: &mut StateReader, what: &str) -> FmiResult<Option<Arc<StressStrain>>> {
-    let n = r.i32(what)?;
-    if !(0..=1_000_000).contains(&n) {
-        return Err(FmiError::error(format!("{what} has {n} points")));
-    }
-    let points = (0..n).map(|_| Ok([r.finite(what)?, r.finite(what)?])).collect::<FmiResult<Vec<_>>>()?;
-    Ok(match points.is_empty() {
-        true => None,
-        false => Some(Arc::new(StressStrain::new(&points).map_err(|e| FmiError::error(format!("{what} {e}")))?)),
-    })
 }

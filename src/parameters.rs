@@ -2,6 +2,7 @@
 
 use crate::description::{Effects, Solver};
 use crate::stress_strain::StressStrain;
+use fmi_core::{FmiError, FmiResult};
 use std::sync::Arc;
 
 /// Properties of one web (`wp1`: arriving at a; `wp2`: in the span).
@@ -113,4 +114,21 @@ pub struct Rates {
     pub speed_b: f64,
     /// dL/dt, m/s.
     pub length: f64,
+}
+
+/// Products of parameters that are each in range but together overflow
+/// (E*A, rho*A of a web of 1e300 m width) would make outputs infinite. Only
+/// the products the equations use: the span web's stiffness and linear
+/// density, and the arriving web's linear density with web mass.
+pub fn check_derived(p: &Parameters) -> FmiResult {
+    let w = &p.span_web;
+    let used = [
+        Some(("wp2: E*width*thickness", w.stiffness())),
+        Some(("wp2: density*width*thickness", w.linear_density())),
+        p.effects.include_mass.then(|| ("wp1: density*width*thickness", p.incoming.linear_density())),
+    ];
+    match used.into_iter().flatten().find(|(_, value)| !value.is_finite()) {
+        Some((what, value)) => Err(FmiError::error(format!("{what} = {value} overflows: the parameters are each in range, not together"))),
+        None => Ok(()),
+    }
 }

@@ -7,7 +7,7 @@
 use crate::description::DESCRIPTION;
 use crate::parameters::{Parameters, WebProperties};
 use crate::records;
-use crate::ConvertingSpan;
+use crate::web_state;
 use fmi_core::description::Start;
 use fmi_core::{FmiError, FmiResult, Resources, StateReader, StateWriter, Variables};
 use profiles::{Profile, Value};
@@ -32,17 +32,20 @@ impl WebChange {
     }
 }
 
-/// The span's profile file, its events resolved in time order.
-pub fn load(model: &ConvertingSpan, resources: &Resources) -> FmiResult<Arc<[WebChange]>> {
-    let Some(path) = profiles::locate(&model.params.profile, resources.folder_or_why(), resources.instance()).map_err(FmiError::error)? else {
+/// The span's profile file, its events resolved in time order: each event's
+/// values are set on a copy of `model` through its bindings, whose
+/// parameters `params` reaches.
+pub fn load<M: Variables + Clone>(model: &M, params: fn(&mut M) -> &mut Parameters, resources: &Resources) -> FmiResult<Arc<[WebChange]>> {
+    let profile_name = params(&mut model.clone()).profile.clone();
+    let Some(path) = profiles::locate(&profile_name, resources.folder_or_why(), resources.instance()).map_err(FmiError::error)? else {
         return Ok(Arc::new([]));
     };
     let text = Profile::read_text(&path).map_err(FmiError::error)?;
     let profile = Profile::parse(&text, &[]).map_err(|e| FmiError::error(format!("profile {}: {e}", path.display())))?;
-    resolve(model, &profile, resources).map_err(|e| e.prefixed(&format!("profile {}", path.display())))
+    resolve(model, params, &profile, resources).map_err(|e| e.prefixed(&format!("profile {}", path.display())))
 }
 
-fn resolve(model: &ConvertingSpan, profile: &Profile, resources: &Resources) -> FmiResult<Arc<[WebChange]>> {
+fn resolve<M: Variables + Clone>(model: &M, params: fn(&mut M) -> &mut Parameters, profile: &Profile, resources: &Resources) -> FmiResult<Arc<[WebChange]>> {
     let mut scratch = model.clone();
     let mut changes = Vec::with_capacity(profile.events.len());
     for e in &profile.events {
@@ -69,9 +72,9 @@ fn resolve(model: &ConvertingSpan, profile: &Profile, resources: &Resources) -> 
                 _ => return Err(FmiError::error(format!("{at}: {name} takes a {}", if matches!(v.start, Start::String(_)) { "text" } else { "number" }))),
             }
         }
-        records::apply(&mut scratch.params, resources).map_err(|err| err.prefixed(&at))?;
-        crate::model::check_derived(&scratch.params).map_err(|err| err.prefixed(&at))?;
-        let p = &scratch.params;
+        let p = params(&mut scratch);
+        records::apply(p, resources).map_err(|err| err.prefixed(&at))?;
+        crate::parameters::check_derived(p).map_err(|err| err.prefixed(&at))?;
         changes.push(WebChange {
             time: e.time,
             incoming: p.incoming.clone(),
@@ -89,7 +92,7 @@ pub fn save(changes: &[WebChange], out: &mut StateWriter) {
     for c in changes {
         out.f64(c.time);
         for web in [&c.incoming, &c.span_web] {
-            crate::model::save_web(web, out);
+            web_state::save_web(web, out);
         }
         out.str(&c.incoming_record);
         out.str(&c.span_record);
@@ -104,8 +107,8 @@ pub fn load_saved(r: &mut StateReader) -> FmiResult<Arc<[WebChange]>> {
     let mut changes = Vec::with_capacity(n as usize);
     for _ in 0..n {
         let time = r.finite("web change time")?;
-        let incoming = crate::model::load_web(r, "wp1 of a web change")?;
-        let span_web = crate::model::load_web(r, "wp2 of a web change")?;
+        let incoming = web_state::load_web(r, "wp1 of a web change")?;
+        let span_web = web_state::load_web(r, "wp2 of a web change")?;
         let (incoming_record, span_record) = (r.string("wp1.record of a web change")?.into(), r.string("wp2.record of a web change")?.into());
         changes.push(WebChange { time, incoming, span_web, incoming_record, span_record });
     }

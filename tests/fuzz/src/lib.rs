@@ -69,9 +69,9 @@ pub type Fuzzed = roller::Roller;
 
 /// The fuzzed model's resources/ folder, what its FMU ships.
 #[cfg(all(feature = "span", not(feature = "roller")))]
-const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../resources/");
+const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../resources/");
 #[cfg(feature = "roller")]
-const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../models/roller/resources/");
+const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/roller/resources/");
 
 fn desc() -> Desc {
     <Fuzzed as Model>::description()
