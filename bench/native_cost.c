@@ -23,7 +23,6 @@
  *   fmi2EnterInitializationMode, fmi2ExitInitializationMode); prints the ns per
  *   instance for that, the growth of the resident set (VmRSS) and of the heap
  *   in use (mallinfo2) per instance, and the ns per fmi2FreeInstance. */
-#include <dlfcn.h>
 #include <malloc.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,6 +30,8 @@
 #include <time.h>
 
 #include "fmi2Functions.h"
+
+#include "library.h"
 
 typedef struct {
     fmi2InstantiateTYPE *Instantiate; fmi2FreeInstanceTYPE *FreeInstance;
@@ -65,7 +66,7 @@ static double now_ns(void) {
 }
 
 static void *sym(void *lib, const char *name, int required) {
-    void *p = dlsym(lib, name);
+    void *p = find_symbol(lib, name);
     if (!p && required) { fprintf(stderr, "no %s\n", name); exit(2); }
     return p;
 }
@@ -84,8 +85,8 @@ static char **load(Target *t, char **argv) {
     parse_vrs(argv[2], t->in, 3);
     parse_vrs(argv[3], t->out, 2);
     parse_doubles(argv[4], t->u, 4);
-    void *lib = dlopen(t->lib, RTLD_NOW | RTLD_LOCAL);
-    if (!lib) { fprintf(stderr, "%s\n", dlerror()); exit(2); }
+    Library lib = open_library(t->lib);
+    if (!lib) { fprintf(stderr, "%s\n", library_error()); exit(2); }
     Api *a = &t->api;
 #define L(n, req) a->n = (fmi2##n##TYPE *)sym(lib, "fmi2" #n, req)
     L(Instantiate, 1); L(FreeInstance, 1); L(SetupExperiment, 1); L(EnterInitializationMode, 1);

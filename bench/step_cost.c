@@ -1,5 +1,5 @@
 /* Native cost of one co-simulation step, as an importer pays it: set the
- * three inputs, fmi2DoStep, get two outputs. Loads the library with dlopen,
+ * three inputs, fmi2DoStep, get two outputs. Loads the library (library.h),
  * so two builds can be measured side by side in one run.
  *
  *   step_cost LIB.so GUID STEPS REPEATS VR_INPUTS(3,comma) VR_OUTPUTS(2,comma) [VR=VALUE ...]
@@ -8,12 +8,13 @@
  * "i:34=3" an Integer, "r:1=0.5" a Real. Prints the median ns per step and
  * the spread (min, max) over the repeats, then the final outputs (so that the
  * work cannot be optimized away and two builds can be compared). */
-#include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include "fmi2Functions.h"
+
+#include "library.h"
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
                    fmi2String category, fmi2String message, ...) {
@@ -36,12 +37,12 @@ static void parse_vrs(const char *s, fmi2ValueReference *out, int n) {
     for (int i = 0; i < n; i++) { out[i] = (fmi2ValueReference)strtoul(s, (char **)&s, 10); if (*s == ',') s++; }
 }
 
-#define LOAD(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name); if (!name) { fprintf(stderr, "no %s\n", #name); return 2; }
+#define LOAD(name) name##TYPE *name = (name##TYPE *)find_symbol(lib, #name); if (!name) { fprintf(stderr, "no %s\n", #name); return 2; }
 
 int main(int argc, char **argv) {
     if (argc < 7) { fprintf(stderr, "usage: see the comment at the top of step_cost.c\n"); return 2; }
-    void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-    if (!lib) { fprintf(stderr, "%s\n", dlerror()); return 2; }
+    Library lib = open_library(argv[1]);
+    if (!lib) { fprintf(stderr, "%s\n", library_error()); return 2; }
     LOAD(fmi2Instantiate) LOAD(fmi2SetupExperiment) LOAD(fmi2EnterInitializationMode)
     LOAD(fmi2ExitInitializationMode) LOAD(fmi2SetReal) LOAD(fmi2GetReal) LOAD(fmi2SetBoolean)
     LOAD(fmi2SetInteger) LOAD(fmi2DoStep) LOAD(fmi2FreeInstance)
@@ -83,6 +84,6 @@ int main(int argc, char **argv) {
     qsort(ns, repeats, sizeof(double), cmp);
     printf("%.2f %.2f %.2f %.17g %.17g\n", ns[repeats / 2], ns[0], ns[repeats - 1], y[0], y[1]);
     free(ns);
-    dlclose(lib);
+    close_library(lib);
     return 0;
 }

@@ -304,9 +304,10 @@ def build():
     bindir = OUT / "bin"
     bindir.mkdir(exist_ok=True)
     inc = f"-I{fmpy_headers()}"
-    sh(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", inc, str(BENCH / "study_driver.c"), "-o", str(bindir / "study_driver"),
+    loader = f"-I{ROOT / 'tests' / 'c_importer'}"
+    sh(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", inc, loader, str(BENCH / "study_driver.c"), "-o", str(bindir / "study_driver"),
         "-ldl", "-lm", "-lsundials_cvode", "-lsundials_nvecserial", "-lsundials_sunmatrixdense", "-lsundials_sunlinsoldense"])
-    sh(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", inc, str(BENCH / "native_cost.c"), "-o", str(bindir / "native_cost"), "-ldl"])
+    sh(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", inc, loader, str(BENCH / "native_cost.c"), "-o", str(bindir / "native_cost"), "-ldl"])
     return unzipdir, lib, bindir
 
 

@@ -36,7 +36,6 @@
  *   cs ID H DERIVS NPARAMS b|i|r:VR=VALUE ...
  *   me ID H RTOL NPARAMS b|i|r:VR=VALUE ...
  */
-#include <dlfcn.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -50,6 +49,8 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "fmi2Functions.h"
+
+#include "library.h"
 
 #define MAX_INPUTS 8
 #define MAX_PTS 64
@@ -179,15 +180,15 @@ typedef struct {
     fmi2GetDerivativesTYPE *GetDerivatives; fmi2GetNominalsOfContinuousStatesTYPE *GetNominalsOfContinuousStates;
 } Api;
 
-static void *sym(void *lib, const char *name) {
-    void *p = dlsym(lib, name);
+static void *sym(Library lib, const char *name) {
+    void *p = find_symbol(lib, name);
     if (!p) { fprintf(stderr, "no %s\n", name); exit(2); }
     return p;
 }
 
 static void load_api(const char *path, Api *a) {
-    void *lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!lib) { fprintf(stderr, "%s\n", dlerror()); exit(2); }
+    Library lib = open_library(path);
+    if (!lib) { fprintf(stderr, "%s\n", library_error()); exit(2); }
 #define L(n) a->n = (fmi2##n##TYPE *)sym(lib, "fmi2" #n)
     L(Instantiate); L(FreeInstance); L(SetupExperiment); L(EnterInitializationMode); L(ExitInitializationMode);
     L(SetReal); L(GetReal); L(SetBoolean); L(SetInteger); L(DoStep); L(SetRealInputDerivatives); L(GetFMUstate);

@@ -14,13 +14,14 @@
 #   1. the packaged FMU's .so: glibc <= 2.17, only glibc + libgcc_s, no test hook
 #      (pytest tests/hardening)
 #   2. panic boundary through the C API (cargo test --features test-hooks)
-#   3. fuzz harness tests/fuzz, property-based, --strict: 50,000 / 1,000,000 sequences;
-#      its FMI 3 mode (--fmi3): 5,000 / 1,000,000
+#   3. fuzz harness tests/fuzz, property-based, --strict, for each model (the span,
+#      the Roller): 50,000 / 1,000,000 sequences; its FMI 3 mode (--fmi3): 5,000 / 1,000,000
 #   4. the same harness built with AddressSanitizer (LeakSanitizer included):
 #      10,000 / 200,000 sequences; FMI 3: 2,000 / 100,000
 #   5. the same harness under valgrind memcheck: 200 / 5,000 sequences
-#   6. tests/hardening/dlopen_cycles.c on the shipped .so, with ASan+UBSan:
-#      1,000 / 1,000 cycles; under valgrind: 100 / 1,000 cycles
+#   6. tests/hardening/dlopen_cycles.c on each shipped .so, with ASan+UBSan:
+#      1,000 / 1,000 cycles; under valgrind: 100 / 1,000 cycles; and the C importer
+#      reloading the library under a live instance (ASan+UBSan)
 #   7. the same with a panic caught in every cycle, on a portable build with the
 #      test-only hook: ASan 1,000 / 1,000, valgrind 20 / 200 cycles
 #   8. (--full) the C importer of tests/c_importer under valgrind, if present
@@ -60,10 +61,15 @@ note() { echo "$*" | tee -a "$SUMMARY"; }
 step() { echo; echo "== $*"; }
 START=$SECONDS
 
-FUZZ_DIR=target/fuzz
-FUZZ="$FUZZ_DIR/fuzz/fuzz_sequences"
-build_fuzz() {
-    cargo build --profile fuzz --quiet -p fmi-fuzz --target-dir "$FUZZ_DIR"
+# The fuzz harness (tests/fuzz) fuzzes one model per build: the span by default,
+# the Roller with --no-default-features --features roller.
+MODELS=(span roller)
+declare -A FEATURES=([span]="" [roller]="--no-default-features --features roller")
+declare -A NAME=([span]=ConvertingSpan [roller]=Roller)
+fuzz_of() { echo "target/fuzz-$1/fuzz/fuzz_sequences"; }
+build_fuzz() { # MODEL
+    # shellcheck disable=SC2086
+    cargo build --profile fuzz --quiet -p fmi-fuzz ${FEATURES[$1]} --target-dir "target/fuzz-$1"
 }
 
 if [ "$MODE" = afl ]; then
@@ -74,7 +80,8 @@ if [ "$MODE" = afl ]; then
     cargo afl config --build 2>/dev/null || true # "already built" is fine
     step "AFL++ (cargo-afl), $AFL_SECONDS s"
     cargo afl build --profile fuzz --quiet --features afl -p fmi-fuzz --target-dir target/fuzz-afl
-    build_fuzz
+    build_fuzz span
+    FUZZ=$(fuzz_of span)
     mkdir -p "$OUT/afl-seeds"
     # Seeds: a few sequences of the property driver's generator.
     "$PY" - "$OUT/afl-seeds" <<'EOF'
@@ -117,24 +124,27 @@ done
 step "2. panic boundary (test-only hook, separate target directory)"
 cargo test --release --quiet --features test-hooks --target-dir target/test-hooks --test panic_boundary
 
-step "3. fuzz harness, strict (a non-finite output after accepted values fails too): $SEQ sequences"
-build_fuzz
-"$FUZZ" --sequences "$SEQ" --strict | tee "$OUT/fuzz.log"
-note "fuzz: $(grep '^fuzzed' "$OUT/fuzz.log")"
-"$FUZZ" --fmi3 --sequences "$SEQ3" --strict | tee "$OUT/fuzz3.log"
-note "fuzz: $(grep '^fuzzed' "$OUT/fuzz3.log")"
+for model in "${MODELS[@]}"; do
+    step "3. fuzz harness, strict (a non-finite output after accepted values fails too), ${NAME[$model]}: $SEQ sequences"
+    build_fuzz "$model"
+    fuzz=$(fuzz_of "$model")
+    "$fuzz" --sequences "$SEQ" --strict | tee "$OUT/fuzz-$model.log"
+    note "fuzz ${NAME[$model]}: $(grep '^fuzzed' "$OUT/fuzz-$model.log")"
+    "$fuzz" --fmi3 --sequences "$SEQ3" --strict | tee "$OUT/fuzz3-$model.log"
+    note "fuzz ${NAME[$model]}: $(grep '^fuzzed' "$OUT/fuzz3-$model.log")"
 
-step "4. fuzz harness with AddressSanitizer: $SEQ_ASAN sequences"
-# -Zsanitizer needs a nightly flag: RUSTC_BOOTSTRAP=1 lets this stable toolchain take it.
-RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" \
-    cargo build --quiet --target x86_64-unknown-linux-gnu \
-    --profile fuzz -p fmi-fuzz --target-dir target/fuzz-asan
-ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 \
-    target/fuzz-asan/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences --sequences "$SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan.log"
-note "fuzz under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan.log"), no ASan/LSan report"
-ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 \
-    target/fuzz-asan/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences --fmi3 --sequences "$SEQ3_ASAN" --seed 7 | tee "$OUT/fuzz3-asan.log"
-note "fuzz under ASan: $(grep '^fuzzed' "$OUT/fuzz3-asan.log"), no ASan/LSan report"
+    step "4. fuzz harness with AddressSanitizer, ${NAME[$model]}: $SEQ_ASAN sequences"
+    # -Zsanitizer needs a nightly flag: RUSTC_BOOTSTRAP=1 lets this stable toolchain take it.
+    # shellcheck disable=SC2086
+    RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" \
+        cargo build --quiet --target x86_64-unknown-linux-gnu \
+        --profile fuzz -p fmi-fuzz ${FEATURES[$model]} --target-dir "target/fuzz-asan-$model"
+    asan="target/fuzz-asan-$model/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences"
+    ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 "$asan" --sequences "$SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan-$model.log"
+    note "fuzz ${NAME[$model]} under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan-$model.log"), no ASan/LSan report"
+    ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 "$asan" --fmi3 --sequences "$SEQ3_ASAN" --seed 7 | tee "$OUT/fuzz3-asan-$model.log"
+    note "fuzz ${NAME[$model]} under ASan: $(grep '^fuzzed' "$OUT/fuzz3-asan-$model.log"), no ASan/LSan report"
+done
 
 VALGRIND=(valgrind --tool=memcheck --leak-check=full --show-leak-kinds=definite,indirect,possible
     --errors-for-leak-kinds=definite,indirect,possible --error-exitcode=99)
@@ -146,51 +156,72 @@ valgrind_summary() { # log file -> one line
     echo "$errors; ${lost:-no leak summary}"
 }
 
-step "5. fuzz harness under valgrind: $SEQ_VALGRIND sequences"
-"${VALGRIND[@]}" --log-file="$OUT/valgrind-fuzz.log" "$FUZZ" --sequences "$SEQ_VALGRIND" --threads 1 --seed 11
-note "fuzz under valgrind ($SEQ_VALGRIND sequences): $(valgrind_summary "$OUT/valgrind-fuzz.log")"
+for model in "${MODELS[@]}"; do
+    step "5. fuzz harness under valgrind, ${NAME[$model]}: $SEQ_VALGRIND sequences"
+    "${VALGRIND[@]}" --log-file="$OUT/valgrind-fuzz-$model.log" "$(fuzz_of "$model")" --sequences "$SEQ_VALGRIND" --threads 1 --seed 11
+    note "fuzz ${NAME[$model]} under valgrind ($SEQ_VALGRIND sequences): $(valgrind_summary "$OUT/valgrind-fuzz-$model.log")"
+done
 
-step "6. dlopen/dlclose cycles of the shipped .so"
-rm -rf "$OUT/fmu" && mkdir -p "$OUT/fmu"
-"$PY" -c "import zipfile,sys; zipfile.ZipFile(sys.argv[1]).extractall(sys.argv[2])" out/ConvertingSpan.fmu "$OUT/fmu"
-SHIPPED="$OUT/fmu/binaries/linux64/ConvertingSpan.so"
-# GUID and value references from the model description.
-read -r GUID VR_A VR_B OUTPUTS < <("$PY" - <<'EOF'
+HEADERS=$("$PY" -c "import fmpy, pathlib; print(pathlib.Path(fmpy.__file__).parent / 'c-code')")
+C_FLAGS=(-O1 -g -Wall -Wextra -Werror -I "$HEADERS" -I tests/c_importer)
+gcc "${C_FLAGS[@]}" -o "$OUT/dlopen_cycles" tests/hardening/dlopen_cycles.c -ldl -lm
+gcc "${C_FLAGS[@]}" -fsanitize=address,undefined -fno-omit-frame-pointer \
+    -o "$OUT/dlopen_cycles_asan" tests/hardening/dlopen_cycles.c -ldl -lm
+gcc "${C_FLAGS[@]}" -fsanitize=address,undefined -fno-omit-frame-pointer \
+    -o "$OUT/importer_asan" tests/c_importer/importer.c -ldl -lm
+declare -A MODEL_DIR=([span]=. [roller]=models/roller)
+declare -A PACKAGE=([span]=converting-span [roller]=roller)
+declare -A LIBRARY=([span]=libconverting_span.so [roller]=libroller.so)
+# The Real input each scene sets to NaN (refused) and the one it steps.
+declare -A REFUSED=([span]=web_a.v [roller]=web_a.F) STEPPED=([span]=web_b.v [roller]=tau_m)
+for model in "${MODELS[@]}"; do
+    step "6. dlopen/dlclose cycles of the shipped ${NAME[$model]}.so, and a reload under a live instance"
+    rm -rf "$OUT/fmu" && mkdir -p "$OUT/fmu"
+    "$PY" -c "import zipfile,sys; zipfile.ZipFile(sys.argv[1]).extractall(sys.argv[2])" "out/${NAME[$model]}.fmu" "$OUT/fmu"
+    SHIPPED="$OUT/${NAME[$model]}.so"
+    cp "$OUT/fmu/binaries/linux64/${NAME[$model]}.so" "$SHIPPED"
+    # GUID, the two inputs' and the Real outputs' value references, from the model description.
+    read -r GUID VR_A VR_B OUTPUTS < <("$PY" - "${MODEL_DIR[$model]}/modelDescription.xml" "${REFUSED[$model]}" "${STEPPED[$model]}" <<'EOF'
+import sys
 import xml.etree.ElementTree as ET
-root = ET.parse("modelDescription.xml").getroot()
+root = ET.parse(sys.argv[1]).getroot()
 vr = {v.get("name"): v.get("valueReference") for v in root.iter("ScalarVariable")}
 outs = [v.get("valueReference") for v in root.iter("ScalarVariable")
         if v.get("causality") == "output" and v.find("Real") is not None]
-print(root.get("guid"), vr["web_a.v"], vr["web_b.v"], ",".join(outs))
+print(root.get("guid"), vr[sys.argv[2]], vr[sys.argv[3]], ",".join(outs))
 EOF
-)
-gcc -O1 -g -Wall -Wextra -Werror -o "$OUT/dlopen_cycles" tests/hardening/dlopen_cycles.c -ldl -lm
-gcc -O1 -g -Wall -Wextra -Werror -fsanitize=address,undefined -fno-omit-frame-pointer \
-    -o "$OUT/dlopen_cycles_asan" tests/hardening/dlopen_cycles.c -ldl -lm
-CYCLE_ARGS=("$GUID" "$VR_A" "$VR_B" "$OUTPUTS")
-ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-    "$OUT/dlopen_cycles_asan" "$SHIPPED" "${CYCLE_ARGS[0]}" "$CYCLES_ASAN" "${CYCLE_ARGS[@]:1}" | tee "$OUT/cycles-asan.log"
-note "dlopen cycles under ASan+UBSan: $(head -1 "$OUT/cycles-asan.log"); no report"
-"${VALGRIND[@]}" --log-file="$OUT/valgrind-cycles.log" \
-    "$OUT/dlopen_cycles" "$SHIPPED" "${CYCLE_ARGS[0]}" "$CYCLES_VALGRIND" "${CYCLE_ARGS[@]:1}"
-note "dlopen cycles under valgrind ($CYCLES_VALGRIND cycles): $(valgrind_summary "$OUT/valgrind-cycles.log")"
+    )
+    CYCLE_ARGS=("$GUID" "$VR_A" "$VR_B" "$OUTPUTS")
+    ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+        "$OUT/dlopen_cycles_asan" "$SHIPPED" "${CYCLE_ARGS[0]}" "$CYCLES_ASAN" "${CYCLE_ARGS[@]:1}" | tee "$OUT/cycles-asan-$model.log"
+    note "dlopen cycles of ${NAME[$model]} under ASan+UBSan: $(head -1 "$OUT/cycles-asan-$model.log"); no report"
+    "${VALGRIND[@]}" --log-file="$OUT/valgrind-cycles-$model.log" \
+        "$OUT/dlopen_cycles" "$SHIPPED" "${CYCLE_ARGS[0]}" "$CYCLES_VALGRIND" "${CYCLE_ARGS[@]:1}"
+    note "dlopen cycles of ${NAME[$model]} under valgrind ($CYCLES_VALGRIND cycles): $(valgrind_summary "$OUT/valgrind-cycles-$model.log")"
+    ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+        "$OUT/importer_asan" "$SHIPPED" "$GUID" --reload "$VR_B" "${OUTPUTS%%,*}" > "$OUT/reload-$model.log" 2>&1 \
+        || { tail -20 "$OUT/reload-$model.log"; exit 1; }
+    grep -q "^reload,unloaded,1" "$OUT/reload-$model.log" || { echo "${NAME[$model]} stayed loaded after the reload scene"; exit 1; }
+    note "${NAME[$model]} reloaded under a live instance (ASan+UBSan): both instances finished, unloaded after the last free"
 
-step "7. a caught panic in every cycle (portable build with the test-only hook)"
-cargo zigbuild --release --quiet --lib --features test-hooks --target x86_64-unknown-linux-gnu.2.17 \
-    --target-dir target/portable-hooks
-HOOKED=target/portable-hooks/x86_64-unknown-linux-gnu/release/libconverting_span.so
-ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-    "$OUT/dlopen_cycles_asan" "$HOOKED" "${CYCLE_ARGS[0]}" "$CYCLES_ASAN" "${CYCLE_ARGS[@]:1}" --panic \
-    2> "$OUT/panic-asan.stderr" | tee "$OUT/panic-asan.log" || { tail -30 "$OUT/panic-asan.stderr"; exit 1; }
-note "panic cycles under ASan+UBSan: $(head -1 "$OUT/panic-asan.log"); no report"
-"${VALGRIND[@]}" --log-file="$OUT/valgrind-panic.log" \
-    "$OUT/dlopen_cycles" "$HOOKED" "${CYCLE_ARGS[0]}" "$PANIC_VALGRIND" "${CYCLE_ARGS[@]:1}" --panic 2> "$OUT/panic-valgrind.stderr"
-note "panic cycles under valgrind ($PANIC_VALGRIND cycles): $(valgrind_summary "$OUT/valgrind-panic.log")"
+    step "7. a caught panic in every cycle, ${NAME[$model]} (portable build with the test-only hook)"
+    cargo zigbuild --release --quiet --lib -p "${PACKAGE[$model]}" --features test-hooks --target x86_64-unknown-linux-gnu.2.17 \
+        --target-dir target/portable-hooks
+    HOOKED="target/portable-hooks/x86_64-unknown-linux-gnu/release/${LIBRARY[$model]}"
+    ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+        "$OUT/dlopen_cycles_asan" "$HOOKED" "${CYCLE_ARGS[0]}" "$CYCLES_ASAN" "${CYCLE_ARGS[@]:1}" --panic \
+        2> "$OUT/panic-asan-$model.stderr" | tee "$OUT/panic-asan-$model.log" || { tail -30 "$OUT/panic-asan-$model.stderr"; exit 1; }
+    note "panic cycles of ${NAME[$model]} under ASan+UBSan: $(head -1 "$OUT/panic-asan-$model.log"); no report"
+    "${VALGRIND[@]}" --log-file="$OUT/valgrind-panic-$model.log" \
+        "$OUT/dlopen_cycles" "$HOOKED" "${CYCLE_ARGS[0]}" "$PANIC_VALGRIND" "${CYCLE_ARGS[@]:1}" --panic 2> "$OUT/panic-valgrind-$model.stderr"
+    note "panic cycles of ${NAME[$model]} under valgrind ($PANIC_VALGRIND cycles): $(valgrind_summary "$OUT/valgrind-panic-$model.log")"
+done
 
 if [ "$MODE" = full ] && [ -f tests/c_importer/importer.c ]; then
     step "8. the C importer of tests/c_importer under valgrind"
-    HEADERS=$("$PY" -c "import fmpy, pathlib; print(pathlib.Path(fmpy.__file__).parent / 'c-code')")
-    gcc -O1 -g -Wall -I "$HEADERS" tests/c_importer/importer.c -o "$OUT/importer" -ldl
+    SHIPPED="$OUT/ConvertingSpan.so"
+    GUID=$("$PY" -c "import xml.etree.ElementTree as ET; print(ET.parse('modelDescription.xml').getroot().get('guid'))")
+    gcc -O1 -g -Wall -I "$HEADERS" -I tests/c_importer tests/c_importer/importer.c -o "$OUT/importer" -ldl
     ARGS=$("$PY" - <<'EOF'
 import xml.etree.ElementTree as ET
 root = ET.parse("modelDescription.xml").getroot()

@@ -13,6 +13,7 @@
  * or, for the scripted scenes of the cross-platform tests, as
  *
  *     importer <library> <GUID> --script <file>       (see run_script below)
+ *     importer <library> <GUID> --reload <input vr> <output vr>   (see run_reload below)
  *
  * The value references come from the command line (the test reads them from
  * modelDescription.xml); none is written here. Results go to stdout as CSV:
@@ -381,8 +382,66 @@ static int run_script(const Api *api, const char *guid, const char *path)
     return 0;
 }
 
+/* ---- --reload: an importer that unloads the library under a live instance ----
+ * One co-simulation engine closes the FMU's library and opens it again when it
+ * instantiates the same FMU a second time, while the first instance lives.
+ * Instance A is made through the first load, the library closed and opened
+ * again, instance B made, both stepped with the same inputs (their outputs
+ * must agree) and freed through the second load; then the library must
+ * unload. Prints reload,<k>,<A>,<B> rows and reload,unloaded,<0|1>. */
+static int run_reload(const char *path, const char *guid, fmi2ValueReference in, fmi2ValueReference out)
+{
+    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    Api first, second;
+    Library lib = open_library(path);
+    if (lib == NULL || !load_api(lib, &first)) {
+        fprintf(stderr, "importer: loading %s failed: %s\n", path, library_error());
+        return 2;
+    }
+    fmi2Component a = first.instantiate("A", fmi2CoSimulation, guid, "file:///nonexistent/resources", &callbacks, fmi2False, fmi2False);
+    if (a == NULL) return 1;
+    must("A setup", first.setupExperiment(a, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    must("A enter init", first.enterInitializationMode(a));
+    close_library(lib);
+    lib = open_library(path);
+    if (lib == NULL || !load_api(lib, &second)) {
+        fprintf(stderr, "importer: loading %s again failed: %s\n", path, library_error());
+        return 2;
+    }
+    fmi2Component b = second.instantiate("B", fmi2CoSimulation, guid, "file:///nonexistent/resources", &callbacks, fmi2False, fmi2False);
+    if (b == NULL) return 1;
+    must("B setup", second.setupExperiment(b, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    must("B enter init", second.enterInitializationMode(b));
+    must("A exit init", second.exitInitializationMode(a));
+    must("B exit init", second.exitInitializationMode(b));
+    double t = 0.0, h = 1e-3;
+    for (int k = 0; k < 10; k++) {
+        double u, ya = 0.0, yb = 0.0;
+        must("A get input", second.getReal(a, &in, 1, &u));
+        u += 1e-3 * (k % 3);
+        must("A set", second.setReal(a, &in, 1, &u));
+        must("B set", second.setReal(b, &in, 1, &u));
+        must("A step", second.doStep(a, t, h, fmi2True));
+        must("B step", second.doStep(b, t, h, fmi2True));
+        must("A get", second.getReal(a, &out, 1, &ya));
+        must("B get", second.getReal(b, &out, 1, &yb));
+        printf("reload,%d,%.17g,%.17g\n", k, ya, yb);
+        if (ya != yb) failures++;
+        t += h;
+    }
+    second.freeInstance(a);
+    second.freeInstance(b);
+    close_library(lib);
+    printf("reload,unloaded,%d\n", !library_is_loaded(path));
+    return failures == 0 ? 0 : 1;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 6 && strcmp(argv[3], "--reload") == 0) {
+        return run_reload(argv[1], argv[2], (fmi2ValueReference)strtoul(argv[4], NULL, 10),
+                          (fmi2ValueReference)strtoul(argv[5], NULL, 10));
+    }
     if (argc == 5 && strcmp(argv[3], "--script") == 0) {
         Api api;
         Library lib = open_library(argv[1]);

@@ -480,3 +480,23 @@ def test_a_panic_in_a_step_comes_back_as_fmi2Error_on_every_platform(importers, 
     for folder in OTHERS:
         assert results[folder].stdout == reference.stdout
         assert log_lines(results[folder].stderr) == log_lines(reference.stderr)
+
+
+# The Real input each reload scene steps and the output it compares.
+RELOAD_SIGNALS = {"ConvertingSpan": ("web_b.v", "summary_Tension"), "Roller": ("tau_m", "omega")}
+
+
+@pytest.mark.parametrize("platform", [p.folder for p in PLATFORMS])
+@pytest.mark.parametrize("model", MODELS)
+def test_a_library_unloaded_and_loaded_again_under_a_live_instance_keeps_it(importers, binaries, descriptions, model,
+                                                                         platform, tmp_path):
+    """An importer that closes the library and opens it again while an instance
+    lives (importer.c --reload): both instances step to the same outputs, and
+    the library unloads after the last free (the instances hold a reference)."""
+    guid, variables = descriptions[model]
+    stepped, compared = (variables[name].get("valueReference") for name in RELOAD_SIGNALS[model])
+    proc = run(importers, platform, binaries[model, platform], guid, ["--reload", stepped, compared], tmp_path)
+    assert proc.returncode == 0, f"{platform}: exit {proc.returncode}\n{proc.stdout[-2000:]}{proc.stderr[-2000:]}"
+    rows = [line.split(",") for line in proc.stdout.splitlines() if line.startswith("reload,") and "unloaded" not in line]
+    assert len(rows) == 10 and all(a == b for _, _, a, b in rows), rows
+    assert "reload,unloaded,1" in proc.stdout.splitlines()

@@ -1,7 +1,7 @@
 /* dlopen/dlclose cycles of the FMU binary, for valgrind memcheck and
  * AddressSanitizer (tests/hardening.sh runs it under both).
  *
- *   dlopen_cycles LIBRARY.so GUID CYCLES VR_WEB_A_V VR_WEB_B_V OUTPUT_VRS [--panic]
+ *   dlopen_cycles LIBRARY.so GUID CYCLES VR_REFUSED VR_STEPPED OUTPUT_VRS [--panic]
  *
  * (OUTPUT_VRS comma-separated; tests/hardening.sh reads all of these from
  * modelDescription.xml.)
@@ -17,33 +17,15 @@
  *
  * Prints "N passed, M failed" (cycles) and exits non-zero on a failure.
  */
-#include <dlfcn.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-typedef void *fmi2Component;
-typedef void *fmi2ComponentEnvironment;
-typedef void *fmi2FMUstate;
-typedef unsigned int fmi2ValueReference;
-typedef double fmi2Real;
-typedef int fmi2Integer;
-typedef int fmi2Boolean;
-typedef char fmi2Char;
-typedef const fmi2Char *fmi2String;
-typedef char fmi2Byte;
-typedef enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending } fmi2Status;
-typedef enum { fmi2ModelExchange, fmi2CoSimulation } fmi2Type;
+#include "fmi2Functions.h"
 
-typedef struct {
-    void (*logger)(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...);
-    void *(*allocateMemory)(size_t, size_t);
-    void (*freeMemory)(void *);
-    void (*stepFinished)(fmi2ComponentEnvironment, fmi2Status);
-    fmi2ComponentEnvironment componentEnvironment;
-} fmi2CallbackFunctions;
+#include "library.h"
 
 /* Counts messages per status; formats each one as a real importer would. */
 typedef struct {
@@ -66,24 +48,23 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
 }
 
 typedef struct {
-    fmi2Component (*instantiate)(fmi2String, fmi2Type, fmi2String, fmi2String, const fmi2CallbackFunctions *,
-                                 fmi2Boolean, fmi2Boolean);
-    void (*free_instance)(fmi2Component);
-    fmi2Status (*setup)(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean, fmi2Real);
-    fmi2Status (*enter_init)(fmi2Component);
-    fmi2Status (*exit_init)(fmi2Component);
-    fmi2Status (*terminate)(fmi2Component);
-    fmi2Status (*reset)(fmi2Component);
-    fmi2Status (*set_debug_logging)(fmi2Component, fmi2Boolean, size_t, const fmi2String[]);
-    fmi2Status (*get_real)(fmi2Component, const fmi2ValueReference[], size_t, fmi2Real[]);
-    fmi2Status (*set_real)(fmi2Component, const fmi2ValueReference[], size_t, const fmi2Real[]);
-    fmi2Status (*do_step)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
-    fmi2Status (*get_state)(fmi2Component, fmi2FMUstate *);
-    fmi2Status (*set_state)(fmi2Component, fmi2FMUstate);
-    fmi2Status (*free_state)(fmi2Component, fmi2FMUstate *);
-    fmi2Status (*serialized_size)(fmi2Component, fmi2FMUstate, size_t *);
-    fmi2Status (*serialize)(fmi2Component, fmi2FMUstate, fmi2Byte[], size_t);
-    fmi2Status (*deserialize)(fmi2Component, const fmi2Byte[], size_t, fmi2FMUstate *);
+    fmi2InstantiateTYPE *instantiate;
+    fmi2FreeInstanceTYPE *free_instance;
+    fmi2SetupExperimentTYPE *setup;
+    fmi2EnterInitializationModeTYPE *enter_init;
+    fmi2ExitInitializationModeTYPE *exit_init;
+    fmi2TerminateTYPE *terminate;
+    fmi2ResetTYPE *reset;
+    fmi2SetDebugLoggingTYPE *set_debug_logging;
+    fmi2GetRealTYPE *get_real;
+    fmi2SetRealTYPE *set_real;
+    fmi2DoStepTYPE *do_step;
+    fmi2GetFMUstateTYPE *get_state;
+    fmi2SetFMUstateTYPE *set_state;
+    fmi2FreeFMUstateTYPE *free_state;
+    fmi2SerializedFMUstateSizeTYPE *serialized_size;
+    fmi2SerializeFMUstateTYPE *serialize;
+    fmi2DeSerializeFMUstateTYPE *deserialize;
 } Api;
 
 static int failures;
@@ -100,17 +81,17 @@ static int failures;
         }                                                                                                              \
     } while (0)
 
-static void *lookup(void *lib, const char *name) {
-    void *f = dlsym(lib, name);
+static void *lookup(Library lib, const char *name) {
+    void *f = find_symbol(lib, name);
     if (f == NULL) {
-        fprintf(stderr, "%s is not exported: %s\n", name, dlerror());
+        fprintf(stderr, "%s is not exported: %s\n", name, library_error());
         exit(2);
     }
     return f;
 }
 
 /* Value references, from the command line. */
-static fmi2ValueReference VR_WEB_A_V, VR_WEB_B_V;
+static fmi2ValueReference VR_REFUSED, VR_STEPPED;
 #define MAX_OUTPUTS 64
 static fmi2ValueReference OUTPUTS[MAX_OUTPUTS];
 static size_t N_OUTPUTS;
@@ -130,7 +111,7 @@ static int run_instance(const Api *api, const char *guid, int cycle, int panic) 
     fmi2FMUstate saved = NULL;
     for (int k = 0; k < 20; k++) {
         fmi2Real speed = 5.0 + 0.01 * k;
-        CHECK(api->set_real(c, &VR_WEB_B_V, 1, &speed) == fmi2OK, "fmi2SetReal");
+        CHECK(api->set_real(c, &VR_STEPPED, 1, &speed) == fmi2OK, "fmi2SetReal");
         CHECK(api->do_step(c, t, h, 1) == fmi2OK, "fmi2DoStep at %g", t);
         t += h;
         if (k == 10) {
@@ -163,7 +144,7 @@ static int run_instance(const Api *api, const char *guid, int cycle, int panic) 
     CHECK(api->free_state(c, &stale) == fmi2Error, "a double free of an FMU state was accepted");
     CHECK(api->reset(c) == fmi2OK, "fmi2Reset");
     fmi2Real nan = NAN;
-    CHECK(api->set_real(c, &VR_WEB_A_V, 1, &nan) == fmi2Error, "NaN accepted");
+    CHECK(api->set_real(c, &VR_REFUSED, 1, &nan) == fmi2Error, "NaN accepted");
     CHECK(log.messages[fmi2Error] >= 4, "errors without log messages (%d)", log.messages[fmi2Error]);
     CHECK(api->reset(c) == fmi2OK, "fmi2Reset after an error");
     if (panic) {
@@ -195,13 +176,13 @@ static int run_instance(const Api *api, const char *guid, int cycle, int panic) 
 
 int main(int argc, char **argv) {
     if (argc < 7) {
-        fprintf(stderr, "usage: %s LIBRARY.so GUID CYCLES VR_WEB_A_V VR_WEB_B_V OUTPUT_VRS [--panic]\n", argv[0]);
+        fprintf(stderr, "usage: %s LIBRARY.so GUID CYCLES VR_REFUSED VR_STEPPED OUTPUT_VRS [--panic]\n", argv[0]);
         return 2;
     }
     const char *path = argv[1], *guid = argv[2];
     int cycles = atoi(argv[3]);
-    VR_WEB_A_V = (fmi2ValueReference)strtoul(argv[4], NULL, 10);
-    VR_WEB_B_V = (fmi2ValueReference)strtoul(argv[5], NULL, 10);
+    VR_REFUSED = (fmi2ValueReference)strtoul(argv[4], NULL, 10);
+    VR_STEPPED = (fmi2ValueReference)strtoul(argv[5], NULL, 10);
     for (char *p = argv[6]; *p && N_OUTPUTS < MAX_OUTPUTS;) {
         OUTPUTS[N_OUTPUTS++] = (fmi2ValueReference)strtoul(p, &p, 10);
         if (*p == ',') p++;
@@ -209,9 +190,9 @@ int main(int argc, char **argv) {
     int panic = argc > 7 && strcmp(argv[7], "--panic") == 0;
     int passed = 0, unloaded = 0;
     for (int cycle = 0; cycle < cycles; cycle++) {
-        void *lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+        Library lib = open_library(path);
         if (lib == NULL) {
-            fprintf(stderr, "dlopen: %s\n", dlerror());
+            fprintf(stderr, "loading %s: %s\n", path, library_error());
             return 2;
         }
         Api api = {
@@ -226,16 +207,10 @@ int main(int argc, char **argv) {
             lookup(lib, "fmi2DeSerializeFMUstate"),
         };
         int failed = run_instance(&api, guid, cycle, panic) || run_instance(&api, guid, cycle, panic);
-        if (dlclose(lib) != 0) {
-            fprintf(stderr, "dlclose: %s\n", dlerror());
-            failed = 1;
-        }
-        /* Was the library really unloaded? RTLD_NOLOAD finds it if not. */
-        void *still = dlopen(path, RTLD_NOW | RTLD_NOLOAD);
-        if (still == NULL) {
+        close_library(lib);
+        /* Was the library really unloaded (no instance keeps a reference)? */
+        if (!library_is_loaded(path)) {
             unloaded++;
-        } else {
-            dlclose(still);
         }
         if (failed) {
             failures++;
