@@ -338,7 +338,7 @@ impl Model for ConvertingSpan {
         Ok(())
     }
 
-    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult {
+    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
         records::apply(&mut self.params, resources)?;
         let p = &self.params;
         let length = physics::span_length(p, &self.inputs);
@@ -392,10 +392,11 @@ impl Model for ConvertingSpan {
         self.rates = Rates::default();
         self.previous = Previous::default();
         self.adaptive_step = 0.0;
-        self.web_changes = schedule::load(self, |m| &mut m.params, resources)?;
+        let (web_changes, unmatched) = schedule::load(self, |m| &mut m.params, resources)?;
+        self.web_changes = web_changes;
         self.next_change = 0;
         self.time = experiment.start_time;
-        Ok(())
+        Ok(unmatched.into_iter().collect())
     }
 
     #[inline]

@@ -34,15 +34,23 @@ impl WebChange {
 
 /// The span's profile file, its events resolved in time order: each event's
 /// values are set on a copy of `model` through its bindings, whose
-/// parameters `params` reaches.
-pub fn load<M: Variables + Clone>(model: &M, params: fn(&mut M) -> &mut Parameters, resources: &Resources) -> FmiResult<Arc<[WebChange]>> {
+/// parameters `params` reaches. With the warning when the FMU carries other
+/// instances' profiles but none for this one.
+pub fn load<M: Variables + Clone>(
+    model: &M,
+    params: fn(&mut M) -> &mut Parameters,
+    resources: &Resources,
+) -> FmiResult<(Arc<[WebChange]>, Option<String>)> {
     let profile_name = params(&mut model.clone()).profile.clone();
-    let Some(path) = profiles::locate(&profile_name, resources.folder_or_why(), resources.instance()).map_err(FmiError::error)? else {
-        return Ok(Arc::new([]));
+    let located = profiles::locate(&profile_name, resources.folder_or_why(), resources.instance(), &[records::SHIPPED])
+        .map_err(FmiError::error)?;
+    let Some(path) = located.path else {
+        return Ok((Arc::new([]), located.unmatched));
     };
     let text = Profile::read_text(&path).map_err(FmiError::error)?;
     let profile = Profile::parse(&text, &[]).map_err(|e| FmiError::error(format!("profile {}: {e}", path.display())))?;
-    resolve(model, params, &profile, resources).map_err(|e| e.prefixed(&format!("profile {}", path.display())))
+    let changes = resolve(model, params, &profile, resources).map_err(|e| e.prefixed(&format!("profile {}", path.display())))?;
+    Ok((changes, None))
 }
 
 fn resolve<M: Variables + Clone>(model: &M, params: fn(&mut M) -> &mut Parameters, profile: &Profile, resources: &Resources) -> FmiResult<Arc<[WebChange]>> {

@@ -106,8 +106,10 @@ pub trait Model: Variables + Clone + Default + 'static {
     /// values) and computes the initial state from parameters and inputs;
     /// `resources` is the FMU's `resources/` folder, for models that read
     /// files. Called when initialization ends, and before outputs are read
-    /// during initialization. Must not change anything when it fails.
-    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult;
+    /// during initialization. Must not change anything when it fails. What
+    /// it returns are warnings, logged once when initialization ends (a
+    /// profile the FMU carries for other instances but none for this one).
+    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>>;
 
     /// Advances the model over a communication step of length `h` > 0, the
     /// inputs held at their current values. On failure the model must be

@@ -38,10 +38,13 @@ impl Loaded {
     }
 }
 
-pub fn load(p: &Parameters, resources: &Resources) -> FmiResult<Option<Loaded>> {
-    let Some(path) = profiles::locate(&p.profile, resources.folder_or_why(), resources.instance()).map_err(FmiError::error)? else { return Ok(None) };
+/// The roller's profile, if it has one; else, when the FMU carries other
+/// instances' profiles but none for this one, the warning that says so.
+pub fn load(p: &Parameters, resources: &Resources) -> FmiResult<Result<Loaded, Option<String>>> {
+    let located = profiles::locate(&p.profile, resources.folder_or_why(), resources.instance(), &[]).map_err(FmiError::error)?;
+    let Some(path) = located.path else { return Ok(Err(located.unmatched)) };
     let text = Profile::read_text(&path).map_err(FmiError::error)?;
-    parse(p, &text).map(Some).map_err(|e| FmiError::error(format!("profile {}: {e}", path.display())))
+    parse(p, &text).map(Ok).map_err(|e| FmiError::error(format!("profile {}: {e}", path.display())))
 }
 
 /// Parses and checks a profile against the roller's parameters.

@@ -350,11 +350,14 @@ impl Model for Roller {
         )))
     }
 
-    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult {
-        let loaded = drive::load(&self.params, resources)?;
-        self.profile = loaded;
+    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
+        let (profile, unmatched) = match drive::load(&self.params, resources)? {
+            Ok(loaded) => (Some(loaded), None),
+            Err(unmatched) => (None, unmatched),
+        };
+        self.profile = profile;
         self.start(experiment.start_time);
-        Ok(())
+        Ok(unmatched.into_iter().collect())
     }
 
     fn provisional_state(&mut self) {

@@ -35,33 +35,75 @@ pub fn due(event: f64, now: f64) -> bool {
 /// The file an FMU carries for itself, used when the `profile` parameter is empty.
 pub const OWN_PROFILE: &str = "profile.json";
 
+/// Where a line part's profile is (`path`, `None`: it has none) and, when the
+/// FMU carries other instances' profiles but none matched this instance,
+/// what to tell the user (`unmatched`): a line then runs without a drive.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Located {
+    pub path: Option<PathBuf>,
+    pub unmatched: Option<String>,
+}
+
 /// The file a `profile` parameter names: an absolute path, a name in the
 /// FMU's resources folder, or (empty) the instance's own profile if the FMU
-/// carries one: `resources/<instance>.json`, else `resources/profile.json`
-/// (`Ok(None)`: no profile). `folder` is the resources folder, or why there
-/// is none. One FMU thus serves a whole line (libcosim unpacks one copy per GUID).
-pub fn locate(name: &str, folder: Result<&Path, &str>, instance: &str) -> Result<Option<PathBuf>, String> {
+/// carries one: `resources/<instance>.json`, else `resources/profile.json`.
+/// `folder` is the resources folder, or why there is none; `not_profiles`
+/// are the model's other JSON files there (the span's library of webs). One
+/// FMU thus serves a whole line (libcosim unpacks one copy per GUID).
+pub fn locate(name: &str, folder: Result<&Path, &str>, instance: &str, not_profiles: &[&str]) -> Result<Located, String> {
     if name.is_empty() {
-        let Ok(folder) = folder else { return Ok(None) };
-        let own = own_file(instance).map(|f| folder.join(f)).filter(|p| p.is_file());
-        return Ok(own.or_else(|| Some(folder.join(OWN_PROFILE)).filter(|p| p.is_file())));
+        let Ok(folder) = folder else { return Ok(Located::default()) };
+        let own = own_files(instance).into_iter().map(|f| folder.join(f)).find(|p| p.is_file());
+        if let Some(path) = own.or_else(|| Some(folder.join(OWN_PROFILE)).filter(|p| p.is_file())) {
+            return Ok(Located { path: Some(path), unmatched: None });
+        }
+        return Ok(Located { path: None, unmatched: unmatched(folder, instance, not_profiles) });
     }
     let path = Path::new(name);
     if path.is_absolute() {
-        return Ok(Some(path.to_path_buf()));
+        return Ok(Located { path: Some(path.to_path_buf()), unmatched: None });
     }
     match folder {
-        Ok(f) => Ok(Some(f.join(name))),
+        Ok(f) => Ok(Located { path: Some(f.join(name)), unmatched: None }),
         Err(why) => Err(format!("profile = {name:?}: cannot read resources/{name} of the FMU: {why}")),
     }
 }
 
-/// `<instance>.json` when the instance name is a plain file name (no path, no dots only).
-fn own_file(instance: &str) -> Option<String> {
-    let plain = !instance.is_empty()
-        && instance.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
-        && !instance.starts_with('.');
-    plain.then(|| format!("{instance}.json"))
+/// The files an instance may own: `<instance>.json`, and for a name that is a
+/// path (some engines name an instance after a file) its last component,
+/// with and without its extension. Only plain file names (no path, no dots only).
+fn own_files(instance: &str) -> Vec<String> {
+    let last = instance.rsplit(['/', '\\']).next().unwrap_or("");
+    let stem = last.rsplit_once('.').map_or(last, |(stem, _)| stem);
+    let mut names: Vec<String> = Vec::new();
+    for candidate in [instance, last, stem] {
+        let plain = !candidate.is_empty()
+            && candidate.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+            && !candidate.starts_with('.');
+        let file = format!("{candidate}.json");
+        if plain && !names.contains(&file) {
+            names.push(file);
+        }
+    }
+    names
+}
+
+/// Why an instance runs without a profile although the FMU carries others' (`None`: it carries none).
+fn unmatched(folder: &Path, instance: &str, not_profiles: &[&str]) -> Option<String> {
+    let mut carried: Vec<String> = std::fs::read_dir(folder)
+        .ok()?
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".json") && n != OWN_PROFILE && !not_profiles.contains(&n.as_str()))
+        .collect();
+    if carried.is_empty() {
+        return None;
+    }
+    carried.sort();
+    Some(format!(
+        "the instance name {instance:?} matches none of the profiles this FMU carries ({}), so it runs without one: \
+         name the instance after one of them (its component in the line) or set the parameter profile",
+        carried.join(", ")
+    ))
 }
 
 /// Profiles are small; a larger file is refused before it is read.
@@ -176,17 +218,39 @@ mod tests {
     fn an_instance_finds_its_own_profile_before_the_shared_one() {
         let dir = std::env::temp_dir().join(format!("profiles-locate-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let found = |instance| locate("", Ok(&dir), instance).unwrap();
+        let found = |instance| locate("", Ok(&dir), instance, &[]).unwrap().path;
         assert_eq!(found("nip"), None);
         std::fs::write(dir.join(OWN_PROFILE), "{}").unwrap();
         assert_eq!(found("nip"), Some(dir.join(OWN_PROFILE)));
         std::fs::write(dir.join("nip.json"), "{}").unwrap();
         assert_eq!(found("nip"), Some(dir.join("nip.json")));
         assert_eq!(found("other"), Some(dir.join(OWN_PROFILE)));
-        // A name with a path is no file name here: the shared profile.
+        // A name that is a path: its last component, with or without its extension; never a path.
         std::fs::write(dir.join("..json"), "{}").unwrap();
         assert_eq!(found("."), Some(dir.join(OWN_PROFILE)));
-        assert_eq!(found("../nip"), Some(dir.join(OWN_PROFILE)));
+        assert_eq!(found("../nip"), Some(dir.join("nip.json")));
+        assert_eq!(found("/opt/line/nip"), Some(dir.join("nip.json")));
+        assert_eq!(found("C:\\line\\nip.fmu"), Some(dir.join("nip.json")));
+        assert_eq!(found("/opt/line/"), Some(dir.join(OWN_PROFILE)));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn an_instance_that_matches_none_of_the_carried_profiles_is_told_which_there_are() {
+        let dir = std::env::temp_dir().join(format!("profiles-unmatched-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let located = |instance| locate("", Ok(&dir), instance, &["webs.json"]).unwrap();
+        std::fs::write(dir.join("webs.json"), "{}").unwrap();
+        // Only the model's own data: nothing carried, nothing to say.
+        assert_eq!(located("Roller"), Located::default());
+        std::fs::write(dir.join("unwind.json"), "{}").unwrap();
+        std::fs::write(dir.join("rewind.json"), "{}").unwrap();
+        let told = located("/engines/line/Roller.fmu");
+        assert_eq!(told.path, None);
+        let message = told.unmatched.unwrap();
+        assert!(message.contains("\"/engines/line/Roller.fmu\" matches none") && message.contains("(rewind.json, unwind.json)"), "{message}");
+        // Matched: silent.
+        assert_eq!(located("unwind"), Located { path: Some(dir.join("unwind.json")), unmatched: None });
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

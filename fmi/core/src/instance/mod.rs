@@ -176,20 +176,24 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn exit_initialization_mode(&mut self, call: CallName) -> FmiResult {
-        self.settle_initial_values().map_err(|e| e.prefixed(call))?;
+        let warnings = self.settle_initial_values().map_err(|e| e.prefixed(call))?;
+        for warning in warnings {
+            self.log(Status::Warning, Status::Warning.log_category(), &format!("{call}: {warning}"));
+        }
         self.phase = if self.experiment.model_exchange { Phase::EventMode } else { Phase::StepComplete };
         self.log_event("initialization done");
         Ok(())
     }
 
     /// Checks every parameter against its allowed range, then lets the model
-    /// compute its initial state. Nothing changes when a check fails.
-    fn settle_initial_values(&mut self) -> FmiResult {
+    /// compute its initial state; returns the model's warnings. Nothing
+    /// changes when a check fails.
+    fn settle_initial_values(&mut self) -> FmiResult<Vec<String>> {
         self.check_parameter_ranges()?;
         let mut model = self.model.clone();
-        model.initialize(&self.experiment, &self.resources)?;
+        let warnings = model.initialize(&self.experiment, &self.resources)?;
         self.model = model;
-        Ok(())
+        Ok(warnings)
     }
 
     /// Every parameter within its allowed range.

@@ -19,6 +19,7 @@ impl<M: Model> Instance<M> {
     /// set so far, so they are computed before they are read.
     pub(super) fn prepare_get(&mut self, call: CallName) -> FmiResult {
         if self.phase == Phase::InitializationMode {
+            // Warnings are logged once, when initialization ends.
             self.settle_initial_values().map_err(|e| e.prefixed(call))?;
         }
         Ok(())
