@@ -17,11 +17,12 @@ import math
 
 import numpy as np
 import pytest
-from conftest import SCENES
 from webline.master import run_scene
 from webline.reference import reference
 from webline.scene import load_scene, parse_scene
 from webline.study import convergence, errors, observed_orders, tension_error, union_grid
+
+from .conftest import SCENES
 
 
 DEFAULT_STEP_TOLERANCE = {"lamination": 1e-3, "emergency_stop": 3e-3, "dancer": 5e-3, "splice": 2.5e-2, "stiff_line": 1e-4}

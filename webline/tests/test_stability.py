@@ -14,6 +14,8 @@ from scipy.integrate import solve_ivp
 
 from webline.stability import Block, Line, conserved_modes, spectral_radius, stable_step, step_map
 
+from .conftest import ROOT, SCENES
+
 
 def spring_line(k=1e6, m=0.04, c=0.0):
     """source -> span1 -> idler -> span2 -> sink; source and sink speeds held (not blocks).
@@ -124,8 +126,6 @@ def test_conserved_length_is_excluded_by_rule():
 
 def span_component(name="s", E=4e9, thickness=5e-4, L=0.2, d_r=1e-4, damping=True, eps=1e-3, v=2.0, fmu=None):
     from types import SimpleNamespace
-
-    from conftest import ROOT
 
     start = {"L": L, "startAtEquilibrium": False, "eps_start": eps, "web_a.v": v, "web_a.eps": eps, "web_b.v": v * 1.001,
              "includeDamping": damping}
@@ -272,7 +272,7 @@ def judged(rows, start):
 
 LINES = {
     "light_idler": (light_idler_scene, "idler"),
-    "lamination": (lambda tmp: __import__("conftest").SCENES / "lamination.json", "idler"),
+    "lamination": (lambda tmp: SCENES / "lamination.json", "idler"),
 }
 OBSERVED = {}
 
