@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 import pytest
-from webline.master import run_scene
+from webline.compiler import run_scene
 from webline.reference import reference
 from webline.scene import load_scene, parse_scene
 from webline.study import convergence, errors, observed_orders, tension_error, union_grid

@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 from webline import records
-from webline.master import run_scene
+from webline.compiler import run_scene
 from webline.reference import reference
 from webline.scene import parse_scene
 from webline.study import errors

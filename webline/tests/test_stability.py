@@ -196,7 +196,7 @@ def light_idler_scene(tmp_path):
 
 def compiled(path, fmus):
     from webline.scene import load_scene
-    from webline.system import compile_scene
+    from webline.compiler import compile_scene
 
     system = compile_scene(load_scene(path), fmus)
     system.record = [(c.name, "summary_Tension") for c in system.components if c.kind == "span"]

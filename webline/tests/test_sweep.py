@@ -2,7 +2,7 @@
 existing scheduler's address, and each row equal to the same point run alone."""
 
 import pytest
-from webline.master import run_scene
+from webline.compiler import run_scene
 from webline.scene import SceneError, load_scene
 from webline.sweep import Table, parse_grid, run_sweep
 

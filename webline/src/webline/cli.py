@@ -21,7 +21,8 @@ import numpy as np
 
 from . import units
 from .fmus import DEFAULT_FMU_DIR, FmuError
-from .master import ALGORITHMS, COUPLINGS, CoSimulationError, run_scene, scene_grid
+from .compiler import run_scene
+from .master import ALGORITHMS, COUPLINGS, CoSimulationError, scene_grid
 from .result import Result
 from .engines import ENGINES
 from .scene import Dancer, SceneError, Span, load_scene
@@ -111,7 +112,7 @@ def system_summary(result: Result) -> str:
 def cmd_export(args):
     from .ssp import write_ssp
     from .stability import export_step
-    from .system import compile_scene
+    from .compiler import compile_scene
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     system = compile_scene(scene, args.fmu_dir)
@@ -129,7 +130,7 @@ def run_other(args, progress):
     from .engines import run_fmpy, run_libcosim
     from .master import run_system
     from .ssp import read_ssp, write_ssp
-    from .system import compile_scene
+    from .compiler import compile_scene
 
     is_ssp = args.scene.endswith(".ssp")
     if is_ssp and args.reference:
@@ -211,7 +212,7 @@ def cmd_check(args):
             system = read_ssp(Path(path), Path(tempfile.mkdtemp(prefix="webline-check-")))
             print(f"{path}: {system.name}: {len(system.components)} components, step {system.step * 1e3:g} ms")
         else:
-            from .system import compile_scene
+            from .compiler import compile_scene
 
             scene = load_scene(path)
             chain = " -> ".join(f"{c.name} ({c.type})" for c in scene.line)

@@ -147,7 +147,7 @@ def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None
     from .ssp import read_ssp, write_ssp
     from .stability import export_step
     from .study import errors
-    from .system import compile_scene
+    from .compiler import compile_scene
 
     scene = load_scene(scene_path, fmu_dir=fmu_dir)
     if stop_time is not None:

@@ -7,7 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .master import run_scene, scene_grid
+from .compiler import run_scene
+from .master import scene_grid
 from .reference import reference
 from .result import Result
 
