@@ -13,7 +13,7 @@ from webline import records
 from webline.compiler import run_scene
 from webline.reference import reference
 from webline.scene import parse_scene
-from webline.study import errors
+from webline.accuracy import errors
 
 from .conftest import ROOT
 

@@ -146,7 +146,7 @@ def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None
     from .scene import load_scene
     from .ssp import read_ssp, write_ssp
     from .stability import export_step
-    from .study import errors
+    from .accuracy import errors
     from .compiler import compile_scene
 
     scene = load_scene(scene_path, fmu_dir=fmu_dir)
