@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile
+from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile, span_effects
 from .master import Master, Options, settle_start_values
 from .profiles import Profile
 from .result import Result
@@ -112,14 +112,14 @@ def _dancer_of(scene: Scene, span: Span):
     return up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
 
 
-def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict) -> Component:
+def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict, effects: tuple) -> Component:
     dancer = _dancer_of(scene, span)
     lib = scene.web_library
     start = {
         "L": float(span.length if span.length is not None else dancer.y_start),
         **web_values("wp1", span.wp1, lib),
         **web_values("wp2", span.wp2, lib),
-        **{e: e in span.effects for e in ("includeDamping", "preventNegativeTension", "includeMass", "variableLength")},
+        **{e: e in span.effects for e in effects},
         # The start strain is given, not the FMU's equilibrium of its first inputs
         # (FMPy's first inputs are all 0.0): every engine starts the same.
         "startAtEquilibrium": False,
@@ -175,11 +175,12 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
     d = Path(fmu_dir or DEFAULT_FMU_DIR)
     span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
     solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}
+    effects = span_effects(d)
     rollers = [_roller(scene, n, roller_fmu) for n in scene.nodes]
     spans = []
     eps_in = _start_strain(scene.line[0])
     for sp in scene.spans:
-        comp = _span(scene, sp, eps_in, span_fmu, solvers)
+        comp = _span(scene, sp, eps_in, span_fmu, solvers, effects)
         eps_in = comp.start["eps_start"]
         spans.append(comp)
 
