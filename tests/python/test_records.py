@@ -23,7 +23,7 @@ L, VA, EPS_A, VB0, VB1 = 0.5, 5.0, 1e-3, 5.0, 5.03
 
 def test_the_fmu_ships_the_library_and_python_reads_every_record(fmu_path):
     with zipfile.ZipFile(fmu_path) as z:
-        assert z.read("resources/webs.json") == (ROOT / "fmu" / "resources" / "webs.json").read_bytes()
+        assert z.read("resources/webs.json") == (ROOT / "resources" / "webs.json").read_bytes()
     shipped = records.shipped_library(fmu_path)
     names = set(shipped)
     assert {"PET-12", "BOPP-20", "LDPE-50", "paper-80gsm", "board-350", "Al-foil-9", "PET12-Al9", "PET12-PE50",
