@@ -25,6 +25,8 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from webline.fmus import effects
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "target" / "bench"
 # The commit before the issue that added effects and solvers.
@@ -102,15 +104,13 @@ def main():
     baseline = build_library(base_tree, OUT / "baseline-target")
 
     on = "1"
+    md = ROOT / "modelDescription.xml"
+    names = effects(md)  # the span's effects, as its model description names them
     scenes = [
         ("elastic (baseline build)", baseline, base_tree / "modelDescription.xml", []),
-        ("elastic, effect code present but off", current, ROOT / "modelDescription.xml", []),
-        ("includeDamping", current, ROOT / "modelDescription.xml", [("b", "includeDamping", on)]),
-        ("preventNegativeTension", current, ROOT / "modelDescription.xml", [("b", "preventNegativeTension", on)]),
-        ("includeMass", current, ROOT / "modelDescription.xml", [("b", "includeMass", on)]),
-        ("variableLength", current, ROOT / "modelDescription.xml", [("b", "variableLength", on)]),
-        ("all four effects", current, ROOT / "modelDescription.xml",
-         [("b", n, on) for n in ["includeDamping", "preventNegativeTension", "includeMass", "variableLength"]]),
+        ("elastic, effect code present but off", current, md, []),
+        *[(n, current, md, [("b", n, on)]) for n in names],
+        ("all four effects", current, md, [("b", n, on) for n in names]),
     ]
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, {platform.platform()}")
     print(f"{args.steps} steps x {args.repeats} repeats per scene; baseline = {args.baseline}\n")

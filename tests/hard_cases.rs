@@ -2,7 +2,7 @@
 //!
 //! Every case is defined once in tests/hard_cases/catalogue.json; its
 //! schedule, its reference and each solver run's tolerance are computed in one
-//! place, tests/hard_cases/reference.py (mpmath closed forms, SciPy's Radau,
+//! place, bench/hard_cases_reference.py (mpmath closed forms, SciPy's Radau,
 //! the stability polynomials of rk4/euler; independent of the model's code),
 //! and stored in tests/hard_cases/references.json, which this test replays:
 //! the parameters set by name, the inputs at t = 0, then every communication

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every test: Rust tests of the model core and of the C API, then the packaged
-# FMU through a C importer, FMPy, fmi-sim and libcosim (pytest), hardening, and the
-# Windows and ARM64 binaries under Wine and QEMU (tests/cross.sh).
+# FMU through a C importer, FMPy, fmi-sim and libcosim, and webline's own tests
+# (pytest), hardening, and the Windows and ARM64 binaries under Wine and QEMU
+# (tests/cross.sh).
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
 source "$ROOT/tests/tools.sh"
@@ -12,7 +13,9 @@ cd "$ROOT"
 cargo test --release --quiet --workspace --exclude fmi-fuzz
 python3 fmu/package.py
 "$PY" fmu/compat.py out
-"$PY" -m pytest tests/python fmu/tests -q
+# --rootdir: webline/pyproject.toml would otherwise become the rootdir (it is among the
+# arguments' folders), and the test ids of tests/python would lose their folder.
+"$PY" -m pytest --rootdir "$ROOT" tests/python fmu/tests webline/tests -q
 # Hardening, CI size (tests/hardening.sh --full for the long runs): the
 # portable .so, the panic boundary, the fuzzed C API, AddressSanitizer and
 # valgrind, dlopen/dlclose cycles.

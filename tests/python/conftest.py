@@ -39,8 +39,6 @@ _fmpy_simulation.fmi2CallbackLoggerTYPE = _kept_logger
 
 ROOT = Path(__file__).resolve().parents[2]
 FMU = ROOT / "out" / "ConvertingSpan.fmu"
-# The web-line scenes of the webline runner (webline/, installed by fmu/env.sh).
-SCENES = ROOT / "webline" / "scenes"
 
 INPUTS = ("web_a.v", "web_a.eps", "web_b.v")
 DPS = 40
@@ -65,7 +63,7 @@ def fmu_path():
 
 @pytest.fixture(scope="session")
 def fmus():
-    """The folder with both FMUs of a web line (ConvertingSpan.fmu, Roller.fmu), for webline."""
+    """The folder with both FMUs (ConvertingSpan.fmu, Roller.fmu)."""
     _packaged(FMU)
     return _packaged(FMU.parent / "Roller.fmu").parent
 

@@ -2,8 +2,8 @@
 
 Every case is defined once in tests/hard_cases/catalogue.json. Its schedule,
 its reference (mpmath closed forms, SciPy's Radau, the rk4/euler stability
-polynomials: tests/hard_cases/reference.py, written from the physics, not from
-the FMU's code) and each solver run's tolerance are stored in
+polynomials: bench/hard_cases_reference.py, written from the physics, not
+from the FMU's code) and each solver run's tolerance are stored in
 tests/hard_cases/references.json; tests/hard_cases.rs replays the same file
 through the model core. Here:
 
@@ -41,8 +41,8 @@ from fmpy.fmi2 import fmi2Discard, fmi2LastSuccessfulTime
 from fmpy.simulation import instantiate_fmu
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tests" / "hard_cases"))
-import reference as R  # noqa: E402
+sys.path.insert(0, str(ROOT / "bench"))
+import hard_cases_reference as R  # noqa: E402
 from conftest import simulate_fmu  # noqa: E402  (the FMI 2.0 FMU, then its FMI 3.0 twin: bit-identical)
 
 STORED = json.loads(R.REFERENCES.read_text())

@@ -4,9 +4,9 @@
     python -m webline --help
 
 Modules: `scene` (the JSON format, read strictly), `system` (a line as FMU
-components and connections; scenes compiled into one), `master` (runs a
-System), `reference` (the monolithic SciPy reference), `sweep` (parameter
-grids on Dask).
+components and connections), `master` (runs a System), `compiler` (scenes
+compiled into a System, and run), `reference` (the monolithic SciPy
+reference), `accuracy` (errors against it), `sweep` (parameter grids on Dask).
 """
 
 from .scene import SceneError, load_scene, parse_scene  # noqa: F401

@@ -5,7 +5,6 @@
     webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
     webline reference SCENE.json
     webline convergence SCENE.json [--steps 2ms,1ms,0.5ms]
-    webline study [SCENE.json] [--stiff STIFF.json]
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
 """
 
@@ -21,7 +20,8 @@ import numpy as np
 
 from . import units
 from .fmus import DEFAULT_FMU_DIR, FmuError
-from .master import ALGORITHMS, COUPLINGS, CoSimulationError, run_scene, scene_grid
+from .compiler import run_scene
+from .master import ALGORITHMS, COUPLINGS, CoSimulationError, scene_grid
 from .result import Result
 from .engines import ENGINES
 from .scene import Dancer, SceneError, Span, load_scene
@@ -111,7 +111,7 @@ def system_summary(result: Result) -> str:
 def cmd_export(args):
     from .ssp import write_ssp
     from .stability import export_step
-    from .system import compile_scene
+    from .compiler import compile_scene
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     system = compile_scene(scene, args.fmu_dir)
@@ -129,7 +129,7 @@ def run_other(args, progress):
     from .engines import run_fmpy, run_libcosim
     from .master import run_system
     from .ssp import read_ssp, write_ssp
-    from .system import compile_scene
+    from .compiler import compile_scene
 
     is_ssp = args.scene.endswith(".ssp")
     if is_ssp and args.reference:
@@ -177,7 +177,7 @@ def report_run(args, scene, name, result, text):
     ref = None
     if args.reference:
         from .reference import reference
-        from .study import errors
+        from .accuracy import errors
 
         ref = reference(scene, times=result.time)
         errs = errors(result, ref)
@@ -211,7 +211,7 @@ def cmd_check(args):
             system = read_ssp(Path(path), Path(tempfile.mkdtemp(prefix="webline-check-")))
             print(f"{path}: {system.name}: {len(system.components)} components, step {system.step * 1e3:g} ms")
         else:
-            from .system import compile_scene
+            from .compiler import compile_scene
 
             scene = load_scene(path)
             chain = " -> ".join(f"{c.name} ({c.type})" for c in scene.line)
@@ -243,7 +243,7 @@ def cmd_reference(args):
 
 
 def cmd_convergence(args):
-    from .study import convergence, observed_orders
+    from .accuracy import convergence, observed_orders
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     steps = [time_arg(s) for s in args.steps.split(",")]
@@ -257,31 +257,6 @@ def cmd_convergence(args):
             print(f"  {r.step * 1e3:>8g}ms   unstable: {r.failed}")
         else:
             print(f"  {r.step * 1e3:>8g}ms{r.error:>15.3e}{r.speed_error:>13.3e}{order:>7}{r.wall_time:>10.2f}s")
-    return 0
-
-
-def cmd_study(args):
-    from .study import line_study, stability_limit
-
-    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-    stiff = load_scene(args.stiff, fmu_dir=args.fmu_dir)
-    steps = [time_arg(x) for x in args.steps.split(",")]
-    stiff_steps = [time_arg(x) for x in args.stiff_steps.split(",")]
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    png = out / "line_study.png"
-    accuracy, stiff_rows = line_study(scene, stiff, steps, stiff_steps, args.fmu_dir, png)
-    print(f"{scene.name}: largest tension error (and wall time) by communication step")
-    print("  " + f"{'variant':<28}" + "".join(f"{h * 1e3:>16g}ms" for h in steps))
-    for (alg, coupling), rows in accuracy.items():
-        cells = "".join(f"{'diverged':>18}" if not r.error < 0.1 else f"{r.error:>10.2e} ({r.wall_time:.2f}s)" for r in rows)
-        print(f"  {alg + ', ' + coupling:<28}{cells}")
-    print(f"{stiff.name}: stability limit of the communication step")
-    for coupling, rows in stiff_rows.items():
-        ok, bad = stability_limit(rows)
-        what = "with input derivatives and extrapolation" if coupling == "extrapolate" else "with inputs held"
-        print(f"  {what}: stable at {ok * 1e3 if ok else '-'} ms, diverges at {bad * 1e3 if bad else '-'} ms")
-    print(f"wrote {png}")
     return 0
 
 
@@ -347,15 +322,6 @@ def main(argv=None):
     p.add_argument("--coupling", choices=COUPLINGS, default="extrapolate")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.set_defaults(func=cmd_convergence)
-
-    p = sub.add_parser("study", help="line-level accuracy-cost study and the stability limit of a stiff line (PNG)")
-    p.add_argument("scene", nargs="?", default=str(Path(__file__).resolve().parents[2] / "scenes" / "lamination.json"))
-    p.add_argument("--stiff", default=str(Path(__file__).resolve().parents[2] / "scenes" / "stiff_line.json"))
-    p.add_argument("--steps", default="2ms,1ms,0.5ms,0.25ms")
-    p.add_argument("--stiff-steps", default="1ms,0.5ms,0.35ms,0.25ms,0.18ms,0.125ms,0.0625ms")
-    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
-    p.add_argument("--out", default=str(OUT))
-    p.set_defaults(func=cmd_study)
 
     p = sub.add_parser("sweep", help="run a scene over a grid of parameters on Dask")
     p.add_argument("scene")

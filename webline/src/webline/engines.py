@@ -146,8 +146,8 @@ def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None
     from .scene import load_scene
     from .ssp import read_ssp, write_ssp
     from .stability import export_step
-    from .study import errors
-    from .system import compile_scene
+    from .accuracy import errors
+    from .compiler import compile_scene
 
     scene = load_scene(scene_path, fmu_dir=fmu_dir)
     if stop_time is not None:

@@ -2,7 +2,7 @@
 
 `FmuFile` extracts an FMU once and reads its model description (the
 enumerations a scene names, such as the span's solvers, come from there:
-`enumeration`); `Instance`
+`enumeration`; so do the span's effects: `span_effects`); `Instance`
 is one FMPy `FMU2Slave` with preallocated ctypes buffers for the calls made
 every communication step, an FMU state slot for rollbacks, and the FMU's log
 messages kept so that a failed call can say why.
@@ -14,6 +14,7 @@ import atexit
 import os
 import shutil
 import tempfile
+import zipfile
 from ctypes import byref
 from functools import lru_cache
 from pathlib import Path
@@ -32,6 +33,7 @@ from fmpy.fmi2 import (
     fmi2ValueReference,
 )
 from fmpy import calloc, free
+from lxml import etree
 
 ROOT = Path(__file__).resolve().parents[3]
 DEFAULT_FMU_DIR = ROOT / "out"
@@ -39,6 +41,9 @@ SPAN_FMU = "ConvertingSpan.fmu"
 ROLLER_FMU = "Roller.fmu"
 
 OK, WARNING, DISCARD = 0, 1, 2
+# The span's model-level annotation that names its effects: the Boolean parameters
+# that switch a physical effect on (not every Boolean parameter is one).
+EFFECTS_TOOL = "ConvertingSpan.effects"
 
 
 class FmuError(RuntimeError):
@@ -58,16 +63,53 @@ def _read(path: str, mtime: float):
     return read_model_description(path)
 
 
-def span_description(fmu_dir=None):
-    """ConvertingSpan's model description: the one of the FMU in `fmu_dir`
-    (out/ by default); without a `fmu_dir` and before the FMUs are built, the
-    repository's modelDescription.xml, which the FMU is packaged from."""
+def _span_path(fmu_dir=None) -> Path:
+    """The FMU in `fmu_dir` (out/ by default); without a `fmu_dir` and before the
+    FMUs are built, the repository's modelDescription.xml, which the FMU is packaged from."""
     path = Path(fmu_dir or DEFAULT_FMU_DIR) / SPAN_FMU
     if not path.exists() and fmu_dir is None and (ROOT / "modelDescription.xml").exists():
         path = ROOT / "modelDescription.xml"
     if not path.exists():
         raise FileNotFoundError(f"{path} is missing: build the FMUs first with `python3 fmu/package.py`")
+    return path
+
+
+def span_description(fmu_dir=None):
+    """ConvertingSpan's model description (see `_span_path` for which one)."""
+    path = _span_path(fmu_dir)
     return _read(str(path), os.path.getmtime(path))
+
+
+def span_effects(fmu_dir=None) -> tuple:
+    """ConvertingSpan's effects, from the same model description as `span_description`."""
+    path = _span_path(fmu_dir)
+    return _effects(str(path), os.path.getmtime(path))
+
+
+def effects(path) -> tuple:
+    """The effects a span's model description (a .fmu or a modelDescription.xml) names in
+    its `EFFECTS_TOOL` annotation, in its order; each must be a Boolean parameter."""
+    return _effects(str(path), os.path.getmtime(path))
+
+
+@lru_cache(maxsize=8)
+def _effects(path: str, mtime: float) -> tuple:
+    if path.endswith(".fmu"):
+        with zipfile.ZipFile(path) as z:
+            text = z.read("modelDescription.xml")
+    else:
+        text = Path(path).read_bytes()
+    root = etree.fromstring(text, etree.XMLParser(resolve_entities=False, no_network=True))
+    names = tuple(e.get("variable") for e in root.iterfind(f"VendorAnnotations/Tool[@name='{EFFECTS_TOOL}']/Effects/Effect"))
+    if not names:
+        raise FmuError(f"{path} names no effects (annotation {EFFECTS_TOOL}): an FMU built before it? "
+                       "Rebuild the FMUs with `python3 fmu/package.py`")
+    booleans = {v.get("name") for v in root.iterfind("ModelVariables/ScalarVariable[@causality='parameter']")
+                if v.find("Boolean") is not None}
+    for name in names:
+        if name not in booleans:
+            raise FmuError(f"{path}: {EFFECTS_TOOL} names {name!r}, which is not a Boolean parameter")
+    return names
 
 
 class FmuFile:

@@ -21,7 +21,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model
 
-from .stability import Block, Line, StabilityError
+from .linear import Block, Line, StabilityError
 
 METHODS = ("auto", "derivatives", "differences")
 # Central differences: a step of 1e-6 of a variable's size (its value, at least its nominal)

@@ -389,13 +389,3 @@ def settle_start_values(system: System):
 def scene_grid(scene, h=None):
     """The aligned communication points of a scene at step h (default: its own)."""
     return communication_points(0.0, scene.stop_time, h or scene.step, scene.breakpoints())
-
-
-def run_scene(scene, fmu_dir=None, **options) -> Result:
-    """A scene compiled and run; the columns named as the scene records them ("film.T [N]")."""
-    from .system import compile_scene
-
-    result = Master(compile_scene(scene, fmu_dir), Options(**options)).run()
-    result.scene = scene.name
-    result.columns = scene.columns()
-    return result

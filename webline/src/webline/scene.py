@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import jsontree, records, units
-from .fmus import DEFAULT_FMU_DIR, SPAN_FMU, enumeration, span_description
+from .fmus import DEFAULT_FMU_DIR, SPAN_FMU, enumeration, span_description, span_effects
 from .jsontree import Node, Obj
 from .profiles import Profile
 from .units import UnitError
@@ -24,7 +24,6 @@ from .units import UnitError
 import numpy as np
 from scipy.optimize import brentq
 
-EFFECTS = ("includeDamping", "preventNegativeTension", "includeMass", "variableLength")
 FIRST = ("source", "unwinder")
 MIDDLE = ("roller", "dancer")
 LAST = ("sink", "winder")
@@ -263,6 +262,10 @@ class _Reader:
         """The span's solvers: the items of its Enumeration `solver`, from its model description."""
         return enumeration(span_description(self.fmu_dir), "solver")
 
+    def effects(self):
+        """The span's effects, as its model description names them."""
+        return span_effects(self.fmu_dir)
+
     def err(self, node_or_pos, message):
         if isinstance(node_or_pos, Node):
             pos = f"{node_or_pos.line}:{node_or_pos.col}"
@@ -421,12 +424,13 @@ def _span(r, o_node, name, webs) -> Span:
     effects = set()
     if "effects" in o:
         node = o["effects"]
+        known = r.effects()
         if not isinstance(node.value, list):
-            raise r.err(node, f"{what}: effects must be a list of effect names ({', '.join(EFFECTS)})")
+            raise r.err(node, f"{what}: effects must be a list of effect names ({', '.join(known)})")
         for e in node.value:
             name_e = r.string(e, f"{what}: effect")
-            if name_e not in EFFECTS:
-                raise r.err(e, f"{what}: unknown effect {name_e!r} (effects: {', '.join(EFFECTS)})")
+            if name_e not in known:
+                raise r.err(e, f"{what}: unknown effect {name_e!r} (effects: {', '.join(known)})")
             if name_e in effects:
                 raise r.err(e, f"{what}: effect {name_e!r} listed twice")
             effects.add(name_e)

@@ -65,7 +65,7 @@ def _fmu_dir_on_worker(files: dict) -> str:
 
 def run_point(scene_text: str, source: str, overrides: dict, files: dict, step=None):
     """One grid point (runs on a Dask worker): the metrics of one co-simulation."""
-    from .master import run_scene
+    from .compiler import run_scene
     from .scene import Span, parse_scene, set_path
 
     start = clock.perf_counter()

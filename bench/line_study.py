@@ -1,91 +1,28 @@
-"""Co-simulation against the monolithic reference: errors, observed order, cost."""
+#!/usr/bin/env python3
+"""The line-level accuracy-cost study (docs/line-coupling.md): co-simulation
+error and wall time against the communication step for each master variant,
+and the stability limit of a stiff line with and without input derivatives.
 
-from __future__ import annotations
+    .venv/bin/python bench/line_study.py [SCENE.json] [--stiff STIFF.json] [--steps 2ms,1ms,...]
+                                         [--stiff-steps ...] [--fmu-dir out] [--out out]
 
-import math
-from dataclasses import dataclass
+Writes OUT/line_study.png (the figure docs/line-coupling.md shows from
+documentation/) and prints the tables. Every run is measured against webline's monolithic reference
+(webline.accuracy).
+"""
 
-import numpy as np
+import argparse
+import sys
+from pathlib import Path
 
-from .master import run_scene, scene_grid
-from .reference import reference
-from .result import Result
+from webline.accuracy import convergence, union_grid
+from webline.cli import time_arg
+from webline.fmus import DEFAULT_FMU_DIR
+from webline.reference import reference
+from webline.scene import load_scene
 
-
-def union_grid(scene, steps):
-    times = set()
-    for h in steps:
-        times.update(scene_grid(scene, h))
-    return np.array(sorted(times))
-
-
-def subsample(ref: Result, times) -> Result:
-    """The reference at `times`, which must be among its own time points."""
-    idx = np.searchsorted(ref.time, times)
-    idx = np.clip(idx, 0, len(ref.time) - 1)
-    left = np.clip(idx - 1, 0, len(ref.time) - 1)
-    pick = np.where(np.abs(ref.time[left] - times) < np.abs(ref.time[idx] - times), left, idx)
-    if np.max(np.abs(ref.time[pick] - times)) > 1e-9:
-        raise ValueError("the reference was not sampled at these times")
-    return Result(scene=ref.scene, columns=ref.columns, time=ref.time[pick], data=ref.data[pick], info=ref.info)
-
-
-def errors(result: Result, ref: Result) -> dict:
-    """Per recorded column: the largest deviation from the reference over the
-    run, relative to the column's largest magnitude in the reference."""
-    r = subsample(ref, result.time)
-    out = {}
-    for key in result.keys():
-        scale = float(np.max(np.abs(r.column(key)))) or 1.0
-        out[key] = float(np.max(np.abs(result.column(key) - r.column(key)))) / scale
-    return out
-
-
-def tension_error(errs: dict) -> float:
-    """The largest relative error of the span tensions."""
-    vals = [e for k, e in errs.items() if k.endswith(".T")]
-    return max(vals) if vals else max(errs.values())
-
-
-@dataclass
-class Row:
-    step: float
-    error: float  # largest relative tension error
-    speed_error: float
-    wall_time: float
-    steps: int
-    rollbacks: int
-    failed: str = ""
-
-
-def convergence(scene, steps, ref: Result | None = None, **options):
-    """Runs the scene at each communication step and measures it against one
-    reference sampled on the union of the grids. Returns (rows, reference)."""
-    steps = sorted(steps, reverse=True)
-    if ref is None:
-        ref = reference(scene, times=union_grid(scene, steps))
-    rows = []
-    for h in steps:
-        try:
-            r = run_scene(scene, step=h, **options)
-        except Exception as e:  # an unstable coupling fails; the study records that
-            rows.append(Row(h, math.inf, math.inf, math.nan, 0, 0, failed=str(e).split(":")[0][:80]))
-            continue
-        errs = errors(r, ref)
-        speed = [e for k, e in errs.items() if k.endswith(".v")]
-        rows.append(Row(h, tension_error(errs), max(speed) if speed else 0.0, r.info["wall_time"], r.info["steps"], r.info["rollbacks"]))
-    return rows, ref
-
-
-def observed_orders(rows):
-    """log(e1/e2)/log(h1/h2) between consecutive steps."""
-    out = []
-    for a, b in zip(rows[:-1], rows[1:]):
-        if a.error > 0 and b.error > 0 and math.isfinite(a.error) and math.isfinite(b.error):
-            out.append(math.log(a.error / b.error) / math.log(a.step / b.step))
-        else:
-            out.append(math.nan)
-    return out
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "webline" / "scenes"
 
 
 VARIANTS = [
@@ -159,3 +96,39 @@ def stability_limit(rows):
     stable = [r.step for r in rows if r.error < UNSTABLE]
     unstable = [r.step for r in rows if not r.error < UNSTABLE]
     return (max(stable) if stable else None, min(unstable) if unstable else None)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("scene", nargs="?", default=str(SCENES / "lamination.json"))
+    p.add_argument("--stiff", default=str(SCENES / "stiff_line.json"))
+    p.add_argument("--steps", default="2ms,1ms,0.5ms,0.25ms")
+    p.add_argument("--stiff-steps", default="1ms,0.5ms,0.35ms,0.25ms,0.18ms,0.125ms,0.0625ms")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
+    p.add_argument("--out", default=str(DEFAULT_FMU_DIR))
+    args = p.parse_args(argv)
+
+    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+    stiff = load_scene(args.stiff, fmu_dir=args.fmu_dir)
+    steps = [time_arg(x) for x in args.steps.split(",")]
+    stiff_steps = [time_arg(x) for x in args.stiff_steps.split(",")]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    png = out / "line_study.png"
+    accuracy, stiff_rows = line_study(scene, stiff, steps, stiff_steps, args.fmu_dir, png)
+    print(f"{scene.name}: largest tension error (and wall time) by communication step")
+    print("  " + f"{'variant':<28}" + "".join(f"{h * 1e3:>16g}ms" for h in steps))
+    for (alg, coupling), rows in accuracy.items():
+        cells = "".join(f"{'diverged':>18}" if not r.error < 0.1 else f"{r.error:>10.2e} ({r.wall_time:.2f}s)" for r in rows)
+        print(f"  {alg + ', ' + coupling:<28}{cells}")
+    print(f"{stiff.name}: stability limit of the communication step")
+    for coupling, rows in stiff_rows.items():
+        ok, bad = stability_limit(rows)
+        what = "with input derivatives and extrapolation" if coupling == "extrapolate" else "with inputs held"
+        print(f"  {what}: stable at {ok * 1e3 if ok else '-'} ms, diverges at {bad * 1e3 if bad else '-'} ms")
+    print(f"wrote {png}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

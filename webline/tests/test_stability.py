@@ -14,6 +14,8 @@ from scipy.integrate import solve_ivp
 
 from webline.stability import Block, Line, conserved_modes, spectral_radius, stable_step, step_map
 
+from .conftest import ROOT, SCENES
+
 
 def spring_line(k=1e6, m=0.04, c=0.0):
     """source -> span1 -> idler -> span2 -> sink; source and sink speeds held (not blocks).
@@ -125,8 +127,6 @@ def test_conserved_length_is_excluded_by_rule():
 def span_component(name="s", E=4e9, thickness=5e-4, L=0.2, d_r=1e-4, damping=True, eps=1e-3, v=2.0, fmu=None):
     from types import SimpleNamespace
 
-    from conftest import ROOT
-
     start = {"L": L, "startAtEquilibrium": False, "eps_start": eps, "web_a.v": v, "web_a.eps": eps, "web_b.v": v * 1.001,
              "includeDamping": damping}
     for w in ("wp1", "wp2"):
@@ -196,7 +196,7 @@ def light_idler_scene(tmp_path):
 
 def compiled(path, fmus):
     from webline.scene import load_scene
-    from webline.system import compile_scene
+    from webline.compiler import compile_scene
 
     system = compile_scene(load_scene(path), fmus)
     system.record = [(c.name, "summary_Tension") for c in system.components if c.kind == "span"]
@@ -272,7 +272,7 @@ def judged(rows, start):
 
 LINES = {
     "light_idler": (light_idler_scene, "idler"),
-    "lamination": (lambda tmp: __import__("conftest").SCENES / "lamination.json", "idler"),
+    "lamination": (lambda tmp: SCENES / "lamination.json", "idler"),
 }
 OBSERVED = {}
 

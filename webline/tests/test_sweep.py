@@ -2,10 +2,11 @@
 existing scheduler's address, and each row equal to the same point run alone."""
 
 import pytest
-from conftest import SCENES
-from webline.master import run_scene
+from webline.compiler import run_scene
 from webline.scene import SceneError, load_scene
 from webline.sweep import Table, parse_grid, run_sweep
+
+from .conftest import SCENES
 
 SCENE = SCENES / "lamination.json"
 GRID = ["stop_time=0.4 s", "line.rewind.drive.tension=250 N,300 N", "line.to_rewind.L=1 m,2 m"]

@@ -16,12 +16,13 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from conftest import SCENES
 from webline.archive import ArchiveError, Limits, extract
 from webline.engines import agreement, relative_difference, run_fmpy, run_libcosim
 from webline.master import Master, Options
 from webline.ssp import NS, SspError, read_ssp, write_ssp
 from webline.system import Component, Connection, System
+
+from .conftest import SCENES
 
 SCHEMAS = Path(__import__("fmpy.ssp").ssp.__file__).parent / "schema"
 WEB = {"E": 4.5e9, "thickness": 5e-5, "width": 1.0, "density": 1390.0, "d_r": 1e-3}

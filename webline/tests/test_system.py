@@ -15,12 +15,14 @@ import zipfile
 
 import numpy as np
 import pytest
-from conftest import SCENES
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
+from webline.compiler import compile_scene
 from webline.master import Master, Options
 from webline.scene import load_scene
-from webline.system import compile_scene, component_fmus
+from webline.system import component_fmus
+
+from .conftest import SCENES
 
 NAMES = ["lamination", "emergency_stop", "dancer", "splice", "stiff_line"]
 

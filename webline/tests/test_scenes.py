@@ -9,9 +9,10 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import ROOT, SCENES
-from webline.master import run_scene
+from webline.compiler import run_scene
 from webline.scene import SceneError, load_scene, parse_scene
+
+from .conftest import ROOT, SCENES
 
 
 

@@ -1,0 +1,226 @@
+"""Scenes compiled into a System, and a scene compiled and run.
+
+Every part of a line becomes an FMU component: a ConvertingSpan per span, a
+Roller per everything else (source, sink, driven roller, idler, unwinder,
+winder, dancer). What a scene says with profiles and events becomes each
+component's profile JSON (tables and timed `set` entries), read by the FMU
+itself. The connected inputs start at the outputs that feed them, settled
+through the FMUs (`master.settle_start_values`).
+
+Ports (a roller's match a span's): span.web_a.v <- roller.web_b.v,
+roller.web_b.F <- span.web_a.F, span.web_b.v <- roller.web_a.v,
+roller.web_a.F <- span.web_b.F; the strain goes span to span
+(span2.web_a.eps <- span1.web_b.eps), the first span's from the line's
+first roller (web_b.eps); spans on a dancer take the height of their moving
+end from its tangent points (web_a.y, web_b.y; the x are constants).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile, span_effects
+from .master import Master, Options, settle_start_values
+from .profiles import Profile
+from .result import Result
+from .scene import Dancer, Scene, Span
+from .system import Component, Connection, System
+
+# A roller whose surface speed is prescribed (source, sink, speed drive) needs
+# J and R > 0 though its speed ignores them: these only scale omega and tau.
+PRESCRIBED_J = 0.01  # kg.m2
+PRESCRIBED_R = 0.1  # m
+ROLL = {"unwinder": 1, "winder": 2}  # the Roller's Integer `roll`; 0 otherwise
+WEB_FIELDS = ("E", "thickness", "width", "density", "d_r")
+
+# A scene's recorded quantity -> the FMU variable that holds it.
+SPAN_VARIABLES = {"T": "summary_Tension", "eps": "summary_Strain", "L": "summary_Length", "F_a": "web_a.F", "F_b": "web_b.F"}
+ROLLER_VARIABLES = {"omega": "omega", "tau": "tau", "y": "y", "y_dot": "y_dot", "eps": "web_b.eps"}
+
+
+def table(profile: Profile):
+    """A scene profile as a profile-JSON table [[t, value], ...]."""
+    return [[float(t), float(v)] for t, v in profile.knots]
+
+
+def web_values(side: str, web, web_library=None, clear_record=False) -> dict:
+    """A span's parameters for one web ("wp1"/"wp2"): its record's name (the FMU
+    reads the record; not for engines that cannot set Strings), or the values one
+    by one. `clear_record`: also empty `side.record` (a set event after a record web)."""
+    if web.record:
+        values = {f"{side}.record": web.record}
+        if web_library:
+            values["webLibrary"] = web_library
+        return values
+    values = {f"{side}.{k}": float(getattr(web, k)) for k in WEB_FIELDS}
+    if clear_record:
+        values[f"{side}.record"] = ""
+    return values
+
+
+def equilibrium_strain(scene: Scene, span: Span, eps_in: float) -> float:
+    """The strain of a span at rest between its rollers' start speeds:
+    (1 + eps) = (v_b / v_a) * (1 + eps_a), or eps_a when v_a = 0."""
+    va = scene.initial_speed(scene.upstream(span))
+    vb = scene.initial_speed(scene.downstream(span))
+    return eps_in if va == 0 else (vb - va + vb * eps_in) / va
+
+
+def _start_strain(node, t=0.0):
+    """The strain a source or unwinder gives the web it feeds."""
+    return node.strain.value(t)
+
+
+def _roller(scene: Scene, node, fmu: Path) -> Component:
+    start = {}
+    profile = {}
+    speed = scene.speed_profile(node)
+    if speed is not None:
+        start.update(J=PRESCRIBED_J, R=PRESCRIBED_R, b=0.0)
+        profile["speed"] = table(speed)
+    else:
+        start.update(J=float(node.J), R=float(node.R), b=float(node.b))
+    start["v_start"] = float(scene.initial_speed(node))
+    if node.type in ROLL:
+        start["roll"] = ROLL[node.type]
+    drive = getattr(node, "drive", None)
+    if drive is not None and drive.kind in ("torque", "tension"):
+        profile[drive.kind] = table(drive.profile)
+    strain = getattr(node, "strain", None)
+    if strain is not None:
+        if strain.is_constant():
+            start["web_a.eps"] = float(strain.value(0.0))  # unconnected: the strain it feeds through
+        else:
+            profile["strain"] = table(strain)
+    if isinstance(node, Dancer):
+        start.update({
+            "carriage": True,
+            "carriage.m": float(node.mass),
+            "carriage.d": float(node.damping),
+            "carriage.k": float(node.stiffness),
+            "carriage.y_start": float(node.y_start),
+        })
+        profile["load"] = table(node.load)
+    sets = [{"time": float(e.time), **{k: float(v) for k, v in e.changes.items()}} for e in scene.events if e.component == node.name]
+    if sets:
+        profile["set"] = sets
+    return Component(node.name, "roller", fmu, start, profile or None)
+
+
+def _dancer_of(scene: Scene, span: Span):
+    up, down = scene.upstream(span), scene.downstream(span)
+    return up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
+
+
+def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict, effects: tuple) -> Component:
+    dancer = _dancer_of(scene, span)
+    lib = scene.web_library
+    start = {
+        "L": float(span.length if span.length is not None else dancer.y_start),
+        **web_values("wp1", span.wp1, lib),
+        **web_values("wp2", span.wp2, lib),
+        **{e: e in span.effects for e in effects},
+        # The start strain is given, not the FMU's equilibrium of its first inputs
+        # (FMPy's first inputs are all 0.0): every engine starts the same.
+        "startAtEquilibrium": False,
+    }
+    eps = span.eps_start if span.eps_start is not None else equilibrium_strain(scene, span, eps_in)
+    start["eps_start"] = float(eps)
+    if span.solver != "auto":  # an Enumeration: left at its default unless asked (libcosim ignores them)
+        start["solver"] = solvers[span.solver]
+    if span.tolerance is not None:
+        start["tolerance"] = float(span.tolerance)
+    if span.substeps is not None:
+        start["substeps"] = int(span.substeps)
+    if dancer is not None:
+        # The span's fixed end, y_start above the dancer's start position (the
+        # Roller's contact points are measured from there, up positive).
+        # The x of the moving end is a constant too, so not connected: an engine
+        # that starts its inputs at 0 (FMPy) then sees the right geometry.
+        if scene.downstream(span) is dancer:
+            start.update({"frame_a.x": 0.0, "frame_a.y": float(dancer.y_start), "frame_b.x": 0.0})
+        else:
+            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(dancer.y_start),
+                          "frame_a.x": 2.0 * float(dancer.R)})
+    sets = []
+    webs = {"wp1": span.wp1, "wp2": span.wp2}
+    for e in scene.events:
+        if e.component != span.name:
+            continue
+        changes = dict(e.changes)
+        if "web" in changes:
+            changes["wp1"] = changes["wp2"] = changes.pop("web")
+        entry = {"time": float(e.time)}
+        for side, web in changes.items():
+            entry.update(web_values(side, web, lib, clear_record=bool(webs[side].record)))
+            webs[side] = web
+        sets.append(entry)
+    return Component(span.name, "span", fmu, start, {"set": sets} if sets else None)
+
+
+def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
+    c = scene.component(cname)
+    if isinstance(c, Span):
+        return SPAN_VARIABLES[quantity]
+    if quantity == "v":
+        return "web_b.v" if c.index == 0 else "web_a.v"
+    return ROLLER_VARIABLES[quantity]
+
+
+def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
+    """The System of a scene: a Roller per node (in line order), then a span per
+    span (in line order), their profiles, connections and the recorded variables.
+    `settle`: connected inputs start at the initial outputs that feed them, read
+    from the FMUs themselves (`master.settle_start_values`)."""
+    d = Path(fmu_dir or DEFAULT_FMU_DIR)
+    span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
+    solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}
+    effects = span_effects(d)
+    rollers = [_roller(scene, n, roller_fmu) for n in scene.nodes]
+    spans = []
+    eps_in = _start_strain(scene.line[0])
+    for sp in scene.spans:
+        comp = _span(scene, sp, eps_in, span_fmu, solvers, effects)
+        eps_in = comp.start["eps_start"]
+        spans.append(comp)
+
+    connections = []
+
+    def connect(src, out, dst, inp):
+        connections.append(Connection((src, out), (dst, inp)))
+
+    for sp in scene.spans:
+        up, down = scene.upstream(sp), scene.downstream(sp)
+        connect(up.name, "web_b.v", sp.name, "web_a.v")
+        if sp.index == 1:
+            connect(up.name, "web_b.eps", sp.name, "web_a.eps")
+        else:
+            connect(scene.line[sp.index - 2].name, "web_b.eps", sp.name, "web_a.eps")
+        connect(down.name, "web_a.v", sp.name, "web_b.v")
+        if isinstance(down, Dancer):
+            connect(down.name, "web_a.y", sp.name, "frame_b.y")
+        if isinstance(up, Dancer):
+            connect(up.name, "web_b.y", sp.name, "frame_a.y")
+        connect(sp.name, "web_a.F", up.name, "web_b.F")
+        connect(sp.name, "web_b.F", down.name, "web_a.F")
+
+    system = System(
+        name=scene.name,
+        components=rollers + spans,
+        connections=connections,
+        start_time=0.0,
+        stop_time=float(scene.stop_time),
+        step=float(scene.step),
+        record=[(c, _record_variable(scene, c, q)) for c, q in scene.record],
+    )
+    if settle:
+        settle_start_values(system)
+    return system
+
+
+def run_scene(scene, fmu_dir=None, **options) -> Result:
+    """A scene compiled and run; the columns named as the scene records them ("film.T [N]")."""
+    result = Master(compile_scene(scene, fmu_dir), Options(**options)).run()
+    result.scene = scene.name
+    result.columns = scene.columns()
+    return result
