@@ -204,7 +204,7 @@ fn run(case: &Case, r: &Run) -> Outcome {
             if let Err(err) = m.do_step(e.h) {
                 assert_eq!(err.status, Status::Discard, "step {k}: {}", err.message);
                 assert!(m == before, "a refused step changes nothing");
-                return Outcome { out, discard: Some((k, err.message)) };
+                return Outcome { out, discard: Some((k, err.into_message())) };
             }
             read(&m, &mut out);
             k += 1;

@@ -28,26 +28,52 @@ impl Status {
 }
 
 /// A failed call: `Error` (or `Discard` where the standard allows the
-/// importer to retry) with the one-line message that explains it.
+/// importer to retry) with the one-line message that explains it. Boxed, so
+/// that a result is one word and the calls that succeed pay nothing for it.
 #[derive(Clone, Debug, PartialEq)]
-pub struct FmiError {
+pub struct FmiError(Box<Failure>);
+
+/// What a failed call reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Failure {
     pub status: Status,
     pub message: String,
 }
 
+impl std::ops::Deref for FmiError {
+    type Target = Failure;
+    fn deref(&self) -> &Failure {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for FmiError {
+    fn deref_mut(&mut self) -> &mut Failure {
+        &mut self.0
+    }
+}
+
 impl FmiError {
+    #[cold]
     pub fn error(message: impl Into<String>) -> Self {
-        FmiError { status: Status::Error, message: message.into() }
+        FmiError(Box::new(Failure { status: Status::Error, message: message.into() }))
     }
 
+    #[cold]
     pub fn discard(message: impl Into<String>) -> Self {
-        FmiError { status: Status::Discard, message: message.into() }
+        FmiError(Box::new(Failure { status: Status::Discard, message: message.into() }))
     }
 
     /// The same error, its message prefixed with where it happened.
     #[cold]
-    pub fn prefixed(self, what: &str) -> Self {
-        FmiError { status: self.status, message: format!("{what}: {}", self.message) }
+    pub fn prefixed(mut self, what: &str) -> Self {
+        self.0.message = format!("{what}: {}", self.0.message);
+        self
+    }
+
+    /// The message, for callers that keep only the text.
+    pub fn into_message(self) -> String {
+        self.0.message
     }
 }
 

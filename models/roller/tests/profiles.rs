@@ -32,7 +32,7 @@ fn roller(reals: &[(Real, f64)], profile: Option<&str>, setup: impl FnOnce(&mut 
         let path = profile_file(&format!("{:x}.json", text.len() * 7919 + text.bytes().map(|b| b as usize).sum::<usize>()), text);
         m.set_string(Text::profile.vr(), path.to_str().unwrap()).unwrap();
     }
-    m.initialize(&Experiment::default(), &Resources::default()).map_err(|e| e.message)?;
+    m.initialize(&Experiment::default(), &Resources::default()).map_err(|e| e.into_message())?;
     Ok(m)
 }
 
@@ -193,11 +193,11 @@ fn bad_profiles_are_refused_naming_the_file_and_the_problem() {
     let missing = std::env::temp_dir().join("no such folder").join("line.json");
     let mut m = Roller::at_start_values();
     m.set_string(Text::profile.vr(), missing.to_str().unwrap()).unwrap();
-    let e = m.initialize(&Experiment::default(), &Resources::default()).unwrap_err().message;
+    let e = m.initialize(&Experiment::default(), &Resources::default()).unwrap_err().into_message();
     assert!(e.contains(&format!("profile {}", missing.display())), "{e}");
     // A name in resources/ with no resource folder says why.
     m.set_string(Text::profile.vr(), "line.json").unwrap();
-    let e = m.initialize(&Experiment::default(), &Resources::default()).unwrap_err().message;
+    let e = m.initialize(&Experiment::default(), &Resources::default()).unwrap_err().into_message();
     assert!(e.contains("profile = \"line.json\": cannot read resources/line.json"), "{e}");
 }
 

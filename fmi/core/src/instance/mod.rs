@@ -265,7 +265,9 @@ impl<M: Model> Instance<M> {
     /// `current` is the instance's time up to `TIME_TOLERANCE` (false for NaN and infinities).
     #[inline]
     fn is_current_time(&self, current: f64) -> bool {
-        current.is_finite() && (current - self.time).abs() <= TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0)
+        // The time itself (the importer kept ours) is the common case; then within the tolerance.
+        current == self.time
+            || (current.is_finite() && (current - self.time).abs() <= TIME_TOLERANCE * current.abs().max(self.time.abs()).max(1.0))
     }
 
     /// Why `fmi2DoStep(current, h)` is refused, if it is.

@@ -17,12 +17,19 @@ impl<M: Model> Instance<M> {
 
     /// In initialization mode the outputs follow the parameters and inputs
     /// set so far, so they are computed before they are read.
+    #[inline]
     pub(super) fn prepare_get(&mut self, call: CallName) -> FmiResult {
         if self.phase == Phase::InitializationMode {
-            // Warnings are logged once, when initialization ends.
-            self.settle_initial_values().map_err(|e| e.prefixed(call))?;
+            return self.settle_for_get(call);
         }
         Ok(())
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn settle_for_get(&mut self, call: CallName) -> FmiResult {
+        // Warnings are logged once, when initialization ends.
+        self.settle_initial_values().map(drop).map_err(|e| e.prefixed(call))
     }
 
     /// Parameters and inputs are always there, but computed values only where
