@@ -80,6 +80,7 @@ macro_rules! conformance_tests {
             types_platform_and_version,
         );
         $crate::__conformance_module!($model; values:
+            start_values_are_allowed_and_read_back,
             parameter_out_of_range_is_refused_at_exit_initialization,
             integer_parameter_out_of_range_is_refused_at_exit_initialization,
             non_finite_reals_are_refused_immediately,
@@ -93,6 +94,7 @@ macro_rules! conformance_tests {
         );
         $crate::__conformance_module!($model; stepping:
             do_step_refuses_bad_step_size_and_time,
+            a_discarded_step_changes_nothing,
             communication_point_tolerance,
             status_functions,
             set_real_input_derivatives_validates_its_arguments,

@@ -38,6 +38,34 @@ pub fn do_step_refuses_bad_step_size_and_time<M: Model>() {
     }
 }
 
+/// Proves that a step the model discards (fmi2Discard: step failed)
+/// changes nothing: every value and the time stay as before the step; that
+/// the instance may then only be terminated, reset or restored; and that a
+/// state saved before the step continues exactly like an undisturbed run.
+pub fn a_discarded_step_changes_nothing<M: Model>() {
+    let (vr, x, h) = failing_step::<M>();
+    let fmu = drive::<M>(Phase::Complete);
+    assert_eq!(fmu.set_reals_vr(&[vr], &[x]), OK);
+    let (before, saved) = (all_values(&fmu), fmu.get_state().unwrap());
+    let (reference, _) = {
+        let twin = drive::<M>(Phase::Complete);
+        run(&twin, 0.0, 0, 5)
+    };
+    assert_eq!(fmu.do_step(0.0, h), DISCARD);
+    let lines = fmu.take_logs();
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert_eq!((lines[0].status, lines[0].category.as_str()), (DISCARD, "logStatusDiscard"));
+    assert!(lines[0].message.contains("fmi2DoStep"), "{lines:?}");
+    assert_eq!(phase_of(&fmu), Phase::Failed);
+    assert_eq!(all_values(&fmu), before, "the discarded step changed values");
+    assert_eq!(fmu.get_real_status(LAST_SUCCESSFUL_TIME), (OK, 0.0));
+    assert_eq!(fmu.do_step(0.0, 0.01), ERROR, "no step after a discarded one");
+    fmu.take_logs();
+    assert_eq!(fmu.set_state(saved), OK);
+    assert_eq!(phase_of(&fmu), Phase::Complete);
+    assert_eq!(run(&fmu, 0.0, 0, 5).0, reference);
+}
+
 /// Proves that fmi2DoStep accepts a communication point 1 ulp above or below
 /// the current time t = 1 (importers sum their time in their own way) and
 /// continues from the importer's point, and refuses points 1e-6 off.

@@ -5,7 +5,7 @@
 
 use super::scene::*;
 use crate::*;
-use fmi_core::description::{Causality, Family, Initial, Kind, Range, Variability, Variable};
+use fmi_core::description::{Causality, Family, Initial, Kind, Range, Start, Variability, Variable};
 use fmi_core::Model;
 
 /// Values outside `r` (the neighbouring doubles of each finite bound, an
@@ -50,6 +50,39 @@ fn bounded(v: &Variable) -> bool {
 /// What `config` or the start value gives `v` before anything else is set.
 fn configured<M: Model>(v: &Variable) -> f64 {
     config::<M>().iter().find(|(n, _)| *n == v.name).map_or_else(|| start_of(v), |c| c.1)
+}
+
+/// Proves that every parameter and input has a start value inside its
+/// allowed range (enumerations: one of its items), and that in
+/// initialization mode each reads back exactly that value through the get
+/// function of its type.
+pub fn start_values_are_allowed_and_read_back<M: Model>() {
+    let fmu = drive_fresh_into_init::<M>();
+    let knowable = M::description().variables.iter().filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input));
+    for v in knowable {
+        match (v.kind, v.start) {
+            (Kind::String, Start::String(text)) => assert_eq!(fmu.text(v.name), text, "{}", v.name),
+            (Kind::Enumeration { values, .. }, Start::Integer(x)) => {
+                assert!(values.contains(&x), "{} start {x} is not an item", v.name);
+                assert_eq!(fmu.get(v.name), Ok(x as f64), "{}", v.name);
+            }
+            (_, Start::String(_) | Start::None) => panic!("{} has no start value of its type", v.name),
+            _ => {
+                let x = start_of(v);
+                assert!(v.kind == Kind::Boolean || v.range.contains(x), "{} start {x} is outside {}", v.name, v.range);
+                assert_eq!(fmu.get(v.name).map(f64::to_bits), Ok(x.to_bits()), "{}", v.name);
+            }
+        }
+    }
+    assert!(fmu.logs().is_empty(), "{:?}", fmu.logs());
+}
+
+/// A fresh instance (start values) in initialization mode.
+fn drive_fresh_into_init<M: Model>() -> Fmu<M> {
+    let fmu = Fmu::<M>::new();
+    assert_eq!(fmu.setup_experiment(0.0), OK);
+    assert_eq!(fmu.enter_init(), OK);
+    fmu
 }
 
 /// Proves that a parameter set outside its range is accepted by fmi2SetReal
