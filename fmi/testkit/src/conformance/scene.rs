@@ -3,12 +3,8 @@
 //! phases of the co-simulation state machine and how to reach each of them.
 
 use crate::{Fmu, LogLine, DISCARD, ERROR, OK};
-use fmi_core::description::{Causality, Initial, Kind, ModelDescription, Start, Variable};
+use fmi_core::description::{Causality, Initial, Kind, Start, Variable};
 use fmi_core::Model;
-
-pub fn description<M: Model>() -> &'static ModelDescription {
-    M::description()
-}
 
 pub fn of_causality<M: Model>(c: Causality) -> Vec<&'static Variable> {
     M::description().variables.iter().filter(|v| v.causality == c).collect()
