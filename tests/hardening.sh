@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Hardening checks of the FMU binary: fuzzed C API, memory checks, panic
-# boundary, portable binary. Threads and global state are in tests/threads.rs
-# (cargo test).
+# boundary, portable binary. Threads and global state are in the conformance
+# suite (fmi/testkit: its threads and statics modules; cargo test).
 #
 #   bash tests/hardening.sh            CI size (tests/run.sh runs this), a few minutes
 #   bash tests/hardening.sh --full     the long runs: 1,000,000 fuzzed sequences,
@@ -121,8 +121,9 @@ grep "newest symbol version" "$OUT/portable.log" | sed 's/^\.*//' | while read -
     note "shipped $line (allowed: up to GLIBC_2.17)"
 done
 
-step "2. panic boundary (test-only hook, separate target directory)"
+step "2. panic boundary (test-only hook, separate target directory): the span, the Roller"
 cargo test --release --quiet --features test-hooks --target-dir target/test-hooks --test panic_boundary
+cargo test --release --quiet -p roller --features test-hooks --target-dir target/test-hooks --test panic_boundary
 
 for model in "${MODELS[@]}"; do
     step "3. fuzz harness, strict (a non-finite output after accepted values fails too), ${NAME[$model]}: $SEQ sequences"

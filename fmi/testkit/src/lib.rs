@@ -12,6 +12,9 @@
 //!
 //! Each instance logs into its own `Log`, passed as `componentEnvironment`:
 //! no global state, so tests can run in parallel threads.
+//!
+//! `conformance`: the suite of the FMI layer's tests that every model runs
+//! (`conformance_tests!`), written over these functions without `unsafe`.
 
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
@@ -25,6 +28,10 @@ use fmi_core::Model;
 use std::ffi::{c_int, c_void, CStr, CString};
 use std::marker::PhantomData;
 use std::sync::Mutex;
+
+pub mod conformance;
+/// For the macros: the panic hook's category exists only with fmi-core's feature.
+pub use fmi_core;
 
 pub const OK: i32 = 0;
 pub const WARNING: i32 = 1;
