@@ -134,10 +134,10 @@ impl ConvertingSpan {
 
     /// Advances over one communication step of length h [3].
     fn advance(&mut self, h: f64) -> FmiResult {
-        let start = self.inputs;
         let rates = self.input_rates.filter(|r| *r != Inputs::default());
-        let step = stepping::Step { params: &self.params, start, rates, x0: self.unstretched, h };
+        let step = stepping::Step { params: &self.params, start: &self.inputs, rates: rates.as_ref(), x0: self.unstretched, h };
         let (next, adaptive_step) = step.integrate(self.params.solver, self.tolerance, self.adaptive_step)?;
+        let start = self.inputs;
         let x = next.value();
         let end = match &rates {
             Some(r) => {

@@ -25,18 +25,18 @@ const STRAIN_SCALE_FLOOR: f64 = 1e-6;
 /// quantity that carries the strain.
 pub struct Step<'a> {
     pub params: &'a Parameters,
-    pub start: Inputs,
+    pub start: &'a Inputs,
     /// Input rates over the step; `None` when the inputs are held.
-    pub rates: Option<Inputs>,
+    pub rates: Option<&'a Inputs>,
     pub x0: CompensatedSum,
     pub h: f64,
 }
 
 impl Step<'_> {
     fn inputs_at(&self, t: f64) -> Inputs {
-        match &self.rates {
+        match self.rates {
             Some(r) => self.start.advanced(r, t),
-            None => self.start,
+            None => *self.start,
         }
     }
 
@@ -45,11 +45,11 @@ impl Step<'_> {
     #[inline]
     pub fn integrate(&self, solver: Solver, tolerance: f64, adaptive_step: f64) -> FmiResult<(CompensatedSum, f64)> {
         let choice = method(solver, self.rates.is_some())?;
-        let length = physics::span_length(self.params, &self.start);
+        let length = physics::span_length(self.params, self.start);
         if choice == Solver::Exact && length > 0.0 {
             // Held inputs: L is constant too, even with moving rollers,
             // because their positions are held.
-            return Ok((physics::exact_step(length, &self.start, self.x0, self.h), adaptive_step));
+            return Ok((physics::exact_step(length, self.start, self.x0, self.h), adaptive_step));
         }
         self.integrate_numerically(choice, tolerance, adaptive_step)
     }
@@ -60,7 +60,7 @@ impl Step<'_> {
     fn integrate_numerically(&self, choice: Solver, tolerance: f64, adaptive_step: f64) -> FmiResult<(CompensatedSum, f64)> {
         check_length(self.shortest_length())?;
         let h = self.h;
-        let length = physics::span_length(self.params, &self.start);
+        let length = physics::span_length(self.params, self.start);
         let explicit = |method: Method| -> FmiResult<(CompensatedSum, f64)> {
             let n = self.params.substeps.max(1) as usize;
             let lambda = self.largest_decay_rate();
@@ -106,9 +106,9 @@ impl Step<'_> {
     /// |d0 + d' t| is smallest where t = -(d0 . d')/|d'|^2, clipped to [0, h].
     pub fn shortest_length(&self) -> f64 {
         let p = self.params;
-        let now = physics::span_length(p, &self.start);
+        let now = physics::span_length(p, self.start);
         let Some(rates) = self.rates.filter(|_| p.effects.variable_length) else { return now };
-        let end = physics::span_length(p, &self.start.advanced(&rates, self.h));
+        let end = physics::span_length(p, &self.start.advanced(rates, self.h));
         let [dx, dy] = self.start.span_vector();
         let [rx, ry] = rates.span_vector();
         let speed2 = rx * rx + ry * ry;
@@ -123,7 +123,7 @@ impl Step<'_> {
     /// the step (a moving roller passing closest).
     fn largest_decay_rate(&self) -> f64 {
         let numerator = |u: &Inputs| u.speed_b - u.speed_a.min(0.0);
-        let largest = numerator(&self.start).max(numerator(&self.inputs_at(self.h)));
+        let largest = numerator(self.start).max(numerator(&self.inputs_at(self.h)));
         largest / self.shortest_length()
     }
 }

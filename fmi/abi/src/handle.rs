@@ -145,7 +145,7 @@ unsafe fn handle<'a, M: Model>(c: *mut c_void, standard: Standard) -> Option<&'a
 }
 
 /// The entry path of every function that takes an instance.
-#[inline]
+#[inline(always)]
 pub unsafe fn enter<M: Model, C: Call>(c: *mut c_void, call: C, body: impl FnOnce(&mut Handle<M>) -> FmiResult) -> c_int {
     let Some(handle) = handle::<M>(c, C::STANDARD) else { return Status::Error as c_int };
     let outcome = catch_unwind(AssertUnwindSafe(|| {

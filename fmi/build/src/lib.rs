@@ -698,7 +698,7 @@ fn emit(md: &ModelDescription, source: &str) -> String {
             table[v.vr() as usize] = format!("Some({family}::{})", v.rust_name());
         }
         writeln!(w, "    const BY_VR: [Option<{family}>; {slots}] = [{}];", table.join(", ")).unwrap();
-        writeln!(w, "    #[inline]\n    pub fn from_vr(vr: u32) -> Option<Self> {{\n        match Self::BY_VR.get(vr as usize) {{ Some(&v) => v, None => None }}\n    }}").unwrap();
+        writeln!(w, "    #[inline(always)]\n    pub fn from_vr(vr: u32) -> Option<Self> {{\n        match Self::BY_VR.get(vr as usize) {{ Some(&v) => v, None => None }}\n    }}").unwrap();
         if vars.is_empty() {
             // A family without variables is an empty enum, which has no discriminant to cast.
             writeln!(w, "    pub const fn vr(self) -> u32 {{ match self {{}} }}").unwrap();

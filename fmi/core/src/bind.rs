@@ -36,7 +36,7 @@ macro_rules! bind_variables {
     ) => {
         impl $model {
             /// The value of a Real variable.
-            #[inline]
+            #[inline(always)]
             pub fn real(&self, var: Real) -> f64 {
                 match var { $(Real::$r => $crate::__bound!(self, $rk, $($rf)+),)* }
             }
@@ -47,7 +47,7 @@ macro_rules! bind_variables {
             }
 
             /// Sets a parameter or input; `Err` for computed variables.
-            #[inline]
+            #[inline(always)]
             pub fn set_real_var(&mut self, var: Real, value: f64) -> $crate::FmiResult {
                 match var { $(Real::$r => $crate::__bound_set!(self, var, value, $rk, $($rf)+),)* }
             }
@@ -68,7 +68,7 @@ macro_rules! bind_variables {
         }
 
         impl $crate::Variables for $model {
-            #[inline]
+            #[inline(always)]
             fn get_real(&self, vr: u32) -> $crate::FmiResult<f64> {
                 match Real::from_vr(vr) {
                     Some(var) => Ok(self.real(var)),
@@ -76,7 +76,7 @@ macro_rules! bind_variables {
                 }
             }
 
-            #[inline]
+            #[inline(always)]
             fn set_real(&mut self, vr: u32, value: f64) -> $crate::FmiResult {
                 self.set_real_var(Real::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))?, value)
             }

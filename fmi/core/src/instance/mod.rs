@@ -110,7 +110,7 @@ impl<M: Model> Instance<M> {
     /// Entry check of every call: does it belong to this instance's
     /// interface, and is it allowed in the current phase? The common case
     /// is one mask test; the rest (tracing, the reason for a refusal) is cold.
-    #[inline]
+    #[inline(always)]
     pub fn begin<C: Call>(&mut self, call: C) -> FmiResult {
         if call.is_allowed(self.phase, self.experiment.model_exchange) && !self.log.traces_calls() {
             return Ok(());
@@ -229,6 +229,7 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    #[inline(always)]
     pub fn do_step(&mut self, call: CallName, current: f64, h: f64) -> FmiResult {
         // The common case inline: a positive finite step from the instance's
         // time (within TIME_TOLERANCE) to a finite end; `check_step` says why not.
@@ -253,13 +254,19 @@ impl<M: Model> Instance<M> {
                 }
                 Ok(())
             }
-            Err(e) => {
-                if e.status == Status::Discard {
-                    self.phase = Phase::StepFailed;
-                }
-                Err(e.prefixed(&format!("{call} at t = {current} with h = {h}")))
-            }
+            Err(e) => Err(self.step_failed(e, call, current, h)),
         }
+    }
+
+    /// A step the model refused: a discard leaves the instance in "step
+    /// failed"; the message says where.
+    #[cold]
+    #[inline(never)]
+    fn step_failed(&mut self, e: FmiError, call: CallName, current: f64, h: f64) -> FmiError {
+        if e.status == Status::Discard {
+            self.phase = Phase::StepFailed;
+        }
+        e.prefixed(&format!("{call} at t = {current} with h = {h}"))
     }
 
     /// `current` is the instance's time up to `TIME_TOLERANCE` (false for NaN and infinities).

@@ -67,6 +67,7 @@ pub enum Call {
 
 impl Call {
     /// The phases in which the standard allows this call.
+    #[inline(always)]
     const fn allowed(self) -> u8 {
         use Call::*;
         match self {
@@ -96,13 +97,14 @@ impl Call {
         }
     }
 
+    #[inline(always)]
     pub fn is_allowed_in(self, phase: Phase) -> bool {
         self.allowed() & phase.bit() != 0
     }
 
     /// Whether the call is one of this interface's functions and allowed in
     /// this phase: the whole check of the state machine in one mask.
-    #[inline]
+    #[inline(always)]
     pub fn is_allowed(self, phase: Phase, model_exchange: bool) -> bool {
         let own = match self.model_exchange_only() {
             Some(me) => me == model_exchange,
@@ -113,6 +115,7 @@ impl Call {
 
     /// `Some(true)` for functions of Model Exchange only, `Some(false)` for
     /// functions of Co-Simulation only, `None` for the common ones.
+    #[inline(always)]
     pub const fn model_exchange_only(self) -> Option<bool> {
         use Call::*;
         match self {
@@ -182,7 +185,7 @@ impl crate::standard::Call for Call {
         self.c_name()
     }
 
-    #[inline]
+    #[inline(always)]
     fn is_allowed(self, phase: Phase, model_exchange: bool) -> bool {
         Call::is_allowed(self, phase, model_exchange)
     }

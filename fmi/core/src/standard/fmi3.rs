@@ -30,6 +30,7 @@ macro_rules! calls {
 
         impl Call {
             /// The phases in which the standard allows this call.
+            #[inline(always)]
             const fn allowed(self) -> u8 {
                 match self { $(Call::$call => $allowed,)* }
             }
@@ -158,7 +159,7 @@ impl crate::standard::Call for Call {
         self.c_name()
     }
 
-    #[inline]
+    #[inline(always)]
     fn is_allowed(self, phase: Phase, model_exchange: bool) -> bool {
         self.serves(model_exchange) && self.allowed() & phase.bit() != 0
     }
