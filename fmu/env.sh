@@ -89,7 +89,7 @@ python_packages main "$ROOT/fmu/requirements.txt"
 if [ "$("$PY" -c 'import webline, os; print(os.path.dirname(os.path.dirname(webline.__file__)))' 2>/dev/null)" != "$ROOT/webline/src" ] \
     || [ ! -x "$VENV/bin/webline" ]; then
     echo "env.sh: installing the webline runner into $VENV (pip install -e webline)"
-    "$PY" -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e "$ROOT/webline" \
+    "$PY" -m pip install --quiet --disable-pip-version-check --no-deps -e "$ROOT/webline" \
         || setup_failed env.sh "pip install -e webline" "pip could not install the webline runner (its message is above)" \
             "Check that PyPI is reachable, then run again."
 fi
