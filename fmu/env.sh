@@ -1,7 +1,7 @@
 # Sourced by fmu/main.sh, tests/run.sh and the other scripts: makes sure the
 # tools of the main job are there (tests/tools.sh adds the tests' own).
-# Creates .venv (fmu/requirements.txt and the webline runner) on first use,
-# then the build toolchain (fmu/toolchain.sh). Every step that fails says
+# Creates .venv (the packages of fmu/requirements.txt, cached, and the
+# webline runner) on first use, then the build toolchain (fmu/toolchain.sh). Every step that fails says
 # which step, why, and what to do, in one line, and stops the run.
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="$ROOT/.venv"
@@ -51,17 +51,30 @@ command -v cargo >/dev/null || setup_failed env.sh "finding cargo" "the Rust too
 command -v gcc >/dev/null || apt_install gcc libc6-dev \
     || setup_failed env.sh "installing gcc" "apt-get could not install gcc and libc6-dev" "Install them, then run again."
 
-# The venv is (re)filled whenever a requirements file changes: a stamp in
-# the venv holds the checksum of the requirements it was installed from.
-requirements_installed() { # STAMP-NAME FILE
-    local stamp="$VENV/.$1.sha256" want
-    want="$(sha256sum "$2" | cut -d' ' -f1)"
-    [ "$(cat "$stamp" 2>/dev/null)" = "$want" ] && return 0
-    echo "env.sh: installing the Python tools of ${2#"$ROOT"/} into $VENV"
-    "$PY" -m pip install --quiet --disable-pip-version-check -r "$2" \
-        || setup_failed env.sh "pip install -r ${2#"$ROOT"/}" "pip could not install a package (its message is above)" \
-            "Check that PyPI is reachable, then run again."
-    echo "$want" > "$stamp"
+# The tools cache, outside the work tree: a fresh clone on the same machine reuses it.
+TOOLS="${CONVERTING_SPAN_TOOLS:-${XDG_CACHE_HOME:-$HOME/.cache}/converting-span-tools}"
+export CONVERTING_SPAN_TOOLS="$TOOLS"
+mkdir -p "$TOOLS"
+
+# Python packages are installed once per requirements file into the tools
+# cache (again when the file changes); the clone's own .venv sees them
+# through a .pth file and holds only this clone's webline runner.
+python_packages() { # NAME FILE
+    local want base site
+    want="$(sha256sum "$2" | cut -c1-16)"
+    base="$TOOLS/python/$1-$want"
+    if ! [ -f "$base/.complete" ]; then
+        echo "env.sh: installing the Python packages of ${2#"$ROOT"/} into $base (once)"
+        rm -rf "$TOOLS/python/$1-"*
+        { python3 -m venv "$base" && "$base/bin/python" -m pip install --quiet --disable-pip-version-check -r "$2"; } \
+            || setup_failed env.sh "pip install -r ${2#"$ROOT"/}" "pip could not install a package (its message is above)" \
+                "Check that PyPI is reachable, then run again."
+        touch "$base/.complete"
+    fi
+    site="$("$base/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
+    local pth
+    pth="$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')/converting_span_$1.pth"
+    [ "$(cat "$pth" 2>/dev/null)" = "$site" ] || echo "$site" > "$pth"
 }
 if [ ! -x "$PY" ]; then
     echo "env.sh: creating $VENV"
@@ -69,13 +82,14 @@ if [ ! -x "$PY" ]; then
         || setup_failed env.sh "creating $VENV" "python3 -m venv does not work here" \
             "Install Debian's python3-venv, then run again."
 fi
-requirements_installed requirements "$ROOT/fmu/requirements.txt"
-# The webline runner (webline/) and its `webline` command, installed editable;
-# again when the installed one is not this folder's (e.g. after a move).
+python_packages main "$ROOT/fmu/requirements.txt"
+# The webline runner (webline/) and its `webline` command, installed editable
+# (its dependencies are the packages above); again when the installed one is
+# not this folder's (e.g. after a move).
 if [ "$("$PY" -c 'import webline, os; print(os.path.dirname(os.path.dirname(webline.__file__)))' 2>/dev/null)" != "$ROOT/webline/src" ] \
     || [ ! -x "$VENV/bin/webline" ]; then
     echo "env.sh: installing the webline runner into $VENV (pip install -e webline)"
-    "$PY" -m pip install --quiet --disable-pip-version-check -e "$ROOT/webline" \
+    "$PY" -m pip install --quiet --disable-pip-version-check --no-deps -e "$ROOT/webline" \
         || setup_failed env.sh "pip install -e webline" "pip could not install the webline runner (its message is above)" \
             "Check that PyPI is reachable, then run again."
 fi

@@ -9,10 +9,8 @@
 #   rustc-web      the Windows and ARM64 compiler (fmu/cross_toolchain.sh)
 #
 # fmu/package.py uses them for the FMU's binaries; plain `cargo build` does not.
-TOOLS="${CONVERTING_SPAN_TOOLS:-${XDG_CACHE_HOME:-$HOME/.cache}/converting-span-tools}"
 ZIGLANG_VERSION=0.15.2
 ZIGBUILD_VERSION=0.24.1
-export CONVERTING_SPAN_TOOLS="$TOOLS"
 mkdir -p "$TOOLS/bin"
 
 if ! [ -x "$TOOLS/zig-venv/bin/python" ] || ! "$TOOLS/zig-venv/bin/python" -m ziglang version 2>/dev/null | grep -qx "$ZIGLANG_VERSION"; then

@@ -9,7 +9,8 @@
 #      (but its objdump checks, `statics::`, which read only the host's
 #      objects), the Roller's tests
 #   2. the fuzz harness tests/fuzz built for each target: FUZZ_SEQUENCES each,
-#      and FUZZ3_SEQUENCES through its FMI 3 mode
+#      and FUZZ3_SEQUENCES through its FMI 3 mode (20,000 and 5,000; --full:
+#      200,000 and 50,000)
 #   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
 #      the packaged FMUs, bit for bit against Linux x86-64; importer3.c's scene
 #      through the FMI 3 FMU likewise
@@ -23,8 +24,11 @@ source "$(dirname "$0")/../fmu/env.sh"
 source "$ROOT/tests/tools.sh"
 cd "$ROOT"
 export RUST_BACKTRACE=0 # the panic-boundary tests panic on purpose
-FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}"
-FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-5000}"
+case "${1:-}" in
+    --full) FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-200000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-50000}" ;;
+    "") FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-5000}" ;;
+    *) echo "usage: $0 [--full]" >&2; exit 2 ;;
+esac
 OUT=target/platforms
 mkdir -p "$OUT"
 SUMMARY="$OUT/summary.txt"

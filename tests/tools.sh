@@ -1,7 +1,7 @@
 # Sourced by the test scripts after fmu/env.sh: what only the tests need,
 # installed once (the main job never installs these):
 #
-#   tests/requirements.txt  pytest and mpmath, into .venv
+#   tests/requirements.txt  pytest and mpmath (cached like fmu/requirements.txt, fmu/env.sh)
 #   apt                     Wine (wine64) and QEMU (qemu-user-static), which run
 #                           the Windows and ARM64 binaries; aarch64 gcc, which
 #                           compiles the C importer for ARM64 and whose sysroot
@@ -14,7 +14,7 @@
 #
 # libcosim comes with the venv (PyPI libcosimpy, fmu/requirements.txt).
 # Exports WINEPREFIX and the runners and linkers of both cross targets.
-requirements_installed tests-requirements "$ROOT/tests/requirements.txt"
+python_packages tests "$ROOT/tests/requirements.txt"
 
 TEST_PACKAGES=(wine64 qemu-user-static gcc-aarch64-linux-gnu valgrind libclang-dev binutils)
 installed() { [ "$(dpkg-query -W -f='${Status}\n' "$@" 2>/dev/null | grep -c '^install ok installed$')" = "$#" ]; }
