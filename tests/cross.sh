@@ -8,7 +8,7 @@
 #      the FMI layer's conformance suite and panic boundary on both models
 #      (but its objdump checks, `statics::`, which read only the host's
 #      objects), the Roller's tests
-#   2. the fuzz harness tests/fuzz built for each target: FUZZ_SEQUENCES each,
+#   2. the fuzz harness tests/fuzz built for each target and model: FUZZ_SEQUENCES each,
 #      and FUZZ3_SEQUENCES through its FMI 3 mode (20,000 and 5,000; --full:
 #      200,000 and 50,000)
 #   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
@@ -40,6 +40,9 @@ cross() { # cargo COMMAND ARGS...: rustc-web's cargo, std built for the target
 }
 
 declare -A NAME=([x86_64-pc-windows-gnu]="win64 (Wine)" [aarch64-unknown-linux-gnu]="aarch64-linux (QEMU)")
+# The fuzz harness fuzzes one model per build (tests/fuzz).
+declare -A MODEL_NAME=([span]=ConvertingSpan [roller]=Roller)
+declare -A FUZZ_FEATURES=([span]="" [roller]="--no-default-features --features roller")
 for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     echo "== Rust tests for $target under ${NAME[$target]}"
     t0=$SECONDS
@@ -55,20 +58,25 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     passed=$(grep -o "^test result: ok. [0-9]* passed" "$OUT/rust-$target.log" | awk '{s += $4} END {print s}')
     note "Rust tests on ${NAME[$target]}: $passed passed in $((SECONDS - t0)) s"
 
-    echo "== fuzz harness for $target: $FUZZ_SEQUENCES sequences"
-    t0=$SECONDS
-    # the tests' target directory: std and the FMU are already built there
-    cross build --profile cross-test --target-dir target/cross-test --target "$target" -p fmi-fuzz --bin fuzz_sequences
     runner_var="CARGO_TARGET_$(echo "$target" | tr 'a-z-' 'A-Z_')_RUNNER"
-    exe="target/cross-test/$target/cross-test/fuzz_sequences"
-    [ -f "$exe.exe" ] && exe="$exe.exe"
-    "${!runner_var}" "$exe" --sequences "$FUZZ_SEQUENCES" --seed 3 | tr -d '\r' | tee "$OUT/fuzz-$target.log"
-    grep -q "^$FUZZ_SEQUENCES passed, 0 failed" "$OUT/fuzz-$target.log" || { echo "fuzz violations on $target"; exit 1; }
-    note "fuzz on ${NAME[$target]}: $(grep '^fuzzed' "$OUT/fuzz-$target.log"), 0 violations ($((SECONDS - t0)) s with the build)"
-    t0=$SECONDS
-    "${!runner_var}" "$exe" --fmi3 --sequences "$FUZZ3_SEQUENCES" --seed 3 | tr -d '\r' | tee "$OUT/fuzz3-$target.log"
-    grep -q "^$FUZZ3_SEQUENCES passed, 0 failed" "$OUT/fuzz3-$target.log" || { echo "FMI 3 fuzz violations on $target"; exit 1; }
-    note "fuzz (FMI 3) on ${NAME[$target]}: $(grep '^fuzzed' "$OUT/fuzz3-$target.log"), 0 violations ($((SECONDS - t0)) s)"
+    for model in span roller; do
+        echo "== fuzz harness for $target, ${MODEL_NAME[$model]}: $FUZZ_SEQUENCES sequences"
+        t0=$SECONDS
+        # the tests' target directory: std and the FMU are already built there
+        # shellcheck disable=SC2086
+        cross build --profile cross-test --target-dir target/cross-test --target "$target" -p fmi-fuzz ${FUZZ_FEATURES[$model]} --bin fuzz_sequences
+        exe="target/cross-test/$target/cross-test/fuzz_sequences"
+        [ -f "$exe.exe" ] && exe="$exe.exe"
+        log="$OUT/fuzz-$model-$target.log"
+        "${!runner_var}" "$exe" --sequences "$FUZZ_SEQUENCES" --seed 3 | tr -d '\r' | tee "$log"
+        grep -q "^$FUZZ_SEQUENCES passed, 0 failed" "$log" || { echo "fuzz violations on $target"; exit 1; }
+        note "fuzz ${MODEL_NAME[$model]} on ${NAME[$target]}: $(grep '^fuzzed' "$log"), 0 violations ($((SECONDS - t0)) s with the build)"
+        t0=$SECONDS
+        log="$OUT/fuzz3-$model-$target.log"
+        "${!runner_var}" "$exe" --fmi3 --sequences "$FUZZ3_SEQUENCES" --seed 3 | tr -d '\r' | tee "$log"
+        grep -q "^$FUZZ3_SEQUENCES passed, 0 failed" "$log" || { echo "FMI 3 fuzz violations on $target"; exit 1; }
+        note "fuzz (FMI 3) ${MODEL_NAME[$model]} on ${NAME[$target]}: $(grep '^fuzzed' "$log"), 0 violations ($((SECONDS - t0)) s)"
+    done
 done
 
 echo "== importer.c on every platform's binary"
