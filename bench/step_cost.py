@@ -73,7 +73,7 @@ CALLS = ("fmi2SetReal", "fmi2DoStep", "fmi2GetReal")
 # pattern that matches the function's name (or, for "model", its file) wins.
 GROUPS = [
     ("entry and exit: tag and poison checks, catch_unwind, status mapping, argument pointers",
-     r"^fmi2::ffi::(enter|handle|slice|slice_mut)\b|^fmi2\w+$|^fmi2::ffi::(exports|calls)::|is_allowed_when_poisoned"
+     r"^fmi_abi::|^handle::(enter|handle)\b|^raw::|^fmi2\w+$|is_allowed_when_poisoned"
      r"|Instance::fail\b|traces_calls|LogFilter"),
     ("state mask: is the call allowed in this phase", r"Instance::(begin|prepare_get|check_computable)\b|\b(Call|Phase)::"),
     ("time checks in do_step", r"Instance::(do_step|check_step)\b"),

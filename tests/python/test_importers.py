@@ -1,5 +1,5 @@
 """The span FMU in other importers than FMPy: rust-fmi's `fmi-sim` (crates.io,
-installed by tests/importers.sh) and DNV's libcosim (PyPI `libcosimpy`).
+installed by tests/tools.sh) and DNV's libcosim (PyPI `libcosimpy`).
 
 Each importer runs the same step scene as FMPy: the three inputs step at
 communication points and are held in between. Every importer sets each new
@@ -68,7 +68,7 @@ def assert_agrees(importer, times, got, reference):
 
 def test_fmi_sim_gives_fmpys_tension(fmu_path, fmpy_result, tmp_path):
     fmi_sim = shutil.which("fmi-sim")
-    assert fmi_sim, "fmi-sim is not on PATH: tests/run.sh installs it (tests/importers.sh)"
+    assert fmi_sim, "fmi-sim is not on PATH: tests/run.sh installs it (tests/tools.sh)"
     # A step half a step before each communication point, so that fmi-sim (which
     # applies the value before an event) sets it at the point, as FMPy does.
     inputs = tmp_path / "in.csv"
@@ -94,6 +94,17 @@ def test_fmi_sim_gives_fmpys_tension(fmu_path, fmpy_result, tmp_path):
     # fmi-sim records the start point too; FMPy's rows are the same points.
     np.testing.assert_allclose(got["time"], fmpy_result["time"], rtol=0, atol=1e-12)
     assert_agrees("fmi-sim", got["time"], got, fmpy_result)
+
+
+def test_fmi_sim_cannot_read_our_fmi3_description_and_says_why(fmu_path):
+    """The README's importers table says fmi-sim 0.7.0 reads FMI 2.0 only: it
+    refuses FMI 3.0's `unit` on a Float64 (legal in FMI 3.0). If a new fmi-sim
+    reads it, this fails, and the table must change."""
+    fmi_sim = shutil.which("fmi-sim")
+    assert fmi_sim, "fmi-sim is not on PATH: tests/run.sh installs it (tests/tools.sh)"
+    fmu3 = fmu_path.parent / "fmi3" / fmu_path.name
+    run = subprocess.run([fmi_sim, "--model", str(fmu3), "co-simulation"], capture_output=True, text=True, timeout=120)
+    assert run.returncode != 0 and 'unknown field "unit" in element "FmiFloat64"' in run.stderr, run.stderr[-2000:]
 
 
 def test_libcosim_gives_fmpys_tension(fmu_path, fmpy_result):

@@ -1,5 +1,5 @@
 """Scenes and the runner: the shipped scenes, strict parsing (every error names
-the key and the file position), the complete example of docs/line-coupling.md, and the
+the key and the file position), the complete example of docs/scenes.md, and the
 `webline` command (CSV, PNG, summary, Jacobi, rollback on a discarded step).
 """
 
@@ -120,10 +120,10 @@ def test_more_scene_errors():
 
 
 def test_the_documented_example_is_a_valid_scene(tmp_path):
-    doc = (ROOT / "docs" / "line-coupling.md").read_text()
+    doc = (ROOT / "docs" / "scenes.md").read_text()
     m = re.search(r"<!-- scene example -->\s*```json\n(.*?)```", doc, re.S)
-    assert m, "the complete scene example of docs/line-coupling.md (marked <!-- scene example -->) is missing"
-    s = parse_scene(m.group(1), "docs/line-coupling.md example")
+    assert m, "the complete scene example of docs/scenes.md (marked <!-- scene example -->) is missing"
+    s = parse_scene(m.group(1), "docs/scenes.md example")
     assert s.spans and s.nodes
 
 

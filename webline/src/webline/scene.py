@@ -3,7 +3,7 @@
 A scene is a chain, source -> span -> roller -> span -> ... -> sink, with
 the webs the spans carry, input profiles, the communication step, the stop
 time, events (properties that change on the fly) and the outputs to record.
-The format is documented in docs/line-coupling.md. Every problem is a
+The format is documented in docs/scenes.md. Every problem is a
 `SceneError` whose message starts with `file:line:column` of the offending
 key or value: an unknown key, a missing value, a wrong unit, a chain that is
 not a line.
