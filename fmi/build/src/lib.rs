@@ -595,18 +595,25 @@ fn emit(md: &ModelDescription, source: &str) -> String {
             }
             _ => ("Kind::String".to_string(), start.map(|s| format!("Start::String({s:?})"))),
         };
-        let bound = |xml: Option<&String>, strict: Option<f64>, default: f64| -> (String, bool) {
-            match (strict, xml.and_then(|x| x.parse::<f64>().ok())) {
-                (Some(b), _) => (rust_f64(b), false),
-                (None, Some(b)) => (rust_f64(b), true),
-                (None, None) => (rust_f64(default), true),
-            }
+        // Both bounds hold: the XML's inclusive one and the annotation's strict one;
+        // the tighter decides (a strict bound at the same value wins).
+        let xml = |k: &str| v.type_attrs.get(k).and_then(|x| x.parse::<f64>().ok());
+        let (min, min_inclusive) = match (xml("min"), v.greater_than) {
+            (Some(m), Some(g)) if m > g => (m, true),
+            (_, Some(g)) => (g, false),
+            (Some(m), None) => (m, true),
+            (None, None) => (f64::NEG_INFINITY, true),
         };
-        let (min, min_inclusive) = bound(v.type_attrs.get("min"), v.greater_than, f64::NEG_INFINITY);
-        let (max, max_inclusive) = bound(v.type_attrs.get("max"), v.less_than, f64::INFINITY);
+        let (max, max_inclusive) = match (xml("max"), v.less_than) {
+            (Some(m), Some(l)) if m < l => (m, true),
+            (_, Some(l)) => (l, false),
+            (Some(m), None) => (m, true),
+            (None, None) => (f64::INFINITY, true),
+        };
         // The same bounds, inclusive: a strict bound moves by one ulp.
-        let lo = v.greater_than.map_or_else(|| min.clone(), |b| rust_f64(b.next_up()));
-        let hi = v.less_than.map_or_else(|| max.clone(), |b| rust_f64(b.next_down()));
+        let lo = rust_f64(if min_inclusive { min } else { min.next_up() });
+        let hi = rust_f64(if max_inclusive { max } else { max.next_down() });
+        let (min, max) = (rust_f64(min), rust_f64(max));
         writeln!(
             w,
             "    Variable {{ name: {:?}, vr: {}, description: {:?}, kind: {kind}, causality: Causality::{causality}, \
@@ -853,6 +860,27 @@ mod tests {
 
     fn tool(ranges: &str) -> String {
         format!(r#"<VendorAnnotations><Tool name="{RANGE_TOOL}"><Ranges>{ranges}</Ranges></Tool></VendorAnnotations>"#)
+    }
+
+    /// The emitted Range of variable x for a `min` attribute and a strict annotation.
+    fn emitted_range(min: &str, greater_than: &str) -> String {
+        let xml = md(&tool(&format!(r#"<Range variable="x" greaterThan="{greater_than}"/>"#)), "")
+            .replace(r#"<Real start="1"/>"#, &format!(r#"<Real start="1" min="{min}"/>"#))
+            .replace("<ModelVariables>", r#"<CoSimulation modelIdentifier="m"/><ModelVariables>"#);
+        let out = emit(&parse(&xml).unwrap(), "test");
+        let at = out.find("range: Range").unwrap();
+        out[at..at + out[at..].find('}').unwrap() + 1].to_string()
+    }
+
+    #[test]
+    fn the_tighter_of_an_inclusive_min_and_a_strict_bound_decides() {
+        // min 1e-6 and > 0 (the Roller's R once): [1e-6, ..., not (0, ...
+        let r = emitted_range("1e-6", "0");
+        assert!(r.contains("min_inclusive: true") && !r.contains("min: 0.0"), "{r}");
+        // min -1 and > -1: the strict bound at the same value wins.
+        assert!(emitted_range("-1", "-1").contains("min_inclusive: false"), "{}", emitted_range("-1", "-1"));
+        // min -5 and > -1: the strict one is tighter.
+        assert!(emitted_range("-5", "-1").contains("min_inclusive: false"), "{}", emitted_range("-5", "-1"));
     }
 
     #[test]
