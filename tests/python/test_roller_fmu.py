@@ -166,8 +166,8 @@ def test_fmu_state_round_trip_continues_bit_identically(roller_path):
 
 @pytest.mark.parametrize(
     "name,value,message",
-    [("J", 0.0, "J = 0 kg.m2 is outside its allowed range (0, 1000000000]"),
-     ("R", -0.1, "R = -0.1 m is outside its allowed range (0, 100]"),
+    [("J", 0.0, "J = 0 kg.m2 is outside its allowed range [0.000000000001, 1000000000]"),
+     ("R", -0.1, "R = -0.1 m is outside its allowed range [0.000001, 100]"),
      ("b", -1.0, "b = -1 N.m.s is outside its allowed range [0, 1000000000]")],
 )
 def test_bad_parameters_are_refused_with_the_range(roller_path, name, value, message):
