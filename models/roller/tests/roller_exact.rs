@@ -59,11 +59,12 @@ fn description_is_the_roller() {
     assert_eq!(&names[14..19], ["web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load"]);
     assert_eq!(&names[19..22], ["web_a.v", "web_b.v", "web_b.eps"]);
     assert!(!DESCRIPTION.can_interpolate_inputs);
-    // Strict and inclusive bounds from the XML (ConvertingSpan.range and min).
+    // Inclusive and strict bounds from the XML (min and ConvertingSpan.range), the tighter holding.
     let range = |n: &str| DESCRIPTION.variable_by_name(n).unwrap().range;
-    assert!(!range("J").contains(0.0) && range("J").contains(1e-12));
-    assert!(!range("R").contains(0.0) && range("R").contains(1e-12));
+    assert!(!range("J").contains(0.0) && !range("J").contains(9.9e-13) && range("J").contains(1e-12));
+    assert!(!range("R").contains(0.0) && !range("R").contains(1e-12) && range("R").contains(1e-6));
     assert!(range("b").contains(0.0) && !range("b").contains(-1e-12));
+    assert!(!range("web_a.eps").contains(-1.0) && range("web_a.eps").contains(-0.999));
     // Only the strain passed on and the drive's torque feed through from an input within a step.
     let through: Vec<&str> = DESCRIPTION
         .output_dependencies
