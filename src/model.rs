@@ -9,7 +9,7 @@ use crate::stepping;
 use crate::records;
 use crate::schedule::{self, WebChange};
 use crate::jacobian::{self, Direction, Point};
-use fmi_core::{Event, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
+use fmi_core::{Compiled, Event, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use crate::web_state;
 use solver::CompensatedSum;
 use std::sync::Arc;
@@ -265,7 +265,12 @@ impl ConvertingSpan {
 }
 
 impl Model for ConvertingSpan {
-    fn description() -> &'static fmi_core::description::ModelDescription {
+    fn instantiate(_: &Resources) -> FmiResult<Self> {
+        Ok(Self::at_start_values())
+    }
+
+    #[inline(always)]
+    fn description(&self) -> &'static fmi_core::description::ModelDescription {
         &DESCRIPTION
     }
 

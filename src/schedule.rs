@@ -61,7 +61,7 @@ fn resolve<M: Variables + Clone>(model: &M, params: fn(&mut M) -> &mut Parameter
         // A record chosen by the event replaces that side's values: back to their start values.
         for (name, _) in &e.changes {
             if let Some(side) = name.strip_suffix(".record") {
-                for v in DESCRIPTION.variables.iter().filter(|v| v.name.starts_with(&format!("{side}.")) && v.name != name) {
+                for v in DESCRIPTION.variables.iter().filter(|v| v.name.starts_with(&format!("{side}.")) && v.name != name.as_str()) {
                     if let Start::Real(x) = v.start {
                         scratch.set_real(v.vr, x)?;
                     }

@@ -3,7 +3,7 @@
 //! `fmi_core::bind_variables!`). Ranges and types come from the XML; equations
 //! for computed variables live in `physics`.
 
-use crate::description::{Boolean, BooleanKind, Effect, Integer, Real, Switch, Text};
+use crate::description::{Boolean, BooleanKind, Effect, Integer, Real, Switch, Text, DESCRIPTION};
 use crate::parameters::Inputs;
 use crate::ConvertingSpan;
 

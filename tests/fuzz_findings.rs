@@ -8,8 +8,8 @@ use fmi_testkit::*;
 
 fn output_vrs() -> Vec<u32> {
     use fmi_core::description::{Causality, Kind};
-    use fmi_core::Model;
-    <converting_span::ConvertingSpan as Model>::description()
+    use fmi_core::Compiled;
+    <converting_span::ConvertingSpan as Compiled>::compiled()
         .variables
         .iter()
         .filter(|v| v.causality == Causality::Output && v.kind == Kind::Real)

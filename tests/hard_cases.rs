@@ -20,7 +20,7 @@
 
 use converting_span::ConvertingSpan;
 use fmi_core::description::{Causality, Kind};
-use fmi_core::{Experiment, Model, Status, Variables};
+use fmi_core::{Compiled, Experiment, Model, Status, Variables};
 
 use serde::Deserialize;
 use serde_json::Value;
@@ -135,11 +135,11 @@ fn cases() -> Vec<Case> {
 // The model under test, driven by variable names
 
 fn vr(name: &str) -> u32 {
-    ConvertingSpan::description().variable_by_name(name).unwrap_or_else(|| panic!("no variable {name}")).vr
+    ConvertingSpan::compiled().variable_by_name(name).unwrap_or_else(|| panic!("no variable {name}")).vr
 }
 
 fn set(m: &mut ConvertingSpan, name: &str, value: &Value) {
-    let v = ConvertingSpan::description().variable_by_name(name).unwrap_or_else(|| panic!("no variable {name}"));
+    let v = ConvertingSpan::compiled().variable_by_name(name).unwrap_or_else(|| panic!("no variable {name}"));
     let result = match (v.kind, value) {
         (Kind::Real, Value::Number(x)) => m.set_real(v.vr, x.as_f64().unwrap()),
         (Kind::Boolean, Value::Bool(b)) => m.set_boolean(v.vr, *b),
@@ -151,11 +151,11 @@ fn set(m: &mut ConvertingSpan, name: &str, value: &Value) {
 
 /// The Real outputs and the state, by name.
 fn observed() -> Vec<(&'static str, u32)> {
-    ConvertingSpan::description()
+    ConvertingSpan::compiled()
         .variables
         .iter()
         .filter(|v| v.kind == Kind::Real && (v.causality == Causality::Output || v.name == "unstretchedLength"))
-        .map(|v| (v.name, v.vr))
+        .map(|v| (&*v.name, v.vr))
         .collect()
 }
 

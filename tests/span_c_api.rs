@@ -47,7 +47,7 @@ fn declared_ranges_are_the_spans() {
         .variables
         .iter()
         .filter(|v| v.kind == Kind::Real && matches!(v.causality, Causality::Parameter | Causality::Input))
-        .map(|v| (v.name, v.range.to_string()))
+        .map(|v| (&*v.name, v.range.to_string()))
         .collect();
     let listed: Vec<(&str, String)> = REAL_RANGES.iter().map(|(n, r)| (*n, r.to_string())).collect();
     assert_eq!(declared, listed);

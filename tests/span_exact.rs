@@ -11,7 +11,7 @@
 //! tiny absolute floor", and the floor only matters where the strain passes
 //! through zero.
 
-use fmi_core::{Experiment, Model, Variables};
+use fmi_core::{Compiled, Experiment, Model, Variables};
 use converting_span::description::{Boolean, Integer, Real, FORCE_UNIT, SPEED_UNIT};
 use converting_span::ConvertingSpan;
 
@@ -303,7 +303,7 @@ fn summary_outputs_are_consistent() {
 fn start_values_come_from_the_model_description() {
     use fmi_core::description::Start;
     let m = ConvertingSpan::at_start_values();
-    for v in ConvertingSpan::description().variables {
+    for v in ConvertingSpan::compiled().variables.iter() {
         match v.start {
             Start::Real(x) => assert_eq!(m.get_real(v.vr).unwrap(), x, "{}", v.name),
             Start::Integer(x) => assert_eq!(m.get_integer(v.vr).unwrap(), x, "{}", v.name),
@@ -329,8 +329,8 @@ fn saved_fields_load_back_identically() {
         experiment: Experiment { tolerance: Some(1e-9), ..Experiment::default() },
         model: m.clone(),
     };
-    let bytes = snapshot.to_bytes(ConvertingSpan::description());
-    let back = fmi_core::snapshot::Snapshot::<ConvertingSpan>::from_bytes(&bytes, ConvertingSpan::description()).unwrap();
+    let bytes = snapshot.to_bytes();
+    let back = fmi_core::snapshot::Snapshot::<ConvertingSpan>::from_bytes(&bytes, &ConvertingSpan::at_start_values()).unwrap();
     assert_eq!(back, snapshot, "every field survives save and load");
 }
 

@@ -5,7 +5,7 @@
 //! integrating-factor solution of the linear balance, evaluated by
 //! composite Gauss–Legendre quadrature (independent of every integrator).
 
-use fmi_core::{Experiment, Model};
+use fmi_core::{Compiled, Experiment, Model};
 use converting_span::description::Real;
 use converting_span::ConvertingSpan;
 

@@ -94,10 +94,25 @@ pub struct Request<'a> {
     pub logging_on: bool,
 }
 
-/// A new instance, or NULL after one log line saying why; no panic crosses.
-pub fn instantiate<M: Model>(request: Request, logger: Box<dyn Log>) -> *mut c_void {
+/// The model an instantiation asks for, at its start values (its interface
+/// read from the FMU's resources where it comes with them), or the one line
+/// that says why there is none.
+pub fn model_of<M: Model>(request: &Request, logger: &dyn Log) -> Option<M> {
+    let resources = request.resources.clone().for_instance(request.instance_name);
+    match catch_unwind(AssertUnwindSafe(|| M::instantiate(&resources))) {
+        Ok(Ok(model)) => Some(model),
+        Ok(Err(error)) => {
+            logger.log(Status::Error, "logStatusError", &format!("{}: {}", request.function, error.message));
+            None
+        }
+        Err(_) => None,
+    }
+}
+
+/// A new instance of `model`, or NULL after one log line saying why; no panic crosses.
+pub fn instantiate<M: Model>(request: Request, logger: Box<dyn Log>, model: M) -> *mut c_void {
     let created = catch_unwind(AssertUnwindSafe(|| {
-        let description = M::description();
+        let description = model.description();
         let refuse = |message: String| {
             logger.log(Status::Error, "logStatusError", &format!("{}: {message}", request.function));
             None
@@ -106,7 +121,7 @@ pub fn instantiate<M: Model>(request: Request, logger: Box<dyn Log>) -> *mut c_v
             return refuse(format!("{} offers only Co-Simulation", description.model_identifier));
         }
         match &request.token {
-            Some(t) if t == description.guid => {}
+            Some(t) if *t == description.guid => {}
             other => {
                 let given = other.as_ref().map_or("NULL".to_string(), |t| format!("\"{t}\""));
                 return refuse(format!(
@@ -119,7 +134,7 @@ pub fn instantiate<M: Model>(request: Request, logger: Box<dyn Log>) -> *mut c_v
     }));
     let Ok(Some(resources)) = created else { return std::ptr::null_mut() };
     let made = catch_unwind(AssertUnwindSafe(|| {
-        let instance = Instance::<M>::new(logger, request.standard, request.logging_on, request.model_exchange, resources);
+        let instance = Instance::<M>::new(logger, request.standard, request.logging_on, request.model_exchange, resources, model);
         Box::new(Handle {
             tag: tag(request.standard),
             instance,

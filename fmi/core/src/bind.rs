@@ -20,7 +20,8 @@
 //! layer does to make a call all-or-nothing) then never allocates.
 //!
 //! The caller has the generated `Real`, `Integer`, `Boolean`, `Text`, `Effect`,
-//! `Switch` and `BooleanKind` in scope.
+//! `Switch`, `BooleanKind` and `DESCRIPTION` in scope; the binding makes the
+//! model `Compiled` (its interface is that generated table).
 
 /// Writes the `Variables` impl and the inherent `real`, `integer`,
 /// `boolean` and `input_field` functions of a model from its bindings.
@@ -64,6 +65,12 @@ macro_rules! bind_variables {
             #[allow(unused_variables)]
             pub fn input_field(u: &mut $inputs, var: Real) -> Option<&mut f64> {
                 match var { $(Real::$r => $crate::__bound_input!(u, $rk, $($rf)+),)* }
+            }
+        }
+
+        impl $crate::Compiled for $model {
+            fn compiled() -> &'static $crate::description::ModelDescription {
+                &DESCRIPTION
             }
         }
 

@@ -1,8 +1,11 @@
-//! The types of the table that build.rs generates from `modelDescription.xml`.
-//! The FMI layer checks every call against this table, so causality,
-//! variability, types and allowed ranges are enforced in one place for any model.
+//! The types of the table that build.rs generates from `modelDescription.xml`,
+//! or that a model builds at instantiation from what its FMU carries (a
+//! line: its interface comes with the scene). The FMI layer checks every call
+//! against this table, so causality, variability, types and allowed ranges
+//! are enforced in one place for any model.
 
 use crate::phase::Phase;
+use std::borrow::Cow;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Causality {
@@ -140,11 +143,11 @@ impl std::fmt::Display for Range {
     }
 }
 
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Variable {
-    pub name: &'static str,
+    pub name: Cow<'static, str>,
     pub vr: u32,
-    pub description: &'static str,
+    pub description: Cow<'static, str>,
     pub kind: Kind,
     pub causality: Causality,
     pub variability: Variability,
@@ -162,10 +165,10 @@ pub struct Variable {
 
 /// One entry of ModelStructure: the unknown `vr` depends on the knowns `on`
 /// (`None`: on all knowns).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Dependency {
     pub vr: u32,
-    pub on: Option<&'static [u32]>,
+    pub on: Option<Cow<'static, [u32]>>,
 }
 
 /// An item of a unit enumeration: value `x` in SI becomes `x * factor` in
@@ -178,17 +181,17 @@ pub struct UnitChoice {
     pub factor: f64,
 }
 
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct ModelDescription {
-    pub model_name: &'static str,
+    pub model_name: Cow<'static, str>,
     pub model_identifier: &'static str,
-    pub guid: &'static str,
+    pub guid: Cow<'static, str>,
     pub log_categories: &'static [&'static str],
-    pub variables: &'static [Variable],
-    /// Value reference -> its variable.
-    pub by_vr: &'static [Option<&'static Variable>],
-    pub output_dependencies: &'static [Dependency],
-    pub initial_dependencies: &'static [Dependency],
+    pub variables: Cow<'static, [Variable]>,
+    /// Value reference -> what a get or set checks, and the variable's row.
+    pub by_vr: Cow<'static, [Slot]>,
+    pub output_dependencies: Cow<'static, [Dependency]>,
+    pub initial_dependencies: Cow<'static, [Dependency]>,
     pub can_handle_variable_communication_step_size: bool,
     pub can_interpolate_inputs: bool,
     pub can_get_and_set_fmu_state: bool,
@@ -198,20 +201,75 @@ pub struct ModelDescription {
     /// A `<ModelExchange>` element is present.
     pub model_exchange: bool,
     /// Value references of the continuous states, in the order of `derivatives`.
-    pub states: &'static [u32],
+    pub states: Cow<'static, [u32]>,
     /// ModelStructure/Derivatives: the derivative variables and their dependencies.
-    pub derivatives: &'static [Dependency],
+    pub derivatives: Cow<'static, [Dependency]>,
     pub number_of_event_indicators: usize,
 }
 
-impl ModelDescription {
-    #[inline]
-    pub fn variable(&self, vr: u32) -> Option<&'static Variable> {
-        *self.by_vr.get(vr as usize)?
+/// What a get or set checks per value, in one row per value reference
+/// (derived from the variable in row `row` of `variables`): the hot path
+/// reads this row and nothing else; error messages read the variable.
+#[derive(Clone, Copy, Debug)]
+pub struct Slot {
+    /// The variable's row of `variables`; `NO_VARIABLE` for a value
+    /// reference that names none.
+    pub row: u32,
+    pub family: Family,
+    pub settable_in: u8,
+    /// Neither a parameter nor an input: computed by the model.
+    pub computed: bool,
+    /// What a set accepts at once, both bounds inclusive and finite (so
+    /// that NaN and infinities fail the same comparison): an input's range;
+    /// every finite value for others (parameters are checked when
+    /// initialization ends).
+    pub set_lo: f64,
+    pub set_hi: f64,
+}
+
+impl Slot {
+    pub const NONE: Slot =
+        Slot { row: NO_VARIABLE, family: Family::Real, settable_in: 0, computed: false, set_lo: 0.0, set_hi: -0.0 };
+
+    pub const fn of(row: u32, v: &Variable) -> Slot {
+        let input = matches!(v.causality, Causality::Input);
+        Slot {
+            row,
+            family: v.family,
+            settable_in: v.settable_in,
+            computed: !matches!(v.causality, Causality::Parameter | Causality::Input),
+            set_lo: if input && v.range.lo > -f64::MAX { v.range.lo } else { -f64::MAX },
+            set_hi: if input && v.range.hi < f64::MAX { v.range.hi } else { f64::MAX },
+        }
     }
 
-    pub fn variable_by_name(&self, name: &str) -> Option<&'static Variable> {
-        let variables: &'static [Variable] = self.variables;
-        variables.iter().find(|v| v.name == name)
+    /// The slots of `variables`, indexed by value reference.
+    pub fn table(variables: &[Variable]) -> Vec<Slot> {
+        let n = variables.iter().map(|v| v.vr as usize + 1).max().unwrap_or(0);
+        let mut slots = vec![Slot::NONE; n];
+        for (row, v) in variables.iter().enumerate() {
+            slots[v.vr as usize] = Slot::of(row as u32, v);
+        }
+        slots
+    }
+}
+
+/// The row of `by_vr` for a value reference that names no variable.
+pub const NO_VARIABLE: u32 = u32::MAX;
+
+impl ModelDescription {
+    #[inline(always)]
+    pub fn variable(&self, vr: u32) -> Option<&Variable> {
+        self.variables.get(self.slot(vr)?.row as usize)
+    }
+
+    /// The slot of `vr`, if it names a variable.
+    #[inline(always)]
+    pub fn slot(&self, vr: u32) -> Option<&Slot> {
+        self.by_vr.get(vr as usize).filter(|s| s.row != NO_VARIABLE)
+    }
+
+    pub fn variable_by_name(&self, name: &str) -> Option<&Variable> {
+        self.variables.iter().find(|v| v.name == name)
     }
 }

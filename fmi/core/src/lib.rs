@@ -26,7 +26,7 @@ pub mod snapshot;
 pub mod standard;
 pub mod status;
 
-pub use model::{Event, EventUpdate, Experiment, IntegerValue, Jacobian, Model, Variables};
+pub use model::{Compiled, Event, EventUpdate, Experiment, IntegerValue, Jacobian, Model, Variables};
 pub use persist::{StateReader, StateWriter};
 pub use resources::Resources;
 pub use standard::{Call, Standard};

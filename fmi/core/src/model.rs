@@ -88,9 +88,16 @@ pub trait Variables {
     fn load_variables(&mut self, input: &mut StateReader) -> FmiResult;
 }
 
-pub trait Model: Variables + Clone + Default + 'static {
-    /// The table generated from this model's `modelDescription.xml`.
-    fn description() -> &'static ModelDescription;
+pub trait Model: Variables + Clone + 'static {
+    /// The model as an importer instantiates it, every parameter and input at
+    /// its start value; `resources` is the FMU's `resources/` folder, where a
+    /// model whose interface comes with the FMU (a line) finds it. A model
+    /// whose interface is compiled in takes `Compiled::at_start_values`.
+    fn instantiate(resources: &Resources) -> FmiResult<Self>;
+
+    /// The table of this model's interface: generated from its
+    /// `modelDescription.xml`, or built from what its FMU carries.
+    fn description(&self) -> &ModelDescription;
 
     /// The model's own state in an FMU state (what is not a variable), after
     /// the variables; `load_state` runs after `load_variables`.
@@ -188,26 +195,40 @@ pub trait Model: Variables + Clone + Default + 'static {
     /// defined. Initialization replaces it.
     fn provisional_state(&mut self) {}
 
+}
+
+/// A model whose interface is compiled in: the table generated from its
+/// `modelDescription.xml` by the build script.
+pub trait Compiled: Model + Default {
+    fn compiled() -> &'static ModelDescription;
+
     /// The model with every parameter and input at its start value.
     fn at_start_values() -> Self {
-        let mut model = Self::default();
-        for v in Self::description().variables {
-            if !matches!(v.causality, Causality::Parameter | Causality::Input) {
-                continue;
-            }
-            // The start values are checked by build.rs and a test covers that
-            // every one is accepted, so a failure here cannot happen.
-            let _ = match v.start {
-                Start::Real(x) => model.set_real(v.vr, x),
-                Start::Integer(x) => model.set_integer(v.vr, x),
-                Start::Boolean(x) => model.set_boolean(v.vr, x),
-                Start::String(x) => model.set_string(v.vr, x),
-                Start::None => Ok(()),
-            };
-        }
-        model.provisional_state();
-        model
+        with_start_values(Self::default(), Self::compiled())
     }
+}
+
+/// `model` with every parameter and input set to its start value in
+/// `description` (the model's own), then a provisional state (so outputs
+/// read before initialization are defined).
+pub fn with_start_values<M: Model>(mut model: M, description: &ModelDescription) -> M {
+    for v in description.variables.iter() {
+        if !matches!(v.causality, Causality::Parameter | Causality::Input) {
+            continue;
+        }
+        // The start values are checked by the generator (or the model that
+        // built the description) and a test covers that every one is
+        // accepted, so a failure here cannot happen.
+        let _ = match v.start {
+            Start::Real(x) => model.set_real(v.vr, x),
+            Start::Integer(x) => model.set_integer(v.vr, x),
+            Start::Boolean(x) => model.set_boolean(v.vr, x),
+            Start::String(x) => model.set_string(v.vr, x),
+            Start::None => Ok(()),
+        };
+    }
+    model.provisional_state();
+    model
 }
 
 // What `bind_variables!` reports; cold, so that the binding's fast paths stay small.

@@ -14,7 +14,6 @@
 //! Reals are stored as their bit patterns, so a restored state continues
 //! bit-identically.
 
-use super::description::ModelDescription;
 use super::model::{Experiment, Model};
 use super::persist::{StateReader, StateWriter};
 use super::phase::Phase;
@@ -43,7 +42,8 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 impl<M: Model> Snapshot<M> {
-    pub fn to_bytes(&self, description: &ModelDescription) -> Vec<u8> {
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let description = self.model.description();
         let mut payload = StateWriter::default();
         payload.bytes.push(self.phase as u8);
         payload.f64(self.time);
@@ -69,7 +69,9 @@ impl<M: Model> Snapshot<M> {
 
     /// Rejects bytes that are short, corrupted, of another format version or
     /// of another model, with the reason.
-    pub fn from_bytes(bytes: &[u8], description: &ModelDescription) -> FmiResult<Self> {
+    /// The state in `bytes`, read into a copy of `template` (a model of this FMU at its start values).
+    pub fn from_bytes(bytes: &[u8], template: &M) -> FmiResult<Self> {
+        let description = template.description();
         let fail = |message: String| Err(FmiError::error(message));
         if bytes.len() < HEADER + TRAILER {
             return fail(format!("{} bytes is too short for an FMU state (at least {})", bytes.len(), HEADER + TRAILER));
@@ -104,7 +106,7 @@ impl<M: Model> Snapshot<M> {
         let stop_given = reader.bool("stop time given")?;
         let stop_time = Some(reader.finite("stop time")?).filter(|_| stop_given);
         let experiment = Experiment { model_exchange, tolerance, start_time, stop_time };
-        let mut model = M::default();
+        let mut model = template.clone();
         model.load_variables(&mut reader)?;
         model.load_state(&mut reader)?;
         if !reader.bytes.is_empty() {

@@ -24,7 +24,7 @@ pub use fmi_abi::fmi2::{
     fmi2ValueReference,
 };
 use fmi_core::description::{Causality, Kind, Variable};
-use fmi_core::Model;
+use fmi_core::Compiled;
 use std::ffi::{c_int, c_void, CStr, CString};
 use std::marker::PhantomData;
 use std::sync::Mutex;
@@ -173,10 +173,10 @@ pub struct Setup<M> {
     pub model: PhantomData<M>,
 }
 
-impl<M: Model> Default for Setup<M> {
+impl<M: Compiled> Default for Setup<M> {
     fn default() -> Self {
         Setup {
-            name: Some(M::description().model_identifier.to_ascii_lowercase()),
+            name: Some(M::compiled().model_identifier.to_ascii_lowercase()),
             fmu_type: CS,
             guid: Some(guid::<M>().into()),
             resource_location: Some(shipped_resources()),
@@ -208,7 +208,7 @@ fn ptr_of(s: &Option<CString>) -> fmi2String {
 }
 
 /// `fmi2Instantiate` with a NULL `functions` pointer: must not crash.
-pub fn instantiate_without_callbacks<M: Model>() -> bool {
+pub fn instantiate_without_callbacks<M: Compiled>() -> bool {
     let name = CString::new("x").unwrap();
     let guid = CString::new(guid::<M>()).unwrap();
     // SAFETY: valid strings; the FMU must cope with the NULL functions pointer.
@@ -229,16 +229,16 @@ pub fn version() -> String {
     unsafe { string(fmi2GetVersion()) }
 }
 
-pub fn guid<M: Model>() -> &'static str {
-    M::description().guid
+pub fn guid<M: Compiled>() -> &'static str {
+    &M::compiled().guid
 }
 
 /// Looks a variable up by name; panics on a name the model does not have.
-pub fn var<M: Model>(name: &str) -> &'static Variable {
-    M::description().variable_by_name(name).unwrap_or_else(|| panic!("no variable {name}"))
+pub fn var<M: Compiled>(name: &str) -> &'static Variable {
+    M::compiled().variable_by_name(name).unwrap_or_else(|| panic!("no variable {name}"))
 }
 
-pub fn vr<M: Model>(name: &str) -> u32 {
+pub fn vr<M: Compiled>(name: &str) -> u32 {
     var::<M>(name).vr
 }
 
@@ -283,7 +283,7 @@ impl<M> Drop for Fmu<M> {
 }
 
 /// Instantiates; on NULL returns what was logged.
-pub fn instantiate<M: Model>(setup: &Setup<M>) -> Result<Fmu<M>, Vec<LogLine>> {
+pub fn instantiate<M: Compiled>(setup: &Setup<M>) -> Result<Fmu<M>, Vec<LogLine>> {
     let log: Box<Log> = Box::default();
     let functions = fmi2CallbackFunctions {
         logger: if setup.no_logger { None } else { Some(logger()) },
@@ -431,8 +431,8 @@ impl Api {
 
 /// Calls `api` on the raw component `c` with harmless arguments; `state` is
 /// passed where a function takes an FMU state.
-unsafe fn raw_call<M: Model>(c: fmi2Component, api: Api, state: fmi2FMUstate, bytes: &[u8]) -> fmi2Status {
-    let description = M::description();
+unsafe fn raw_call<M: Compiled>(c: fmi2Component, api: Api, state: fmi2FMUstate, bytes: &[u8]) -> fmi2Status {
+    let description = M::compiled();
     let first = |causality: Causality, kind: fn(&Kind) -> bool| {
         description.variables.iter().find(|v| v.causality == causality && kind(&v.kind)).map(|v| v.vr)
     };
@@ -528,7 +528,7 @@ unsafe fn raw_call<M: Model>(c: fmi2Component, api: Api, state: fmi2FMUstate, by
 }
 
 /// Calls `api` with a NULL `fmi2Component`.
-pub fn call_with_null_component<M: Model>(api: Api) -> i32 {
+pub fn call_with_null_component<M: Compiled>(api: Api) -> i32 {
     // SAFETY: NULL is refused by the FMU before anything is dereferenced;
     // every other pointer argument is valid.
     unsafe { raw_call::<M>(std::ptr::null_mut(), api, std::ptr::null_mut(), &[0u8; 64]) }
@@ -548,7 +548,7 @@ fn status_of<T>(status: fmi2Status, value: T) -> Result<T, i32> {
     }
 }
 
-impl<M: Model> Fmu<M> {
+impl<M: Compiled> Fmu<M> {
     /// A Co-Simulation instance named after the model, logging off, or panics.
     pub fn new() -> Self {
         Self::with(&Setup::default())
@@ -883,7 +883,7 @@ impl<M: Model> Fmu<M> {
     }
 }
 
-impl<M: Model> Fmu<M> {
+impl<M: Compiled> Fmu<M> {
     /// fmi2SetRealInputDerivatives.
     pub fn set_real_input_derivatives(&self, vrs: &[u32], orders: &[i32], values: &[f64]) -> i32 {
         assert!(orders.len() == vrs.len() && values.len() == vrs.len());
@@ -911,7 +911,7 @@ impl<M: Model> Fmu<M> {
 }
 
 // The short forms the hardening tests and the fuzz harness use.
-impl<M: Model> Fmu<M> {
+impl<M: Compiled> Fmu<M> {
     pub fn set_real(&self, name: &str, x: f64) -> i32 {
         // SAFETY: live instance, one value.
         unsafe { fmi2SetReal(self.c, &vr::<M>(name), 1, &x) }

@@ -18,7 +18,7 @@ pub mod physics;
 
 use description::{Boolean, BooleanKind, Integer, Real, Switch, Text, DESCRIPTION};
 use drive::{Drive, Loaded};
-use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
+use fmi_core::{Compiled, EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use physics::{Inputs, Parameters, Roll};
 use profiles::Value;
 use solver::CompensatedSum;
@@ -303,7 +303,12 @@ impl Roller {
 }
 
 impl Model for Roller {
-    fn description() -> &'static fmi_core::description::ModelDescription {
+    fn instantiate(_: &Resources) -> FmiResult<Self> {
+        Ok(Self::at_start_values())
+    }
+
+    #[inline(always)]
+    fn description(&self) -> &'static fmi_core::description::ModelDescription {
         &DESCRIPTION
     }
 

@@ -7,8 +7,8 @@
 
 use fmi_core::snapshot::Snapshot;
 use fmi_core::phase::Phase;
-use fmi_core::{Experiment, Model, Resources, Variables};
-use roller::description::{Boolean, Integer, Real, Text, DESCRIPTION};
+use fmi_core::{Compiled, Experiment, Model, Resources, Variables};
+use roller::description::{Boolean, Integer, Real, Text};
 use roller::Roller;
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -169,7 +169,7 @@ fn an_fmu_state_carries_the_profile_and_continues_bit_identically() {
     step_to(&mut m, &mut t, 0.3, 0.1);
     assert_eq!(get(&m, Real::web_b_eps), 1e-3);
     let snapshot = Snapshot { phase: Phase::StepComplete, time: t, experiment: Default::default(), model: m.clone() };
-    let back = Snapshot::<Roller>::from_bytes(&snapshot.to_bytes(&DESCRIPTION), &DESCRIPTION).unwrap();
+    let back = Snapshot::<Roller>::from_bytes(&snapshot.to_bytes(), &Roller::at_start_values()).unwrap();
     let mut copy = back.model;
     let (mut t1, mut t2) = (t, t);
     step_to(&mut m, &mut t1, 1.0, 0.1);

@@ -54,7 +54,7 @@ use fmi_core::description::{
     Causality, Initial, Kind, ModelDescription, Variability, Variable,
 };
 use fmi_core::instance::TEST_PANIC_CATEGORY;
-use fmi_core::Model;
+use fmi_core::Compiled;
 use fmi_testkit::*;
 use std::ffi::CString;
 use std::ptr::null_mut;
@@ -74,7 +74,7 @@ const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../resources/")
 const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/roller/resources/");
 
 fn desc() -> Desc {
-    <Fuzzed as Model>::description()
+    <Fuzzed as Compiled>::compiled()
 }
 
 // ---------------------------------------------------------------- input
@@ -1142,7 +1142,7 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
             }
             let v = var(x, fam).expect("known");
             match fam {
-                Family::Real => r.finite(i, reals[k], v.name)?,
+                Family::Real => r.finite(i, reals[k], &v.name)?,
                 Family::Boolean if !(ints[k] == 0 || ints[k] == 1) => {
                     return fail(format!(
                         "{}: {} = {} is not a Boolean",
@@ -1965,7 +1965,7 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             }
             r.what = format!("{} then fmi2GetReal", r.what);
             for (v, x) in reals.iter().zip(values) {
-                r.finite(i, x, v.name)?;
+                r.finite(i, x, &v.name)?;
             }
         }
         DISCARD => {

@@ -34,8 +34,19 @@ pub unsafe fn instantiate<M: Model>(
     let Some(functions) = functions.as_ref() else { return std::ptr::null_mut() };
     let name = text(instance_name).unwrap_or_default();
     let logger = Logger::new(functions, &name);
-    let description = M::description();
-    let model_exchange = match fmu_type {
+    let mut request = Request {
+        standard: Standard::Fmi2,
+        function: "fmi2Instantiate",
+        instance_name: &name,
+        model_exchange: false,
+        token: text(guid),
+        token_name: "GUID",
+        resources: Resources::from_location(text(resource_location).as_deref()),
+        logging_on: logging_on != 0,
+    };
+    let Some(model) = handle::model_of::<M>(&request, &logger) else { return std::ptr::null_mut() };
+    let description = model.description();
+    request.model_exchange = match fmu_type {
         fmi2CoSimulation => false,
         fmi2ModelExchange if description.model_exchange => true,
         _ => {
@@ -45,17 +56,7 @@ pub unsafe fn instantiate<M: Model>(
             return std::ptr::null_mut();
         }
     };
-    let request = Request {
-        standard: Standard::Fmi2,
-        function: "fmi2Instantiate",
-        instance_name: &name,
-        model_exchange,
-        token: text(guid),
-        token_name: "GUID",
-        resources: Resources::from_location(text(resource_location).as_deref()),
-        logging_on: logging_on != 0,
-    };
-    handle::instantiate::<M>(request, Box::new(logger))
+    handle::instantiate::<M>(request, Box::new(logger), model)
 }
 
 /// `fmi2FreeInstance`.
@@ -256,7 +257,7 @@ pub unsafe fn serialized_fmu_state_size<M: Model>(
 ) -> fmi2Status {
     let call = Call::SerializedFMUstateSize;
     enter::<M, _>(c, call, |h| {
-        let n = h.own_state(call, state)?.to_bytes(M::description()).len();
+        let n = h.own_state(call, state)?.to_bytes().len();
         *out_ref(call, size, "size")? = n;
         OK
     })
@@ -270,7 +271,7 @@ pub unsafe fn serialize_fmu_state<M: Model>(
 ) -> fmi2Status {
     let call = Call::SerializeFMUstate;
     enter::<M, _>(c, call, |h| {
-        let bytes = h.own_state(call, state)?.to_bytes(M::description());
+        let bytes = h.own_state(call, state)?.to_bytes();
         if size < bytes.len() {
             return Err(FmiError::error(format!(
                 "{}: the buffer holds {size} bytes, the state needs {} (ask fmi2SerializedFMUstateSize)",
@@ -293,7 +294,7 @@ pub unsafe fn de_serialize_fmu_state<M: Model>(
     let call = Call::DeSerializeFMUstate;
     enter::<M, _>(c, call, |h| {
         let bytes = slice(call, serialized as *const u8, size, "serializedState")?;
-        let snapshot = Snapshot::<M>::from_bytes(bytes, M::description())
+        let snapshot = Snapshot::<M>::from_bytes(bytes, h.instance.start_model())
             .and_then(|s| Instance::<M>::check_snapshot(&s).map(|()| s))
             .map_err(|why| FmiError::error(format!("{}: rejected: {}", call.name(), why.message)))?;
         h.keep_state(call, state, "FMUstate", snapshot)?;

@@ -39,7 +39,9 @@ unsafe fn instantiate<M: Model>(
         resources: Resources::from_path(text(resource_path).as_deref()),
         logging_on: logging_on != 0,
     };
-    handle::instantiate::<M>(request, Box::new(Logger { callback: log_message, environment }))
+    let logger = Logger { callback: log_message, environment };
+    let Some(model) = handle::model_of::<M>(&request, &logger) else { return std::ptr::null_mut() };
+    handle::instantiate::<M>(request, Box::new(logger), model)
 }
 
 pub unsafe fn set_debug_logging<M: Model>(
@@ -174,15 +176,15 @@ pub unsafe fn get_float64<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let (vrs, out) = (slice(call, vr, nvr, "valueReferences")?, slice_mut(call, values, nvr, "values")?);
-        let description = M::description();
-        if !types::check(description, call, vrs, Type::Float64, true)? {
+        if !types::check(h.instance.description(), call, vrs, Type::Float64, true)? {
             return h.instance.get_reals(call.name(), vrs, out);
         }
+        let indicators = h.instance.description().number_of_event_indicators;
         for (&vr, value) in vrs.iter().zip(out.iter_mut()) {
-            *value = match types::added(description, vr) {
+            *value = match types::added(h.instance.description(), vr) {
                 Some(Added::Time) => h.instance.time(),
                 Some(Added::EventIndicator(i)) => {
-                    let mut z = vec![0.0; description.number_of_event_indicators];
+                    let mut z = vec![0.0; indicators];
                     h.instance.get_event_indicators(call.name(), &mut z)?;
                     z[i]
                 }
@@ -208,7 +210,7 @@ pub unsafe fn set_float64<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        types::check(M::description(), call, vrs, Type::Float64, false)?;
+        types::check(h.instance.description(), call, vrs, Type::Float64, false)?;
         h.instance.set_reals(call.name(), vrs, slice(call, values, nvr, "values")?)
     })
 }
@@ -224,7 +226,7 @@ pub unsafe fn get_int32<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        types::check(M::description(), call, vrs, Type::Int32, true)?;
+        types::check(h.instance.description(), call, vrs, Type::Int32, true)?;
         h.instance.get_integers(call.name(), vrs, slice_mut(call, values, nvr, "values")?)
     })
 }
@@ -240,7 +242,7 @@ pub unsafe fn set_int32<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        types::check(M::description(), call, vrs, Type::Int32, false)?;
+        types::check(h.instance.description(), call, vrs, Type::Int32, false)?;
         h.instance.set_integers(call.name(), vrs, slice(call, values, nvr, "values")?)
     })
 }
@@ -257,7 +259,7 @@ pub unsafe fn get_int64<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        types::check(M::description(), call, vrs, Type::Int64, true)?;
+        types::check(h.instance.description(), call, vrs, Type::Int64, true)?;
         let out = slice_mut(call, values, nvr, "values")?;
         let mut items = vec![0; nvr];
         h.instance.get_integers(call.name(), vrs, &mut items)?;
@@ -277,14 +279,14 @@ pub unsafe fn set_int64<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        let description = M::description();
+        let description = h.instance.description();
         types::check(description, call, vrs, Type::Int64, false)?;
         let items = slice(call, values, nvr, "values")?
             .iter()
             .zip(vrs)
             .map(|(&x, &vr)| {
                 i32::try_from(x).map_err(|_| {
-                    let name = description.variable(vr).map_or("", |v| v.name);
+                    let name = description.variable(vr).map_or("", |v| &v.name);
                     FmiError::error(format!("{}: {name} = {x} is not a value of its enumeration", call.name()))
                 })
             })
@@ -304,7 +306,7 @@ pub unsafe fn get_boolean<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        types::check(M::description(), call, vrs, Type::Boolean, true)?;
+        types::check(h.instance.description(), call, vrs, Type::Boolean, true)?;
         let out = slice_mut(call, values, nvr, "values")?;
         let mut flags = vec![0; nvr];
         h.instance.get_booleans(call.name(), vrs, &mut flags)?;
@@ -324,7 +326,7 @@ pub unsafe fn set_boolean<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        types::check(M::description(), call, vrs, Type::Boolean, false)?;
+        types::check(h.instance.description(), call, vrs, Type::Boolean, false)?;
         // Bytes other than 0 and 1 reach the instance's check, which names them.
         let flags: Vec<i32> = slice(call, values, nvr, "values")?.iter().map(|&b| b.into()).collect();
         h.instance.set_booleans(call.name(), vrs, &flags)
@@ -342,7 +344,7 @@ pub unsafe fn get_string<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        types::check(M::description(), call, vrs, Type::String, true)?;
+        types::check(h.instance.description(), call, vrs, Type::String, true)?;
         let out = slice_mut(call, values, nvr, "values")?;
         let mut texts = Vec::with_capacity(vrs.len());
         h.instance.get_strings(call.name(), vrs, |s| texts.push(c_text(s)))?;
@@ -362,7 +364,7 @@ pub unsafe fn set_string<M: Model>(
     enter::<M, _>(c, call, |h| {
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
-        types::check(M::description(), call, vrs, Type::String, false)?;
+        types::check(h.instance.description(), call, vrs, Type::String, false)?;
         let texts = slice(call, values, nvr, "values")?
             .iter()
             .enumerate()
@@ -412,7 +414,7 @@ pub unsafe fn free_fmu_state<M: Model>(c: fmi3Instance, state: *mut fmi3FMUState
 pub unsafe fn serialized_fmu_state_size<M: Model>(c: fmi3Instance, state: fmi3FMUState, size: *mut usize) -> fmi3Status {
     let call = Call::SerializedFMUStateSize;
     enter::<M, _>(c, call, |h| {
-        let n = h.own_state(call, state)?.to_bytes(M::description()).len();
+        let n = h.own_state(call, state)?.to_bytes().len();
         *out_ref(call, size, "size")? = n;
         Ok(())
     })
@@ -426,7 +428,7 @@ pub unsafe fn serialize_fmu_state<M: Model>(
 ) -> fmi3Status {
     let call = Call::SerializeFMUState;
     enter::<M, _>(c, call, |h| {
-        let bytes = h.own_state(call, state)?.to_bytes(M::description());
+        let bytes = h.own_state(call, state)?.to_bytes();
         if size < bytes.len() {
             return Err(FmiError::error(format!(
                 "{}: the buffer holds {size} bytes, the state needs {} (ask fmi3SerializedFMUStateSize)",
@@ -448,7 +450,7 @@ pub unsafe fn deserialize_fmu_state<M: Model>(
     let call = Call::DeserializeFMUState;
     enter::<M, _>(c, call, |h| {
         let bytes = slice(call, serialized, size, "serializedState")?;
-        let snapshot = Snapshot::<M>::from_bytes(bytes, M::description())
+        let snapshot = Snapshot::<M>::from_bytes(bytes, h.instance.start_model())
             .and_then(|s| Instance::<M>::check_snapshot(&s).map(|()| s))
             .map_err(|why| FmiError::error(format!("{}: rejected: {}", call.name(), why.message)))?;
         h.keep_state(call, state, "FMUState", snapshot)
@@ -542,16 +544,16 @@ pub unsafe fn get_nominals_of_continuous_states<M: Model>(c: fmi3Instance, nomin
 
 pub unsafe fn get_number_of_event_indicators<M: Model>(c: fmi3Instance, n: *mut usize) -> fmi3Status {
     let call = Call::GetNumberOfEventIndicators;
-    enter::<M, _>(c, call, |_| {
-        *out_ref(call, n, "nEventIndicators")? = M::description().number_of_event_indicators;
+    enter::<M, _>(c, call, |h| {
+        *out_ref(call, n, "nEventIndicators")? = h.instance.description().number_of_event_indicators;
         Ok(())
     })
 }
 
 pub unsafe fn get_number_of_continuous_states<M: Model>(c: fmi3Instance, n: *mut usize) -> fmi3Status {
     let call = Call::GetNumberOfContinuousStates;
-    enter::<M, _>(c, call, |_| {
-        *out_ref(call, n, "nContinuousStates")? = M::description().states.len();
+    enter::<M, _>(c, call, |h| {
+        *out_ref(call, n, "nContinuousStates")? = h.instance.description().states.len();
         Ok(())
     })
 }

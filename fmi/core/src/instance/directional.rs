@@ -17,7 +17,7 @@ impl<M: Model> Instance<M> {
         seed: &[f64],
         out: &mut [f64],
     ) -> FmiResult {
-        let d = Self::description();
+        let d = self.model.description();
         let me = self.experiment.model_exchange;
         if !d.provides_directional_derivative[me as usize] {
             let interface = if me { "Model Exchange" } else { "Co-Simulation" };
@@ -32,10 +32,10 @@ impl<M: Model> Instance<M> {
             _ => Jacobian::CommunicationPoint,
         };
         for &vr in unknowns {
-            Self::unknown_dependencies(call, vr, of)?;
+            self.unknown_dependencies(call, vr, of)?;
         }
         for (j, (&vr, &s)) in knowns.iter().zip(seed).enumerate() {
-            Self::check_known(call, vr, of)?;
+            self.check_known(call, vr, of)?;
             if !s.is_finite() {
                 return Err(FmiError::error(format!("{}: dvKnown[{j}] = {s} must be finite", call)));
             }
@@ -43,7 +43,7 @@ impl<M: Model> Instance<M> {
         self.prepare_get(call)?;
         self.check_computable(call)?;
         for (slot, &unknown) in out.iter_mut().zip(unknowns) {
-            let on = Self::unknown_dependencies(call, unknown, of)?.on;
+            let on = self.unknown_dependencies(call, unknown, of)?.on.as_deref();
             let mut sum = 0.0;
             for (&known, &s) in knowns.iter().zip(seed) {
                 if s == 0.0 || on.is_some_and(|on| !on.contains(&known)) {
@@ -58,11 +58,11 @@ impl<M: Model> Instance<M> {
 
     /// The ModelStructure entry of an unknown of `of`: an initial unknown
     /// during initialization, otherwise an output or a state derivative.
-    fn unknown_dependencies(call: CallName, vr: u32, of: Jacobian) -> FmiResult<&'static Dependency> {
-        let d = Self::description();
+    fn unknown_dependencies(&self, call: CallName, vr: u32, of: Jacobian) -> FmiResult<&Dependency> {
+        let d = self.model.description();
         let found = match of {
             Jacobian::Initialization => d.initial_dependencies.iter().find(|u| u.vr == vr),
-            _ => d.output_dependencies.iter().chain(d.derivatives).find(|u| u.vr == vr),
+            _ => d.output_dependencies.iter().chain(d.derivatives.iter()).find(|u| u.vr == vr),
         };
         match (found, d.variable(vr)) {
             (Some(u), Some(v)) if v.family == Family::Real => Ok(u),
@@ -71,8 +71,8 @@ impl<M: Model> Instance<M> {
     }
 
     /// Knowns: the inputs, and in Model Exchange after initialization also the continuous states.
-    fn check_known(call: CallName, vr: u32, of: Jacobian) -> FmiResult {
-        let d = Self::description();
+    fn check_known(&self, call: CallName, vr: u32, of: Jacobian) -> FmiResult {
+        let d = self.model.description();
         let v = d.variable(vr);
         let ok = v.is_some_and(|v| {
             v.family == Family::Real

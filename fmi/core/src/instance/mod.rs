@@ -17,7 +17,7 @@ mod model_exchange;
 mod states;
 mod values;
 
-use super::description::{Causality, Family, Kind, ModelDescription, Variability, Variable};
+use super::description::{Causality, Family, Kind, ModelDescription, Slot, Variability, Variable};
 use super::logging::{Log, LogFilter};
 use super::model::{Experiment, Model};
 use super::phase::Phase;
@@ -67,21 +67,25 @@ pub struct Instance<M: Model> {
     /// The FMU's resources/ folder, from fmi2Instantiate.
     resources: Resources,
     model: M,
+    /// The model as instantiated: what a reset returns to, and what FMU states are read into.
+    start: M,
     #[cfg(feature = "test-hooks")]
     panic_in_next_step: bool,
 }
 
 impl<M: Model> Instance<M> {
-    pub fn new(logger: Box<dyn Log>, standard: Standard, logging_on: bool, model_exchange: bool, resources: Resources) -> Self {
+    pub fn new(logger: Box<dyn Log>, standard: Standard, logging_on: bool, model_exchange: bool, resources: Resources, model: M) -> Self {
+        let log = LogFilter::new(model.description().log_categories, logging_on);
         let instance = Instance {
             logger,
             standard,
-            log: LogFilter::new(Self::description().log_categories, logging_on),
+            log,
             phase: Phase::Instantiated,
             time: 0.0,
             experiment: Experiment { model_exchange, ..Experiment::default() },
             resources,
-            model: M::at_start_values(),
+            start: model.clone(),
+            model,
             #[cfg(feature = "test-hooks")]
             panic_in_next_step: false,
         };
@@ -89,8 +93,15 @@ impl<M: Model> Instance<M> {
         instance
     }
 
-    fn description() -> &'static ModelDescription {
-        M::description()
+    /// The interface of the model this instance serves.
+    #[inline(always)]
+    pub fn description(&self) -> &ModelDescription {
+        self.model.description()
+    }
+
+    /// The model as instantiated (FMU states are read into a copy of it).
+    pub fn start_model(&self) -> &M {
+        &self.start
     }
 
     pub fn phase(&self) -> Phase {
@@ -198,7 +209,7 @@ impl<M: Model> Instance<M> {
 
     /// Every parameter within its allowed range.
     fn check_parameter_ranges(&self) -> FmiResult {
-        for v in Self::description().variables {
+        for v in self.model.description().variables.iter() {
             if v.causality != Causality::Parameter || v.range.is_unbounded() {
                 continue;
             }
@@ -221,7 +232,7 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn reset(&mut self) -> FmiResult {
-        self.model = M::at_start_values();
+        self.model = self.start.clone();
         self.phase = Phase::Instantiated;
         self.time = 0.0;
         self.experiment = Experiment { model_exchange: self.experiment.model_exchange, ..Experiment::default() };

@@ -30,7 +30,7 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn set_continuous_states(&mut self, call: CallName, x: &[f64]) -> FmiResult {
-        Self::check_count(call, "states", x.len(), Self::description().states.len())?;
+        Self::check_count(call, "states", x.len(), self.model.description().states.len())?;
         if let Some(bad) = x.iter().find(|v| !v.is_finite()) {
             return Err(FmiError::error(format!("{}: a state value is {bad}", call)));
         }
@@ -38,22 +38,25 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn get_continuous_states(&mut self, call: CallName, x: &mut [f64]) -> FmiResult {
-        self.prepare_computed(call, "states", x.len(), Self::description().states.len())?;
+        let n = self.model.description().states.len();
+        self.prepare_computed(call, "states", x.len(), n)?;
         self.model.get_continuous_states(x).map_err(|e| e.prefixed(call))
     }
 
     pub fn get_derivatives(&mut self, call: CallName, dx: &mut [f64]) -> FmiResult {
-        self.prepare_computed(call, "derivatives", dx.len(), Self::description().states.len())?;
+        let n = self.model.description().states.len();
+        self.prepare_computed(call, "derivatives", dx.len(), n)?;
         self.model.get_derivatives(dx).map_err(|e| e.prefixed(call))
     }
 
     pub fn get_event_indicators(&mut self, call: CallName, z: &mut [f64]) -> FmiResult {
-        self.prepare_computed(call, "event indicators", z.len(), Self::description().number_of_event_indicators)?;
+        let n = self.model.description().number_of_event_indicators;
+        self.prepare_computed(call, "event indicators", z.len(), n)?;
         self.model.get_event_indicators(z).map_err(|e| e.prefixed(call))
     }
 
     pub fn get_nominals(&mut self, call: CallName, nominals: &mut [f64]) -> FmiResult {
-        Self::check_count(call, "nominals", nominals.len(), Self::description().states.len())?;
+        Self::check_count(call, "nominals", nominals.len(), self.model.description().states.len())?;
         self.model.get_nominals(nominals).map_err(|e| e.prefixed(call))
     }
 

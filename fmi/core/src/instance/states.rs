@@ -45,7 +45,7 @@ impl<M: Model> Instance<M> {
             snapshot.phase,
             Phase::StepComplete | Phase::StepFailed | Phase::Terminated | Phase::EventMode | Phase::ContinuousTimeMode
         );
-        for v in Self::description().variables {
+        for v in snapshot.model.description().variables.iter() {
             let checked_range = v.causality == Causality::Input || (v.causality == Causality::Parameter && initialized);
             let wrong = match v.kind {
                 Kind::Real if matches!(v.causality, Causality::Input | Causality::Parameter) => {

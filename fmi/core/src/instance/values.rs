@@ -4,15 +4,22 @@
 
 use super::*;
 
+/// Looks up a value reference and checks that it is of the family the
+/// function handles.
+#[inline(always)]
+fn slot_in(d: &ModelDescription, call: CallName, vr: u32, family: Family) -> FmiResult<&Slot> {
+    match d.slot(vr) {
+        Some(s) if s.family == family => Ok(s),
+        _ => Err(wrong_variable(call, vr, d.variable(vr), family)),
+    }
+}
+
 impl<M: Model> Instance<M> {
-    /// Looks up a value reference and checks that it is of the family the
-    /// function handles.
     #[inline(always)]
-    fn variable(&self, call: CallName, vr: u32, family: Family) -> FmiResult<&'static Variable> {
-        match Self::description().variable(vr) {
-            Some(v) if v.family == family => Ok(v),
-            found => Err(wrong_variable(call, vr, found, family)),
-        }
+    fn variable(&self, call: CallName, vr: u32, family: Family) -> FmiResult<&Variable> {
+        let d = self.model.description();
+        let slot = slot_in(d, call, vr, family)?;
+        Ok(&d.variables[slot.row as usize])
     }
 
     /// In initialization mode the outputs follow the parameters and inputs
@@ -58,8 +65,8 @@ impl<M: Model> Instance<M> {
         self.prepare_get(call)?;
         let mut checked = false;
         for (vr, value) in vrs.iter().zip(values.iter_mut()) {
-            let v = self.variable(call, *vr, Family::Real)?;
-            if !checked && !matches!(v.causality, Causality::Parameter | Causality::Input) {
+            let slot = slot_in(self.model.description(), call, *vr, Family::Real)?;
+            if !checked && slot.computed {
                 self.check_computable(call)?;
                 checked = true;
             }
@@ -149,14 +156,17 @@ impl<M: Model> Instance<M> {
     /// as `set_all`, every value before any is applied.
     #[inline(always)]
     pub fn set_reals(&mut self, call: CallName, vrs: &[u32], values: &[f64]) -> FmiResult {
+        let d = self.model.description();
         for (&vr, &x) in vrs.iter().zip(values) {
-            let v = self.variable(call, vr, Family::Real)?;
-            self.check_settable(call, v)?;
+            let slot = slot_in(d, call, vr, Family::Real)?;
+            if slot.settable_in & self.phase.bit() == 0 {
+                return Err(not_settable(call, &d.variables[slot.row as usize], self.standard.state(self.phase)));
+            }
             // Parameters are range-checked when initialization ends (they
             // may pass through odd values while a user sets them one by
             // one); inputs take effect at once, so they are checked now.
-            if !x.is_finite() || (v.causality == Causality::Input && !v.range.contains(x)) {
-                return Err(out_of_range(v, x).prefixed(call));
+            if !(slot.set_lo <= x && x <= slot.set_hi) {
+                return Err(out_of_range(&d.variables[slot.row as usize], x).prefixed(call));
             }
         }
         for (&vr, &x) in vrs.iter().zip(values) {
@@ -203,7 +213,7 @@ impl<M: Model> Instance<M> {
 
     /// `fmi2SetRealInputDerivatives`: first derivatives of Real inputs.
     pub fn set_input_derivatives(&mut self, call: CallName, vrs: &[u32], orders: &[i32], values: &[f64]) -> FmiResult {
-        if !Self::description().can_interpolate_inputs {
+        if !self.model.description().can_interpolate_inputs {
             return Err(FmiError::error(format!("{}: canInterpolateInputs is false", call)));
         }
         for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(values) {

@@ -7,12 +7,12 @@ use super::scene::*;
 use super::{Hints, Point};
 use crate::*;
 use fmi_core::description::{Causality, Dependency, Kind, Variable};
-use fmi_core::Model;
+use fmi_core::Compiled;
 
 /// The operating points: the start values; each settable Boolean parameter
 /// flipped and each enumeration parameter at each other item (alone); and
 /// the model's hints.
-fn points<M: Model>(hints: &Hints) -> Vec<Point> {
+fn points<M: Compiled>(hints: &Hints) -> Vec<Point> {
     let mut out = vec![Point::default()];
     for v in settable_parameters::<M>() {
         let others: Vec<f64> = match v.kind {
@@ -20,14 +20,14 @@ fn points<M: Model>(hints: &Hints) -> Vec<Point> {
             Kind::Enumeration { values, .. } => values.iter().map(|&i| i as f64).filter(|&i| i != start_of(v)).collect(),
             _ => continue,
         };
-        out.extend(others.into_iter().map(|x| Point { values: vec![(v.name, x)], texts: vec![] }));
+        out.extend(others.into_iter().map(|x| Point { values: vec![(&v.name, x)], texts: vec![] }));
     }
     out.extend(hints.points.iter().cloned());
     out
 }
 
 /// A fresh instance with `point` set; `None` (with the log) when a set is refused.
-fn at<M: Model>(point: &Point) -> Result<Fmu<M>, String> {
+fn at<M: Compiled>(point: &Point) -> Result<Fmu<M>, String> {
     let fmu = Fmu::<M>::new();
     for &(name, x) in &point.values {
         if fmu.set(name, x) != OK {
@@ -64,14 +64,14 @@ fn perturbed(v: &Variable, x: f64) -> f64 {
 /// gives no list (FMI 2.0: then it depends on all knowns, a conservative
 /// statement that claims nothing exact).
 fn listed(u: &Dependency, known: &Variable) -> Option<bool> {
-    u.on.map(|on| on.contains(&known.vr))
+    u.on.as_ref().map(|on| on.contains(&known.vr))
 }
 
 /// Mismatches of the measured largest relative changes per (unknown, known)
 /// with the listed dependencies: a listed known must change the unknown by
 /// more than `significant` at some point; an unlisted one must never change
 /// it by more than `rounding`.
-fn dependency_problems<M: Model>(
+fn dependency_problems<M: Compiled>(
     unknowns: &[Dependency],
     knowns: &[&Variable],
     largest: &[Vec<f64>],
@@ -80,7 +80,7 @@ fn dependency_problems<M: Model>(
 ) -> Vec<String> {
     let mut problems = Vec::new();
     for (i, u) in unknowns.iter().enumerate() {
-        let unknown = M::description().variable(u.vr).unwrap().name;
+        let unknown = &M::compiled().variable(u.vr).unwrap().name;
         for (j, known) in knowns.iter().enumerate() {
             let c = largest[i][j];
             match listed(u, known) {
@@ -103,8 +103,8 @@ fn dependency_problems<M: Model>(
 /// some point if the input is listed as its dependency (by far more than
 /// rounding), and leaves it bit-identical at every point if not. Every
 /// perturbation uses a fresh instance; every output must be listed.
-pub fn output_dependencies_are_exact<M: Model>(hints: &Hints) {
-    let outputs = M::description().output_dependencies;
+pub fn output_dependencies_are_exact<M: Compiled>(hints: &Hints) {
+    let outputs = &M::compiled().output_dependencies;
     let output_vrs: Vec<u32> = of_causality::<M>(Causality::Output).iter().map(|v| v.vr).collect();
     assert_eq!(outputs.iter().map(|d| d.vr).collect::<Vec<_>>(), output_vrs, "every output is listed");
     let inputs = of_causality::<M>(Causality::Input);
@@ -121,9 +121,9 @@ pub fn output_dependencies_are_exact<M: Model>(hints: &Hints) {
                 }
                 run(&fmu, 0.0, 0, steps);
                 for input in &inputs {
-                    let x = fmu.get(input.name).unwrap();
+                    let x = fmu.get(&input.name).unwrap();
                     let y = if perturbed_input == Some(input.vr) { perturbed(input, x) } else { x };
-                    assert_eq!(fmu.set(input.name, y), OK, "{} = {y}: {:?}", input.name, fmu.logs());
+                    assert_eq!(fmu.set(&input.name, y), OK, "{} = {y}: {:?}", input.name, fmu.logs());
                 }
                 Ok(outputs.iter().map(|d| fmu.get_reals_vr(&[d.vr]).unwrap()[0]).collect())
             };
@@ -147,7 +147,7 @@ pub fn output_dependencies_are_exact<M: Model>(hints: &Hints) {
         }
     }
     assert!(measured >= 2, "only {measured} operating points initialize");
-    let problems = dependency_problems::<M>(outputs, &inputs, &largest, 1e-10, 0.0);
+    let problems = dependency_problems::<M>(&outputs, &inputs, &largest, 1e-10, 0.0);
     assert!(problems.is_empty(), "{problems:#?}");
 }
 
@@ -162,15 +162,15 @@ pub fn output_dependencies_are_exact<M: Model>(hints: &Hints) {
 /// perturbed to the other text the hints give. Each perturbation is a fresh
 /// instance; a perturbation the model refuses must be one the hints name.
 /// SHOW_DEPENDENCY_MARGINS=1 prints the margins.
-pub fn initial_dependencies_are_exact<M: Model>(hints: &Hints) {
-    let unknowns = M::description().initial_dependencies;
-    let all_knowns = M::description().variables.iter().filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input));
+pub fn initial_dependencies_are_exact<M: Compiled>(hints: &Hints) {
+    let unknowns = &M::compiled().initial_dependencies;
+    let all_knowns = M::compiled().variables.iter().filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input));
     let text_of = |v: &Variable| hints.texts.iter().find(|(n, _)| *n == v.name).map(|(_, t)| t.clone());
     let (knowns, untextable): (Vec<&Variable>, Vec<&Variable>) =
         all_knowns.partition(|v| v.kind != Kind::String || text_of(v).is_some());
     for v in &untextable {
         let listing: Vec<&str> =
-            unknowns.iter().filter(|u| listed(u, v) == Some(true)).map(|u| M::description().variable(u.vr).unwrap().name).collect();
+            unknowns.iter().filter(|u| listed(u, v) == Some(true)).map(|u| M::compiled().variable(u.vr).unwrap().name.as_ref()).collect();
         assert!(listing.is_empty(), "{listing:?} list {}: the hints must give it another text", v.name);
     }
     // Largest absolute change per (unknown, known), and largest magnitude per unknown.
@@ -186,8 +186,8 @@ pub fn initial_dependencies_are_exact<M: Model>(hints: &Hints) {
             let fmu = at::<M>(&base)?;
             if let Some((v, x)) = change {
                 let status = match v.kind {
-                    Kind::String => fmu.set_text(v.name, &text_of(v).unwrap()),
-                    _ => fmu.set(v.name, x),
+                    Kind::String => fmu.set_text(&v.name, &text_of(v).unwrap()),
+                    _ => fmu.set(&v.name, x),
                 };
                 assert_eq!(status, OK, "perturbing {}", v.name);
             }
@@ -209,10 +209,10 @@ pub fn initial_dependencies_are_exact<M: Model>(hints: &Hints) {
             scale[i] = scale[i].max(y.abs());
         }
         for (j, known) in knowns.iter().enumerate() {
-            let x = if known.kind == Kind::String { 0.0 } else { perturbed(known, probe.get(known.name).unwrap()) };
+            let x = if known.kind == Kind::String { 0.0 } else { perturbed(known, probe.get(&known.name).unwrap()) };
             let fmu = in_init(Some((known, x))).unwrap_or_else(|why| panic!("{base:?}: {why}"));
             let Some(after) = read(&fmu) else {
-                refused(&fmu, known.name);
+                refused(&fmu, &known.name);
                 continue;
             };
             for i in 0..unknowns.len() {
@@ -227,7 +227,7 @@ pub fn initial_dependencies_are_exact<M: Model>(hints: &Hints) {
     }
     if std::env::var_os("SHOW_DEPENDENCY_MARGINS").is_some() {
         for (i, u) in unknowns.iter().enumerate() {
-            let name = M::description().variable(u.vr).unwrap().name;
+            let name = M::compiled().variable(u.vr).unwrap().name.as_ref();
             let (mut smallest_listed, mut largest_unlisted) = (f64::INFINITY, 0.0f64);
             for (j, k) in knowns.iter().enumerate() {
                 match listed(u, k) {
@@ -238,7 +238,7 @@ pub fn initial_dependencies_are_exact<M: Model>(hints: &Hints) {
             eprintln!("{name}: smallest listed {smallest_listed:e}, largest unlisted {largest_unlisted:e}");
         }
     }
-    let problems = dependency_problems::<M>(unknowns, &knowns, &largest, 1e-11, 1e-13);
+    let problems = dependency_problems::<M>(&unknowns, &knowns, &largest, 1e-11, 1e-13);
     assert!(problems.is_empty(), "{problems:#?}");
 }
 
@@ -250,8 +250,8 @@ pub fn initial_dependencies_are_exact<M: Model>(hints: &Hints) {
 /// a state as known in Co-Simulation, an input as unknown, a value reference
 /// of no variable, a NaN seed, NULL arrays and one array for dvKnown and
 /// dvUnknown. Without the capability every call is refused as not supported.
-pub fn directional_derivatives_through_the_c_api<M: Model>() {
-    let d = M::description();
+pub fn directional_derivatives_through_the_c_api<M: Compiled>() {
+    let d = M::compiled();
     let inputs = real_inputs::<M>();
     // An output that lists an input (k1), and another input (k2), for the weighted sum.
     let (output, k1) = d
@@ -269,7 +269,7 @@ pub fn directional_derivatives_through_the_c_api<M: Model>() {
     let fmu = drive::<M>(Phase::Complete);
     let mut compared = 0;
     for u in d.output_dependencies.iter().filter(|u| d.variable(u.vr).unwrap().kind == Kind::Real) {
-        let name = d.variable(u.vr).unwrap().name;
+        let name = &d.variable(u.vr).unwrap().name;
         for k in &inputs {
             let (status, column) = fmu.directional_derivative(&[u.vr], &[k.vr], &[1.0]);
             assert_eq!(status, OK, "d{name}/d{}: {:?}", k.name, fmu.logs());
@@ -277,11 +277,11 @@ pub fn directional_derivatives_through_the_c_api<M: Model>() {
                 assert_eq!(column[0], 0.0, "d{name}/d{} is structurally 0", k.name);
                 continue;
             }
-            let x = fmu.real(k.name);
+            let x = fmu.real(&k.name);
             let dx = 1e-6 * x.abs().max(1e-3);
             let value_at = |y: f64| {
-                assert_eq!(fmu.set(k.name, y), OK, "{} = {y}: {:?}", k.name, fmu.logs());
-                fmu.real(name)
+                assert_eq!(fmu.set(&k.name, y), OK, "{} = {y}: {:?}", k.name, fmu.logs());
+                fmu.real(&name)
             };
             let difference = (value_at(x + dx) - value_at(x - dx)) / (2.0 * dx);
             let value = value_at(x);

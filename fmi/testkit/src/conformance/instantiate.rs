@@ -3,21 +3,21 @@
 
 use super::scene::*;
 use crate::*;
-use fmi_core::Model;
+use fmi_core::Compiled;
 
 /// Proves that fmi2Instantiate refuses a wrong or NULL GUID and every
 /// fmuType other than fmi2ModelExchange (0) and fmi2CoSimulation (1), which
 /// the description offers, by returning NULL and logging one fmi2Error line
 /// that says why (under the given instance name).
-pub fn instantiate_refuses_wrong_guid_and_fmu_type<M: Model>() {
-    let guid = M::description().guid;
+pub fn instantiate_refuses_wrong_guid_and_fmu_type<M: Compiled>() {
+    let guid = M::compiled().guid.to_string();
     let cases: Vec<(Setup<M>, Vec<String>)> = vec![
         (
             Setup { guid: Some("{00000000-0000-0000-0000-000000000000}".into()), ..Setup::default() },
-            vec!["GUID".into(), "{00000000-0000-0000-0000-000000000000}".into(), guid.into()],
+            vec!["GUID".into(), "{00000000-0000-0000-0000-000000000000}".into(), guid.clone()],
         ),
-        (Setup { guid: Some(String::new()), ..Setup::default() }, vec!["GUID".into(), guid.into()]),
-        (Setup { guid: None, ..Setup::default() }, vec!["GUID".into(), guid.into()]),
+        (Setup { guid: Some(String::new()), ..Setup::default() }, vec!["GUID".into(), guid.clone()]),
+        (Setup { guid: None, ..Setup::default() }, vec!["GUID".into(), guid.clone()]),
         (Setup { fmu_type: 2, ..Setup::default() }, vec!["fmuType = 2".into(), "Co-Simulation (1)".into()]),
         (Setup { fmu_type: 7, ..Setup::default() }, vec!["fmuType = 7".into()]),
         (Setup { fmu_type: -1, ..Setup::default() }, vec!["fmuType = -1".into()]),
@@ -35,14 +35,14 @@ pub fn instantiate_refuses_wrong_guid_and_fmu_type<M: Model>() {
     assert!(instantiate(&Setup::<M> { guid: Some(guid.to_uppercase()), ..Setup::default() }).is_err());
     assert!(instantiate(&Setup::<M>::default()).is_ok());
     let model_exchange = instantiate(&Setup::<M> { fmu_type: ME, ..Setup::default() });
-    assert_eq!(model_exchange.is_ok(), M::description().model_exchange, "fmi2ModelExchange as the description offers it");
+    assert_eq!(model_exchange.is_ok(), M::compiled().model_exchange, "fmi2ModelExchange as the description offers it");
 }
 
 /// Proves that odd but legal arguments are tolerated: a NULL resource
 /// location, empty, non-ASCII and printf-like instance names (passed to the
 /// logger unchanged as instanceName), a NULL instance name, a NULL logger,
 /// and a NULL callback-functions pointer (refused with NULL, no crash).
-pub fn instantiate_tolerates_odd_names_and_null_resources<M: Model>() {
+pub fn instantiate_tolerates_odd_names_and_null_resources<M: Compiled>() {
     let names = ["", "Bahn-Zugspannung_ÄÖÜ_张力_🧻", "span %s %d %n %%", "a b\tc"];
     for name in names {
         let fmu = Fmu::<M>::with(&Setup { name: Some(name.into()), resource_location: None, logging_on: true, ..Setup::default() });
@@ -68,7 +68,7 @@ pub fn instantiate_tolerates_odd_names_and_null_resources<M: Model>() {
 }
 
 /// Proves fmi2GetTypesPlatform and fmi2GetVersion.
-pub fn types_platform_and_version<M: Model>() {
+pub fn types_platform_and_version<M: Compiled>() {
     assert_eq!(types_platform(), "default");
     assert_eq!(version(), "2.0");
 }

@@ -1,7 +1,7 @@
 //! The conformance suite of the FMI layer: every test of what the standard
 //! and this layer promise an importer, written once, generic over the model
 //! and driven by its description (names, value references, causality,
-//! ranges and start values come from `M::description()`, never from a
+//! ranges and start values come from `M::compiled()`, never from a
 //! model's own names). Each model runs it through the C API of its own
 //! library with one line in its tests:
 //!

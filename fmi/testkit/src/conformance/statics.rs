@@ -4,12 +4,12 @@
 //! skips these), with a control in the test kit's own tests showing that the
 //! binary check does catch a static Atomic, a `static mut` and a thread-local.
 
-use fmi_core::Model;
+use fmi_core::Compiled;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The model's library crate: the first segment of its type's path.
-fn crate_of<M: Model>() -> &'static str {
+fn crate_of<M: Compiled>() -> &'static str {
     std::any::type_name::<M>().split("::").next().unwrap_or_default()
 }
 
@@ -55,7 +55,7 @@ fn deps_dir() -> PathBuf {
     std::env::current_exe().unwrap().parent().unwrap().to_path_buf()
 }
 
-pub fn the_compiled_library_has_no_writable_statics<M: Model>() {
+pub fn the_compiled_library_has_no_writable_statics<M: Compiled>() {
     let krate = crate_of::<M>();
     let rlib = deps_dir().join(format!("lib{krate}.rlib"));
     assert!(rlib.exists(), "{} is missing", rlib.display());
@@ -64,7 +64,7 @@ pub fn the_compiled_library_has_no_writable_statics<M: Model>() {
     assert!(found.is_empty(), "global mutable state in the library: {found:#?}");
 }
 
-pub fn the_source_declares_no_mutable_statics<M: Model>() {
+pub fn the_source_declares_no_mutable_statics<M: Compiled>() {
     let src = Path::new(&package()).join("src");
     let mut found = Vec::new();
     let mut files = vec![src.clone()];

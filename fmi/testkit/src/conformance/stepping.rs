@@ -4,13 +4,13 @@
 
 use super::scene::*;
 use crate::*;
-use fmi_core::Model;
+use fmi_core::Compiled;
 
 /// Proves that fmi2DoStep refuses h = 0, -0, h < 0, NaN and inf, and a
 /// communication point other than the current time (also NaN), each with
 /// fmi2Error and one line naming the argument and value, and that a state
 /// saved before the refused step continues exactly like an undisturbed run.
-pub fn do_step_refuses_bad_step_size_and_time<M: Model>() {
+pub fn do_step_refuses_bad_step_size_and_time<M: Compiled>() {
     let (_, t) = running::<M>(6);
     let (reference, _) = {
         let (r, t2) = running::<M>(6);
@@ -42,7 +42,7 @@ pub fn do_step_refuses_bad_step_size_and_time<M: Model>() {
 /// changes nothing: every value and the time stay as before the step; that
 /// the instance may then only be terminated, reset or restored; and that a
 /// state saved before the step continues exactly like an undisturbed run.
-pub fn a_discarded_step_changes_nothing<M: Model>() {
+pub fn a_discarded_step_changes_nothing<M: Compiled>() {
     let (vr, x, h) = failing_step::<M>();
     let fmu = drive::<M>(Phase::Complete);
     assert_eq!(fmu.set_reals_vr(&[vr], &[x]), OK);
@@ -69,7 +69,7 @@ pub fn a_discarded_step_changes_nothing<M: Model>() {
 /// Proves that fmi2DoStep accepts a communication point 1 ulp above or below
 /// the current time t = 1 (importers sum their time in their own way) and
 /// continues from the importer's point, and refuses points 1e-6 off.
-pub fn communication_point_tolerance<M: Model>() {
+pub fn communication_point_tolerance<M: Compiled>() {
     let at_one = || {
         let fmu = Fmu::<M>::new();
         fmu.init(0.0);
@@ -95,7 +95,7 @@ pub fn communication_point_tolerance<M: Model>() {
 /// and false, and the kinds the FMU does not provide (fmi2GetStatus,
 /// fmi2GetIntegerStatus, fmi2GetStringStatus, other kinds) return
 /// fmi2Discard with one logStatusDiscard line and leave the instance usable.
-pub fn status_functions<M: Model>() {
+pub fn status_functions<M: Compiled>() {
     let fmu = Fmu::<M>::new();
     fmu.init(0.25);
     assert_eq!(fmu.get_real_status(LAST_SUCCESSFUL_TIME), (OK, 0.25));
@@ -137,7 +137,7 @@ pub fn status_functions<M: Model>() {
 /// (its result differs from a step with held inputs, by a little for a
 /// small rate). With "false": every call is refused in every phase where
 /// inputs can be set, with one line saying so, and nothing is applied.
-pub fn set_real_input_derivatives_validates_its_arguments<M: Model>() {
+pub fn set_real_input_derivatives_validates_its_arguments<M: Compiled>() {
     let (reference, _) = {
         let (r, t) = running::<M>(4);
         run(&r, t, 4, 8)
@@ -146,7 +146,7 @@ pub fn set_real_input_derivatives_validates_its_arguments<M: Model>() {
     let (a, b) = (inputs[0], *inputs.last().unwrap());
     let output = first_real_output::<M>();
     let unused = unused_vr::<M>();
-    if !M::description().can_interpolate_inputs {
+    if !M::compiled().can_interpolate_inputs {
         for phase in [Phase::Instantiated, Phase::Init, Phase::Complete] {
             let fmu = drive::<M>(phase);
             assert_eq!(fmu.set_real_input_derivatives(&[a.vr], &[1], &[0.1]), ERROR, "{phase:?}");
@@ -175,10 +175,10 @@ pub fn set_real_input_derivatives_validates_its_arguments<M: Model>() {
         assert_eq!(run(&fmu, t, 4, 8).0, reference, "{what}: nothing applied");
     }
     // An accepted derivative changes the next step: an input the states depend on, at a small rate.
-    let d = M::description();
+    let d = M::compiled();
     let driving = inputs
         .iter()
-        .find(|v| d.derivatives.iter().any(|u| u.on.is_none_or(|on| on.contains(&v.vr))))
+        .find(|v| d.derivatives.iter().any(|u| u.on.as_ref().is_none_or(|on| on.contains(&v.vr))))
         .expect("an input the state derivatives depend on");
     let rate = 0.1 * start_of(driving).abs().max(1.0);
     let (held, t) = running::<M>(4);

@@ -7,7 +7,7 @@
 use super::scene::*;
 use crate::*;
 use fmi_core::description::Kind;
-use fmi_core::Model;
+use fmi_core::Compiled;
 use std::sync::Barrier;
 
 const THREADS: usize = 8;
@@ -17,7 +17,7 @@ const STEPS: usize = 3000;
 /// every enumeration parameter (a solver, a unit), inputs moving about
 /// their start values at its own pace and, in the second half, apart;
 /// returns the bits of every Real after every step.
-fn scenario<M: Model>(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
+fn scenario<M: Compiled>(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
     let fmu = Fmu::<M>::named(&format!("thread{k}"));
     let parameters = settable_parameters::<M>();
     let first = parameters.iter().find(|v| v.kind == Kind::Real).expect("a Real parameter");
@@ -25,10 +25,10 @@ fn scenario<M: Model>(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
     for _ in 0..k {
         x = other_value(first, x);
     }
-    assert_eq!(fmu.set(first.name, x), OK, "{:?}", fmu.messages());
+    assert_eq!(fmu.set(&first.name, x), OK, "{:?}", fmu.messages());
     for v in &parameters {
         if let Kind::Enumeration { values, .. } = v.kind {
-            assert_eq!(fmu.set(v.name, values[k % values.len()] as f64), OK, "{:?}", fmu.messages());
+            assert_eq!(fmu.set(&v.name, values[k % values.len()] as f64), OK, "{:?}", fmu.messages());
         }
     }
     assert_eq!(fmu.initialize(), OK, "{:?}", fmu.messages());
@@ -47,7 +47,7 @@ fn scenario<M: Model>(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
             let x0 = start_of(v);
             let y = if x0 == 0.0 { wave } else { x0 * (1.0 + wave) };
             let y = if v.range.contains(y) { y } else { x0 };
-            assert_eq!(fmu.set(v.name, y), OK, "{:?}", fmu.messages());
+            assert_eq!(fmu.set(&v.name, y), OK, "{:?}", fmu.messages());
         }
         let status = fmu.do_step(t, h);
         assert_eq!(status, OK, "run {k}, step {n}: {:?}", fmu.messages());
@@ -58,7 +58,7 @@ fn scenario<M: Model>(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
     bits
 }
 
-pub fn eight_instances_on_eight_threads_match_the_same_runs_one_after_another<M: Model>() {
+pub fn eight_instances_on_eight_threads_match_the_same_runs_one_after_another<M: Compiled>() {
     let sequential: Vec<Vec<u64>> = (0..THREADS).map(|k| scenario::<M>(k, None)).collect();
     // The runs differ from each other, so a mix-up between instances shows.
     for k in 1..THREADS {
@@ -81,14 +81,14 @@ pub fn eight_instances_on_eight_threads_match_the_same_runs_one_after_another<M:
     }
 }
 
-pub fn start_values_do_not_depend_on_other_instances<M: Model>() {
+pub fn start_values_do_not_depend_on_other_instances<M: Compiled>() {
     // An instance changed and stepped must not change what a new one starts with.
     let first = settable_parameters::<M>().into_iter().find(|v| v.kind == Kind::Real).expect("a Real parameter");
     let a = Fmu::<M>::named("a");
-    assert_eq!(a.set(first.name, other_value(first, start_of(first))), OK);
+    assert_eq!(a.set(&first.name, other_value(first, start_of(first))), OK);
     assert_eq!(a.initialize(), OK);
     assert_eq!(a.do_step(0.0, 0.1), OK);
     let b = Fmu::<M>::named("b");
     assert_eq!(b.initialize(), OK);
-    assert_eq!(b.get(first.name), Ok(start_of(first)));
+    assert_eq!(b.get(&first.name), Ok(start_of(first)));
 }
