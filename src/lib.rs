@@ -40,6 +40,10 @@ pub use model::{effective_tolerance, ConvertingSpan};
 pub use parameters::Rates;
 pub use physics::Outputs;
 
+// The FMU's C API (feature `fmu`, on by default); the Line FMU links the
+// model as a library without it, so that its own API is the only one.
+#[cfg(feature = "fmu")]
 fmi_abi::export_fmi2!(crate::ConvertingSpan);
 // The FMI 3.0 API from the same library: the FMI 3.0 FMU ships this binary too.
+#[cfg(feature = "fmu")]
 fmi_abi::export_fmi3!(crate::ConvertingSpan);

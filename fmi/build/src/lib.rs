@@ -48,6 +48,15 @@ pub fn generate(source: &str, generated: &str) {
     std::fs::write(&out, emit(&md, source)).expect("cannot write generated model description");
 }
 
+/// The checks `generate` makes, for a description written by a program
+/// (the Line FMU's): the problems found, none if it is sound.
+pub fn check_description(xml: &str) -> Vec<String> {
+    match parse(xml) {
+        Ok(md) => check(&md),
+        Err(e) => vec![e],
+    }
+}
+
 fn fail(source: &str, problems: &[String]) -> ! {
     eprintln!("\nerror: {source} does not describe a model this crate can build:");
     for p in problems {

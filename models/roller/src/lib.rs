@@ -23,8 +23,10 @@ use physics::{Inputs, Parameters, Roll};
 use profiles::Value;
 use solver::CompensatedSum;
 
+#[cfg(feature = "fmu")]
 fmi_abi::export_fmi2!(crate::Roller);
 // The FMI 3.0 API from the same library (out/fmi3/Roller.fmu ships it too).
+#[cfg(feature = "fmu")]
 fmi_abi::export_fmi3!(crate::Roller);
 
 fmi_core::bind_variables! {
@@ -102,6 +104,12 @@ impl Roller {
 
     fn drive(&self) -> Drive {
         self.profile.as_ref().map_or(Drive::Torque, |l| l.drive)
+    }
+
+    /// The surface speed follows a speed table (a source, a sink, a speed
+    /// drive): forces do not move it.
+    pub fn speed_prescribed(&self) -> bool {
+        self.drive() == Drive::Speed
     }
 
     fn table(&self, key: &str) -> Option<&profiles::Table> {

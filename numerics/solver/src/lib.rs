@@ -2,12 +2,14 @@
 //! linear ODE, compensated sums, and a family of integrators on fixed-size
 //! arrays (no heap allocation in a step).
 
+pub mod band;
 mod compensated;
 pub mod dopri5;
 pub mod fixed;
 mod linalg;
 mod linear;
 pub mod ode;
+pub mod rodas;
 pub mod rosenbrock;
 
 pub use compensated::CompensatedSum;

@@ -1,0 +1,100 @@
+//! The steady state a line starts in: every state derivative zero at the
+//! start time, the drives at their start values. Newton's method on the
+//! same evaluation and banded Jacobian the integrator uses. A roll's radius
+//! is never steady while web winds on or off, so it keeps its start value
+//! (the steady state of the line at that radius), and so does the speed of a
+//! roller whose speed a table prescribes.
+
+use crate::part::Part;
+use crate::stepping::residual_and_jacobian;
+use crate::Line;
+use solver::band::{Band, BandLu};
+
+const MAX_ITERATIONS: usize = 50;
+/// Converged when no state moves by more than this fraction of its size.
+const STEP_TOLERANCE: f64 = 1e-13;
+
+/// Moves the line's states to its steady state, or says why there is none
+/// (the states are then as they were).
+pub fn solve(line: &mut Line) -> Result<(), String> {
+    let net = line.net.as_ref().expect("initialized");
+    let n = net.len();
+    if n == 0 {
+        return Ok(());
+    }
+    let (kl, ku) = (net.kl, net.ku);
+    let frozen: Vec<bool> = net
+        .states
+        .iter()
+        .map(|s| match &line.parts[s.part] {
+            Part::Roller(r) => s.index == 1 || (s.index == 0 && r.speed_prescribed()),
+            Part::Span(_) => false,
+        })
+        .collect();
+    let size: Vec<f64> = (0..n).map(|k| line.scratch.atol[k] / line.tolerance).collect();
+    let x0 = line.x.clone();
+    let mut x = x0.clone();
+    let (mut f, mut trial_f) = (vec![0.0; n], vec![0.0; n]);
+    let mut jac = Band::zeros(n, kl, ku);
+    let mut lu = BandLu::new(n, kl, ku);
+    let mut trial = vec![0.0; n];
+    let norm = |f: &[f64]| f.iter().zip(&size).map(|(r, s)| (r / s).abs()).fold(0.0, f64::max);
+    let result = (|| {
+        for _ in 0..MAX_ITERATIONS {
+            residual_and_jacobian(line, &x, &mut f, Some(&mut jac)).map_err(|e| e.into_message())?;
+            for i in 0..n {
+                if frozen[i] {
+                    f[i] = x[i] - x0[i];
+                    for j in i.saturating_sub(kl)..(i + ku + 1).min(n) {
+                        jac.set(i, j, if i == j { 1.0 } else { 0.0 });
+                    }
+                }
+            }
+            // c I - a with c = 0 and a = J factors -J: the solve gives -J^-1 f, Newton's step.
+            if !lu.factor_shifted(0.0, &jac) {
+                return Err("no steady state: the line's Jacobian is singular (a speed or a position that nothing holds, such as a line of torque drives without a speed reference or damping)".to_string());
+            }
+            let mut step = f.clone();
+            lu.solve(&mut step);
+            let r0 = norm(&f);
+            // Damped: halve the step until the residual falls.
+            let mut lambda = 1.0;
+            loop {
+                for i in 0..n {
+                    trial[i] = x[i] + lambda * step[i];
+                }
+                let ok = residual_and_jacobian(line, &trial, &mut trial_f, None).is_ok();
+                if ok {
+                    for i in 0..n {
+                        if frozen[i] {
+                            trial_f[i] = trial[i] - x0[i];
+                        }
+                    }
+                }
+                if ok && (norm(&trial_f) < r0 || lambda < 1e-3) {
+                    break;
+                }
+                lambda *= 0.5;
+                if lambda < 1e-4 {
+                    return Err("no steady state: Newton's method stalls (the drives may not hold the line at rest)".to_string());
+                }
+            }
+            let moved = (0..n).map(|i| (lambda * step[i] / size[i]).abs()).fold(0.0, f64::max);
+            x.copy_from_slice(&trial);
+            if moved < STEP_TOLERANCE {
+                return Ok(());
+            }
+        }
+        Err(format!("no steady state: Newton's method did not converge in {MAX_ITERATIONS} iterations"))
+    })();
+    match result {
+        Ok(()) => {
+            line.x = x;
+            Ok(())
+        }
+        Err(why) => {
+            line.x = x0;
+            Err(why)
+        }
+    }
+}

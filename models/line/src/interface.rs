@@ -1,0 +1,252 @@
+//! The Line FMU's interface, built from its spec and its parts: every
+//! variable is `<part>.<variable>` in SI units and is one of the part's own
+//! (so its type, unit and range come from the part's model description) or
+//! a load cell. The same table is the runtime description the FMI layer
+//! checks calls against and, written as XML by `line-description`, the
+//! modelDescription.xml the FMU ships: one builder for both.
+
+use crate::part::Part;
+use crate::spec::{PartSpec, Role, Spec};
+use fmi_core::description::{
+    settable_in, Causality, Dependency, Family, Initial, Kind, ModelDescription, Range, Slot, Start, Variability, Variable,
+};
+use std::borrow::Cow;
+
+/// What a variable of the line is bound to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Binding {
+    /// Variable `vr` of part `part`.
+    Part { part: usize, vr: u32 },
+    /// The resultant of the two web forces on a roller's bearings, for a wrap angle with this cosine.
+    LoadCell { part: usize, cos_wrap: f64 },
+    /// The line integrator's relative tolerance.
+    Tolerance,
+    /// Whether initialization solves the line's steady state.
+    StartAtEquilibrium,
+}
+
+/// Part parameters the line does not offer: the line solves and starts the
+/// parts itself, and its outputs are SI.
+const NOT_OFFERED: [&str; 8] = ["startAtEquilibrium", "useSensor", "toUnitV", "toUnitF", "solver", "tolerance", "substeps", "profile"];
+
+/// The integrator's relative tolerance unless the user sets `tolerance`.
+pub const DEFAULT_TOLERANCE: f64 = 1e-9;
+
+pub struct Interface {
+    pub description: ModelDescription,
+    /// By value reference (index 0 unused).
+    pub bindings: Vec<Binding>,
+}
+
+struct Builder<'a> {
+    parts: &'a [Part],
+    variables: Vec<Variable>,
+    bindings: Vec<Binding>,
+}
+
+impl Builder<'_> {
+    fn push(&mut self, v: Variable, b: Binding) -> u32 {
+        let vr = self.bindings.len() as u32;
+        self.variables.push(Variable { vr, ..v });
+        self.bindings.push(b);
+        vr
+    }
+
+    /// The part's variable `name`, offered as `<part>.<label>` with `causality`.
+    fn part_variable(&mut self, p: usize, spec: &PartSpec, name: &str, label: &str, causality: Causality) -> u32 {
+        let part = &self.parts[p];
+        let d = part.description();
+        let v = d.variable_by_name(name).unwrap_or_else(|| panic!("{} has {name}", d.model_identifier));
+        let start = match (causality, v.kind) {
+            (Causality::Parameter | Causality::Input, Kind::Real) => Start::Real(part.get_real(v.vr).expect("a Real")),
+            (Causality::Parameter | Causality::Input, Kind::Integer | Kind::Enumeration { .. }) => Start::Integer(part.get_integer(v.vr).expect("an Integer")),
+            (Causality::Parameter | Causality::Input, Kind::Boolean) => Start::Boolean(part.get_boolean(v.vr).expect("a Boolean")),
+            _ => Start::None,
+        };
+        let (variability, initial) = match causality {
+            Causality::Parameter => (Variability::Fixed, Initial::Exact),
+            Causality::Input => (Variability::Continuous, Initial::None),
+            _ => (v.variability, if v.initial == Initial::None { Initial::Calculated } else { v.initial }),
+        };
+        let description = if v.description.is_empty() {
+            format!("{} ({})", spec.name, spec.role.name())
+        } else {
+            format!("{}: {}", spec.name, v.description)
+        };
+        let row = Variable {
+            name: Cow::Owned(format!("{}.{label}", spec.name)),
+            vr: 0,
+            description: Cow::Owned(description),
+            kind: v.kind,
+            causality,
+            variability,
+            initial,
+            start,
+            range: v.range,
+            unit: v.unit,
+            max_rate: v.max_rate,
+            family: v.family,
+            settable_in: settable_in(causality, variability, initial),
+        };
+        let vr = v.vr;
+        self.push(row, Binding::Part { part: p, vr })
+    }
+
+    fn own(&mut self, name: String, description: &str, kind: Kind, causality: Causality, start: Start, range: Range, b: Binding) -> u32 {
+        let (variability, initial) = match causality {
+            Causality::Parameter => (Variability::Fixed, Initial::Exact),
+            _ => (Variability::Continuous, Initial::Calculated),
+        };
+        let row = Variable {
+            name: Cow::Owned(name),
+            vr: 0,
+            description: Cow::Owned(description.to_string()),
+            kind,
+            causality,
+            variability,
+            initial,
+            start,
+            range,
+            unit: if matches!(b, Binding::LoadCell { .. }) { "N" } else { "" },
+            max_rate: f64::INFINITY,
+            family: Family::of(kind),
+            settable_in: settable_in(causality, variability, initial),
+        };
+        self.push(row, b)
+    }
+}
+
+fn offered_vr(offered: &[(u32, u32)], part_vr: u32) -> Option<u32> {
+    offered.iter().find(|(pv, _)| *pv == part_vr).map(|&(_, lv)| lv)
+}
+
+fn any() -> Range {
+    Range { min: f64::NEG_INFINITY, min_inclusive: true, max: f64::INFINITY, max_inclusive: true, lo: f64::NEG_INFINITY, hi: f64::INFINITY }
+}
+
+/// The interface of `spec` with `parts` at their start values; `active`
+/// lists each part's integrated states (indices of its state vector).
+pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, start_equilibrium: bool) -> Interface {
+    let mut b = Builder { parts, variables: Vec::new(), bindings: vec![Binding::Tolerance] };
+    let positive = Range { min: 0.0, min_inclusive: false, max: 1e-2, max_inclusive: true, lo: f64::MIN_POSITIVE, hi: 1e-2 };
+    b.own(
+        "tolerance".into(),
+        "relative tolerance of the line's integrator (RODAS4, error-controlled)",
+        Kind::Real,
+        Causality::Parameter,
+        Start::Real(DEFAULT_TOLERANCE),
+        positive,
+        Binding::Tolerance,
+    );
+    b.own(
+        "startAtEquilibrium".into(),
+        "initialization solves the line's steady state for its drives at the start time",
+        Kind::Boolean,
+        Causality::Parameter,
+        Start::Boolean(start_equilibrium),
+        any(),
+        Binding::StartAtEquilibrium,
+    );
+    let mut states = Vec::new();
+    let mut derivatives = Vec::new();
+    let mut outputs = Vec::new();
+    for (p, ps) in spec.parts.iter().enumerate() {
+        let d = parts[p].description();
+        let mut offered: Vec<(u32, u32)> = Vec::new(); // (part vr, line vr)
+        macro_rules! offer {
+            ($name:expr, $label:expr, $causality:expr) => {{
+                let name: &str = $name;
+                let vr = b.part_variable(p, ps, name, $label, $causality);
+                offered.push((d.variable_by_name(name).expect("offered").vr, vr));
+                vr
+            }};
+        }
+        match ps.role {
+            Role::Span => {
+                for (name, label) in [("summary_Tension", "T"), ("summary_Strain", "eps")] {
+                    outputs.push(offer!(name, label, Causality::Output));
+                }
+            }
+            role => {
+                let mut names = vec![("web_b.v", "v"), ("omega", "omega"), ("tau", "tau")];
+                if matches!(role, Role::Unwinder | Role::Winder) {
+                    names.push(("r", "r"));
+                }
+                if role == Role::Dancer {
+                    names.extend([("y", "y"), ("y_dot", "y_dot")]);
+                }
+                for (name, label) in names {
+                    outputs.push(offer!(name, label, Causality::Output));
+                }
+                if let Some(w) = ps.wrap {
+                    let vr = b.own(
+                        format!("{}.F", ps.name),
+                        &format!("{}: load cell, the resultant of the two web forces on the bearings (wrap {w} degrees)", ps.name),
+                        Kind::Real,
+                        Causality::Output,
+                        Start::None,
+                        any(),
+                        Binding::LoadCell { part: p, cos_wrap: w.to_radians().cos() },
+                    );
+                    outputs.push(vr);
+                }
+                if ps.torque_input {
+                    offer!("tau_m", "tau_m", Causality::Input);
+                }
+                if role == Role::Dancer {
+                    offer!("F_load", "F_load", Causality::Input);
+                }
+            }
+        }
+        for v in d.variables.iter() {
+            if v.causality == Causality::Parameter && v.kind != Kind::String && !NOT_OFFERED.contains(&&*v.name) {
+                offer!(&v.name, &v.name, Causality::Parameter);
+            }
+        }
+        // The integrated states and their derivatives (Model Exchange).
+        for &s in &active[p] {
+            let state_vr = d.states[s];
+            let name = d.variable(state_vr).expect("a state").name.clone();
+            let known = offered_vr(&offered, state_vr);
+            let line_state = match known {
+                Some(lv) => lv,
+                None => offer!(&name, &name, Causality::Local),
+            };
+            let der = d.derivatives[s].vr;
+            let der_name = d.variable(der).expect("a derivative").name.clone();
+            let inner = der_name.trim_start_matches("der(").trim_end_matches(')');
+            let line_der = b.part_variable(p, ps, &der_name, "", Causality::Local);
+            b.variables[line_der as usize - 1].name = Cow::Owned(format!("der({}.{inner})", ps.name));
+            states.push(line_state);
+            derivatives.push(line_der);
+        }
+    }
+    let n_indicators = parts.iter().map(Part::event_indicator_count).sum();
+    let all = |vrs: &[u32]| -> Cow<'static, [Dependency]> { Cow::Owned(vrs.iter().map(|&vr| Dependency { vr, on: None }).collect()) };
+    let mut initial: Vec<u32> = outputs.clone();
+    initial.extend(&states);
+    initial.extend(&derivatives);
+    initial.sort_unstable();
+    initial.dedup();
+    let by_vr = Slot::table(&b.variables);
+    let description = ModelDescription {
+        model_name: Cow::Owned(format!("Line {}", spec.name)),
+        model_identifier: "Line",
+        guid: Cow::Owned(guid),
+        log_categories: converting_span::description::DESCRIPTION.log_categories,
+        variables: Cow::Owned(b.variables),
+        by_vr: Cow::Owned(by_vr),
+        output_dependencies: all(&outputs),
+        initial_dependencies: all(&initial),
+        can_handle_variable_communication_step_size: true,
+        can_interpolate_inputs: true,
+        can_get_and_set_fmu_state: true,
+        can_serialize_fmu_state: true,
+        provides_directional_derivative: [true, true],
+        model_exchange: true,
+        states: Cow::Owned(states),
+        derivatives: all(&derivatives),
+        number_of_event_indicators: n_indicators,
+    };
+    Interface { description, bindings: b.bindings }
+}

@@ -1,0 +1,379 @@
+//! The parts joined into one system of ODEs: the line's state vector (every
+//! part's continuous states, in line order), the connections evaluated in an
+//! order where each output is computed after the inputs it depends on, and
+//! the Jacobian's band.
+//!
+//! Two couplings need more than copying an output to an input:
+//!
+//! * a span with `includeMass` pulls its exit roller with `T + p + m dv_b/dt`,
+//!   and `dv_b/dt` is that roller's acceleration, which the pull drives: a
+//!   loop, linear in `dv_b/dt`, solved exactly per evaluation from the
+//!   roller's own partial derivatives (the effective inertia `J + m r^2`);
+//! * a span with `variableLength` and `includeDamping` reads dL/dt: the rates
+//!   of its frame inputs, from the feeding part's state derivatives.
+
+use crate::part::Part;
+use crate::spec::Spec;
+use fmi_core::description::{Causality, ModelDescription};
+use fmi_core::{FmiError, FmiResult};
+use std::collections::BTreeSet;
+
+/// A connection, resolved to parts and value references.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Link {
+    pub from: usize,
+    pub output: u32,
+    pub to: usize,
+    pub input: u32,
+    pub kind: LinkKind,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LinkKind {
+    Plain,
+    /// A span's exit force into its exit roller, the span carrying web mass:
+    /// `speed` is the span's web_b.v input, `roller_speed` the roller's output feeding it.
+    MassLoop { speed: u32, roller_speed: u32 },
+}
+
+/// An input whose rate a span reads (its frame, on a moving roller): the
+/// rate of `output` of part `from`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RateLink {
+    pub span: usize,
+    pub input: u32,
+    pub from: usize,
+    pub output: u32,
+}
+
+/// One of the line's states: state `index` of part `part`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StateRef {
+    pub part: usize,
+    pub index: usize,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Network {
+    /// In evaluation order.
+    pub links: Vec<Link>,
+    pub rates: Vec<RateLink>,
+    pub states: Vec<StateRef>,
+    /// Per part: its first state in the line's vector, and its active states.
+    pub first_state: Vec<usize>,
+    pub active: Vec<Vec<usize>>,
+    /// Per part: its whole Model Exchange state vector and its derivatives
+    /// (inactive entries stay as the part has them).
+    full: Vec<Vec<f64>>,
+    dfull: Vec<Vec<f64>>,
+    /// Sub- and super-diagonals of the Jacobian.
+    pub kl: usize,
+    pub ku: usize,
+}
+
+fn vr_of(d: &ModelDescription, name: &str, part: &str) -> Result<u32, String> {
+    d.variable_by_name(name).map(|v| v.vr).ok_or_else(|| format!("part {part} ({}) has no variable {name:?}", d.model_identifier))
+}
+
+impl Network {
+    /// The links of the spec, ordered; the states; the band. `parts` are
+    /// initialized (effects and drives known).
+    pub fn new(spec: &Spec, parts: &[Part]) -> Result<Network, String> {
+        let n_parts = parts.len();
+        let mut links = Vec::new();
+        for c in &spec.connections {
+            let part = |name: &str| spec.part(name).ok_or_else(|| format!("connection {}.{} -> {}.{}: no part {name:?}", c.from.0, c.from.1, c.to.0, c.to.1));
+            let (from, to) = (part(&c.from.0)?, part(&c.to.0)?);
+            let (df, dt) = (parts[from].description(), parts[to].description());
+            let output = vr_of(df, &c.from.1, &c.from.0)?;
+            let input = vr_of(dt, &c.to.1, &c.to.0)?;
+            let out_var = df.variable(output).expect("looked up");
+            let in_var = dt.variable(input).expect("looked up");
+            if out_var.causality != Causality::Output || in_var.causality != Causality::Input {
+                return Err(format!("connection {}.{} -> {}.{}: must go from an output to an input", c.from.0, c.from.1, c.to.0, c.to.1));
+            }
+            if links.iter().any(|l: &Link| l.to == to && l.input == input) {
+                return Err(format!("input {}.{} is connected twice", c.to.0, c.to.1));
+            }
+            links.push(Link { from, output, to, input, kind: LinkKind::Plain });
+        }
+        // The web-mass loops: a span's web_b.F into the roller whose web_a.v feeds its web_b.v.
+        for i in 0..links.len() {
+            let l = links[i];
+            if !parts[l.from].includes_mass() {
+                continue;
+            }
+            let d = parts[l.from].description();
+            if l.output != vr_of(d, "web_b.F", "span")? {
+                continue;
+            }
+            let speed = vr_of(d, "web_b.v", "span")?;
+            let Some(feed) = links.iter().find(|k| k.to == l.from && k.input == speed) else {
+                return Err(format!("part {}: includeMass needs its web_b.v connected", spec.parts[l.from].name));
+            };
+            if feed.from != l.to {
+                return Err(format!(
+                    "part {}: includeMass needs web_b.v from the part its web_b.F pulls ({}), not from {}",
+                    spec.parts[l.from].name, spec.parts[l.to].name, spec.parts[feed.from].name
+                ));
+            }
+            links[i].kind = LinkKind::MassLoop { speed, roller_speed: feed.output };
+        }
+        // Frames whose rates a damped span of variable length reads.
+        let mut rates = Vec::new();
+        for l in &links {
+            if parts[l.to].reads_length_rate() {
+                let name = &parts[l.to].description().variable(l.input).expect("looked up").name;
+                if name.starts_with("frame_") {
+                    rates.push(RateLink { span: l.to, input: l.input, from: l.from, output: l.output });
+                }
+            }
+        }
+        let links = order(&links, parts, spec)?;
+        // States in line order.
+        let mut states = Vec::new();
+        let mut first_state = Vec::with_capacity(n_parts);
+        let mut active = Vec::with_capacity(n_parts);
+        for (p, part) in parts.iter().enumerate() {
+            first_state.push(states.len());
+            let a = part.active_states();
+            states.extend(a.iter().map(|&index| StateRef { part: p, index }));
+            active.push(a);
+        }
+        let mut full = Vec::with_capacity(n_parts);
+        for part in parts {
+            let mut x = vec![0.0; part.state_count()];
+            part.get_states(&mut x).map_err(|e| e.into_message())?;
+            full.push(x);
+        }
+        let dfull = parts.iter().map(|p| vec![0.0; p.state_count()]).collect();
+        let mut net = Network { links, rates, states, first_state, active, full, dfull, kl: 0, ku: 0 };
+        (net.kl, net.ku) = net.band(parts);
+        Ok(net)
+    }
+
+    pub fn len(&self) -> usize {
+        self.states.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.states.is_empty()
+    }
+
+    /// The global index of part p's state `index`, if it is integrated.
+    pub fn global(&self, p: usize, index: usize) -> Option<usize> {
+        self.active[p].iter().position(|&i| i == index).map(|k| self.first_state[p] + k)
+    }
+
+    /// Reads the parts' states into x (after initialization or an event).
+    pub fn gather(&mut self, parts: &[Part], x: &mut [f64]) -> FmiResult {
+        for (p, part) in parts.iter().enumerate() {
+            part.get_states(&mut self.full[p])?;
+            for (k, &i) in self.active[p].iter().enumerate() {
+                x[self.first_state[p] + k] = self.full[p][i];
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets the states x and the time t on the parts, runs the connections,
+    /// and writes the state derivatives into dx (if given). Afterwards every
+    /// part's outputs are those of (t, x).
+    pub fn evaluate(&mut self, parts: &mut [Part], t: f64, x: &[f64], dx: Option<&mut [f64]>) -> FmiResult {
+        for (p, part) in parts.iter_mut().enumerate() {
+            part.set_time(t);
+            for (k, &i) in self.active[p].iter().enumerate() {
+                self.full[p][i] = x[self.first_state[p] + k];
+            }
+            part.set_states(&self.full[p])?;
+        }
+        for i in 0..self.rates.len() {
+            let r = self.rates[i];
+            let rate = self.output_rate(parts, r.from, r.output)?;
+            parts[r.span].set_input_derivative(r.input, rate)?;
+        }
+        for i in 0..self.links.len() {
+            let l = self.links[i];
+            match l.kind {
+                LinkKind::Plain => {
+                    let v = parts[l.from].get_real(l.output)?;
+                    parts[l.to].set_real(l.input, v)?;
+                }
+                LinkKind::MassLoop { speed, roller_speed } => self.mass_loop(parts, &l, speed, roller_speed)?,
+            }
+        }
+        if let Some(dx) = dx {
+            for (p, part) in parts.iter().enumerate() {
+                part.get_derivatives(&mut self.dfull[p])?;
+                for (k, &i) in self.active[p].iter().enumerate() {
+                    dx[self.first_state[p] + k] = self.dfull[p][i];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The state derivatives of the parts as last evaluated.
+    pub fn derivatives(&self, parts: &[Part], dx: &mut [f64]) -> FmiResult {
+        let mut full = [0.0; 8];
+        for (p, part) in parts.iter().enumerate() {
+            let n = part.state_count();
+            part.get_derivatives(&mut full[..n])?;
+            for (k, &i) in self.active[p].iter().enumerate() {
+                dx[self.first_state[p] + k] = full[i];
+            }
+        }
+        Ok(())
+    }
+
+    /// d(output)/dt of part p now: sum over its states of d(output)/dx * dx/dt.
+    fn output_rate(&mut self, parts: &[Part], p: usize, output: u32) -> FmiResult<f64> {
+        let part = &parts[p];
+        part.get_derivatives(&mut self.dfull[p])?;
+        let d = part.description();
+        let mut rate = 0.0;
+        for (i, &state) in d.states.iter().enumerate() {
+            let dx = self.dfull[p][i];
+            if dx != 0.0 {
+                rate += part.partial_derivative(output, state)? * dx;
+            }
+        }
+        Ok(rate)
+    }
+
+    /// F = F0 + m a, a = a0 + beta F (the roller's surface acceleration, linear
+    /// in the force on it): a = (a0 + beta F0) / (1 - beta m), exactly.
+    fn mass_loop(&mut self, parts: &mut [Part], l: &Link, speed: u32, roller_speed: u32) -> FmiResult {
+        let (span, roller) = (l.from, l.to);
+        parts[span].set_input_derivative(speed, 0.0)?;
+        let f0 = parts[span].get_real(l.output)?;
+        let mass_vr = parts[span].description().variable_by_name("m_web").map(|v| v.vr).expect("the span has m_web");
+        let m = parts[span].get_real(mass_vr)?;
+        parts[roller].set_real(l.input, f0)?;
+        let a0 = self.output_rate(parts, roller, roller_speed)?;
+        let d = parts[roller].description();
+        let mut beta = 0.0;
+        for (i, &state) in d.states.iter().enumerate() {
+            let dv = parts[roller].partial_derivative(roller_speed, state)?;
+            if dv != 0.0 {
+                beta += dv * parts[roller].partial_derivative(d.derivatives[i].vr, l.input)?;
+            }
+        }
+        let a = a0 / (1.0 - beta * m);
+        if !a.is_finite() {
+            return Err(FmiError::discard(format!("the web mass loop has no solution (1 - beta m = {})", 1.0 - beta * m)));
+        }
+        parts[span].set_input_derivative(speed, a)?;
+        let f = parts[span].get_real(l.output)?;
+        parts[roller].set_real(l.input, f)
+    }
+
+    /// The Jacobian's band from the model structures: which states each
+    /// derivative can depend on, through the connections.
+    fn band(&self, parts: &[Part]) -> (usize, usize) {
+        let n_parts = parts.len();
+        // Per part and input vr: the global states it depends on.
+        let mut input_deps: Vec<Vec<(u32, BTreeSet<usize>)>> = vec![Vec::new(); n_parts];
+        let own_states = |p: usize| -> BTreeSet<usize> { (0..self.active[p].len()).map(|k| self.first_state[p] + k).collect() };
+        let knowns = |p: usize, on: &Option<std::borrow::Cow<'static, [u32]>>, input_deps: &Vec<Vec<(u32, BTreeSet<usize>)>>| -> BTreeSet<usize> {
+            let d = parts[p].description();
+            let mut set = BTreeSet::new();
+            let all: Vec<u32> = d.variables.iter().filter(|v| v.causality == Causality::Input).map(|v| v.vr).chain(d.states.iter().copied()).collect();
+            let list: &[u32] = match on {
+                Some(l) => l,
+                None => &all,
+            };
+            for &vr in list {
+                if let Some(s) = d.states.iter().position(|&s| s == vr) {
+                    if let Some(g) = self.global(p, s) {
+                        set.insert(g);
+                    }
+                } else if let Some((_, deps)) = input_deps[p].iter().find(|(i, _)| *i == vr) {
+                    set.extend(deps);
+                }
+            }
+            set
+        };
+        for l in &self.links {
+            let d = parts[l.from].description();
+            let on = d.output_dependencies.iter().find(|u| u.vr == l.output).map(|u| u.on.clone()).unwrap_or(None);
+            let mut deps = knowns(l.from, &on, &input_deps);
+            if let LinkKind::MassLoop { .. } = l.kind {
+                deps.extend(own_states(l.to));
+                for (_, others) in &input_deps[l.to] {
+                    deps.extend(others.iter().copied());
+                }
+            }
+            input_deps[l.to].push((l.input, deps));
+        }
+        for r in &self.rates {
+            let source = own_states(r.from);
+            match input_deps[r.span].iter_mut().find(|(i, _)| *i == r.input) {
+                Some((_, deps)) => deps.extend(source),
+                None => input_deps[r.span].push((r.input, source)),
+            }
+        }
+        let (mut kl, mut ku) = (0, 0);
+        for (p, part) in parts.iter().enumerate() {
+            let d = part.description();
+            for (k, &s) in self.active[p].iter().enumerate() {
+                let row = self.first_state[p] + k;
+                let on = d.derivatives.get(s).map(|u| u.on.clone()).unwrap_or(None);
+                let mut deps = knowns(p, &on, &input_deps);
+                // A rate link makes a span's force depend on more than its structure says.
+                if self.rates.iter().any(|r| r.span == p) || self.links.iter().any(|l| l.to == p && matches!(l.kind, LinkKind::MassLoop { .. })) {
+                    for (_, others) in &input_deps[p] {
+                        deps.extend(others.iter().copied());
+                    }
+                }
+                for j in deps {
+                    kl = kl.max(row.saturating_sub(j));
+                    ku = ku.max(j.saturating_sub(row));
+                }
+            }
+        }
+        (kl, ku)
+    }
+}
+
+/// The links in an order where each one's output is computed after every
+/// link into the inputs that output depends on (ModelStructure); a web-mass
+/// loop after every other link into its roller.
+fn order(links: &[Link], parts: &[Part], spec: &Spec) -> Result<Vec<Link>, String> {
+    let needs: Vec<Vec<usize>> = links
+        .iter()
+        .map(|l| {
+            let d = parts[l.from].description();
+            let on = d.output_dependencies.iter().find(|u| u.vr == l.output).and_then(|u| u.on.clone());
+            let depends = |vr: u32| on.as_ref().is_none_or(|list| list.contains(&vr));
+            let mut need: Vec<usize> = links.iter().enumerate().filter(|(_, k)| k.to == l.from && depends(k.input)).map(|(i, _)| i).collect();
+            if let LinkKind::MassLoop { .. } = l.kind {
+                need.extend(links.iter().enumerate().filter(|(_, k)| k.to == l.to && k.input != l.input).map(|(i, _)| i));
+            }
+            need
+        })
+        .collect();
+    let mut done = vec![false; links.len()];
+    let mut ordered = Vec::with_capacity(links.len());
+    while ordered.len() < links.len() {
+        let before = ordered.len();
+        for i in 0..links.len() {
+            if !done[i] && needs[i].iter().all(|&k| done[k] || k == i) {
+                done[i] = true;
+                ordered.push(links[i]);
+            }
+        }
+        if ordered.len() == before {
+            let stuck: Vec<String> = (0..links.len())
+                .filter(|&i| !done[i])
+                .map(|i| {
+                    let l = &links[i];
+                    let name = |p: usize, vr: u32| format!("{}.{}", spec.parts[p].name, parts[p].description().variable(vr).map_or("?", |v| &v.name));
+                    format!("{} -> {}", name(l.from, l.output), name(l.to, l.input))
+                })
+                .collect();
+            return Err(format!("the connections form an algebraic loop: {}", stuck.join(", ")));
+        }
+    }
+    Ok(ordered)
+}

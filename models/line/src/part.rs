@@ -1,0 +1,158 @@
+//! A part of the line: the span's or the Roller's own model, called through
+//! the same `Model` and `Variables` functions its FMU's C API calls, so the
+//! line runs the parts' equations and nothing else. Unboxed, so that a copy
+//! of the line (to undo a failed step) allocates nothing: the models share
+//! their profiles and records by `Arc`.
+
+use converting_span::ConvertingSpan;
+use fmi_core::description::ModelDescription;
+use fmi_core::{Compiled, EventUpdate, Experiment, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
+use roller::Roller;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Part {
+    Span(ConvertingSpan),
+    Roller(Roller),
+}
+
+macro_rules! each {
+    ($self:expr, $m:ident => $e:expr) => {
+        match $self {
+            Part::Span($m) => $e,
+            Part::Roller($m) => $e,
+        }
+    };
+}
+
+impl Part {
+    pub fn span() -> Part {
+        Part::Span(ConvertingSpan::at_start_values())
+    }
+
+    pub fn roller() -> Part {
+        Part::Roller(Roller::at_start_values())
+    }
+
+    pub fn description(&self) -> &'static ModelDescription {
+        match self {
+            Part::Span(_) => ConvertingSpan::compiled(),
+            Part::Roller(_) => Roller::compiled(),
+        }
+    }
+
+    #[inline]
+    pub fn get_real(&self, vr: u32) -> FmiResult<f64> {
+        each!(self, m => m.get_real(vr))
+    }
+    #[inline]
+    pub fn set_real(&mut self, vr: u32, x: f64) -> FmiResult {
+        each!(self, m => m.set_real(vr, x))
+    }
+    pub fn get_integer(&self, vr: u32) -> FmiResult<i32> {
+        each!(self, m => m.get_integer(vr))
+    }
+    pub fn set_integer(&mut self, vr: u32, x: i32) -> FmiResult {
+        each!(self, m => m.set_integer(vr, x))
+    }
+    pub fn get_boolean(&self, vr: u32) -> FmiResult<bool> {
+        each!(self, m => m.get_boolean(vr))
+    }
+    pub fn set_boolean(&mut self, vr: u32, x: bool) -> FmiResult {
+        each!(self, m => m.set_boolean(vr, x))
+    }
+    pub fn get_string(&self, vr: u32) -> FmiResult<&str> {
+        each!(self, m => m.get_string(vr))
+    }
+    pub fn set_string(&mut self, vr: u32, x: &str) -> FmiResult {
+        each!(self, m => m.set_string(vr, x))
+    }
+    pub fn set_input_derivative(&mut self, vr: u32, x: f64) -> FmiResult {
+        each!(self, m => m.set_input_derivative(vr, x))
+    }
+    pub fn save_variables(&self, out: &mut StateWriter) {
+        each!(self, m => m.save_variables(out))
+    }
+    pub fn load_variables(&mut self, input: &mut StateReader) -> FmiResult {
+        each!(self, m => m.load_variables(input))
+    }
+    pub fn save_state(&self, out: &mut StateWriter) {
+        each!(self, m => m.save_state(out))
+    }
+    pub fn load_state(&mut self, input: &mut StateReader) -> FmiResult {
+        each!(self, m => m.load_state(input))
+    }
+    pub fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
+        each!(self, m => m.initialize(experiment, resources))
+    }
+    #[inline]
+    pub fn set_time(&mut self, t: f64) {
+        each!(self, m => m.set_time(t))
+    }
+    pub fn event_update(&mut self) -> EventUpdate {
+        each!(self, m => m.event_update())
+    }
+    #[inline]
+    pub fn get_states(&self, x: &mut [f64]) -> FmiResult {
+        each!(self, m => m.get_continuous_states(x))
+    }
+    #[inline]
+    pub fn set_states(&mut self, x: &[f64]) -> FmiResult {
+        each!(self, m => m.set_continuous_states(x))
+    }
+    #[inline]
+    pub fn get_derivatives(&self, dx: &mut [f64]) -> FmiResult {
+        each!(self, m => m.get_derivatives(dx))
+    }
+    pub fn get_nominals(&self, n: &mut [f64]) -> FmiResult {
+        each!(self, m => m.get_nominals(n))
+    }
+    pub fn get_event_indicators(&self, z: &mut [f64]) -> FmiResult {
+        each!(self, m => m.get_event_indicators(z))
+    }
+    pub fn partial_derivative(&self, unknown: u32, known: u32) -> FmiResult<f64> {
+        each!(self, m => Model::partial_derivative(m, unknown, known, Jacobian::ContinuousTime))
+    }
+    pub fn outputs_defined(&self) -> FmiResult {
+        each!(self, m => m.outputs_defined())
+    }
+    pub fn inputs_valid(&self) -> FmiResult {
+        each!(self, m => m.inputs_valid())
+    }
+
+    /// The part's continuous states the line integrates (indices into its
+    /// Model Exchange state vector): a Roller's radius only on a roll being
+    /// wound, its carriage only on a dancer.
+    pub fn active_states(&self) -> Vec<usize> {
+        match self {
+            Part::Span(_) => vec![0],
+            Part::Roller(r) => {
+                let mut states = vec![0];
+                if r.params.winding() {
+                    states.push(1);
+                }
+                if r.params.carriage {
+                    states.extend([2, 3]);
+                }
+                states
+            }
+        }
+    }
+
+    /// Length of the part's Model Exchange state vector.
+    pub fn state_count(&self) -> usize {
+        self.description().states.len()
+    }
+
+    pub fn event_indicator_count(&self) -> usize {
+        self.description().number_of_event_indicators
+    }
+
+    pub fn includes_mass(&self) -> bool {
+        matches!(self, Part::Span(s) if s.params.effects.include_mass)
+    }
+
+    /// A span whose length moves and whose tension is damped reads dL/dt.
+    pub fn reads_length_rate(&self) -> bool {
+        matches!(self, Part::Span(s) if s.params.effects.variable_length && s.params.effects.include_damping)
+    }
+}

@@ -1,0 +1,172 @@
+//! `resources/line.json`: the line an FMU holds, as `webline export --fmu`
+//! writes it from a scene. Its parts are the span's and the Roller's models
+//! with their start values and profiles; the connections say which output
+//! feeds which input, as in the line's SSP of parts. Unknown fields are
+//! refused, so a misspelt key is an error and not a silent default.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// The format this binary reads; another is refused with both named.
+pub const FORMAT: &str = "converting-span-line 1";
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    pub format: String,
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    pub experiment: ExperimentSpec,
+    /// How the line starts: in equilibrium with its drives (the default),
+    /// or from the parts' start values as given.
+    #[serde(default)]
+    pub start: StartMode,
+    /// In line order (the web's path): the states follow it, so the line's
+    /// Jacobian is banded.
+    pub parts: Vec<PartSpec>,
+    pub connections: Vec<Connection>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExperimentSpec {
+    #[serde(default)]
+    pub start_time: f64,
+    pub stop_time: f64,
+    /// The communication step the scene was made for.
+    pub step: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum StartMode {
+    #[default]
+    Equilibrium,
+    Given,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+pub enum ModelKind {
+    ConvertingSpan,
+    Roller,
+}
+
+/// What a part is in the line: it decides the outputs and inputs the Line
+/// FMU offers for it.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Role {
+    Span,
+    Source,
+    Sink,
+    Roller,
+    Unwinder,
+    Winder,
+    Dancer,
+}
+
+impl Role {
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Span => "span",
+            Role::Source => "source",
+            Role::Sink => "sink",
+            Role::Roller => "roller",
+            Role::Unwinder => "unwinder",
+            Role::Winder => "winder",
+            Role::Dancer => "dancer",
+        }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartSpec {
+    pub name: String,
+    pub model: ModelKind,
+    pub role: Role,
+    /// Start values by the part's variable name (parameters and inputs).
+    #[serde(default)]
+    pub start: BTreeMap<String, serde_json::Value>,
+    /// The part's profile (tables of time, timed `set` entries), as its own
+    /// FMU would read it; shipped as resources/profiles/<name>.json.
+    #[serde(default)]
+    pub profile: Option<serde_json::Value>,
+    /// Whether the Line FMU gives it a motor torque input `<name>.tau_m`
+    /// (its speed is not prescribed).
+    #[serde(default)]
+    pub torque_input: bool,
+    /// A load cell: the wrap angle of the web on the roller, degrees; the
+    /// output `<name>.F` is the resultant of the two web forces on its bearings.
+    #[serde(default)]
+    pub wrap: Option<f64>,
+}
+
+/// `from` (part, output) feeds `to` (part, input).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Connection {
+    pub from: (String, String),
+    pub to: (String, String),
+}
+
+impl Spec {
+    /// Parses and checks what needs no model: format, names, experiment.
+    pub fn parse(text: &str) -> Result<Spec, String> {
+        let spec: Spec = serde_json::from_str(text).map_err(|e| format!("line.json: {e}"))?;
+        if spec.format != FORMAT {
+            return Err(format!("line.json: format {:?} is not the one this binary reads ({FORMAT:?})", spec.format));
+        }
+        let e = spec.experiment;
+        if !(e.start_time.is_finite() && e.stop_time > e.start_time && e.step > 0.0 && e.step.is_finite()) {
+            return Err(format!(
+                "line.json: experiment start_time = {}, stop_time = {}, step = {}: needs start < stop and a step > 0",
+                e.start_time, e.stop_time, e.step
+            ));
+        }
+        if spec.parts.is_empty() {
+            return Err("line.json: a line needs at least one part".into());
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        for p in &spec.parts {
+            let plain = !p.name.is_empty() && p.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            if !plain {
+                return Err(format!("line.json: part name {:?}: use letters, digits and _ only (it prefixes variable names)", p.name));
+            }
+            if !seen.insert(p.name.as_str()) {
+                return Err(format!("line.json: two parts are named {:?}", p.name));
+            }
+            let span_model = p.model == ModelKind::ConvertingSpan;
+            if span_model != (p.role == Role::Span) {
+                return Err(format!("line.json: part {}: role {} does not go with model {:?}", p.name, p.role.name(), p.model));
+            }
+            if let Some(w) = p.wrap {
+                if !(0.0..=360.0).contains(&w) {
+                    return Err(format!("line.json: part {}: wrap = {w} degrees is outside [0, 360]", p.name));
+                }
+            }
+        }
+        Ok(spec)
+    }
+
+    pub fn part(&self, name: &str) -> Option<usize> {
+        self.parts.iter().position(|p| p.name == name)
+    }
+}
+
+/// FNV-1a over the bytes, 64 bit, twice with different offsets: the
+/// GUID of a line is the hash of its line.json text, so a description
+/// shipped with other resources is refused at instantiation.
+pub fn guid(text: &str) -> String {
+    let fnv = |offset: u64| text.bytes().fold(offset, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3));
+    let (a, b) = (fnv(0xcbf2_9ce4_8422_2325), fnv(0x8422_2325_cbf2_9ce4));
+    format!(
+        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
+        a >> 32,
+        (a >> 16) & 0xffff,
+        a & 0xffff,
+        b >> 48,
+        b & 0xffff_ffff_ffff
+    )
+}

@@ -1,0 +1,337 @@
+//! Time: initialization, a communication step and Model Exchange events.
+//!
+//! A step runs from event to event (a profile's breakpoint, a `set` entry,
+//! a web change: each part names its next one) and RODAS4 integrates the line
+//! between them, so every event happens at its exact time whatever the
+//! communication step. A failed step leaves the line as it was.
+
+use crate::equilibrium;
+use crate::interface::Binding;
+use crate::network::Network;
+use crate::part::Part;
+use crate::{Line, Scratch};
+use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Resources};
+use solver::band::Band;
+use solver::rodas::{Control, Rodas, System};
+use solver::Failure;
+
+/// Rounds of copying outputs to inputs and initializing again until the
+/// parts agree (a span's start depends on its rollers' speeds, a dancer's
+/// spans on its position).
+const SETTLE_ROUNDS: usize = 20;
+
+/// Most integrator steps (accepted and rejected) in one communication step.
+const MAX_STEPS: usize = 100_000;
+
+pub fn scratch(line: &Line, n: usize) -> Scratch {
+    let v = || vec![0.0; n];
+    let mut atol = v();
+    if let Some(net) = &line.net {
+        let mut buffer = [0.0; 8];
+        for (k, s) in net.states.iter().enumerate() {
+            let part = &line.parts[s.part];
+            let m = part.state_count();
+            let nominal = if part.get_nominals(&mut buffer[..m]).is_ok() { buffer[s.index].abs() } else { 1.0 };
+            // Absolute tolerance: the relative one of a state of its nominal size.
+            atol[k] = line.tolerance * if nominal > 0.0 { nominal } else { 1.0 };
+        }
+    }
+    Scratch { x: v(), f0: v(), f1: v(), y: v(), atol }
+}
+
+pub fn initialize(line: &mut Line, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
+    let spec = line.shared.clone();
+    let spec = &spec.spec;
+    // The parts are stepped by the line, never by an importer of their own.
+    let part_experiment = Experiment { model_exchange: false, ..*experiment };
+    let t0 = experiment.start_time;
+    let mut warnings = Vec::new();
+    let mut net: Option<Network> = None;
+    let mut x = Vec::new();
+    let mut settled = false;
+    for _ in 0..SETTLE_ROUNDS {
+        warnings.clear();
+        for (p, part) in line.parts.iter_mut().enumerate() {
+            let ps = &spec.parts[p];
+            let own = resources.clone().for_instance(&ps.name);
+            let said = part.initialize(&part_experiment, &own).map_err(|e| e.prefixed(&format!("part {}", ps.name)))?;
+            // A part without a profile of its own hears about the others' files: not news in a line.
+            if ps.profile.is_some() {
+                warnings.extend(said.into_iter().map(|w| format!("part {}: {w}", ps.name)));
+            }
+        }
+        let n = net.get_or_insert(Network::new(spec, &line.parts).map_err(FmiError::error)?);
+        x.resize(n.len(), 0.0);
+        n.gather(&line.parts, &mut x)?;
+        let before = connected_inputs(n, &line.parts)?;
+        n.evaluate(&mut line.parts, t0, &x, None).map_err(|e| e.prefixed("the line's start"))?;
+        if connected_inputs(n, &line.parts)? == before {
+            settled = true;
+            break;
+        }
+    }
+    if !settled {
+        return Err(FmiError::error(format!("the parts' start values do not settle through the connections in {SETTLE_ROUNDS} rounds")));
+    }
+    let net = net.expect("built in the first round");
+    line.x = x;
+    line.time = t0;
+    line.ramps.clear();
+    line.integrator = Some(Rodas::new(net.len(), net.kl, net.ku));
+    line.net = Some(net);
+    line.scratch = scratch(line, line.x.len());
+    apply_events(line)?;
+    if line.start_equilibrium {
+        if let Err(why) = equilibrium::solve(line) {
+            warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values"));
+        }
+    }
+    line.settle()?;
+    Ok(warnings)
+}
+
+/// The values of every connected input, to see whether the parts settled.
+fn connected_inputs(net: &Network, parts: &[Part]) -> FmiResult<Vec<u64>> {
+    net.links.iter().map(|l| parts[l.to].get_real(l.input).map(f64::to_bits)).collect()
+}
+
+/// Lets every part apply what is due now; the next event of any part.
+fn apply_events(line: &mut Line) -> FmiResult {
+    let net = line.net.as_mut().expect("initialized");
+    net.evaluate(&mut line.parts, line.time, &line.x, None)?;
+    let mut next = f64::INFINITY;
+    let mut changed = false;
+    for part in &mut line.parts {
+        let update = part.event_update();
+        next = next.min(update.next_event_time.unwrap_or(f64::INFINITY));
+        changed |= update.states_changed;
+    }
+    if changed {
+        net.gather(&line.parts, &mut line.x)?;
+    }
+    line.next_event = next;
+    Ok(())
+}
+
+/// The line as one ODE for the integrator: inputs an importer ramps move
+/// with time; the Jacobian by finite differences over the band, a group of
+/// columns (kl + ku + 1 apart, so no row sees two) per evaluation.
+struct LineSystem<'a> {
+    parts: &'a mut [Part],
+    net: &'a mut Network,
+    ramps: &'a [(usize, u32, f64, f64)],
+    t_start: f64,
+    time_dependent: bool,
+    f0: &'a mut [f64],
+    f1: &'a mut [f64],
+    y: &'a mut [f64],
+}
+
+impl LineSystem<'_> {
+    fn eval(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> FmiResult {
+        for &(part, vr, base, rate) in self.ramps {
+            self.parts[part].set_real(vr, base + rate * (t - self.t_start))?;
+        }
+        self.net.evaluate(self.parts, t, y, Some(dy))
+    }
+}
+
+impl System for LineSystem<'_> {
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), ()> {
+        self.eval(t, y, dy).map_err(drop)
+    }
+
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut Band) -> Result<(), ()> {
+        let n = y.len();
+        let f0 = std::mem::take(&mut self.f0);
+        let result = (|| {
+            self.eval(t, y, f0).map_err(drop)?;
+            let width = jac.lower() + jac.upper() + 1;
+            for group in 0..width.min(n) {
+                self.y.copy_from_slice(y);
+                let mut j = group;
+                while j < n {
+                    self.y[j] += delta(y[j]);
+                    j += width;
+                }
+                let (yp, f1) = (std::mem::take(&mut self.y), std::mem::take(&mut self.f1));
+                let r = self.eval(t, yp, f1);
+                self.y = yp;
+                self.f1 = f1;
+                r.map_err(drop)?;
+                let mut j = group;
+                while j < n {
+                    let d = self.y[j] - y[j];
+                    for i in j.saturating_sub(jac.upper())..(j + jac.lower() + 1).min(n) {
+                        jac.set(i, j, (self.f1[i] - f0[i]) / d);
+                    }
+                    j += width;
+                }
+            }
+            Ok(())
+        })();
+        self.f0 = f0;
+        result
+    }
+
+    fn time_dependent(&self) -> bool {
+        self.time_dependent
+    }
+}
+
+/// A forward-difference increment for a state of size |x| (exactly
+/// representable: (x + d) - x == d).
+fn delta(x: f64) -> f64 {
+    let d = f64::EPSILON.sqrt() * x.abs().max(1e-3);
+    (x + d) - x
+}
+
+/// Integrates the line from its time to `end`, no event inside.
+fn integrate(line: &mut Line, end: f64) -> FmiResult {
+    let t = line.time;
+    let time_dependent = !line.ramps.is_empty() || line.shared.spec.parts.iter().any(|p| p.profile.is_some());
+    let Line { parts, net, x, ramps, integrator, scratch, tolerance, .. } = line;
+    let (net, rodas) = (net.as_mut().expect("initialized"), integrator.as_mut().expect("initialized"));
+    let Scratch { f0, f1, y, atol, .. } = scratch;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent, f0, f1, y };
+    let control = Control { rtol: *tolerance, atol, max_steps: MAX_STEPS, max_step: 0.0 };
+    rodas.integrate(&mut sys, t, end, x, &control).map_err(|f| failure(f, t, end))?;
+    line.time = end;
+    Ok(())
+}
+
+fn failure(f: Failure, t: f64, end: f64) -> FmiError {
+    FmiError::discard(match f {
+        Failure::TooMuchWork { reached, steps } => {
+            format!("the line's integrator took {steps} steps from t = {t} s and reached only {reached} s of {end} s: take a shorter step or loosen tolerance")
+        }
+        Failure::StepTooSmall { reached, step } => format!("the line's integrator needed a step of {step} s at t = {reached} s: the line cannot be followed there"),
+        Failure::NotFinite { reached } => {
+            format!("the line left the states its parts can take at t = {reached} s (a span with no web, a roll run empty): check the inputs and drives")
+        }
+    })
+}
+
+/// One communication step of length h.
+pub fn step(line: &mut Line, h: f64) -> FmiResult {
+    let t0 = line.time;
+    let next_event = line.next_event;
+    let next_step = line.integrator.as_ref().map_or(0.0, |r| r.next_step);
+    line.backup.clone_from(&line.parts);
+    line.scratch.x.copy_from_slice(&line.x);
+    match advance(line, t0 + h) {
+        Ok(()) => {
+            // The ramped inputs end the step where their derivatives took them.
+            for &(part, vr, base, rate) in &line.ramps {
+                line.parts[part].set_real(vr, base + rate * h)?;
+            }
+            line.ramps.clear();
+            line.settle()
+        }
+        Err(e) => {
+            std::mem::swap(&mut line.parts, &mut line.backup);
+            line.x.copy_from_slice(&line.scratch.x);
+            line.time = t0;
+            line.next_event = next_event;
+            if let Some(r) = line.integrator.as_mut() {
+                r.next_step = next_step;
+            }
+            let _ = line.settle();
+            Err(e)
+        }
+    }
+}
+
+fn advance(line: &mut Line, end: f64) -> FmiResult {
+    // An event within rounding of the end belongs to the next step's start.
+    let last = end - profiles_tolerance(end);
+    loop {
+        if line.next_event <= line.time + profiles_tolerance(line.time) {
+            apply_events(line)?;
+        }
+        let stop = if line.next_event < last { line.next_event } else { end };
+        if stop > line.time {
+            integrate(line, stop)?;
+        }
+        line.time = stop;
+        if stop >= end {
+            return Ok(());
+        }
+    }
+}
+
+/// The parts' tolerance for "due now" (their profiles').
+fn profiles_tolerance(t: f64) -> f64 {
+    1e-9 * t.abs().max(1.0)
+}
+
+/// Model Exchange: the parts apply what is due at the time set.
+pub fn event_update(line: &mut Line) -> EventUpdate {
+    let before = line.x.clone();
+    if apply_events(line).is_err() {
+        return EventUpdate::default();
+    }
+    let _ = line.settle();
+    EventUpdate {
+        next_event_time: line.next_event.is_finite().then_some(line.next_event),
+        states_changed: before != line.x,
+    }
+}
+
+/// d(unknown)/d(known) of the line now, by central differences (step 1e-6
+/// of the known's size: truncation ~1e-12, rounding ~1e-10 relative). Known:
+/// a state or an input of the line; unknown: an output or a derivative.
+pub fn partial_derivative(line: &Line, unknown: u32, known: u32) -> FmiResult<f64> {
+    let Some(net) = &line.net else { return Err(FmiError::error("the line is not initialized")) };
+    let state = line.shared.description.states.iter().position(|&vr| vr == known);
+    let input = match line.shared.bindings.get(known as usize) {
+        Some(&Binding::Part { part, vr }) if state.is_none() => Some((part, vr)),
+        _ => None,
+    };
+    let value = match (state, input) {
+        (Some(k), _) => line.x[k],
+        (None, Some((part, vr))) => line.parts[part].get_real(vr)?,
+        _ => return Err(FmiError::error(format!("value reference {known} is neither a state nor an input of the line"))),
+    };
+    let d = 1e-6 * value.abs().max(if state.is_some() { nominal(line, net, state.unwrap_or(0)) } else { 1.0 });
+    let mut probe = line.clone();
+    let mut at = |x: f64| -> FmiResult<f64> {
+        match (state, input) {
+            (Some(k), _) => probe.x[k] = x,
+            (None, Some((part, vr))) => probe.parts[part].set_real(vr, x)?,
+            _ => unreachable!("checked above"),
+        }
+        probe.settle()?;
+        use fmi_core::Variables;
+        probe.get_real(unknown)
+    };
+    let (hi, lo) = (at(value + d)?, at(value - d)?);
+    Ok((hi - lo) / (2.0 * d))
+}
+
+fn nominal(line: &Line, net: &Network, k: usize) -> f64 {
+    let s = net.states[k];
+    let mut buffer = [0.0; 8];
+    let part = &line.parts[s.part];
+    let m = part.state_count();
+    if part.get_nominals(&mut buffer[..m]).is_ok() && buffer[s.index] != 0.0 {
+        buffer[s.index].abs()
+    } else {
+        1.0
+    }
+}
+
+/// For `equilibrium`: f(t, x) and its Jacobian through the same evaluation the integrator uses.
+pub fn residual_and_jacobian(line: &mut Line, x: &[f64], f: &mut [f64], jac: Option<&mut Band>) -> FmiResult {
+    let t = line.time;
+    let Line { parts, net, ramps, scratch, .. } = line;
+    let net = net.as_mut().expect("initialized");
+    let Scratch { f0, f1, y, .. } = scratch;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y };
+    sys.eval(t, x, f)?;
+    if let Some(jac) = jac {
+        jac.clear();
+        sys.jacobian(t, x, jac).map_err(|()| FmiError::error("the line cannot be evaluated near its start state"))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,131 @@
+"""A whole line as one FMU: Line.fmu, its line in resources/line.json.
+
+The scene is compiled as for a co-simulation of parts (`compiler`): the
+same parts, start values, profiles and connections, in line order. They go
+into resources/line.json (and each part's profile into
+resources/profiles/<part>.json); the model descriptions come from
+`line-description`, the Rust tool that builds the interface exactly as the
+FMU's binary does when it reads that file; the binaries are the generic
+Line library, built once for every platform (`fmu/package.py`).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import tempfile
+import zipfile
+from pathlib import Path
+
+from .compiler import compile_scene
+from .fmus import DEFAULT_FMU_DIR
+from .scene import Scene, Span
+from .system import profile_text
+
+FORMAT = "converting-span-line 1"
+ROOT = Path(__file__).resolve().parents[3]
+# Where fmu/package.py leaves the Line library of each platform, FMI 2.0 and 3.0 names.
+TEMPLATE = "line"
+
+
+class LineFmuError(RuntimeError):
+    """The Line FMU cannot be written; the message says why."""
+
+
+def line_spec(scene: Scene, fmu_dir=None, start: str | None = None) -> dict:
+    """The line.json of a scene: its parts in line order with their start
+    values and profiles, the connections, the experiment, how it starts."""
+    system = compile_scene(scene, fmu_dir)
+    components = {c.name: c for c in system.components}
+    parts = []
+    for c in scene.line:
+        comp = components[c.name]
+        part = {"name": c.name, "start": comp.start}
+        if isinstance(c, Span):
+            part.update(model="ConvertingSpan", role="span")
+        else:
+            part.update(model="Roller", role=c.type, torque_input=scene.speed_profile(c) is None)
+            wrap = getattr(c, "wrap", None)
+            if wrap is not None:
+                part["wrap"] = float(wrap)
+        if comp.profile:
+            part["profile"] = comp.profile
+        parts.append(part)
+    return {
+        "format": FORMAT,
+        "name": scene.name,
+        "description": scene.description,
+        "experiment": {"start_time": 0.0, "stop_time": float(scene.stop_time), "step": float(scene.step)},
+        "start": start or getattr(scene, "start", None) or "equilibrium",
+        "parts": parts,
+        "connections": [{"from": list(k.source), "to": list(k.target)} for k in system.connections],
+    }
+
+
+def spec_text(spec: dict) -> str:
+    """The canonical text of a spec: its hash is the FMU's GUID."""
+    return json.dumps(spec, indent=1, sort_keys=True) + "\n"
+
+
+def description_tool() -> Path:
+    """The host's line-description, built on first use (cargo, from this checkout)."""
+    manifest = ROOT / "models" / "line" / "Cargo.toml"
+    target = ROOT / "target"
+    exe = target / "release" / "line-description"
+    run = subprocess.run(
+        ["cargo", "build", "--quiet", "--release", "--manifest-path", str(manifest), "--features", "cli", "--bin", "line-description"],
+        capture_output=True,
+        text=True,
+        env={**__import__("os").environ, "CARGO_TARGET_DIR": str(target)},
+    )
+    if run.returncode != 0:
+        raise LineFmuError(f"cannot build line-description: {run.stderr.strip().splitlines()[-1] if run.stderr.strip() else run.returncode}")
+    return exe
+
+
+def descriptions(text: str, out: Path):
+    """modelDescription.xml (FMI 2.0) and fmi3/ files for the spec text, into out."""
+    with tempfile.TemporaryDirectory() as tmp:
+        spec_file = Path(tmp) / "line.json"
+        spec_file.write_text(text)
+        run = subprocess.run([str(description_tool()), str(spec_file), str(out)], capture_output=True, text=True)
+        if run.returncode != 0:
+            raise LineFmuError(run.stderr.strip() or f"line-description failed ({run.returncode})")
+
+
+def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None) -> Path:
+    """Writes Line.fmu for the scene (FMI 3.0 with fmi3=True); returns its path."""
+    fmu_dir = Path(fmu_dir or DEFAULT_FMU_DIR)
+    template = fmu_dir / TEMPLATE / ("fmi3" if fmi3 else "fmi2")
+    binaries = template / "binaries"
+    if not binaries.is_dir() or not any(binaries.iterdir()):
+        raise LineFmuError(f"no Line binaries in {binaries}: build them with `bash fmu/main.sh` (fmu/package.py)")
+    spec = line_spec(scene, fmu_dir, start)
+    text = spec_text(spec)
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        descriptions(text, tmp)
+        entries = {"modelDescription.xml": (tmp / ("fmi3" if fmi3 else "") / "modelDescription.xml").read_bytes()}
+        if fmi3:
+            entries["terminalsAndIcons/terminalsAndIcons.xml"] = (tmp / "fmi3" / "terminalsAndIcons.xml").read_bytes()
+        entries["resources/line.json"] = text.encode()
+        for part in spec["parts"]:
+            if part.get("profile"):
+                entries[f"resources/profiles/{part['name']}.json"] = profile_text(part["profile"]).encode()
+        for path in sorted(binaries.rglob("*")):
+            if path.is_file():
+                entries[f"binaries/{path.relative_to(binaries).as_posix()}"] = path.read_bytes()
+        doc = template / "documentation"
+        if doc.is_dir():
+            for path in sorted(doc.rglob("*")):
+                if path.is_file():
+                    entries[f"documentation/{path.relative_to(doc).as_posix()}"] = path.read_bytes()
+        part_file = out.with_suffix(".part")
+        with zipfile.ZipFile(part_file, "w", zipfile.ZIP_DEFLATED) as z:
+            for name, data in entries.items():
+                z.writestr(name, data)
+        part_file.replace(out)
+    return out
