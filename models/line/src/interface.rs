@@ -163,12 +163,13 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
         }
         match ps.role {
             Role::Span => {
-                for (name, label) in [("summary_Tension", "T"), ("summary_Strain", "eps")] {
+                let names = [("summary_Tension", "T"), ("summary_Strain", "eps"), ("web_a.F", "F_a"), ("web_b.F", "F_b"), ("summary_Length", "length")];
+                for (name, label) in names {
                     outputs.push(offer!(name, label, Causality::Output));
                 }
             }
             role => {
-                let mut names = vec![("web_b.v", "v"), ("omega", "omega"), ("tau", "tau")];
+                let mut names = vec![("web_b.v", "v"), ("omega", "omega"), ("tau", "tau"), ("web_b.eps", "eps")];
                 if matches!(role, Role::Unwinder | Role::Winder) {
                     names.push(("r", "r"));
                 }

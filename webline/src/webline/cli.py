@@ -1,7 +1,8 @@
 """The `webline` command.
 
-    webline run SCENE.json|LINE.ssp [--engine webline|libcosim|fmpy] [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
+    webline run SCENE.json|LINE.ssp [--engine webline|libcosim|fmpy|fmpy-line] [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
     webline export SCENE.json -o LINE.ssp
+    webline export SCENE.json --fmu [-o Line.fmu] [--fmi3]
     webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
     webline reference SCENE.json
     webline convergence SCENE.json [--steps 2ms,1ms,0.5ms]
@@ -26,6 +27,7 @@ from .result import Result
 from .engines import ENGINES
 from .scene import Dancer, SceneError, Span, load_scene
 from .ssp import SspError
+from .linefmu import LineFmuError
 
 OUT = DEFAULT_FMU_DIR  # <repo>/out
 
@@ -114,6 +116,15 @@ def cmd_export(args):
     from .compiler import compile_scene
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+    if args.fmu:
+        from . import linefmu
+
+        path = linefmu.export(scene, args.output or Path(args.out) / f"{scene.name}.fmu", args.fmu_dir, fmi3=args.fmi3)
+        print(f"{scene.name}: {len(scene.line)} parts as one FMU ({'FMI 3.0' if args.fmi3 else 'FMI 2.0'}, "
+              f"start: {scene.start or 'equilibrium'}); wrote {path}")
+        return 0
+    if args.fmi3:
+        raise SceneError("--fmi3 goes with --fmu (an SSP archive carries the FMI 2.0 FMUs)")
     system = compile_scene(scene, args.fmu_dir)
     system.step = args.step or export_step(system)
     path = write_ssp(system, args.output or Path(args.out) / f"{scene.name}.ssp")
@@ -159,6 +170,14 @@ def run_other(args, progress):
 
 def cmd_run(args):
     progress = sys.stderr.isatty() if args.progress is None else args.progress
+    if args.engine == "fmpy-line":
+        from . import linefmu
+
+        if args.scene.endswith(".ssp"):
+            raise SspError(f"{args.scene}: the fmpy-line engine runs a scene (.json) as one Line FMU")
+        scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+        result = linefmu.run(scene, args.fmu_dir, args.step)
+        return report_run(args, scene, scene.name, result, system_summary(result))
     if args.scene.endswith(".ssp") or args.engine != "webline":
         scene, name, result = run_other(args, progress)
         return report_run(args, scene, name, result, system_summary(result))
@@ -283,7 +302,8 @@ def main(argv=None):
     add_master_options(p)
     p.add_argument("--engine", choices=ENGINES, default="webline",
                    help="webline (default; --algorithm and --coupling apply), or libcosim or FMPy on the SSP "
-                        "(Jacobi, held inputs, fixed step); a scene is exported to SSP first")
+                        "(Jacobi, held inputs, fixed step; a scene is exported to SSP first), or fmpy-line: "
+                        "the scene as one Line FMU in FMPy (solved monolithically at any --step)")
     p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
     p.add_argument("--no-plot", action="store_true")
     p.add_argument("--reference", action="store_true", help="also compute the monolithic reference and print the error")
@@ -292,9 +312,12 @@ def main(argv=None):
     g.add_argument("--no-progress", dest="progress", action="store_false")
     p.set_defaults(func=cmd_run)
 
-    p = sub.add_parser("export", help="a scene as an SSP 1.0 archive (FMUs, parameter sets, step) for libcosim, FMPy, ...")
+    p = sub.add_parser("export", help="a scene as an SSP 1.0 archive of parts (FMUs, parameter sets, step) for libcosim, "
+                                      "FMPy, ...; or with --fmu as one Line FMU")
     p.add_argument("scene")
-    p.add_argument("-o", "--output", type=Path, help="the archive (default: OUT/SCENE.ssp)")
+    p.add_argument("-o", "--output", type=Path, help="the archive (default: OUT/SCENE.ssp; OUT/SCENE.fmu with --fmu)")
+    p.add_argument("--fmu", action="store_true", help="the whole line as one FMU (Line.fmu), solved implicitly inside")
+    p.add_argument("--fmi3", action="store_true", help="with --fmu: FMI 3.0 instead of 2.0")
     p.add_argument("--step", type=time_arg, help="the step the archive carries (default: the predicted stable step, "
                                                    "or the scene's if smaller)")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
@@ -337,7 +360,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError) as e:
+    except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError, LineFmuError) as e:
         print(f"webline: {e}", file=sys.stderr)
         return 2
 

@@ -167,6 +167,23 @@ def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
     return ROLLER_VARIABLES[quantity]
 
 
+def equilibrium_starts(scene: Scene) -> dict:
+    """With `"start": "equilibrium"`: each span's strain and each roller's
+    speed in the line's steady state (from the monolithic reference's
+    equations, solved once), as the parts' start values. A dancer keeps its
+    y_start (its spring's rest position is the same parameter)."""
+    if scene.start != "equilibrium":
+        return {}
+    from .reference import LineODE
+
+    ode = LineODE(scene)
+    z = ode.initial_state()
+    starts = {sp.name: {"eps_start": float(z[ode.i_eps[sp.name]])} for sp in scene.spans}
+    for m in ode.movers:
+        starts[m.name] = {"v_start": float(m.R * z[ode.i_omega[m.name]])}
+    return starts
+
+
 def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
     """The System of a scene: a Roller per node (in line order), then a span per
     span (in line order), their profiles, connections and the recorded variables.
@@ -175,6 +192,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
     d = Path(fmu_dir or DEFAULT_FMU_DIR)
     span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
     solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}
+    equilibrium = equilibrium_starts(scene)
     effects = span_effects(d)
     rollers = [_roller(scene, n, roller_fmu) for n in scene.nodes]
     spans = []
@@ -183,6 +201,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
         comp = _span(scene, sp, eps_in, span_fmu, solvers, effects)
         eps_in = comp.start["eps_start"]
         spans.append(comp)
+    for comp in rollers + spans:
+        comp.start.update(equilibrium.get(comp.name, {}))
 
     connections = []
 

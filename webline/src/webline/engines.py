@@ -15,7 +15,7 @@ from .result import Result
 from .ssp import SSD, SspError, _variables
 from .system import System
 
-ENGINES = ("webline", "libcosim", "fmpy")
+ENGINES = ("webline", "libcosim", "fmpy", "fmpy-line")
 
 
 def steps_of(system: System, step: float | None) -> tuple[float, int]:

@@ -30,11 +30,17 @@ import time as clock
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import root
+import warnings
 
 from .result import Result
 from .scene import Dancer, Prescribed, Roller, Scene, Span
 
 RTOL = 1e-10
+
+
+class EquilibriumError(RuntimeError):
+    """The line has no steady state for its drives at the start."""
 
 
 class LineODE:
@@ -158,6 +164,28 @@ class LineODE:
         return self.evaluate(t, z)[0]
 
     def initial_state(self):
+        """The start: the scene's start values, or with `"start": "equilibrium"`
+        the steady state for the drives at t = 0 (scipy's root, 'hybr'; where
+        there is none, a warning and the start values)."""
+        z = self.given_state()
+        if self.s.start == "equilibrium":
+            try:
+                z = self.equilibrium(z)
+            except EquilibriumError as e:
+                warnings.warn(f"{self.s.name}: {e}; the line starts from its start values", stacklevel=2)
+        return z
+
+    def equilibrium(self, z0, t=0.0):
+        """The state where every rate vanishes, from z0."""
+        scale = np.maximum(np.abs(z0), atol_of(self, z0) * 1e6)
+        sol = root(lambda u: self.rhs(t, u * scale), z0 / scale, method="hybr", options={"xtol": 1e-15})
+        z = sol.x * scale
+        residual = np.max(np.abs(self.rhs(t, z)) / scale) if len(z) else 0.0
+        if not sol.success or not residual < 1e-9:
+            raise EquilibriumError(f"no steady state ({sol.message.strip()}; largest rate {residual:.3g} of the state's size per second)")
+        return z
+
+    def given_state(self):
         s = self.s
         z = np.zeros(self.n)
         for node in self.movers:

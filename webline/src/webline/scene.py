@@ -110,6 +110,7 @@ class Prescribed(Component):
 
     speed: Profile | None = None
     strain: Profile | None = None
+    wrap: float | None = None
 
 
 @dataclass
@@ -122,6 +123,7 @@ class Roller(Component):
     v_start: float | None = None
     drive: Drive = field(default_factory=lambda: Drive("idler"))
     strain: Profile | None = None  # unwinder: strain of the web leaving the roll
+    wrap: float | None = None  # degrees: a load cell on its bearings (Line FMU output <name>.F)
 
     @property
     def has_fmu(self):
@@ -144,6 +146,7 @@ class Dancer(Component):
     stiffness: float = 0.0
     y_start: float = 0.0
     v_start: float | None = None
+    wrap: float | None = None
 
     has_fmu = True
 
@@ -168,6 +171,10 @@ class Scene:
     events: list
     record: list  # [(component name, quantity)]
     web_library: str | None = None  # absolute path of the scene's own web records
+    # "equilibrium": the line starts in its steady state for the drives at t = 0
+    # (reference, webline run, Line FMU); "given": from the start values; None: not said
+    # (the parts' start values; the Line FMU's default is equilibrium).
+    start: str | None = None
 
     def component(self, name):
         return next(c for c in self.line if c.name == name)
@@ -461,7 +468,7 @@ def _span(r, o_node, name, webs) -> Span:
 
 def _roller(r, o_node, name, kind) -> Roller:
     what = f"{kind} {name!r}"
-    optional = ["J", "R", "b", "v_start", "drive", "description"]
+    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap"]
     required = ["type", "name"]
     if kind == "unwinder":
         required.append("strain")
@@ -486,17 +493,29 @@ def _roller(r, o_node, name, kind) -> Roller:
             c.v_start = r.quantity(o["v_start"], units.SPEED, f"{what}: v_start")
     if kind == "unwinder":
         c.strain = r.profile(o["strain"], units.DIMENSIONLESS, f"{what}: strain")
+    c.wrap = _wrap(r, o, what)
     return c
+
+
+def _wrap(r, o, what):
+    """A roller's wrap angle (a load cell), degrees, in [0, 360]."""
+    if "wrap" not in o:
+        return None
+    w = r.quantity(o["wrap"], units.ANGLE, f"{what}: wrap", nonnegative=True)
+    if w > 360.0:
+        raise r.err(o["wrap"], f"{what}: wrap = {w} degrees is more than a full turn")
+    return w
 
 
 def _prescribed(r, o_node, name, kind) -> Prescribed:
     what = f"{kind} {name!r}"
     required = ["type", "name", "speed"] + (["strain"] if kind == "source" else [])
-    o = r.keys(o_node, what, required=required, optional=("description",))
+    o = r.keys(o_node, what, required=required, optional=("description", "wrap"))
     c = Prescribed(name=name, type=kind, where=f"{r.source}:{o_node.line}:{o_node.col}")
     c.speed = r.profile(o["speed"], units.SPEED, f"{what}: speed")
     if kind == "source":
         c.strain = r.profile(o["strain"], units.DIMENSIONLESS, f"{what}: strain")
+    c.wrap = _wrap(r, o, what)
     return c
 
 
@@ -506,7 +525,7 @@ def _dancer(r, o_node, name) -> Dancer:
         o_node,
         what,
         required=("type", "name", "J", "R", "mass", "load", "damping", "y_start"),
-        optional=("b", "stiffness", "v_start", "description"),
+        optional=("b", "stiffness", "v_start", "description", "wrap"),
     )
     U = units
     return Dancer(
@@ -522,6 +541,7 @@ def _dancer(r, o_node, name) -> Dancer:
         stiffness=r.quantity(o["stiffness"], U.STIFFNESS, f"{what}: stiffness", nonnegative=True) if "stiffness" in o else 0.0,
         y_start=r.quantity(o["y_start"], U.LENGTH, f"{what}: y_start", positive=True),
         v_start=r.quantity(o["v_start"], U.SPEED, f"{what}: v_start") if "v_start" in o else None,
+        wrap=_wrap(r, o, what),
     )
 
 
@@ -572,7 +592,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
         root,
         "the scene",
         required=("name", "stop_time", "step", "webs", "line"),
-        optional=("description", "events", "record", "web_library"),
+        optional=("description", "events", "record", "web_library", "start"),
     )
     name = r.string(o["name"], "name")
     description = r.string(o["description"], "description") if "description" in o else ""
@@ -580,6 +600,12 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     step = r.quantity(o["step"], units.TIME, "step", positive=True)
     if step > stop:
         raise r.err(o["step"], f"step {step} s is longer than stop_time {stop} s")
+
+    start = None
+    if "start" in o:
+        start = r.string(o["start"], "start")
+        if start not in ("equilibrium", "given"):
+            raise r.err(o["start"], f"start must be \"equilibrium\" or \"given\", not {start!r}")
 
     web_library = None
     if "web_library" in o:
@@ -694,6 +720,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
         events=sorted(events, key=lambda e: e.time),
         record=record,
         web_library=web_library,
+        start=start,
     )
 
 
