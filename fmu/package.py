@@ -154,6 +154,12 @@ def packages():
     return [arg for model in MODELS for arg in ("-p", model.package)]
 
 
+# The Line FMU's generic library: a workspace of its own (models/line/Cargo.toml
+# says why); `webline export --fmu` adds a line's description and resources.
+LINE = Model("Line", "line", ROOT / "models" / "line", fmi3=True)
+LINE_MANIFEST = ["--manifest-path", str(ROOT / "models" / "line" / "Cargo.toml")]
+
+
 class StepFailed(Exception):
     """A step of packaging failed: the one line the user reads instead of a traceback."""
 
@@ -174,11 +180,18 @@ def run(step, command, **kwargs):
 
 def build_host():
     run("building the host libraries", ["cargo", "build", "--release", "--lib", "--quiet", *packages()])
+    run("building the host Line library", ["cargo", "build", "--release", "--lib", "--quiet", *LINE_MANIFEST],
+        env={**os.environ, "CARGO_TARGET_DIR": str(ROOT / "target")})
 
 
 def build(platform):
-    """Both models' libraries for one platform, with the tools of fmu/env.sh."""
-    common = ["--release", "--lib", "--quiet", *packages(), "--target", platform.target]
+    """Both models' libraries and the Line's for one platform, with the tools of fmu/env.sh."""
+    build_crates(platform, packages(), "libraries")
+    build_crates(platform, LINE_MANIFEST, "Line library")
+
+
+def build_crates(platform, selection, what):
+    common = ["--release", "--lib", "--quiet", *selection, "--target", platform.target]
     common += ["--target-dir", str(platform.target_dir)]
     env = dict(os.environ)
     if platform.folder == "linux64":
@@ -191,7 +204,7 @@ def build(platform):
             env.pop("CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER", None)
             env.update(CARGO=command[0], RUSTC=os.environ["CROSS_RUSTC"], RUSTC_BOOTSTRAP="1")
             command[0:2] = ["cargo-zigbuild", "build"]
-    run(f"building the {platform.folder} libraries", command, env=env)
+    run(f"building the {platform.folder} {what}", command, env=env)
 
 
 def exported_functions(path):
@@ -425,6 +438,21 @@ def write_fmu3(out, model, libraries):
     return out
 
 
+def write_line_template(folder, libraries):
+    """The Line FMU's generic libraries under FMI 2.0's and FMI 3.0's platform
+    folders (fmi2/binaries, fmi3/binaries), replacing what was there."""
+    import shutil
+
+    for standard, names in (("fmi2", {f: f for f in SUFFIXES}), ("fmi3", FMI3_FOLDERS)):
+        binaries = folder / standard / "binaries"
+        shutil.rmtree(binaries, ignore_errors=True)
+        for platform, library in sorted(libraries.items()):
+            target = binaries / names[platform] / f"Line{SUFFIXES[platform]}"
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(library, target)
+    return folder
+
+
 def write_zip(out, entries):
     out.parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
@@ -509,6 +537,13 @@ def main():
         kind = " (host build, not portable)" if args.host_build else ""
         for fmu in written:
             print(f"wrote {fmu} ({fmu.stat().st_size} bytes; {sizes}){kind}")
+    line_libraries = {folder: PLATFORMS[folder].library(LINE) for folder in chosen}
+    if args.host_build:
+        line_libraries["linux64"] = LINE.host_library
+    for folder, library in line_libraries.items():
+        check_library(folder, library, True)
+    print(f"wrote {write_line_template(span_out.parent / 'line', line_libraries)} (the Line FMU's libraries: "
+          f"{', '.join(sorted(line_libraries))}; webline export --fmu adds a line)")
     for folder, path in args.add_binary:
         # tests/run.sh runs the platforms built here; an added library only its own platform can run.
         print(f"added binaries/{folder} from {path}: its exports are checked, but it was not run here; "

@@ -68,6 +68,8 @@ pub struct Line {
     x: Vec<f64>,
     time: f64,
     tolerance: f64,
+    /// The integrator's relative tolerance: `tolerance`, or the importer's where smaller.
+    rtol: f64,
     start_equilibrium: bool,
     /// Inputs an importer moves linearly over a step (fmi2SetRealInputDerivatives):
     /// (part, vr, value at the step's start, rate).
@@ -118,6 +120,7 @@ impl Line {
             x: Vec::new(),
             time: 0.0,
             tolerance: interface::DEFAULT_TOLERANCE,
+            rtol: interface::DEFAULT_TOLERANCE,
             start_equilibrium,
             ramps: Vec::new(),
             next_event: f64::INFINITY,
@@ -299,6 +302,7 @@ impl Model for Line {
         out.f64(self.time);
         out.f64(self.next_event);
         out.f64(self.integrator.as_ref().map_or(0.0, |r| r.next_step));
+        out.f64(self.rtol);
     }
 
     fn load_state(&mut self, r: &mut StateReader) -> FmiResult {
@@ -314,6 +318,7 @@ impl Model for Line {
         self.time = r.finite("time")?;
         self.next_event = r.f64("next event")?;
         let next_step = r.finite("next step")?;
+        self.rtol = r.finite("integrator tolerance")?;
         if initialized {
             let net = Network::new(&self.shared.spec, &self.parts).map_err(FmiError::error)?;
             if x.len() != net.len() {

@@ -134,6 +134,10 @@ impl Spec {
             if !plain {
                 return Err(format!("line.json: part name {:?}: use letters, digits and _ only (it prefixes variable names)", p.name));
             }
+            // A part without a profile finds resources/<name>.json as its own: not these.
+            if p.name == "line" || p.name == "profile" {
+                return Err(format!("line.json: a part may not be named {:?} (a file of the FMU's resources has that name)", p.name));
+            }
             if !seen.insert(p.name.as_str()) {
                 return Err(format!("line.json: two parts are named {:?}", p.name));
             }

@@ -33,7 +33,7 @@ pub fn scratch(line: &Line, n: usize) -> Scratch {
             let m = part.state_count();
             let nominal = if part.get_nominals(&mut buffer[..m]).is_ok() { buffer[s.index].abs() } else { 1.0 };
             // Absolute tolerance: the relative one of a state of its nominal size.
-            atol[k] = line.tolerance * if nominal > 0.0 { nominal } else { 1.0 };
+            atol[k] = line.rtol * if nominal > 0.0 { nominal } else { 1.0 };
         }
     }
     Scratch { x: v(), f0: v(), f1: v(), y: v(), atol }
@@ -45,6 +45,8 @@ pub fn initialize(line: &mut Line, experiment: &Experiment, resources: &Resource
     // The parts are stepped by the line, never by an importer of their own.
     let part_experiment = Experiment { model_exchange: false, ..*experiment };
     let t0 = experiment.start_time;
+    // The importer's tolerance counts where it asks for more accuracy than the parameter.
+    line.rtol = experiment.tolerance.filter(|&t| t > 0.0 && t < line.tolerance).unwrap_or(line.tolerance);
     let mut warnings = Vec::new();
     let mut net: Option<Network> = None;
     let mut x = Vec::new();
@@ -190,11 +192,11 @@ fn delta(x: f64) -> f64 {
 fn integrate(line: &mut Line, end: f64) -> FmiResult {
     let t = line.time;
     let time_dependent = !line.ramps.is_empty() || line.shared.spec.parts.iter().any(|p| p.profile.is_some());
-    let Line { parts, net, x, ramps, integrator, scratch, tolerance, .. } = line;
+    let Line { parts, net, x, ramps, integrator, scratch, rtol, .. } = line;
     let (net, rodas) = (net.as_mut().expect("initialized"), integrator.as_mut().expect("initialized"));
     let Scratch { f0, f1, y, atol, .. } = scratch;
     let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent, f0, f1, y };
-    let control = Control { rtol: *tolerance, atol, max_steps: MAX_STEPS, max_step: 0.0 };
+    let control = Control { rtol: *rtol, atol, max_steps: MAX_STEPS, max_step: 0.0 };
     rodas.integrate(&mut sys, t, end, x, &control).map_err(|f| failure(f, t, end))?;
     line.time = end;
     Ok(())
