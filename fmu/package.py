@@ -109,7 +109,7 @@ class Platform:
 
     def library(self, model):
         triple = self.target.removesuffix(".2.17")
-        return self.target_dir / triple / "release" / f"{self.prefix}{model.crate}{self.suffix}"
+        return model.target_dir(self.target_dir) / triple / "release" / f"{self.prefix}{model.crate}{self.suffix}"
 
 
 PLATFORMS = {
@@ -141,7 +141,12 @@ class Model:
         self.template = crate_dir / "documentation" / "index.html"
         # Files shipped in the FMU's resources/ folder (the span's library of webs).
         self.resources = crate_dir / "resources"
-        self.host_library = ROOT / "target" / "release" / f"lib{self.crate}.so"
+        self.host_library = self.target_dir(ROOT / "target") / "release" / f"lib{self.crate}.so"
+
+    def target_dir(self, base):
+        """Where cargo builds it: the Line in a folder of its own, as its build of the
+        span's crate (without the C API) would replace the span's library in a shared one."""
+        return base.parent / "line" / base.name if self.name == "Line" else base
 
 
 MODELS = [
@@ -180,19 +185,19 @@ def run(step, command, **kwargs):
 
 def build_host():
     run("building the host libraries", ["cargo", "build", "--release", "--lib", "--quiet", *packages()])
-    run("building the host Line library", ["cargo", "build", "--release", "--lib", "--quiet", *LINE_MANIFEST],
-        env={**os.environ, "CARGO_TARGET_DIR": str(ROOT / "target")})
+    run("building the host Line library", ["cargo", "build", "--release", "--lib", "--quiet", *LINE_MANIFEST,
+        "--target-dir", str(LINE.target_dir(ROOT / "target"))])
 
 
 def build(platform):
     """Both models' libraries and the Line's for one platform, with the tools of fmu/env.sh."""
-    build_crates(platform, packages(), "libraries")
-    build_crates(platform, LINE_MANIFEST, "Line library")
+    build_crates(platform, packages(), "libraries", platform.target_dir)
+    build_crates(platform, LINE_MANIFEST, "Line library", LINE.target_dir(platform.target_dir))
 
 
-def build_crates(platform, selection, what):
+def build_crates(platform, selection, what, target_dir):
     common = ["--release", "--lib", "--quiet", *selection, "--target", platform.target]
-    common += ["--target-dir", str(platform.target_dir)]
+    common += ["--target-dir", str(target_dir)]
     env = dict(os.environ)
     if platform.folder == "linux64":
         command = ["cargo", "zigbuild", *common]

@@ -31,7 +31,7 @@ pub fn solve(line: &mut Line) -> Result<(), String> {
             Part::Span(_) => false,
         })
         .collect();
-    let size: Vec<f64> = (0..n).map(|k| line.scratch.atol[k] / line.rtol).collect();
+    let size: Vec<f64> = (0..n).map(|k| line.scratch.atol[k] / (line.rtol * line.scratch.rtol_scale[k])).collect();
     let x0 = line.x.clone();
     let mut x = x0.clone();
     let (mut f, mut trial_f) = (vec![0.0; n], vec![0.0; n]);

@@ -30,7 +30,7 @@ pub enum Binding {
 const NOT_OFFERED: [&str; 8] = ["startAtEquilibrium", "useSensor", "toUnitV", "toUnitF", "solver", "tolerance", "substeps", "profile"];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.
-pub const DEFAULT_TOLERANCE: f64 = 1e-10;
+pub const DEFAULT_TOLERANCE: f64 = 1e-9;
 
 pub struct Interface {
     pub description: ModelDescription,

@@ -90,6 +90,7 @@ pub struct Scratch {
     pub f1: Vec<f64>,
     pub y: Vec<f64>,
     pub atol: Vec<f64>,
+    pub rtol_scale: Vec<f64>,
 }
 
 impl Line {
@@ -303,6 +304,10 @@ impl Model for Line {
         out.f64(self.next_event);
         out.f64(self.integrator.as_ref().map_or(0.0, |r| r.next_step));
         out.f64(self.rtol);
+        out.i32(self.scratch.rtol_scale.len() as i32);
+        for &x in &self.scratch.rtol_scale {
+            out.f64(x);
+        }
     }
 
     fn load_state(&mut self, r: &mut StateReader) -> FmiResult {
@@ -319,6 +324,11 @@ impl Model for Line {
         self.next_event = r.f64("next event")?;
         let next_step = r.finite("next step")?;
         self.rtol = r.finite("integrator tolerance")?;
+        let scales = r.i32("number of tolerance scales")?;
+        let mut rtol_scale = Vec::new();
+        for _ in 0..scales.max(0) {
+            rtol_scale.push(r.finite("tolerance scale")?);
+        }
         if initialized {
             let net = Network::new(&self.shared.spec, &self.parts).map_err(FmiError::error)?;
             if x.len() != net.len() {
@@ -336,7 +346,12 @@ impl Model for Line {
         self.ramps.clear();
         self.scratch = Scratch::default();
         if let Some(net) = &self.net {
-            self.scratch = stepping::scratch(self, net.len());
+            if rtol_scale.len() != net.len() {
+                return Err(FmiError::error(format!("the state holds {} tolerance scales, the line has {} states", rtol_scale.len(), net.len())));
+            }
+            let mut scratch = stepping::scratch(self, net.len());
+            scratch.rtol_scale = rtol_scale;
+            self.scratch = scratch;
         }
         self.settle()
     }

@@ -23,20 +23,34 @@ const SETTLE_ROUNDS: usize = 20;
 /// Most integrator steps (accepted and rejected) in one communication step.
 const MAX_STEPS: usize = 100_000;
 
+/// A span's unstretched length x is its length over 1 + strain: the tolerance
+/// is meant for the strain (tension is made of it), so on x it is scaled by
+/// the largest strain the span has had (at least STRAIN_FLOOR), as if the
+/// integrator held the strain itself, relative to its size.
+pub const STRAIN_FLOOR: f64 = 1e-7;
+
 pub fn scratch(line: &Line, n: usize) -> Scratch {
     let v = || vec![0.0; n];
-    let mut atol = v();
-    if let Some(net) = &line.net {
-        let mut buffer = [0.0; 8];
-        for (k, s) in net.states.iter().enumerate() {
-            let part = &line.parts[s.part];
-            let m = part.state_count();
-            let nominal = if part.get_nominals(&mut buffer[..m]).is_ok() { buffer[s.index].abs() } else { 1.0 };
-            // Absolute tolerance: the relative one of a state of its nominal size.
-            atol[k] = line.rtol * if nominal > 0.0 { nominal } else { 1.0 };
-        }
+    let mut scratch = Scratch { x: v(), f0: v(), f1: v(), y: v(), atol: v(), rtol_scale: vec![0.0; n] };
+    tolerances(line, &mut scratch);
+    scratch
+}
+
+/// The absolute tolerances and the spans' strain scales for the next step.
+pub fn tolerances(line: &Line, scratch: &mut Scratch) {
+    let Some(net) = &line.net else { return };
+    let mut buffer = [0.0; 8];
+    for (k, s) in net.states.iter().enumerate() {
+        let part = &line.parts[s.part];
+        let m = part.state_count();
+        let nominal = if part.get_nominals(&mut buffer[..m]).is_ok() && buffer[s.index] != 0.0 { buffer[s.index].abs() } else { 1.0 };
+        scratch.rtol_scale[k] = match part {
+            Part::Span(span) => scratch.rtol_scale[k].max(span.outputs().strain.abs()).max(STRAIN_FLOOR),
+            Part::Roller(_) => 1.0,
+        };
+        // Absolute tolerance: the relative one of a state of its nominal size.
+        scratch.atol[k] = line.rtol * scratch.rtol_scale[k] * nominal;
     }
-    Scratch { x: v(), f0: v(), f1: v(), y: v(), atol }
 }
 
 pub fn initialize(line: &mut Line, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
@@ -194,9 +208,9 @@ fn integrate(line: &mut Line, end: f64) -> FmiResult {
     let time_dependent = !line.ramps.is_empty() || line.shared.spec.parts.iter().any(|p| p.profile.is_some());
     let Line { parts, net, x, ramps, integrator, scratch, rtol, .. } = line;
     let (net, rodas) = (net.as_mut().expect("initialized"), integrator.as_mut().expect("initialized"));
-    let Scratch { f0, f1, y, atol, .. } = scratch;
+    let Scratch { f0, f1, y, atol, rtol_scale, .. } = scratch;
     let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent, f0, f1, y };
-    let control = Control { rtol: *rtol, atol, max_steps: MAX_STEPS, max_step: 0.0 };
+    let control = Control { rtol: *rtol, atol, rtol_scale, max_steps: MAX_STEPS, max_step: 0.0 };
     rodas.integrate(&mut sys, t, end, x, &control).map_err(|f| failure(f, t, end))?;
     line.time = end;
     Ok(())
@@ -245,6 +259,9 @@ pub fn step(line: &mut Line, h: f64) -> FmiResult {
 }
 
 fn advance(line: &mut Line, end: f64) -> FmiResult {
+    let mut scratch = std::mem::take(&mut line.scratch);
+    tolerances(line, &mut scratch);
+    line.scratch = scratch;
     // An event within rounding of the end belongs to the next step's start.
     let last = end - profiles_tolerance(end);
     loop {

@@ -76,7 +76,9 @@ def spec_text(spec: dict) -> str:
 def description_tool() -> Path:
     """The host's line-description, built on first use (cargo, from this checkout)."""
     manifest = ROOT / "models" / "line" / "Cargo.toml"
-    target = ROOT / "target"
+    # Its own target folder: a build of the line links the span's crate without its C API,
+    # which must not replace the span's own library in target/ (fmu/package.py does the same).
+    target = ROOT / "target" / "line"
     exe = target / "release" / "line-description"
     run = subprocess.run(
         ["cargo", "build", "--quiet", "--release", "--manifest-path", str(manifest), "--features", "cli", "--bin", "line-description"],
@@ -139,7 +141,9 @@ def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None
 def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=False, workdir=None):
     """The scene as one Line FMU in FMPy (Co-Simulation at the step, or Model
     Exchange with FMPy's CVode and output at the step): a Result with the
-    scene's recorded columns at the communication points."""
+    scene's recorded columns at the communication points. The line starts as
+    every engine starts the scene (its "start", else its start values), so
+    that the whole and the parts compare."""
     import time as clock
 
     import numpy as np
@@ -149,7 +153,7 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
 
     h = step or scene.step
     with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
-        path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir)
+        path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=scene.start or "given")
         outputs = [f"{c}.{OUTPUTS[q]}" for c, q in scene.record]
         messages = []
         t0 = clock.perf_counter()

@@ -1,0 +1,243 @@
+"""The Line FMU: a scene as one FMU, against the monolithic reference.
+
+TOL is the accuracy docs/line-fmu.md states for Co-Simulation: at any
+communication step, every recorded signal within 1e-6 of its largest
+magnitude of the SciPy Radau reference (rtol 1e-10), with the Line's default
+integrator tolerance (1e-9 on strains and speeds; measured worst 6.3e-8 over
+the shipped scenes). Model Exchange is FMPy's CVode's accuracy.
+"""
+
+import json
+import random
+import shutil
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+
+from webline import linefmu
+from webline.accuracy import errors
+from webline.reference import reference
+from webline.scene import load_scene, parse_scene
+
+from .conftest import ROOT, SCENES
+
+TOL = 1e-6
+SHIPPED = sorted(p.stem for p in SCENES.glob("*.json"))
+
+
+@pytest.fixture(scope="session")
+def line_dir(fmus):
+    """out/ with the Line's generic libraries (fmu/package.py writes out/line)."""
+    template = fmus / linefmu.TEMPLATE / "fmi2" / "binaries"
+    assert template.is_dir(), f"{template} is missing: fmu/package.py writes it"
+    return fmus
+
+
+def worst(result, scene):
+    ref = reference(scene, times=result.time)
+    errs = errors(result, ref)
+    key = max(errs, key=errs.get)
+    return errs[key], key
+
+
+@pytest.mark.parametrize("h", [1e-3, 1e-2])
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_shipped_scene_matches_the_reference_at_1_and_10_ms(name, h, line_dir):
+    scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
+    result = linefmu.run(scene, line_dir, step=h)
+    assert len(result.time) == int(round(scene.stop_time / h)) + 1
+    err, key = worst(result, scene)
+    assert err <= TOL, f"{name} at h = {h}: {key} off the reference by {err:.2e} of its scale"
+
+
+@pytest.mark.parametrize("name", ["splice", "stiff_line", "paper_line"])
+def test_model_exchange_in_fmpys_cvode_matches_the_reference(name, line_dir, tmp_path):
+    scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
+    path = linefmu.export(scene, tmp_path / f"{name}.fmu", line_dir, start=scene.start or "given")
+    outputs = [f"{c}.{linefmu.OUTPUTS[q]}" for c, q in scene.record]
+    h = scene.step
+    out = simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=scene.stop_time, output_interval=h,
+                       relative_tolerance=1e-9, output=outputs)
+    time = out["time"]
+    on_grid = (np.abs(time / h - np.round(time / h)) < 1e-6) & np.insert(time[1:] != time[:-1], 0, True)
+    ref = reference(scene, times=time[on_grid])
+    for k, o in enumerate(outputs):
+        got = out[o][on_grid]
+        err = np.max(np.abs(got - ref.data[:, k])) / (np.max(np.abs(ref.data[:, k])) or 1.0)
+        # FMPy's CVode at rtol 1e-9 (its own absolute tolerance and output
+        # interpolation): measured 4.3e-5 of scale at worst.
+        assert err <= 1e-4, f"{name}, Model Exchange: {o} off by {err:.2e}"
+
+
+def test_the_fmi3_fmu_gives_the_fmi2_fmus_numbers(line_dir, tmp_path):
+    scene = load_scene(SCENES / "lamination.json", fmu_dir=line_dir)
+    scene.stop_time = 0.5
+    fmu2 = linefmu.export(scene, tmp_path / "line2.fmu", line_dir)
+    fmu3 = linefmu.export(scene, tmp_path / "line3.fmu", line_dir, fmi3=True)
+    assert read_model_description(str(fmu3)).fmiVersion == "3.0"
+    outputs = ["film.T", "laminate.T", "idler.v"]
+    a = simulate_fmu(str(fmu2), stop_time=0.5, step_size=1e-3, output_interval=1e-3, output=outputs)
+    b = simulate_fmu(str(fmu3), stop_time=0.5, step_size=1e-3, output_interval=1e-3, output=outputs)
+    for o in outputs:
+        # One binary, the same calls: the same numbers.
+        np.testing.assert_array_equal(a[o], b[o])
+
+
+def test_libcosim_and_fmi_sim_run_the_line_fmu_as_fmpy_does(line_dir, tmp_path):
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    scene = load_scene(SCENES / "splice.json", fmu_dir=line_dir)
+    h, stop = 1e-3, 1.5
+    path = linefmu.export(scene, tmp_path / "splice.fmu", line_dir)
+    names = ["first.T", "second.T", "idler.v"]
+    fmpy = simulate_fmu(str(path), stop_time=stop, step_size=h, output_interval=h, output=names)
+
+    log_output_level(CosimLogLevel.ERROR)
+    execution = CosimExecution.from_step_size(step_size=int(round(h * 1e9)))
+    slave = execution.add_local_slave(CosimLocalSlave(fmu_path=str(path), instance_name="line"))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    vr = {v.name.decode(): v.reference for v in execution.slave_variables(slave)}
+    rows = []
+    for _ in range(int(round(stop / h))):
+        assert execution.step()
+        rows.append(observer.last_real_values(slave, [vr[n] for n in names]))
+    rows = np.array(rows)
+    for j, n in enumerate(names):
+        # libcosim and FMPy add up their times differently (ulps): the same steps otherwise.
+        np.testing.assert_allclose(rows[:, j], fmpy[n][1:], rtol=1e-9, err_msg=f"libcosim {n}")
+
+    fmi_sim = shutil.which("fmi-sim")
+    assert fmi_sim, "fmi-sim is not on PATH: tests/run.sh installs it (tests/tools.sh)"
+    out = tmp_path / "out.csv"
+    run = subprocess.run([fmi_sim, "--model", str(path), "-o", str(out), "co-simulation", "--output-interval", repr(h),
+                          "-s", "0", "-f", repr(stop)], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, f"fmi-sim failed:\n{run.stdout[-2000:]}\n{run.stderr[-2000:]}"
+    import csv
+
+    with open(out) as f:
+        got = list(csv.DictReader(f))
+    for n in names:
+        col = np.array([float(r[n]) for r in got])
+        np.testing.assert_allclose(col[: len(fmpy)], fmpy[n][: len(col)], rtol=1e-9, err_msg=f"fmi-sim {n}")
+
+
+def test_the_equilibrium_start_is_flat_until_the_first_disturbance(line_dir):
+    scene = load_scene(SCENES / "paper_line.json", fmu_dir=line_dir)
+    result = linefmu.run(scene, line_dir, step=1e-3)
+    ref = reference(scene, times=result.time)
+    before = result.time < 0.5
+    for k, col in enumerate(result.columns):
+        if col.endswith("T [N]"):
+            line, radau = result.data[before, k], ref.data[before, k]
+            # Flat to rounding in the FMU; the reference's steady state comes from scipy's root (tolerance 1e-9 of the rates).
+            assert np.ptp(line) < 1e-6, f"{col} moves by {np.ptp(line):.2e} N before anything happens"
+            assert np.ptp(radau) < 1e-3, f"the reference's {col} moves by {np.ptp(radau):.2e} N"
+    given = parse_scene((SCENES / "paper_line.json").read_text().replace('"start": "equilibrium"', '"start": "given"'),
+                        fmu_dir=line_dir)
+    given.stop_time = 0.3
+    ringing = linefmu.run(given, line_dir, step=1e-3)
+    k = ringing.columns.index("entry.T [N]")
+    assert np.ptp(ringing.data[:, k]) > 100.0, "without the equilibrium start the line must ring"
+
+
+def test_a_line_fmu_whose_resources_were_changed_is_refused(line_dir, tmp_path):
+    scene = load_scene(SCENES / "splice.json", fmu_dir=line_dir)
+    good = linefmu.export(scene, tmp_path / "good.fmu", line_dir)
+    bad = tmp_path / "bad.fmu"
+    with zipfile.ZipFile(good) as src, zipfile.ZipFile(bad, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename == "resources/line.json":
+                spec = json.loads(data)
+                spec["parts"][1]["start"]["L"] *= 1.1  # a user edits the line inside the FMU
+                data = linefmu.spec_text(spec).encode()
+            dst.writestr(item, data)
+    messages = []
+    with pytest.raises(Exception):
+        simulate_fmu(str(bad), stop_time=0.01, step_size=1e-3,
+                     logger=lambda *a: messages.append(a[-1].decode() if isinstance(a[-1], bytes) else str(a[-1])))
+    assert any("GUID" in m for m in messages), messages
+
+
+def test_the_cli_exports_and_runs_a_line(line_dir, tmp_path):
+    scene = SCENES / "dancer.json"
+    out = tmp_path / "dancer.fmu"
+    cmd = [sys.executable, "-m", "webline"]
+    run = subprocess.run([*cmd, "export", str(scene), "--fmu", "-o", str(out), "--fmu-dir", str(line_dir)],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert out.exists() and "dancer: 5 parts as one FMU (FMI 2.0" in run.stdout
+    md = read_model_description(str(out))
+    names = {v.name for v in md.modelVariables}
+    assert {"down_leg.T", "dancer.y", "dancer.F_load", "dancer.tau_m", "down_leg.wp1.E", "infeed.v"} <= names
+    assert "infeed.tau_m" not in names, "a part whose speed is prescribed takes no torque"
+    run = subprocess.run([*cmd, "run", str(scene), "--engine", "fmpy-line", "--fmu-dir", str(line_dir), "--out", str(tmp_path),
+                          "--no-plot", "--step", "10ms"], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert "Line FMU in FMPy, Co-Simulation" in run.stdout and (tmp_path / "dancer.csv").exists()
+
+
+# ---------------------------------------------------------------- scenes a user could write
+
+
+def random_scene(seed: int) -> str:
+    """A line as a user writes one: random length, parts, webs, drives,
+    inertias and effects; some with a speed ramp, a splice or an equilibrium start."""
+    rnd = random.Random(seed)
+    n_spans = rnd.randint(1, 4)
+    webs = {}
+    for k in range(2):
+        webs[f"web{k}"] = {"E": f"{rnd.uniform(1, 70):.3g} GPa", "thickness": f"{rnd.uniform(20, 150):.3g} um",
+                           "width": f"{rnd.uniform(0.3, 2):.3g} m", "density": f"{rnd.uniform(800, 3000):.4g} kg/m3",
+                           "d_r": f"{rnd.uniform(0.2, 2):.3g} ms"}
+    v = rnd.uniform(1, 8)
+    ramp = [["0 s", f"{v} m/s"], ["0.2 s", f"{v} m/s"], ["0.5 s", f"{v * rnd.uniform(0.9, 1.1):.4g} m/s"]]
+    line = []
+    if rnd.random() < 0.5:
+        line.append({"type": "source", "name": "feed", "speed": f"{v} m/s", "strain": f"{rnd.uniform(0, 1e-3):.3g}"})
+    else:
+        line.append({"type": "unwinder", "name": "feed", "J": f"{rnd.uniform(0.5, 5):.3g} kg.m2", "R": f"{rnd.uniform(0.1, 0.5):.3g} m",
+                     "b": f"{rnd.uniform(0, 0.1):.3g} N.m.s", "drive": {"tension": f"{rnd.uniform(50, 300):.4g} N"},
+                     "strain": 0.0, "v_start": f"{v} m/s"})
+    speed_set = line[0]["type"] == "source"
+    for i in range(n_spans):
+        effects = [e for e in ("includeDamping", "includeMass") if rnd.random() < 0.5]
+        span = {"type": "span", "name": f"s{i}", "L": f"{rnd.uniform(0.3, 3):.3g} m", "web": rnd.choice(list(webs)), "effects": effects}
+        if rnd.random() < 0.5:
+            span["T_start"] = f"{rnd.uniform(50, 300):.4g} N"
+        line.append(span)
+        if i < n_spans - 1:
+            if not speed_set and rnd.random() < 0.4:
+                line.append({"type": "roller", "name": f"r{i}", "drive": {"speed": {"table": ramp}}})
+                speed_set = True
+            else:
+                line.append({"type": "roller", "name": f"r{i}", "J": f"{rnd.uniform(0.005, 0.5):.3g} kg.m2",
+                             "R": f"{rnd.uniform(0.04, 0.2):.3g} m", "b": f"{rnd.uniform(0, 0.01):.3g} N.m.s", "v_start": f"{v} m/s"})
+    if not speed_set or rnd.random() < 0.5:
+        line.append({"type": "sink", "name": "out", "speed": {"table": ramp}})
+    else:
+        line.append({"type": "winder", "name": "out", "J": f"{rnd.uniform(0.5, 5):.3g} kg.m2", "R": f"{rnd.uniform(0.1, 0.5):.3g} m",
+                     "b": f"{rnd.uniform(0, 0.1):.3g} N.m.s", "drive": {"tension": f"{rnd.uniform(50, 300):.4g} N"}, "v_start": f"{v} m/s"})
+    scene = {"name": f"random{seed}", "stop_time": "0.8 s", "step": "1 ms", "webs": webs, "line": line}
+    if rnd.random() < 0.5:
+        scene["start"] = "equilibrium"
+    if n_spans > 1 and rnd.random() < 0.5:
+        scene["events"] = [{"time": "0.4 s", "component": "s0", "set": {"wp1": rnd.choice(list(webs))}}]
+    return json.dumps(scene)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_lines_a_user_writes_match_the_reference(seed, line_dir):
+    scene = parse_scene(random_scene(seed), source=f"random{seed}", fmu_dir=line_dir)
+    for h in (1e-3, 1e-2):
+        result = linefmu.run(scene, line_dir, step=h)
+        err, key = worst(result, scene)
+        assert err <= TOL, f"random scene {seed} ({' -> '.join(c.type for c in scene.line)}) at h = {h}: {key} off by {err:.2e}"
