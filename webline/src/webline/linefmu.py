@@ -125,11 +125,7 @@ def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None
         for path in sorted(binaries.rglob("*")):
             if path.is_file():
                 entries[f"binaries/{path.relative_to(binaries).as_posix()}"] = path.read_bytes()
-        doc = template / "documentation"
-        if doc.is_dir():
-            for path in sorted(doc.rglob("*")):
-                if path.is_file():
-                    entries[f"documentation/{path.relative_to(doc).as_posix()}"] = path.read_bytes()
+        entries["documentation/index.html"] = documentation(spec, entries["modelDescription.xml"], fmi3).encode()
         part_file = out.with_suffix(".part")
         with zipfile.ZipFile(part_file, "w", zipfile.ZIP_DEFLATED) as z:
             for name, data in entries.items():
@@ -174,3 +170,44 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
     return Result(scene=scene.name, columns=scene.columns(), time=time, data=data,
                   info={"method": f"Line FMU in FMPy, {how}", "step": h, "steps": n, "wall_time": wall,
                         "messages": messages})
+
+
+def documentation(spec: dict, description: bytes, fmi3: bool) -> str:
+    """The FMU's documentation/index.html: which line, its parts, its variables."""
+    import html
+    import xml.etree.ElementTree as ET
+
+    esc = html.escape
+    root = ET.fromstring(description)
+    token = root.get("instantiationToken") if fmi3 else root.get("guid")
+    variables = root.find("ModelVariables")
+    rows = []
+    offered = {}
+    for v in variables:
+        if fmi3:
+            kind, attrs = v.tag, v
+        else:
+            kind = next(iter(v)).tag
+            attrs = next(iter(v))
+        name = v.get("name")
+        part = name.split(".")[0].removeprefix("der(")
+        if v.get("causality") in ("output", "input"):
+            offered.setdefault(part, []).append(name.split(".", 1)[1])
+        rows.append(f"<tr><td><code>{esc(name)}</code></td><td>{esc(v.get('causality', 'local'))}</td>"
+                    f"<td>{esc(attrs.get('unit', ''))}</td><td>{esc(attrs.get('start', ''))}</td>"
+                    f"<td>{esc(v.get('description', ''))}</td></tr>")
+    parts = [f"<tr><td><code>{esc(p['name'])}</code></td><td>{esc(p['role'])}</td><td>{esc(p['model'])}</td>"
+             f"<td>{esc(', '.join(offered.get(p['name'], [])))}</td></tr>" for p in spec["parts"]]
+    text = (ROOT / "models" / "line" / "documentation" / "index.html").read_text(encoding="utf-8")
+    values = {
+        "<!-- STYLE -->": (ROOT / "fmu" / "style.css").read_text(encoding="utf-8"),
+        "<!-- NAME -->": esc(spec["name"]),
+        "<!-- DESCRIPTION -->": esc(spec.get("description", "")),
+        "<!-- GUID -->": esc(token or ""),
+        "<!-- STANDARD -->": "FMI 3.0" if fmi3 else "FMI 2.0",
+        "<!-- PARTS -->": "\n".join(parts),
+        "<!-- VARIABLES -->": "\n".join(rows),
+    }
+    for key, value in values.items():
+        text = text.replace(key, value)
+    return text
