@@ -340,6 +340,26 @@ fn nominal(line: &Line, net: &Network, k: usize) -> f64 {
     }
 }
 
+/// The line's ODE x' = f(t, x) as the integrator sees it (inputs as set,
+/// held), for tools that integrate the line themselves (bench/: other solvers).
+pub fn rhs_at(line: &mut Line, t: f64, x: &[f64], dx: &mut [f64]) -> FmiResult {
+    let Line { parts, net, ramps, scratch, .. } = line;
+    let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
+    let Scratch { f0, f1, y, .. } = scratch;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y };
+    sys.eval(t, x, dx)
+}
+
+/// df/dx at (t, x), banded as `line.network()` says (kl, ku).
+pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], jac: &mut Band) -> FmiResult {
+    let Line { parts, net, ramps, scratch, .. } = line;
+    let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
+    let Scratch { f0, f1, y, .. } = scratch;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y };
+    jac.clear();
+    sys.jacobian(t, x, jac).map_err(|()| FmiError::error("the line cannot be evaluated there"))
+}
+
 /// For `equilibrium`: f(t, x) and its Jacobian through the same evaluation the integrator uses.
 pub fn residual_and_jacobian(line: &mut Line, x: &[f64], f: &mut [f64], jac: Option<&mut Band>) -> FmiResult {
     let t = line.time;
