@@ -236,6 +236,7 @@ static void print_cont(const char *run, double t, int n, double rec[][3])
  * One command per line; values are the 16 hex digits of an IEEE double's bits,
  * so no platform's strtod or printf takes part:
  *
+ *     resources <URI>                     the resource location of later instances (a Line FMU's)
  *     instance <name>                     fmi2Instantiate (co-simulation, logging on)
  *     setup <stop bits>                   fmi2SetupExperiment from 0
  *     real|integer|boolean <vr> <value>   one set (integer and boolean values in decimal)
@@ -278,6 +279,7 @@ static int run_script(const Api *api, const char *guid, const char *path)
     int n_outputs = 0, line_no = 0;
     double t = 0.0;
     char line[4096];
+    char resources[4096] = "file:///nonexistent/resources";
     while (fgets(line, sizeof line, script) != NULL) {
         char *words[70];
         int n = 0;
@@ -290,8 +292,12 @@ static int run_script(const Api *api, const char *guid, const char *path)
         }
         const char *cmd = words[0];
         fmi2Status s = fmi2OK;
+        if (strcmp(cmd, "resources") == 0 && n == 2) {
+            snprintf(resources, sizeof resources, "%s", words[1]);
+            continue;
+        }
         if (strcmp(cmd, "instance") == 0 && n == 2) {
-            c = api->instantiate(words[1], fmi2CoSimulation, guid, "file:///nonexistent/resources", &callbacks,
+            c = api->instantiate(words[1], fmi2CoSimulation, guid, resources, &callbacks,
                                  fmi2False, fmi2True);
             t = 0.0;
             s = c != NULL ? fmi2OK : fmi2Error;

@@ -500,3 +500,57 @@ def test_a_library_unloaded_and_loaded_again_under_a_live_instance_keeps_it(impo
     rows = [line.split(",") for line in proc.stdout.splitlines() if line.startswith("reload,") and "unloaded" not in line]
     assert len(rows) == 10 and all(a == b for _, _, a, b in rows), rows
     assert "reload,unloaded,1" in proc.stdout.splitlines()
+
+
+@pytest.fixture(scope="session")
+def line_fmu(tmp_path_factory):
+    """A Line FMU of the splice scene (a new roll and thinner films at exact event
+    times) from the packaged Line libraries of every platform, unpacked:
+    (folder, GUID, {name: variable})."""
+    sys.path.insert(0, str(ROOT / "webline" / "src"))
+    from webline import linefmu
+    from webline.scene import load_scene
+
+    folder = tmp_path_factory.mktemp("line")
+    scene = load_scene(ROOT / "webline" / "scenes" / "splice.json", fmu_dir=OUT)
+    fmu = linefmu.export(scene, folder / "splice.fmu", OUT)
+    with zipfile.ZipFile(fmu) as zf:
+        zf.extractall(folder / "fmu")
+    root = ET.parse(folder / "fmu" / "modelDescription.xml").getroot()
+    return folder / "fmu", root.get("guid"), {v.get("name"): v for v in root.iter("ScalarVariable")}
+
+
+@pytest.mark.parametrize("platform", OTHERS)
+def test_a_line_fmu_gives_the_same_bits_on_every_platform(importers, line_fmu, platform, tmp_path):
+    """The splice scene as one Line FMU (RODAS4 inside, events at their times, a
+    motor torque stepped, an FMU state saved and restored): every output of every
+    1 ms step the same as on Linux x86-64."""
+    unpacked, guid, variables = line_fmu
+    s = Scene(variables)
+    s.add("resources", (unpacked / "resources").as_uri())
+    s.start("line", stop=3.0)
+    torque = next(n for n in variables if n.endswith(".tau_m"))
+    s.steps(700)
+    s.set(torque, 2.0)
+    state = tmp_path / "line-state.bin"
+    s.steps(800)
+    s.add("save", state)
+    s.steps(1000)
+    s.add("free")
+    s.start("restored", stop=3.0)
+    s.add("load", state, bits(1.5))
+    s.steps(1000)
+    s.add("free")
+    texts = {}
+    for folder in (REFERENCE, platform):
+        p = BY_FOLDER[folder]
+        library = unpacked / "binaries" / folder / f"Line{p.suffix}"
+        assert library.exists(), f"the Line FMU lacks {library.name} for {folder}: run python3 fmu/package.py"
+        proc = run_script(importers, folder, library, guid, s.text(), tmp_path)
+        calls = [l for l in proc.stdout.splitlines() if l.startswith("call,")]
+        assert all(l.endswith(",0") for l in calls), f"{folder}: {[l for l in calls if not l.endswith(',0')][:3]}\n{proc.stderr[-2000:]}"
+        texts[folder] = proc.stdout
+    worst, where = largest_difference(texts[REFERENCE], texts[platform])
+    assert worst <= REL_TOL, f"Line on {platform}: {worst:.3g} at {where}"
+    record(f"Line FMU (splice, 3500 steps of 1 ms, a saved state restored) on {platform}: largest relative difference to linux64 {worst:.3g}"
+           f"{' (bit-identical)' if worst == 0 else ''}")
