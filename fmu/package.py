@@ -40,6 +40,7 @@ glibc of the machine that built it.
 """
 
 import argparse
+import concurrent.futures
 import html
 import json
 import os
@@ -189,10 +190,18 @@ def build_host():
         "--target-dir", str(LINE.target_dir(ROOT / "target"))])
 
 
-def build(platform):
-    """Both models' libraries and the Line's for one platform, with the tools of fmu/env.sh."""
-    build_crates(platform, packages(), "libraries", platform.target_dir)
-    build_crates(platform, LINE_MANIFEST, "Line library", LINE.target_dir(platform.target_dir))
+def build(platforms):
+    """Both models' libraries and the Line's for each platform, with the tools of fmu/env.sh.
+    Two builds at a time: a release build ends in one long single-threaded link (LTO, one
+    codegen unit), so a second build keeps the other core busy. Builds that share a target
+    folder wait for each other on cargo's lock."""
+    models = [(p, packages(), "libraries", p.target_dir) for p in platforms]
+    lines = [(p, LINE_MANIFEST, "Line library", LINE.target_dir(p.target_dir)) for p in platforms]
+    # interleaved, so that the two running builds rarely share a target folder
+    jobs = [job for pair in zip(models, lines) for job in pair]
+    with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
+        for done in [pool.submit(build_crates, *job) for job in jobs]:
+            done.result()  # a failed build's StepFailed
 
 
 def build_crates(platform, selection, what, target_dir):
@@ -513,8 +522,7 @@ def main():
         if not args.no_build:
             build_host()
     elif not args.no_build:
-        for folder in chosen:
-            build(PLATFORMS[folder])
+        build([PLATFORMS[folder] for folder in chosen])
     names = {model.name for model in MODELS}
     for folder, path in args.add_binary:
         if not path.is_dir() and path.stem not in names:
