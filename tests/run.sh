@@ -28,7 +28,10 @@ stage() { # NAME COMMAND...: runs it and notes how long it took
 }
 # Every package of the workspace but the fuzz harness (tests/hardening.sh builds it with
 # its own profile): the models, the FMI layer and its conformance suite, the generator, the solvers.
-stage "Rust tests" cargo test --release --quiet --workspace --exclude fmi-fuzz
+stage "Rust tests" cargo test --profile cross-test --quiet --workspace --exclude fmi-fuzz
+# The Line FMU's crate: a workspace of its own, built in a folder of its own (models/line/Cargo.toml).
+stage "Rust tests of the Line" cargo test --profile cross-test --quiet \
+    --manifest-path models/line/Cargo.toml --target-dir target/line
 stage "packaging" python3 fmu/package.py
 stage "compatibility files" "$PY" fmu/compat.py out
 # --rootdir: webline/pyproject.toml would otherwise become the rootdir (it is among the
