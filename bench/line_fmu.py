@@ -33,7 +33,6 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 import zipfile
 from pathlib import Path
 
@@ -110,27 +109,9 @@ def native(exe: Path, fmu: Path, folder: Path, torque: str, output: str, h: floa
 
 
 def line_in_libcosim(fmu: Path, scene, h: float) -> Result:
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
-
-    log_output_level(CosimLogLevel.ERROR)
     names = [f"{c}.{linefmu.OUTPUTS[q]}" for c, q in scene.record]
-    t0 = time.perf_counter()
-    execution = CosimExecution.from_step_size(step_size=int(round(h * 1e9)))
-    slave = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu), instance_name="line"))
-    observer = CosimObserver.create_last_value()
-    execution.add_observer(observer)
-    vr = {v.name.decode(): v.reference for v in execution.slave_variables(slave)}
-    rows = []
-    n = int(round(scene.stop_time / h))
-    for _ in range(n):
-        execution.step()
-        rows.append(observer.last_real_values(slave, [vr[x] for x in names]))
-    wall = time.perf_counter() - t0
-    return Result(scene.name, scene.columns(), h * np.arange(1, n + 1), np.array(rows),
-                  {"method": "Line FMU in libcosim", "step": h, "steps": n, "wall_time": wall})
+    time_, rows, wall = linefmu.run_libcosim(fmu, names, h, scene.stop_time)
+    return Result(scene.name, scene.columns(), time_, rows, {"method": "Line FMU in libcosim", "step": h, "wall_time": wall})
 
 
 def parts(source: str, stop: float, folder: str):

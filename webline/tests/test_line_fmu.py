@@ -88,28 +88,13 @@ def test_the_fmi3_fmu_gives_the_fmi2_fmus_numbers(line_dir, tmp_path):
 
 
 def test_libcosim_and_fmi_sim_run_the_line_fmu_as_fmpy_does(line_dir, tmp_path):
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimObserver import CosimObserver
-    from libcosimpy.CosimSlave import CosimLocalSlave
-
     scene = load_scene(SCENES / "splice.json", fmu_dir=line_dir)
     h, stop = 1e-3, 1.5
     path = linefmu.export(scene, tmp_path / "splice.fmu", line_dir)
     names = ["first.T", "second.T", "idler.v"]
     fmpy = simulate_fmu(str(path), stop_time=stop, step_size=h, output_interval=h, output=names)
 
-    log_output_level(CosimLogLevel.ERROR)
-    execution = CosimExecution.from_step_size(step_size=int(round(h * 1e9)))
-    slave = execution.add_local_slave(CosimLocalSlave(fmu_path=str(path), instance_name="line"))
-    observer = CosimObserver.create_last_value()
-    execution.add_observer(observer)
-    vr = {v.name.decode(): v.reference for v in execution.slave_variables(slave)}
-    rows = []
-    for _ in range(int(round(stop / h))):
-        assert execution.step()
-        rows.append(observer.last_real_values(slave, [vr[n] for n in names]))
-    rows = np.array(rows)
+    _, rows, _ = linefmu.run_libcosim(path, names, h, stop)
     for j, n in enumerate(names):
         # libcosim and FMPy add up their times differently (ulps): the same steps otherwise.
         np.testing.assert_allclose(rows[:, j], fmpy[n][1:], rtol=1e-9, err_msg=f"libcosim {n}")
