@@ -300,9 +300,14 @@ pub fn event_update(line: &mut Line) -> EventUpdate {
 /// d(unknown)/d(known) of the line now, by central differences (step 1e-6
 /// of the known's size: truncation ~1e-12, rounding ~1e-10 relative). Known:
 /// a state or an input of the line; unknown: an output or a derivative.
+/// Before initialization has built the network (an instance that failed
+/// before it ended: the error state), only inputs are known, and the parts
+/// answer at their own values, as fmi2GetReal does then.
 pub fn partial_derivative(line: &Line, unknown: u32, known: u32) -> FmiResult<f64> {
-    let Some(net) = &line.net else { return Err(FmiError::error("the line is not initialized")) };
     let state = line.shared.description.states.iter().position(|&vr| vr == known);
+    if state.is_some() && line.net.is_none() {
+        return Err(FmiError::error("the line is not initialized: it has no states yet"));
+    }
     let input = match line.shared.bindings.get(known as usize) {
         Some(&Binding::Part { part, vr }) if state.is_none() => Some((part, vr)),
         _ => None,
@@ -312,7 +317,11 @@ pub fn partial_derivative(line: &Line, unknown: u32, known: u32) -> FmiResult<f6
         (None, Some((part, vr))) => line.parts[part].get_real(vr)?,
         _ => return Err(FmiError::error(format!("value reference {known} is neither a state nor an input of the line"))),
     };
-    let d = 1e-6 * value.abs().max(if state.is_some() { nominal(line, net, state.unwrap_or(0)) } else { 1.0 });
+    let scale = match (state, &line.net) {
+        (Some(k), Some(net)) => nominal(line, net, k),
+        _ => 1.0,
+    };
+    let d = 1e-6 * value.abs().max(scale);
     let mut probe = line.clone();
     let mut at = |x: f64| -> FmiResult<f64> {
         match (state, input) {
