@@ -346,6 +346,10 @@ impl Model for Line {
             self.integrator = Some(rodas);
             self.net = Some(net);
         } else {
+            // Before initialization the line has no integrator, so no tolerance scales to keep.
+            if !rtol_scale.is_empty() {
+                return Err(FmiError::error(format!("the state holds {} tolerance scales, the line is not initialized", rtol_scale.len())));
+            }
             self.net = None;
             self.integrator = None;
         }
