@@ -93,8 +93,8 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     exe="target/cross-test/$target/cross-test/fuzz_sequences"
     [ -f "$exe.exe" ] && exe="$exe.exe"
     for api in 2 3; do
-        if [ "$api" = 2 ]; then n=$LINE_FUZZ_SEQUENCES flag=""; else n=$LINE_FUZZ3_SEQUENCES flag="--fmi3"; fi
-        log="$OUT/fuzz$([ "$api" = 3 ] && echo 3)-line-$target.log"
+        if [ "$api" = 2 ]; then n=$LINE_FUZZ_SEQUENCES flag="" log="$OUT/fuzz-line-$target.log"
+        else n=$LINE_FUZZ3_SEQUENCES flag="--fmi3" log="$OUT/fuzz3-line-$target.log"; fi
         # shellcheck disable=SC2086
         "${!runner_var}" "$exe" $flag --sequences "$n" --seed 3 --strict | tr -d '\r' | tee "$log"
         grep -q "^$n passed, 0 failed" "$log" || { echo "Line fuzz violations on $target (FMI $api)"; exit 1; }
