@@ -19,7 +19,8 @@
 #
 # Each target builds std with rustc-web into target/cross-test once (profile
 # cross-test, with the test hooks: apart from the shipped libraries of
-# target/cross), for its tests and the fuzz harness alike.
+# target/cross), for its tests and the fuzz harness alike; the Line's harness,
+# of another workspace, into target/cross-test-line.
 # A summary is printed at the end and written to target/platforms/summary.txt.
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
@@ -85,12 +86,11 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     echo "== fuzz harness for $target, the Line: $LINE_FUZZ_SEQUENCES sequences, FMI 3: $LINE_FUZZ3_SEQUENCES"
     t0=$SECONDS
     # fmi-fuzz-line, a member of the Line's own workspace (in the main one the span's `fmu`
-    # feature would be unified into the Line), built in the tests' target directory, where std
-    # is built already: it relinks the span's unhashed library there without its C API, which
-    # every later build that uses that library (test_platforms.py's) links again first.
-    cross build --profile cross-test --manifest-path models/line/Cargo.toml --target-dir target/cross-test --target "$target" \
-        -p fmi-fuzz-line --bin fuzz_sequences
-    exe="target/cross-test/$target/cross-test/fuzz_sequences"
+    # feature would be unified into the Line), in a target directory of its own: sharing the
+    # tests' one, the two workspaces overwrite each other's fmi_core (rustc then finds two).
+    cross build --profile cross-test --manifest-path models/line/Cargo.toml --target-dir target/cross-test-line \
+        --target "$target" -p fmi-fuzz-line --bin fuzz_sequences
+    exe="target/cross-test-line/$target/cross-test/fuzz_sequences"
     [ -f "$exe.exe" ] && exe="$exe.exe"
     for api in 2 3; do
         if [ "$api" = 2 ]; then n=$LINE_FUZZ_SEQUENCES flag="" log="$OUT/fuzz-line-$target.log"
