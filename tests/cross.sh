@@ -10,14 +10,17 @@
 #      objects), the Roller's tests
 #   2. the fuzz harness tests/fuzz built for each target and model: FUZZ_SEQUENCES each,
 #      and FUZZ3_SEQUENCES through its FMI 3 mode (20,000 and 5,000; --full:
-#      200,000 and 50,000)
+#      200,000 and 50,000); for the Line (its test line), the same harness built as
+#      fmi-fuzz-line: LINE_FUZZ_SEQUENCES and LINE_FUZZ3_SEQUENCES (300 and 100;
+#      --full: 20,000 and 5,000)
 #   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
 #      the packaged FMUs, bit for bit against Linux x86-64; importer3.c's scene
 #      through the FMI 3 FMU likewise
 #
 # Each target builds std with rustc-web into target/cross-test once (profile
 # cross-test, with the test hooks: apart from the shipped libraries of
-# target/cross), for its tests and the fuzz harness alike.
+# target/cross), for its tests and the fuzz harness alike; the Line's harness,
+# of another workspace, into target/cross-test-line.
 # A summary is printed at the end and written to target/platforms/summary.txt.
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
@@ -25,8 +28,10 @@ source "$ROOT/tests/tools.sh"
 cd "$ROOT"
 export RUST_BACKTRACE=0 # the panic-boundary tests panic on purpose
 case "${1:-}" in
-    --full) FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-200000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-50000}" ;;
-    "") FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-5000}" ;;
+    --full) FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-200000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-50000}"
+        LINE_FUZZ_SEQUENCES="${LINE_FUZZ_SEQUENCES:-20000}" LINE_FUZZ3_SEQUENCES="${LINE_FUZZ3_SEQUENCES:-5000}" ;;
+    "") FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-5000}"
+        LINE_FUZZ_SEQUENCES="${LINE_FUZZ_SEQUENCES:-300}" LINE_FUZZ3_SEQUENCES="${LINE_FUZZ3_SEQUENCES:-100}" ;;
     *) echo "usage: $0 [--full]" >&2; exit 2 ;;
 esac
 OUT=target/platforms
@@ -77,6 +82,24 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
         grep -q "^$FUZZ3_SEQUENCES passed, 0 failed" "$log" || { echo "FMI 3 fuzz violations on $target"; exit 1; }
         note "fuzz (FMI 3) ${MODEL_NAME[$model]} on ${NAME[$target]}: $(grep '^fuzzed' "$log"), 0 violations ($((SECONDS - t0)) s)"
     done
+
+    echo "== fuzz harness for $target, the Line: $LINE_FUZZ_SEQUENCES sequences, FMI 3: $LINE_FUZZ3_SEQUENCES"
+    t0=$SECONDS
+    # fmi-fuzz-line, a member of the Line's own workspace (in the main one the span's `fmu`
+    # feature would be unified into the Line), in a target directory of its own: sharing the
+    # tests' one, the two workspaces overwrite each other's fmi_core (rustc then finds two).
+    cross build --profile cross-test --manifest-path models/line/Cargo.toml --target-dir target/cross-test-line \
+        --target "$target" -p fmi-fuzz-line --bin fuzz_sequences
+    exe="target/cross-test-line/$target/cross-test/fuzz_sequences"
+    [ -f "$exe.exe" ] && exe="$exe.exe"
+    for api in 2 3; do
+        if [ "$api" = 2 ]; then n=$LINE_FUZZ_SEQUENCES flag="" log="$OUT/fuzz-line-$target.log"
+        else n=$LINE_FUZZ3_SEQUENCES flag="--fmi3" log="$OUT/fuzz3-line-$target.log"; fi
+        # shellcheck disable=SC2086
+        "${!runner_var}" "$exe" $flag --sequences "$n" --seed 3 --strict | tr -d '\r' | tee "$log"
+        grep -q "^$n passed, 0 failed" "$log" || { echo "Line fuzz violations on $target (FMI $api)"; exit 1; }
+    done
+    note "fuzz Line on ${NAME[$target]}: $(grep '^fuzzed' "$OUT/fuzz-line-$target.log"); $(grep '^fuzzed' "$OUT/fuzz3-line-$target.log"); 0 violations ($((SECONDS - t0)) s with the build)"
 done
 
 echo "== importer.c on every platform's binary"

@@ -26,6 +26,10 @@
 #      test-only hook: ASan 1,000 / 1,000, valgrind 20 / 200 cycles
 #   8. (--full) the C importer of tests/c_importer under valgrind, if present
 #      (reported, not enforced: it is another program)
+#   9. the Line (its test line, models/line/resources): the same harness built as
+#      fmi-fuzz-line in the Line's own workspace, strict: LINE_SEQ / LINE_SEQ3
+#      sequences (CI 3,000 / 1,000; --full 200,000 / 50,000, and 20,000 / 5,000
+#      under ASan, 500 under valgrind, and the Line's panic-boundary tests)
 # A summary is printed at the end and written to target/hardening/summary.txt.
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
@@ -47,9 +51,11 @@ esac
 if [ "$MODE" = full ]; then
     SEQ=1000000 SEQ_ASAN=200000 SEQ_VALGRIND=5000 CYCLES_VALGRIND=1000 PANIC_VALGRIND=200
     SEQ3=1000000 SEQ3_ASAN=100000
+    LINE_SEQ=200000 LINE_SEQ3=50000 LINE_SEQ_ASAN=20000 LINE_SEQ3_ASAN=5000 LINE_SEQ_VALGRIND=500
 else
     SEQ=50000 SEQ_ASAN=10000 SEQ_VALGRIND=200 CYCLES_VALGRIND=100 PANIC_VALGRIND=20
     SEQ3=5000 SEQ3_ASAN=2000
+    LINE_SEQ=3000 LINE_SEQ3=1000 LINE_SEQ_ASAN=0 LINE_SEQ3_ASAN=0 LINE_SEQ_VALGRIND=0
 fi
 CYCLES_ASAN=1000
 
@@ -241,6 +247,35 @@ EOF
     note "tests/c_importer under valgrind: $(valgrind_summary "$OUT/valgrind-importer.log");" \
         "its own failed checks: $(grep -c '^check,.*,0$' "$OUT/importer.out" || true)"
 fi
+
+# The Line: the harness of tests/fuzz built as fmi-fuzz-line in the Line's own
+# workspace (models/line/fuzz; in this one the span's `fmu` feature, its C API,
+# would be unified into the Line), over the Line's test line.
+step "9. fuzz harness, strict, the Line (models/line/resources): $LINE_SEQ sequences, FMI 3: $LINE_SEQ3"
+LINE_START=$SECONDS
+line_fuzz() { # TARGET-DIR [cargo options...]
+    cargo build --profile fuzz --quiet --manifest-path models/line/Cargo.toml -p fmi-fuzz-line --bin fuzz_sequences \
+        --target-dir "$1" "${@:2}"
+}
+line_fuzz target/fuzz-line
+LINE_FUZZ=target/fuzz-line/fuzz/fuzz_sequences
+"$LINE_FUZZ" --sequences "$LINE_SEQ" --strict | tee "$OUT/fuzz-line.log"
+note "fuzz Line: $(grep '^fuzzed' "$OUT/fuzz-line.log")"
+"$LINE_FUZZ" --fmi3 --sequences "$LINE_SEQ3" --strict | tee "$OUT/fuzz3-line.log"
+note "fuzz Line: $(grep '^fuzzed' "$OUT/fuzz3-line.log")"
+if [ "$MODE" = full ]; then
+    RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" line_fuzz target/fuzz-asan-line --target x86_64-unknown-linux-gnu
+    asan=target/fuzz-asan-line/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences
+    ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 "$asan" --sequences "$LINE_SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan-line.log"
+    note "fuzz Line under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan-line.log"), no ASan/LSan report"
+    ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 "$asan" --fmi3 --sequences "$LINE_SEQ3_ASAN" --seed 7 | tee "$OUT/fuzz3-asan-line.log"
+    note "fuzz Line under ASan: $(grep '^fuzzed' "$OUT/fuzz3-asan-line.log"), no ASan/LSan report"
+    "${VALGRIND[@]}" --log-file="$OUT/valgrind-fuzz-line.log" "$LINE_FUZZ" --sequences "$LINE_SEQ_VALGRIND" --threads 1 --seed 11
+    note "fuzz Line under valgrind ($LINE_SEQ_VALGRIND sequences): $(valgrind_summary "$OUT/valgrind-fuzz-line.log")"
+    cargo test --release --quiet --manifest-path models/line/Cargo.toml --features test-hooks --target-dir target/line-hooks --test panic_boundary
+    note "panic boundary of the Line: passed"
+fi
+note "the Line took $((SECONDS - LINE_START)) s"
 
 note "hardening ($MODE) took $((SECONDS - START)) s"
 echo

@@ -8,7 +8,8 @@
 //! at link time to the `#[no_mangle]` exports of the model crate the test
 //! binary links, so every call goes through the real C entry points. The
 //! model type parameter `M` only supplies its description (GUID, value
-//! references); a test binary links exactly one model.
+//! references) and its resources ([`Tested`]); a test binary links exactly
+//! one model.
 //!
 //! Each instance logs into its own `Log`, passed as `componentEnvironment`:
 //! no global state, so tests can run in parallel threads.
@@ -23,8 +24,8 @@ pub use fmi_abi::fmi2::{
     fmi2EventInfo, fmi2FMUstate, fmi2Integer, fmi2Real, fmi2Status, fmi2StatusKind, fmi2String, fmi2Type,
     fmi2ValueReference,
 };
-use fmi_core::description::{Causality, Kind, Variable};
-use fmi_core::Compiled;
+use fmi_core::description::{Causality, Kind, ModelDescription, Variable};
+use fmi_core::{Compiled, Model, Resources};
 use std::ffi::{c_int, c_void, CStr, CString};
 use std::marker::PhantomData;
 use std::sync::Mutex;
@@ -83,6 +84,66 @@ pub use fmi2_api::*;
 pub mod fmi3 {
     pub use fmi_abi::fmi3::*;
     fmi_abi::fmi3_functions!(declare, ());
+}
+
+// ---------------------------------------------------------------- the model under test
+
+/// The model a test binary drives through the C API it links: its
+/// interface, where its FMU's resources are, and what it needs to exist.
+/// A model whose description is compiled in (`Compiled`) is all that by
+/// itself. A model that builds its interface at instantiation from its
+/// resources (the Line, from line.json) is tested through a stand-in type of
+/// its tests that reads the description once from the fixture resources
+/// (`description_from_resources`).
+pub trait Tested: 'static {
+    /// The interface of the model under test, as the library will build it
+    /// from `resources()`.
+    fn description() -> &'static ModelDescription;
+
+    /// The resources/ folder the tests instantiate with (what the model's
+    /// FMU ships in resources/), a path ending in '/': the folder of the
+    /// package cargo runs the tests of (every model has the same shape),
+    /// else the span's at the root (the fuzz harness runs outside cargo).
+    fn resources() -> String {
+        let package = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../..").into());
+        format!("{package}/resources/").replace('\\', "/")
+    }
+
+    /// The library crate whose exports the test binary links (for the
+    /// checks of its compiled objects): the first segment of the type's path.
+    fn library() -> &'static str {
+        std::any::type_name::<Self>().split("::").next().unwrap_or_default()
+    }
+
+    /// The model cannot be instantiated without its resources (its
+    /// interface is in them): a NULL resource location must be refused
+    /// with a message that says so, where other models tolerate it.
+    fn needs_resources() -> bool {
+        false
+    }
+
+    /// Why a test of the conformance suite (`"module::test"`) cannot apply
+    /// to this model, or None: the macros' test then passes after printing
+    /// the reason (one line, so a skip is never silent). A few tests ask
+    /// this also per case (`"module::test: <case>"`, as they print it).
+    fn skipped(_test: &str) -> Option<&'static str> {
+        None
+    }
+}
+
+impl<M: Compiled> Tested for M {
+    fn description() -> &'static ModelDescription {
+        M::compiled()
+    }
+}
+
+/// The description `M` builds at instantiation from the resources folder
+/// `folder` (`Model::instantiate`), leaked so that it lives as long as the
+/// test binary: for a test's `Tested::description`, called once (a `OnceLock`).
+pub fn description_from_resources<M: Model>(folder: &str) -> &'static ModelDescription {
+    let model = M::instantiate(&Resources::from_path(Some(folder)))
+        .unwrap_or_else(|e| panic!("the model under test cannot be instantiated from {folder}: {}", e.message));
+    Box::leak(Box::new(model.description().clone()))
 }
 
 // ---------------------------------------------------------------- logging
@@ -161,7 +222,7 @@ pub fn callbacks(log: &Log) -> fmi2CallbackFunctions {
 // ---------------------------------------------------------------- instantiation
 
 /// What `fmi2Instantiate` is called with; `None` strings are passed as NULL.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Setup<M> {
     pub name: Option<String>,
     pub fmu_type: i32,
@@ -173,13 +234,26 @@ pub struct Setup<M> {
     pub model: PhantomData<M>,
 }
 
-impl<M: Compiled> Default for Setup<M> {
+// Not derived: that would ask the model type to be Clone, which a stand-in need not be.
+impl<M> Clone for Setup<M> {
+    fn clone(&self) -> Self {
+        Setup {
+            name: self.name.clone(),
+            guid: self.guid.clone(),
+            resource_location: self.resource_location.clone(),
+            model: PhantomData,
+            ..*self
+        }
+    }
+}
+
+impl<M: Tested> Default for Setup<M> {
     fn default() -> Self {
         Setup {
-            name: Some(M::compiled().model_identifier.to_ascii_lowercase()),
+            name: Some(M::description().model_identifier.to_ascii_lowercase()),
             fmu_type: CS,
             guid: Some(guid::<M>().into()),
-            resource_location: Some(shipped_resources()),
+            resource_location: Some(shipped_resources::<M>()),
             logging_on: false,
             no_logger: false,
             model: PhantomData,
@@ -187,15 +261,11 @@ impl<M: Compiled> Default for Setup<M> {
     }
 }
 
-/// The tested model's resources/ folder (what its FMU ships in resources/)
-/// as a file: URI, spaces percent-encoded as importers do: the folder of the
-/// package cargo runs the tests of (every model has the same shape), else
-/// the span's at the root (the fuzz harness runs outside cargo).
+/// The tested model's resources/ folder (`Tested::resources`) as a file:
+/// URI, spaces percent-encoded as importers do.
 /// (No canonicalize: on Windows it gives a verbatim \\?\ path, which is no URI.)
-pub fn shipped_resources() -> String {
-    let package = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../..").into());
-    let folder = format!("{package}/resources/").replace('\\', "/");
-    let folder = folder.replace('%', "%25").replace(' ', "%20");
+pub fn shipped_resources<M: Tested>() -> String {
+    let folder = M::resources().replace('%', "%25").replace(' ', "%20");
     if folder.starts_with('/') { format!("file://{folder}") } else { format!("file:///{folder}") }
 }
 
@@ -207,12 +277,14 @@ fn ptr_of(s: &Option<CString>) -> fmi2String {
     s.as_ref().map_or(std::ptr::null(), |s| s.as_ptr())
 }
 
-/// `fmi2Instantiate` with a NULL `functions` pointer: must not crash.
-pub fn instantiate_without_callbacks<M: Compiled>() -> bool {
+/// `fmi2Instantiate` with a NULL `functions` pointer (and every other
+/// argument valid, so that only that can be refused): must not crash.
+pub fn instantiate_without_callbacks<M: Tested>() -> bool {
     let name = CString::new("x").unwrap();
     let guid = CString::new(guid::<M>()).unwrap();
+    let resources = CString::new(shipped_resources::<M>()).unwrap();
     // SAFETY: valid strings; the FMU must cope with the NULL functions pointer.
-    let c = unsafe { fmi2Instantiate(name.as_ptr(), CS, guid.as_ptr(), std::ptr::null(), std::ptr::null(), 0, 0) };
+    let c = unsafe { fmi2Instantiate(name.as_ptr(), CS, guid.as_ptr(), resources.as_ptr(), std::ptr::null(), 0, 0) };
     let got = !c.is_null();
     // SAFETY: c is NULL or an instance of this library.
     unsafe { fmi2FreeInstance(c) };
@@ -229,16 +301,16 @@ pub fn version() -> String {
     unsafe { string(fmi2GetVersion()) }
 }
 
-pub fn guid<M: Compiled>() -> &'static str {
-    &M::compiled().guid
+pub fn guid<M: Tested>() -> &'static str {
+    &M::description().guid
 }
 
 /// Looks a variable up by name; panics on a name the model does not have.
-pub fn var<M: Compiled>(name: &str) -> &'static Variable {
-    M::compiled().variable_by_name(name).unwrap_or_else(|| panic!("no variable {name}"))
+pub fn var<M: Tested>(name: &str) -> &'static Variable {
+    M::description().variable_by_name(name).unwrap_or_else(|| panic!("no variable {name}"))
 }
 
-pub fn vr<M: Compiled>(name: &str) -> u32 {
+pub fn vr<M: Tested>(name: &str) -> u32 {
     var::<M>(name).vr
 }
 
@@ -283,7 +355,7 @@ impl<M> Drop for Fmu<M> {
 }
 
 /// Instantiates; on NULL returns what was logged.
-pub fn instantiate<M: Compiled>(setup: &Setup<M>) -> Result<Fmu<M>, Vec<LogLine>> {
+pub fn instantiate<M: Tested>(setup: &Setup<M>) -> Result<Fmu<M>, Vec<LogLine>> {
     let log: Box<Log> = Box::default();
     let functions = fmi2CallbackFunctions {
         logger: if setup.no_logger { None } else { Some(logger()) },
@@ -431,8 +503,8 @@ impl Api {
 
 /// Calls `api` on the raw component `c` with harmless arguments; `state` is
 /// passed where a function takes an FMU state.
-unsafe fn raw_call<M: Compiled>(c: fmi2Component, api: Api, state: fmi2FMUstate, bytes: &[u8]) -> fmi2Status {
-    let description = M::compiled();
+unsafe fn raw_call<M: Tested>(c: fmi2Component, api: Api, state: fmi2FMUstate, bytes: &[u8]) -> fmi2Status {
+    let description = M::description();
     let first = |causality: Causality, kind: fn(&Kind) -> bool| {
         description.variables.iter().find(|v| v.causality == causality && kind(&v.kind)).map(|v| v.vr)
     };
@@ -528,7 +600,7 @@ unsafe fn raw_call<M: Compiled>(c: fmi2Component, api: Api, state: fmi2FMUstate,
 }
 
 /// Calls `api` with a NULL `fmi2Component`.
-pub fn call_with_null_component<M: Compiled>(api: Api) -> i32 {
+pub fn call_with_null_component<M: Tested>(api: Api) -> i32 {
     // SAFETY: NULL is refused by the FMU before anything is dereferenced;
     // every other pointer argument is valid.
     unsafe { raw_call::<M>(std::ptr::null_mut(), api, std::ptr::null_mut(), &[0u8; 64]) }
@@ -548,7 +620,7 @@ fn status_of<T>(status: fmi2Status, value: T) -> Result<T, i32> {
     }
 }
 
-impl<M: Compiled> Fmu<M> {
+impl<M: Tested> Fmu<M> {
     /// A Co-Simulation instance named after the model, logging off, or panics.
     pub fn new() -> Self {
         Self::with(&Setup::default())
@@ -883,7 +955,7 @@ impl<M: Compiled> Fmu<M> {
     }
 }
 
-impl<M: Compiled> Fmu<M> {
+impl<M: Tested> Fmu<M> {
     /// fmi2SetRealInputDerivatives.
     pub fn set_real_input_derivatives(&self, vrs: &[u32], orders: &[i32], values: &[f64]) -> i32 {
         assert!(orders.len() == vrs.len() && values.len() == vrs.len());
@@ -911,7 +983,7 @@ impl<M: Compiled> Fmu<M> {
 }
 
 // The short forms the hardening tests and the fuzz harness use.
-impl<M: Compiled> Fmu<M> {
+impl<M: Tested> Fmu<M> {
     pub fn set_real(&self, name: &str, x: f64) -> i32 {
         // SAFETY: live instance, one value.
         unsafe { fmi2SetReal(self.c, &vr::<M>(name), 1, &x) }

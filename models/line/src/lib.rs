@@ -270,8 +270,12 @@ impl Variables for Line {
     }
 
     fn load_variables(&mut self, input: &mut StateReader) -> FmiResult {
-        for part in &mut self.parts {
-            part.load_variables(input)?;
+        for (part, spec) in self.parts.iter_mut().zip(&self.shared.spec.parts) {
+            // The part's messages name its own variables ("L is ..."): the line's are "<part>.L".
+            part.load_variables(input).map_err(|mut e| {
+                e.message = format!("{}.{}", spec.name, e.message);
+                e
+            })?;
         }
         self.tolerance = input.finite("tolerance")?;
         self.start_equilibrium = input.bool("startAtEquilibrium")?;
@@ -330,6 +334,9 @@ impl Model for Line {
             rtol_scale.push(r.finite("tolerance scale")?);
         }
         if initialized {
+            // The parameters set the network (a roll's radius is a state only while it is wound):
+            // out of their ranges, say which, before the structure they break.
+            fmi_core::instance::check_values(self, true)?;
             let net = Network::new(&self.shared.spec, &self.parts).map_err(FmiError::error)?;
             if x.len() != net.len() {
                 return Err(FmiError::error(format!("the state holds {} line states, the line has {}", x.len(), net.len())));
@@ -339,6 +346,10 @@ impl Model for Line {
             self.integrator = Some(rodas);
             self.net = Some(net);
         } else {
+            // Before initialization the line has no integrator, so no tolerance scales to keep.
+            if !rtol_scale.is_empty() {
+                return Err(FmiError::error(format!("the state holds {} tolerance scales, the line is not initialized", rtol_scale.len())));
+            }
             self.net = None;
             self.integrator = None;
         }

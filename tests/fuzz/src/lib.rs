@@ -54,27 +54,58 @@ use fmi_core::description::{
     Causality, Initial, Kind, ModelDescription, Variability, Variable,
 };
 use fmi_core::instance::TEST_PANIC_CATEGORY;
-use fmi_core::Compiled;
 use fmi_testkit::*;
 use std::ffi::CString;
 use std::ptr::null_mut;
 
 type Desc = &'static ModelDescription;
 
-/// The model this build fuzzes (features `span`, the default, or `roller`).
-#[cfg(all(feature = "span", not(feature = "roller")))]
+// One model per build: each exports the same C names. The Line is fuzzed by
+// the same source built as crate fmi-fuzz-line in the Line's own workspace
+// (models/line/fuzz, feature `line`): a build of the Line here would unify
+// the span's `fmu` feature (its C API) into the Line's binary.
+/// The model this build fuzzes (features `span`, the default, `roller` or `line`).
+#[cfg(all(feature = "span", not(feature = "roller"), not(feature = "line")))]
 pub type Fuzzed = converting_span::ConvertingSpan;
-#[cfg(feature = "roller")]
+#[cfg(all(feature = "roller", not(feature = "line")))]
 pub type Fuzzed = roller::Roller;
+#[cfg(feature = "line")]
+pub type Fuzzed = FuzzedLine;
 
 /// The fuzzed model's resources/ folder, what its FMU ships.
-#[cfg(all(feature = "span", not(feature = "roller")))]
+#[cfg(all(feature = "span", not(feature = "roller"), not(feature = "line")))]
 const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../resources/");
-#[cfg(feature = "roller")]
+#[cfg(all(feature = "roller", not(feature = "line")))]
 const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/roller/resources/");
+/// The Line's test line (models/line/resources/README.md); this crate is models/line/fuzz there.
+#[cfg(feature = "line")]
+const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../resources/");
+
+/// The Line as the harness sees it: its interface is not compiled in but
+/// built from line.json at instantiation, so it is read once from the test
+/// line the harness instantiates with.
+#[cfg(feature = "line")]
+pub struct FuzzedLine;
+
+#[cfg(feature = "line")]
+impl Tested for FuzzedLine {
+    fn description() -> &'static ModelDescription {
+        static DESCRIPTION: std::sync::OnceLock<&'static ModelDescription> = std::sync::OnceLock::new();
+        DESCRIPTION.get_or_init(|| description_from_resources::<line::Line>(RESOURCES))
+    }
+    fn resources() -> String {
+        RESOURCES.into()
+    }
+    fn library() -> &'static str {
+        "line"
+    }
+    fn needs_resources() -> bool {
+        true
+    }
+}
 
 fn desc() -> Desc {
-    <Fuzzed as Compiled>::compiled()
+    <Fuzzed as Tested>::description()
 }
 
 // ---------------------------------------------------------------- input
@@ -780,6 +811,7 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     // What the FMU ships, so records load.
     let resources = CString::new(format!("file://{RESOURCES}")).unwrap();
     let logging_on = boolean(src);
+    let null_resources = src.chance(128);
     let c = unsafe {
         fmi2Instantiate(
             if null_name {
@@ -789,7 +821,7 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             },
             fmu_type,
             guid_ptr,
-            if src.chance(128) {
+            if null_resources {
                 std::ptr::null()
             } else {
                 resources.as_ptr()
@@ -804,10 +836,12 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         )
     };
     r.what = format!(
-        "fmi2Instantiate(type {fmu_type}, guid ok {guid_ok}, functions NULL {null_functions})"
+        "fmi2Instantiate(type {fmu_type}, guid ok {guid_ok}, functions NULL {null_functions}, resources NULL {null_resources})"
     );
     r.out.calls += 1;
-    let should = right_type && guid_ok && !null_functions;
+    // A model whose interface is in its resources cannot exist without them.
+    let resources_ok = !null_resources || !Fuzzed::needs_resources();
+    let should = right_type && guid_ok && !null_functions && resources_ok;
     if c.is_null() == should {
         if !c.is_null() {
             unsafe { fmi2FreeInstance(c) };
@@ -857,11 +891,13 @@ fn op_instantiate3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let required: Vec<u32> = if src.chance(12) { vec![vr(src, |_| true)] } else { Vec::new() };
     let no_logger = src.chance(12);
     let logging_on = src.chance(128);
+    let null_name = src.chance(8);
+    let null_resources = src.chance(16);
     let args = api::Instantiate3 {
         model_exchange,
-        name: if src.chance(8) { std::ptr::null() } else { name_c.as_ptr() },
+        name: if null_name { std::ptr::null() } else { name_c.as_ptr() },
         token: if null_token { std::ptr::null() } else { token_c.as_ptr() },
-        resource_path: if src.chance(16) { std::ptr::null() } else { resources.as_ptr() },
+        resource_path: if null_resources { std::ptr::null() } else { resources.as_ptr() },
         logging_on,
         event_mode_used: src.chance(16),
         required: &required,
@@ -869,12 +905,13 @@ fn op_instantiate3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     };
     let c = unsafe { api::instantiate3(&args) };
     r.what = format!(
-        "{}(token ok {token_ok}, required {required:?}, logger {})",
+        "{}(token ok {token_ok}, required {required:?}, logger {}, resources NULL {null_resources})",
         if model_exchange { "fmi3InstantiateModelExchange" } else { "fmi3InstantiateCoSimulation" },
         !no_logger
     );
     r.out.calls += 1;
-    let should = token_ok && (model_exchange || required.is_empty());
+    let resources_ok = !null_resources || !Fuzzed::needs_resources();
+    let should = token_ok && (model_exchange || required.is_empty()) && resources_ok;
     if c.is_null() == should {
         if !c.is_null() {
             unsafe { r.api.free_instance(c) };
@@ -2468,14 +2505,17 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         let functions = Box::new(callbacks(&log));
         let name = CString::new(format!("fuzz{i}")).unwrap();
         let g = CString::new(guid::<Fuzzed>()).unwrap();
+        // No resources where the model can do without (as importers may pass none).
+        let (uri, path) = (CString::new(format!("file://{RESOURCES}")).unwrap(), CString::new(RESOURCES).unwrap());
+        let (uri, path) = if Fuzzed::needs_resources() { (uri.as_ptr(), path.as_ptr()) } else { (std::ptr::null(), std::ptr::null()) };
         let c = unsafe {
             match api {
-                Api::Fmi2 => fmi2Instantiate(name.as_ptr(), 1, g.as_ptr(), std::ptr::null(), &*functions, 0, 0),
+                Api::Fmi2 => fmi2Instantiate(name.as_ptr(), 1, g.as_ptr(), uri, &*functions, 0, 0),
                 Api::Fmi3 => api::instantiate3(&api::Instantiate3 {
                     model_exchange: false,
                     name: name.as_ptr(),
                     token: g.as_ptr(),
-                    resource_path: std::ptr::null(),
+                    resource_path: path,
                     logging_on: false,
                     event_mode_used: false,
                     required: &[],

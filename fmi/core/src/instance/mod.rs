@@ -15,6 +15,7 @@
 mod directional;
 mod model_exchange;
 mod states;
+pub use states::check_values;
 mod values;
 
 use super::description::{Causality, Family, Kind, ModelDescription, Slot, Variability, Variable};

@@ -45,30 +45,41 @@ impl<M: Model> Instance<M> {
             snapshot.phase,
             Phase::StepComplete | Phase::StepFailed | Phase::Terminated | Phase::EventMode | Phase::ContinuousTimeMode
         );
-        for v in snapshot.model.description().variables.iter() {
-            let checked_range = v.causality == Causality::Input || (v.causality == Causality::Parameter && initialized);
-            let wrong = match v.kind {
-                Kind::Real if matches!(v.causality, Causality::Input | Causality::Parameter) => {
-                    let x = snapshot.model.get_real(v.vr)?;
-                    (!x.is_finite() || (checked_range && !v.range.contains(x))).then(|| format!("{x}, allowed {}", v.range))
-                }
-                Kind::Integer if v.causality == Causality::Parameter => {
-                    let x = snapshot.model.get_integer(v.vr)?;
-                    (checked_range && !v.range.contains(x as f64)).then(|| format!("{x}, allowed {}", v.range))
-                }
-                Kind::Enumeration { values, .. } => {
-                    let x = snapshot.model.get_integer(v.vr)?;
-                    (!values.contains(&x)).then(|| format!("{x}, not a value of the enumeration"))
-                }
-                _ => None,
-            };
-            if let Some(why) = wrong {
-                return Err(FmiError::error(format!("{} = {why}", v.name)));
-            }
-        }
+        check_values(&snapshot.model, initialized)?;
         if initialized {
             snapshot.model.outputs_defined()?;
         }
         Ok(())
     }
+}
+
+/// The values of a restored `model` checked as `fmi2Set*` and
+/// initialization would have: Booleans and enumerations always, inputs
+/// against their ranges, parameters against theirs if `initialized`. Part of
+/// `Instance::check_snapshot`; public for a model whose own state depends on
+/// its parameters (the Line: its network), to check them first in its
+/// `load_state` and so name the value rather than the structure it breaks.
+pub fn check_values<M: Model>(model: &M, initialized: bool) -> FmiResult {
+    for v in model.description().variables.iter() {
+        let checked_range = v.causality == Causality::Input || (v.causality == Causality::Parameter && initialized);
+        let wrong = match v.kind {
+            Kind::Real if matches!(v.causality, Causality::Input | Causality::Parameter) => {
+                let x = model.get_real(v.vr)?;
+                (!x.is_finite() || (checked_range && !v.range.contains(x))).then(|| format!("{x}, allowed {}", v.range))
+            }
+            Kind::Integer if v.causality == Causality::Parameter => {
+                let x = model.get_integer(v.vr)?;
+                (checked_range && !v.range.contains(x as f64)).then(|| format!("{x}, allowed {}", v.range))
+            }
+            Kind::Enumeration { values, .. } => {
+                let x = model.get_integer(v.vr)?;
+                (!values.contains(&x)).then(|| format!("{x}, not a value of the enumeration"))
+            }
+            _ => None,
+        };
+        if let Some(why) = wrong {
+            return Err(FmiError::error(format!("{} = {why}", v.name)));
+        }
+    }
+    Ok(())
 }

@@ -228,7 +228,8 @@ impl<M: Model> Instance<M> {
                     v.name
                 )));
             }
-            if !(value.abs() <= v.max_rate) {
+            // Finite always: an input without a maxRate has an infinite one.
+            if !(value.is_finite() && value.abs() <= v.max_rate) {
                 let unit = match v.unit {
                     "" | "1" => "1/s".to_string(),
                     "m/s" => "m/s2".to_string(),

@@ -7,12 +7,12 @@ use super::scene::*;
 use super::{Hints, Point};
 use crate::*;
 use fmi_core::description::{Causality, Dependency, Kind, Variable};
-use fmi_core::Compiled;
+use crate::Tested;
 
 /// The operating points: the start values; each settable Boolean parameter
 /// flipped and each enumeration parameter at each other item (alone); and
 /// the model's hints.
-fn points<M: Compiled>(hints: &Hints) -> Vec<Point> {
+fn points<M: Tested>(hints: &Hints) -> Vec<Point> {
     let mut out = vec![Point::default()];
     for v in settable_parameters::<M>() {
         let others: Vec<f64> = match v.kind {
@@ -27,7 +27,7 @@ fn points<M: Compiled>(hints: &Hints) -> Vec<Point> {
 }
 
 /// A fresh instance with `point` set; `None` (with the log) when a set is refused.
-fn at<M: Compiled>(point: &Point) -> Result<Fmu<M>, String> {
+fn at<M: Tested>(point: &Point) -> Result<Fmu<M>, String> {
     let fmu = Fmu::<M>::new();
     for &(name, x) in &point.values {
         if fmu.set(name, x) != OK {
@@ -71,7 +71,7 @@ fn listed(u: &Dependency, known: &Variable) -> Option<bool> {
 /// with the listed dependencies: a listed known must change the unknown by
 /// more than `significant` at some point; an unlisted one must never change
 /// it by more than `rounding`.
-fn dependency_problems<M: Compiled>(
+fn dependency_problems<M: Tested>(
     unknowns: &[Dependency],
     knowns: &[&Variable],
     largest: &[Vec<f64>],
@@ -80,7 +80,7 @@ fn dependency_problems<M: Compiled>(
 ) -> Vec<String> {
     let mut problems = Vec::new();
     for (i, u) in unknowns.iter().enumerate() {
-        let unknown = &M::compiled().variable(u.vr).unwrap().name;
+        let unknown = &M::description().variable(u.vr).unwrap().name;
         for (j, known) in knowns.iter().enumerate() {
             let c = largest[i][j];
             match listed(u, known) {
@@ -103,8 +103,8 @@ fn dependency_problems<M: Compiled>(
 /// some point if the input is listed as its dependency (by far more than
 /// rounding), and leaves it bit-identical at every point if not. Every
 /// perturbation uses a fresh instance; every output must be listed.
-pub fn output_dependencies_are_exact<M: Compiled>(hints: &Hints) {
-    let outputs = &M::compiled().output_dependencies;
+pub fn output_dependencies_are_exact<M: Tested>(hints: &Hints) {
+    let outputs = &M::description().output_dependencies;
     let output_vrs: Vec<u32> = of_causality::<M>(Causality::Output).iter().map(|v| v.vr).collect();
     assert_eq!(outputs.iter().map(|d| d.vr).collect::<Vec<_>>(), output_vrs, "every output is listed");
     let inputs = of_causality::<M>(Causality::Input);
@@ -162,15 +162,15 @@ pub fn output_dependencies_are_exact<M: Compiled>(hints: &Hints) {
 /// perturbed to the other text the hints give. Each perturbation is a fresh
 /// instance; a perturbation the model refuses must be one the hints name.
 /// SHOW_DEPENDENCY_MARGINS=1 prints the margins.
-pub fn initial_dependencies_are_exact<M: Compiled>(hints: &Hints) {
-    let unknowns = &M::compiled().initial_dependencies;
-    let all_knowns = M::compiled().variables.iter().filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input));
+pub fn initial_dependencies_are_exact<M: Tested>(hints: &Hints) {
+    let unknowns = &M::description().initial_dependencies;
+    let all_knowns = M::description().variables.iter().filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input));
     let text_of = |v: &Variable| hints.texts.iter().find(|(n, _)| *n == v.name).map(|(_, t)| t.clone());
     let (knowns, untextable): (Vec<&Variable>, Vec<&Variable>) =
         all_knowns.partition(|v| v.kind != Kind::String || text_of(v).is_some());
     for v in &untextable {
         let listing: Vec<&str> =
-            unknowns.iter().filter(|u| listed(u, v) == Some(true)).map(|u| M::compiled().variable(u.vr).unwrap().name.as_ref()).collect();
+            unknowns.iter().filter(|u| listed(u, v) == Some(true)).map(|u| M::description().variable(u.vr).unwrap().name.as_ref()).collect();
         assert!(listing.is_empty(), "{listing:?} list {}: the hints must give it another text", v.name);
     }
     // Largest absolute change per (unknown, known), and largest magnitude per unknown.
@@ -227,7 +227,7 @@ pub fn initial_dependencies_are_exact<M: Compiled>(hints: &Hints) {
     }
     if std::env::var_os("SHOW_DEPENDENCY_MARGINS").is_some() {
         for (i, u) in unknowns.iter().enumerate() {
-            let name = M::compiled().variable(u.vr).unwrap().name.as_ref();
+            let name = M::description().variable(u.vr).unwrap().name.as_ref();
             let (mut smallest_listed, mut largest_unlisted) = (f64::INFINITY, 0.0f64);
             for (j, k) in knowns.iter().enumerate() {
                 match listed(u, k) {
@@ -250,8 +250,8 @@ pub fn initial_dependencies_are_exact<M: Compiled>(hints: &Hints) {
 /// a state as known in Co-Simulation, an input as unknown, a value reference
 /// of no variable, a NaN seed, NULL arrays and one array for dvKnown and
 /// dvUnknown. Without the capability every call is refused as not supported.
-pub fn directional_derivatives_through_the_c_api<M: Compiled>() {
-    let d = M::compiled();
+pub fn directional_derivatives_through_the_c_api<M: Tested>() {
+    let d = M::description();
     let inputs = real_inputs::<M>();
     // An output that lists an input (k1), and another input (k2), for the weighted sum.
     let (output, k1) = d

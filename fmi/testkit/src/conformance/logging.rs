@@ -3,7 +3,7 @@
 
 use super::scene::*;
 use crate::*;
-use fmi_core::Compiled;
+use crate::Tested;
 
 /// The message as a printf-style logger prints it; `None` if it holds a
 /// '%' that is not part of "%%" (which such a logger would misread).
@@ -20,16 +20,16 @@ fn printf_unescape(message: &str) -> Option<String> {
 }
 
 /// The lifecycle category the layer logs events in; the description must declare it.
-fn events<M: Compiled>() -> &'static str {
+fn events<M: Tested>() -> &'static str {
     let category = "logEvents";
-    assert!(M::compiled().log_categories.contains(&category), "{category} is not among the LogCategories");
+    assert!(M::description().log_categories.contains(&category), "{category} is not among the LogCategories");
     category
 }
 
 /// Proves that fmi2SetDebugLogging refuses an unknown category with
 /// fmi2Error and one line naming it, and applies nothing of a list that
 /// holds an unknown name (logEvents stays off).
-pub fn set_debug_logging_refuses_unknown_categories<M: Compiled>() {
+pub fn set_debug_logging_refuses_unknown_categories<M: Tested>() {
     let fmu = Fmu::<M>::new();
     assert_eq!(fmu.set_debug_logging(true, &["logNoSuchCategory"]), ERROR);
     assert_one_error(&fmu.take_logs(), &["fmi2SetDebugLogging", "logNoSuchCategory"]);
@@ -45,7 +45,7 @@ pub fn set_debug_logging_refuses_unknown_categories<M: Compiled>() {
 /// Proves that error messages are on by default, that switching
 /// logStatusError off silences them (the status is still returned), and
 /// that switching it on again brings them back.
-pub fn log_status_error_can_be_switched_off<M: Compiled>() {
+pub fn log_status_error_can_be_switched_off<M: Tested>() {
     let fmu = Fmu::<M>::new();
     assert_eq!(fmu.do_step(0.0, 1.0), ERROR);
     assert_eq!(fmu.take_logs().len(), 1, "on by default");
@@ -62,7 +62,7 @@ pub fn log_status_error_can_be_switched_off<M: Compiled>() {
 /// (logEvents, fmi2OK) from the first moment, that loggingOn = fmi2False
 /// gives none, and that fmi2SetDebugLogging(on, "logEvents") turns them on
 /// later.
-pub fn event_logging_follows_logging_on_and_set_debug_logging<M: Compiled>() {
+pub fn event_logging_follows_logging_on_and_set_debug_logging<M: Tested>() {
     let on = Fmu::<M>::logging(true);
     on.init(0.0);
     assert_eq!(on.terminate(), OK);
@@ -85,7 +85,7 @@ pub fn event_logging_follows_logging_on_and_set_debug_logging<M: Compiled>() {
 /// Proves that nCategories = 0 switches every category: on, each call is
 /// traced (logAll) and events are logged; off, even error messages are
 /// silent.
-pub fn no_categories_switches_all<M: Compiled>() {
+pub fn no_categories_switches_all<M: Tested>() {
     let fmu = Fmu::<M>::new();
     assert_eq!(fmu.set_debug_logging(true, &[]), OK);
     fmu.take_logs();
@@ -106,7 +106,7 @@ pub fn no_categories_switches_all<M: Compiled>() {
 /// Proves that a '%' in a message reaches the logger escaped as "%%", so a
 /// printf-style logger prints it literally: provoked with an unknown log
 /// category and a GUID that contain printf directives.
-pub fn percent_in_messages_is_escaped_for_printf_loggers<M: Compiled>() {
+pub fn percent_in_messages_is_escaped_for_printf_loggers<M: Tested>() {
     let fmu = Fmu::<M>::new();
     assert_eq!(fmu.set_debug_logging(true, &["100%s%n"]), ERROR);
     let lines = fmu.take_logs();

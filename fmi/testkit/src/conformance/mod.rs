@@ -1,14 +1,15 @@
 //! The conformance suite of the FMI layer: every test of what the standard
 //! and this layer promise an importer, written once, generic over the model
 //! and driven by its description (names, value references, causality,
-//! ranges and start values come from `M::compiled()`, never from a
-//! model's own names). Each model runs it through the C API of its own
-//! library with one line in its tests:
+//! ranges and start values come from `M::description()` of `crate::Tested`,
+//! never from a model's own names). Each model runs it through the C API of
+//! its own library with one line in its tests:
 //!
 //! ```text
 //! fmi_testkit::conformance_tests!(roller::Roller);
 //! fmi_testkit::conformance_tests!(converting_span::ConvertingSpan, hints = span_hints);
 //! fmi_testkit::panic_boundary_tests!(roller::Roller); // a test target with the model's feature `test-hooks`
+//! fmi_testkit::conformance_tests!(TestedLine); // a stand-in: the Line's interface comes with its resources
 //! ```
 //!
 //! * `scene` — what the tests drive a model with, derived from its description;
@@ -160,6 +161,11 @@ macro_rules! __conformance_module {
             $(
                 #[test]
                 fn $test() {
+                    let name = concat!(stringify!($module), "::", stringify!($test));
+                    if let Some(reason) = <$model as $crate::Tested>::skipped(name) {
+                        eprintln!("skipped {name}: {reason}");
+                        return;
+                    }
                     $crate::conformance::$module::$test::<$model>($($($arg),*)?)
                 }
             )*

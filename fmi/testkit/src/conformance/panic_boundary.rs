@@ -11,13 +11,13 @@
 
 use super::scene::*;
 use crate::*;
-use fmi_core::Compiled;
+use crate::Tested;
 
-fn arm<M: Compiled>(fmu: &Fmu<M>, hook: &str) -> i32 {
+fn arm<M: Tested>(fmu: &Fmu<M>, hook: &str) -> i32 {
     fmu.set_debug_logging(true, &[hook])
 }
 
-fn running<M: Compiled>() -> Fmu<M> {
+fn running<M: Tested>() -> Fmu<M> {
     let fmu = Fmu::<M>::named("panicky");
     assert_eq!(fmu.initialize(), OK, "{:?}", fmu.messages());
     fmu
@@ -25,7 +25,7 @@ fn running<M: Compiled>() -> Fmu<M> {
 
 const REFUSAL: &str = "only fmi2Reset or fmi2FreeInstance are accepted";
 
-pub fn a_panic_inside_the_step_becomes_fmi2error_with_a_log_line<M: Compiled>(hook: &str) {
+pub fn a_panic_inside_the_step_becomes_fmi2error_with_a_log_line<M: Tested>(hook: &str) {
     let fmu = running::<M>();
     assert_eq!(fmu.do_step(0.0, 0.1), OK);
     assert_eq!(arm(&fmu, hook), OK);
@@ -37,7 +37,7 @@ pub fn a_panic_inside_the_step_becomes_fmi2error_with_a_log_line<M: Compiled>(ho
     assert!(line.message.contains("fmi2DoStep: internal error") && line.message.contains("test hook"), "{line:?}");
 }
 
-pub fn a_poisoned_instance_refuses_everything_but_reset_and_free<M: Compiled>(hook: &str) {
+pub fn a_poisoned_instance_refuses_everything_but_reset_and_free<M: Tested>(hook: &str) {
     let fmu = running::<M>();
     let mut saved = fmu.get_state().unwrap();
     assert_eq!(arm(&fmu, hook), OK);
@@ -86,7 +86,7 @@ pub fn a_poisoned_instance_refuses_everything_but_reset_and_free<M: Compiled>(ho
     assert_eq!(fmu.free_state(&mut saved), OK);
 }
 
-pub fn a_poisoned_instance_can_be_freed_and_others_are_untouched<M: Compiled>(hook: &str) {
+pub fn a_poisoned_instance_can_be_freed_and_others_are_untouched<M: Tested>(hook: &str) {
     let healthy = running::<M>();
     for _ in 0..3 {
         let fmu = running::<M>();
@@ -97,7 +97,7 @@ pub fn a_poisoned_instance_can_be_freed_and_others_are_untouched<M: Compiled>(ho
     assert_eq!(healthy.do_step(0.0, 0.1), OK, "{:?}", healthy.messages());
 }
 
-pub fn without_arming_the_hook_does_nothing<M: Compiled>(_hook: &str) {
+pub fn without_arming_the_hook_does_nothing<M: Tested>(_hook: &str) {
     let fmu = running::<M>();
     for k in 0..100 {
         assert_eq!(fmu.do_step(k as f64 * 0.01, 0.01), OK);

@@ -4,33 +4,33 @@
 
 use crate::{Fmu, LogLine, DISCARD, ERROR, OK};
 use fmi_core::description::{Causality, Initial, Kind, Start, Variable};
-use fmi_core::Compiled;
+use crate::Tested;
 
-pub fn of_causality<M: Compiled>(c: Causality) -> Vec<&'static Variable> {
-    M::compiled().variables.iter().filter(|v| v.causality == c).collect()
+pub fn of_causality<M: Tested>(c: Causality) -> Vec<&'static Variable> {
+    M::description().variables.iter().filter(|v| v.causality == c).collect()
 }
 
-pub fn real_inputs<M: Compiled>() -> Vec<&'static Variable> {
+pub fn real_inputs<M: Tested>() -> Vec<&'static Variable> {
     of_causality::<M>(Causality::Input).into_iter().filter(|v| v.kind == Kind::Real).collect()
 }
 
 /// Parameters an importer may set before initialization (initial exact or approx).
-pub fn settable_parameters<M: Compiled>() -> Vec<&'static Variable> {
+pub fn settable_parameters<M: Tested>() -> Vec<&'static Variable> {
     of_causality::<M>(Causality::Parameter).into_iter().filter(|v| matches!(v.initial, Initial::Exact | Initial::Approx)).collect()
 }
 
 /// The first Real input; every model of this project has one (a step needs something to act on).
-pub fn first_real_input<M: Compiled>() -> &'static Variable {
+pub fn first_real_input<M: Tested>() -> &'static Variable {
     real_inputs::<M>().into_iter().next().expect("a Real input")
 }
 
-pub fn first_real_output<M: Compiled>() -> &'static Variable {
+pub fn first_real_output<M: Tested>() -> &'static Variable {
     of_causality::<M>(Causality::Output).into_iter().find(|v| v.kind == Kind::Real).expect("a Real output")
 }
 
 /// A value reference no variable has.
-pub fn unused_vr<M: Compiled>() -> u32 {
-    M::compiled().variables.iter().map(|v| v.vr).max().unwrap_or(0) + 1
+pub fn unused_vr<M: Tested>() -> u32 {
+    M::description().variables.iter().map(|v| v.vr).max().unwrap_or(0) + 1
 }
 
 /// The start value as `Fmu::set` takes it (Booleans and enumerations as numbers).
@@ -67,7 +67,7 @@ pub fn other_value(v: &Variable, x: f64) -> f64 {
 
 /// Values off the start values, so that a reset has something to undo: the
 /// first settable parameter of each type and the first Real input.
-pub fn config<M: Compiled>() -> Vec<(&'static str, f64)> {
+pub fn config<M: Tested>() -> Vec<(&'static str, f64)> {
     let parameters = settable_parameters::<M>();
     let kinds: [fn(&Kind) -> bool; 4] = [
         |k| *k == Kind::Real,
@@ -105,14 +105,14 @@ pub fn step_size(k: usize) -> f64 {
 }
 
 /// Every Real's value reference.
-pub fn reals<M: Compiled>() -> Vec<u32> {
-    M::compiled().variables.iter().filter(|v| v.kind == Kind::Real).map(|v| v.vr).collect()
+pub fn reals<M: Tested>() -> Vec<u32> {
+    M::description().variables.iter().filter(|v| v.kind == Kind::Real).map(|v| v.vr).collect()
 }
 
 /// Steps `from..to` of the standard run, from time `t`: sets the inputs,
 /// steps, and records the bits of every Real after each step. Returns the
 /// record and the end time.
-pub fn run<M: Compiled>(fmu: &Fmu<M>, mut t: f64, from: usize, to: usize) -> (Vec<Vec<u64>>, f64) {
+pub fn run<M: Tested>(fmu: &Fmu<M>, mut t: f64, from: usize, to: usize) -> (Vec<Vec<u64>>, f64) {
     let reals = reals::<M>();
     let inputs = real_inputs::<M>();
     let vrs: Vec<u32> = inputs.iter().map(|v| v.vr).collect();
@@ -130,8 +130,8 @@ pub fn run<M: Compiled>(fmu: &Fmu<M>, mut t: f64, from: usize, to: usize) -> (Ve
 }
 
 /// Every variable's value as bits (Strings hashed, see `Fmu::get`).
-pub fn all_values<M: Compiled>(fmu: &Fmu<M>) -> Vec<u64> {
-    M::compiled()
+pub fn all_values<M: Tested>(fmu: &Fmu<M>) -> Vec<u64> {
+    M::description()
         .variables
         .iter()
         .map(|v| fmu.get(&v.name).unwrap_or_else(|s| panic!("get {}: {s} {:?}", v.name, fmu.logs())).to_bits())
@@ -140,7 +140,7 @@ pub fn all_values<M: Compiled>(fmu: &Fmu<M>) -> Vec<u64> {
 
 /// Initialization from the instantiated phase and three steps: the values
 /// after initialization and the record of the steps.
-pub fn init_and_run<M: Compiled>(fmu: &Fmu<M>) -> Vec<Vec<u64>> {
+pub fn init_and_run<M: Tested>(fmu: &Fmu<M>) -> Vec<Vec<u64>> {
     fmu.init(0.0);
     let mut out = vec![all_values(fmu)];
     out.extend(run(fmu, 0.0, 0, 3).0);
@@ -149,7 +149,7 @@ pub fn init_and_run<M: Compiled>(fmu: &Fmu<M>) -> Vec<Vec<u64>> {
 
 /// An instance at its start values in step complete after `steps` steps of
 /// the standard run, and its time.
-pub fn running<M: Compiled>(steps: usize) -> (Fmu<M>, f64) {
+pub fn running<M: Tested>(steps: usize) -> (Fmu<M>, f64) {
     let fmu = Fmu::new();
     fmu.init(0.0);
     let (_, t) = run(&fmu, 0.0, 0, steps);
@@ -175,7 +175,7 @@ pub const PHASES: [Phase; 6] = [Phase::Instantiated, Phase::Init, Phase::Complet
 /// The phase of an instance, read without disturbing it: fmi2GetFMUstate
 /// and fmi2SerializeFMUstate are allowed in every phase, and the payload
 /// (after the 24-byte header) starts with the phase byte.
-pub fn phase_of<M: Compiled>(fmu: &Fmu<M>) -> Phase {
+pub fn phase_of<M: Tested>(fmu: &Fmu<M>) -> Phase {
     let mut s = fmu.get_state().expect("fmi2GetFMUstate");
     let bytes = fmu.serialize(s).expect("fmi2SerializeFMUstate");
     assert_eq!(fmu.free_state(&mut s), OK);
@@ -186,7 +186,7 @@ pub fn phase_of<M: Compiled>(fmu: &Fmu<M>) -> Phase {
 /// input at an end of its range (the first such that works) and a step
 /// long enough to leave every bound. FMI 2.0 lets only the model discard,
 /// so the step-failed phase is reached through the model's own limits.
-pub fn failing_step<M: Compiled>() -> (u32, f64, f64) {
+pub fn failing_step<M: Tested>() -> (u32, f64, f64) {
     let config = config::<M>();
     for v in real_inputs::<M>() {
         for x in [v.range.hi, v.range.lo].into_iter().filter(|x| x.is_finite()) {
@@ -204,7 +204,7 @@ pub fn failing_step<M: Compiled>() -> (u32, f64, f64) {
 }
 
 /// A fresh instance with `config` set, brought into `phase` (checked).
-pub fn drive<M: Compiled>(phase: Phase) -> Fmu<M> {
+pub fn drive<M: Tested>(phase: Phase) -> Fmu<M> {
     let fmu = Fmu::new();
     fmu.set_all(&config::<M>());
     match phase {

@@ -6,7 +6,7 @@
 
 use super::scene::*;
 use crate::*;
-use fmi_core::Compiled;
+use crate::Tested;
 
 /// The phases in which FMI 2.0 (section 4.2.4, the co-simulation state
 /// table) allows a call, written here independently of the product's table.
@@ -50,8 +50,8 @@ enum Outcome {
 
 /// What an allowed call (with the harmless arguments of `Fmu::call`) gives,
 /// from what the description offers.
-fn outcome<M: Compiled>(api: Api) -> Outcome {
-    let d = M::compiled();
+fn outcome<M: Tested>(api: Api) -> Outcome {
+    let d = M::description();
     match api {
         Api::GetStatus | Api::GetIntegerStatus | Api::GetStringStatus => Outcome::Discard,
         Api::GetRealOutputDerivatives | Api::CancelStep => Outcome::Unsupported("not supported"),
@@ -81,7 +81,7 @@ fn next_phase(api: Api, phase: Phase) -> Phase {
 /// an allowed call succeeds (or discards, for the status kinds the FMU does
 /// not provide; or says why the model does not offer it) and moves to the
 /// phase the standard prescribes.
-pub fn state_machine_rejects_illegal_calls_and_recovers_by_reset<M: Compiled>() {
+pub fn state_machine_rejects_illegal_calls_and_recovers_by_reset<M: Tested>() {
     let fresh = init_and_run(&Fmu::<M>::new());
     let mut illegal = 0;
     for phase in PHASES {
@@ -137,7 +137,7 @@ pub fn state_machine_rejects_illegal_calls_and_recovers_by_reset<M: Compiled>() 
 
 /// Proves that fmi2Reset works from every phase (not only after an error)
 /// and restores start values: afterwards the instance equals a fresh one.
-pub fn reset_from_every_phase_restores_start_values<M: Compiled>() {
+pub fn reset_from_every_phase_restores_start_values<M: Tested>() {
     let fresh = init_and_run(&Fmu::<M>::new());
     for phase in PHASES {
         let fmu = drive::<M>(phase);
@@ -153,7 +153,7 @@ pub fn reset_from_every_phase_restores_start_values<M: Compiled>() {
 /// Proves that an instance created as fmi2CoSimulation refuses the Model
 /// Exchange functions in every phase of the co-simulation state machine
 /// (FMI 2.0, 4.2.4: they are not part of it) with fmi2Error and one line.
-pub fn co_simulation_instance_refuses_model_exchange_functions<M: Compiled>() {
+pub fn co_simulation_instance_refuses_model_exchange_functions<M: Tested>() {
     let mut accepted = Vec::new();
     for phase in PHASES {
         for api in Api::ALL.into_iter().filter(|a| a.is_model_exchange()) {
@@ -175,9 +175,9 @@ pub fn co_simulation_instance_refuses_model_exchange_functions<M: Compiled>() {
 /// fmi2SetRealInputDerivatives, fmi2GetRealOutputDerivatives and the five
 /// status functions) in every phase of the model-exchange state machine
 /// (FMI 2.0, 3.2.3). A model without Model Exchange refuses the instance.
-pub fn model_exchange_instance_refuses_co_simulation_functions<M: Compiled>() {
+pub fn model_exchange_instance_refuses_co_simulation_functions<M: Tested>() {
     let me = || instantiate::<M>(&Setup { fmu_type: ME, ..Setup::default() });
-    if !M::compiled().model_exchange {
+    if !M::description().model_exchange {
         assert!(me().is_err(), "no <ModelExchange> in the description, yet fmi2ModelExchange is instantiated");
         return;
     }
@@ -230,7 +230,7 @@ pub fn model_exchange_instance_refuses_co_simulation_functions<M: Compiled>() {
 /// Proves that the co-simulation function this layer does not provide
 /// (output derivatives) returns fmi2Error with one line naming the function
 /// and saying "not supported" in step complete.
-pub fn unsupported_co_simulation_functions_say_not_supported<M: Compiled>() {
+pub fn unsupported_co_simulation_functions_say_not_supported<M: Tested>() {
     for api in [Api::GetRealOutputDerivatives] {
         let fmu = drive::<M>(Phase::Complete);
         assert_eq!(fmu.call(api), ERROR, "{}", api.c_name());
@@ -243,7 +243,7 @@ pub fn unsupported_co_simulation_functions_say_not_supported<M: Compiled>() {
 /// line saying "not supported" where a step could be (step complete, step
 /// failed); elsewhere it is an illegal call sequence (see the state-machine
 /// test).
-pub fn cancel_step_says_not_supported<M: Compiled>() {
+pub fn cancel_step_says_not_supported<M: Tested>() {
     for phase in [Phase::Complete, Phase::Failed] {
         let fmu = drive::<M>(phase);
         assert_eq!(fmu.call(Api::CancelStep), ERROR);
@@ -254,7 +254,7 @@ pub fn cancel_step_says_not_supported<M: Compiled>() {
 
 /// Proves that every function taking an fmi2Component returns fmi2Error
 /// for NULL without crashing, and that fmi2FreeInstance(NULL) is a no-op.
-pub fn null_component_is_refused_everywhere<M: Compiled>() {
+pub fn null_component_is_refused_everywhere<M: Tested>() {
     for api in Api::ALL {
         assert_eq!(call_with_null_component::<M>(api), ERROR, "{}", api.c_name());
     }

@@ -4,14 +4,9 @@
 //! skips these), with a control in the test kit's own tests showing that the
 //! binary check does catch a static Atomic, a `static mut` and a thread-local.
 
-use fmi_core::Compiled;
+use crate::Tested;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-/// The model's library crate: the first segment of its type's path.
-fn crate_of<M: Compiled>() -> &'static str {
-    std::any::type_name::<M>().split("::").next().unwrap_or_default()
-}
 
 /// The model's package folder: cargo runs its tests there.
 fn package() -> String {
@@ -55,8 +50,8 @@ fn deps_dir() -> PathBuf {
     std::env::current_exe().unwrap().parent().unwrap().to_path_buf()
 }
 
-pub fn the_compiled_library_has_no_writable_statics<M: Compiled>() {
-    let krate = crate_of::<M>();
+pub fn the_compiled_library_has_no_writable_statics<M: Tested>() {
+    let krate = M::library();
     let rlib = deps_dir().join(format!("lib{krate}.rlib"));
     assert!(rlib.exists(), "{} is missing", rlib.display());
     let (found, ours) = mutable_statics(&rlib, &format!("{krate}::"));
@@ -64,7 +59,7 @@ pub fn the_compiled_library_has_no_writable_statics<M: Compiled>() {
     assert!(found.is_empty(), "global mutable state in the library: {found:#?}");
 }
 
-pub fn the_source_declares_no_mutable_statics<M: Compiled>() {
+pub fn the_source_declares_no_mutable_statics<M: Tested>() {
     let src = Path::new(&package()).join("src");
     let mut found = Vec::new();
     let mut files = vec![src.clone()];

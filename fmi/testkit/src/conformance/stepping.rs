@@ -4,13 +4,13 @@
 
 use super::scene::*;
 use crate::*;
-use fmi_core::Compiled;
+use crate::Tested;
 
 /// Proves that fmi2DoStep refuses h = 0, -0, h < 0, NaN and inf, and a
 /// communication point other than the current time (also NaN), each with
 /// fmi2Error and one line naming the argument and value, and that a state
 /// saved before the refused step continues exactly like an undisturbed run.
-pub fn do_step_refuses_bad_step_size_and_time<M: Compiled>() {
+pub fn do_step_refuses_bad_step_size_and_time<M: Tested>() {
     let (_, t) = running::<M>(6);
     let (reference, _) = {
         let (r, t2) = running::<M>(6);
@@ -42,7 +42,7 @@ pub fn do_step_refuses_bad_step_size_and_time<M: Compiled>() {
 /// changes nothing: every value and the time stay as before the step; that
 /// the instance may then only be terminated, reset or restored; and that a
 /// state saved before the step continues exactly like an undisturbed run.
-pub fn a_discarded_step_changes_nothing<M: Compiled>() {
+pub fn a_discarded_step_changes_nothing<M: Tested>() {
     let (vr, x, h) = failing_step::<M>();
     let fmu = drive::<M>(Phase::Complete);
     assert_eq!(fmu.set_reals_vr(&[vr], &[x]), OK);
@@ -69,7 +69,7 @@ pub fn a_discarded_step_changes_nothing<M: Compiled>() {
 /// Proves that fmi2DoStep accepts a communication point 1 ulp above or below
 /// the current time t = 1 (importers sum their time in their own way) and
 /// continues from the importer's point, and refuses points 1e-6 off.
-pub fn communication_point_tolerance<M: Compiled>() {
+pub fn communication_point_tolerance<M: Tested>() {
     let at_one = || {
         let fmu = Fmu::<M>::new();
         fmu.init(0.0);
@@ -95,7 +95,7 @@ pub fn communication_point_tolerance<M: Compiled>() {
 /// and false, and the kinds the FMU does not provide (fmi2GetStatus,
 /// fmi2GetIntegerStatus, fmi2GetStringStatus, other kinds) return
 /// fmi2Discard with one logStatusDiscard line and leave the instance usable.
-pub fn status_functions<M: Compiled>() {
+pub fn status_functions<M: Tested>() {
     let fmu = Fmu::<M>::new();
     fmu.init(0.25);
     assert_eq!(fmu.get_real_status(LAST_SUCCESSFUL_TIME), (OK, 0.25));
@@ -137,7 +137,7 @@ pub fn status_functions<M: Compiled>() {
 /// (its result differs from a step with held inputs, by a little for a
 /// small rate). With "false": every call is refused in every phase where
 /// inputs can be set, with one line saying so, and nothing is applied.
-pub fn set_real_input_derivatives_validates_its_arguments<M: Compiled>() {
+pub fn set_real_input_derivatives_validates_its_arguments<M: Tested>() {
     let (reference, _) = {
         let (r, t) = running::<M>(4);
         run(&r, t, 4, 8)
@@ -146,7 +146,7 @@ pub fn set_real_input_derivatives_validates_its_arguments<M: Compiled>() {
     let (a, b) = (inputs[0], *inputs.last().unwrap());
     let output = first_real_output::<M>();
     let unused = unused_vr::<M>();
-    if !M::compiled().can_interpolate_inputs {
+    if !M::description().can_interpolate_inputs {
         for phase in [Phase::Instantiated, Phase::Init, Phase::Complete] {
             let fmu = drive::<M>(phase);
             assert_eq!(fmu.set_real_input_derivatives(&[a.vr], &[1], &[0.1]), ERROR, "{phase:?}");
@@ -175,7 +175,7 @@ pub fn set_real_input_derivatives_validates_its_arguments<M: Compiled>() {
         assert_eq!(run(&fmu, t, 4, 8).0, reference, "{what}: nothing applied");
     }
     // An accepted derivative changes the next step: an input the states depend on, at a small rate.
-    let d = M::compiled();
+    let d = M::description();
     let driving = inputs
         .iter()
         .find(|v| d.derivatives.iter().any(|u| u.on.as_ref().is_none_or(|on| on.contains(&v.vr))))
@@ -193,7 +193,13 @@ pub fn set_real_input_derivatives_validates_its_arguments<M: Compiled>() {
     let states: Vec<u32> = d.states.to_vec();
     let (x_held, x_moving) = (held.get_reals_vr(&states).unwrap(), moving.get_reals_vr(&states).unwrap());
     assert_ne!(x_held, x_moving, "the derivative of {} is not used by the step", driving.name);
-    for (h, m) in x_held.iter().zip(&x_moving) {
-        assert!(relative_change(*h, *m) < 1e-3, "a small rate changes the state a little: {h} vs {m}");
+    for ((h, m), vr) in x_held.iter().zip(&x_moving).zip(&states) {
+        let name = &d.variable(*vr).unwrap().name;
+        let case = format!("stepping::set_real_input_derivatives_validates_its_arguments: {name} a little");
+        if let Some(reason) = M::skipped(&case) {
+            eprintln!("skipped {case} ({h} vs {m}): {reason}");
+            continue;
+        }
+        assert!(relative_change(*h, *m) < 1e-3, "a small rate of {} changes the state {name} a little: {h} vs {m}", driving.name);
     }
 }

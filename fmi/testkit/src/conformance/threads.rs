@@ -7,7 +7,7 @@
 use super::scene::*;
 use crate::*;
 use fmi_core::description::Kind;
-use fmi_core::Compiled;
+use crate::Tested;
 use std::sync::Barrier;
 
 const THREADS: usize = 8;
@@ -17,7 +17,7 @@ const STEPS: usize = 3000;
 /// every enumeration parameter (a solver, a unit), inputs moving about
 /// their start values at its own pace and, in the second half, apart;
 /// returns the bits of every Real after every step.
-fn scenario<M: Compiled>(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
+fn scenario<M: Tested>(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
     let fmu = Fmu::<M>::named(&format!("thread{k}"));
     let parameters = settable_parameters::<M>();
     let first = parameters.iter().find(|v| v.kind == Kind::Real).expect("a Real parameter");
@@ -58,7 +58,7 @@ fn scenario<M: Compiled>(k: usize, barrier: Option<&Barrier>) -> Vec<u64> {
     bits
 }
 
-pub fn eight_instances_on_eight_threads_match_the_same_runs_one_after_another<M: Compiled>() {
+pub fn eight_instances_on_eight_threads_match_the_same_runs_one_after_another<M: Tested>() {
     let sequential: Vec<Vec<u64>> = (0..THREADS).map(|k| scenario::<M>(k, None)).collect();
     // The runs differ from each other, so a mix-up between instances shows.
     for k in 1..THREADS {
@@ -81,7 +81,7 @@ pub fn eight_instances_on_eight_threads_match_the_same_runs_one_after_another<M:
     }
 }
 
-pub fn start_values_do_not_depend_on_other_instances<M: Compiled>() {
+pub fn start_values_do_not_depend_on_other_instances<M: Tested>() {
     // An instance changed and stepped must not change what a new one starts with.
     let first = settable_parameters::<M>().into_iter().find(|v| v.kind == Kind::Real).expect("a Real parameter");
     let a = Fmu::<M>::named("a");

@@ -6,7 +6,7 @@
 use super::scene::*;
 use crate::*;
 use fmi_core::description::{Causality, Family, Initial, Kind, Range, Start, Variability, Variable};
-use fmi_core::Compiled;
+use crate::Tested;
 
 /// Values outside `r` (the neighbouring doubles of each finite bound, an
 /// open bound itself, and far beyond), and the values just inside.
@@ -48,7 +48,7 @@ fn bounded(v: &Variable) -> bool {
 }
 
 /// What `config` or the start value gives `v` before anything else is set.
-fn configured<M: Compiled>(v: &Variable) -> f64 {
+fn configured<M: Tested>(v: &Variable) -> f64 {
     config::<M>().iter().find(|(n, _)| *n == v.name).map_or_else(|| start_of(v), |c| c.1)
 }
 
@@ -56,9 +56,9 @@ fn configured<M: Compiled>(v: &Variable) -> f64 {
 /// allowed range (enumerations: one of its items), and that in
 /// initialization mode each reads back exactly that value through the get
 /// function of its type.
-pub fn start_values_are_allowed_and_read_back<M: Compiled>() {
+pub fn start_values_are_allowed_and_read_back<M: Tested>() {
     let fmu = drive_fresh_into_init::<M>();
-    let knowable = M::compiled().variables.iter().filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input));
+    let knowable = M::description().variables.iter().filter(|v| matches!(v.causality, Causality::Parameter | Causality::Input));
     for v in knowable {
         match (v.kind, v.start) {
             (Kind::String, Start::String(text)) => assert_eq!(fmu.text(&v.name), text, "{}", v.name),
@@ -78,7 +78,7 @@ pub fn start_values_are_allowed_and_read_back<M: Compiled>() {
 }
 
 /// A fresh instance (start values) in initialization mode.
-fn drive_fresh_into_init<M: Compiled>() -> Fmu<M> {
+fn drive_fresh_into_init<M: Tested>() -> Fmu<M> {
     let fmu = Fmu::<M>::new();
     assert_eq!(fmu.setup_experiment(0.0), OK);
     assert_eq!(fmu.enter_init(), OK);
@@ -93,7 +93,7 @@ fn drive_fresh_into_init<M: Compiled>() -> Fmu<M> {
 /// brings the instance back to an initialization that then runs exactly
 /// like an instance that never saw the bad value); and that the values just
 /// inside the range are accepted (so the bound is where the XML puts it).
-pub fn parameter_out_of_range_is_refused_at_exit_initialization<M: Compiled>() {
+pub fn parameter_out_of_range_is_refused_at_exit_initialization<M: Tested>() {
     let good = config::<M>();
     let reference = {
         let fmu = Fmu::<M>::new();
@@ -127,6 +127,11 @@ pub fn parameter_out_of_range_is_refused_at_exit_initialization<M: Compiled>() {
             cases += 1;
         }
         for &x in &fine {
+            let case = format!("values::parameter_out_of_range_is_refused_at_exit_initialization: {} = {x}", v.name);
+            if let Some(reason) = M::skipped(&case) {
+                eprintln!("skipped {case}: {reason}");
+                continue;
+            }
             let fmu = Fmu::<M>::new();
             assert_eq!(fmu.set(&v.name, x), OK);
             assert_eq!(fmu.setup_experiment(0.0), OK);
@@ -140,7 +145,7 @@ pub fn parameter_out_of_range_is_refused_at_exit_initialization<M: Compiled>() {
 /// Proves that an Integer parameter outside its min/max is refused when
 /// initialization ends, with one line naming the variable, the value and
 /// the range, and that both bounds are accepted.
-pub fn integer_parameter_out_of_range_is_refused_at_exit_initialization<M: Compiled>() {
+pub fn integer_parameter_out_of_range_is_refused_at_exit_initialization<M: Tested>() {
     for v in settable_parameters::<M>().into_iter().filter(|v| v.kind == Kind::Integer && bounded(v)) {
         let (lo, hi) = (v.range.lo, v.range.hi);
         let mut bad: Vec<i32> = [lo - 1.0, lo - 5.0, hi + 1.0, i32::MIN as f64, i32::MAX as f64]
@@ -170,7 +175,7 @@ pub fn integer_parameter_out_of_range_is_refused_at_exit_initialization<M: Compi
 /// every Real parameter and input, in every phase in which the variable can
 /// be set, with one line naming variable, value and range, and that the
 /// variable keeps its previous value (read back in the error state).
-pub fn non_finite_reals_are_refused_immediately<M: Compiled>() {
+pub fn non_finite_reals_are_refused_immediately<M: Tested>() {
     let knowable = settable_parameters::<M>().into_iter().chain(real_inputs::<M>()).filter(|v| v.kind == Kind::Real);
     for v in knowable {
         let phases: &[Phase] = match (v.causality, v.initial) {
@@ -197,7 +202,7 @@ pub fn non_finite_reals_are_refused_immediately<M: Compiled>() {
 /// with the name, value and range in the message and the value kept; the
 /// values just inside are accepted. After restoring a state saved before
 /// the bad call the instance continues exactly like one that never saw it.
-pub fn input_out_of_range_is_refused_immediately<M: Compiled>() {
+pub fn input_out_of_range_is_refused_immediately<M: Tested>() {
     let inputs: Vec<&Variable> = real_inputs::<M>().into_iter().filter(|v| bounded(v)).collect();
     assert!(!inputs.is_empty(), "no Real input with an allowed range: nothing to check");
     for v in &inputs {
@@ -235,8 +240,8 @@ pub fn input_out_of_range_is_refused_immediately<M: Compiled>() {
 /// and above them, -1, i32::MAX) are refused for every enumeration with one
 /// line naming the variable, the value and the allowed items, that the old
 /// value is kept, and that the first and last items are accepted.
-pub fn enumeration_outside_its_items_is_refused<M: Compiled>() {
-    let enumerations = M::compiled().variables.iter().filter(|v| v.settable_in != 0);
+pub fn enumeration_outside_its_items_is_refused<M: Tested>() {
+    let enumerations = M::description().variables.iter().filter(|v| v.settable_in != 0);
     for v in enumerations {
         let Kind::Enumeration { values, .. } = v.kind else { continue };
         let (min, max) = (*values.iter().min().unwrap(), *values.iter().max().unwrap());
@@ -260,8 +265,8 @@ pub fn enumeration_outside_its_items_is_refused<M: Compiled>() {
 /// Proves that fmi2SetBoolean refuses values other than 0 and 1 (2, -1)
 /// for every Boolean with one line naming variable, value and the allowed
 /// values, and keeps the old value.
-pub fn boolean_other_than_0_or_1_is_refused<M: Compiled>() {
-    for v in M::compiled().variables.iter().filter(|v| v.kind == Kind::Boolean && v.settable_in != 0) {
+pub fn boolean_other_than_0_or_1_is_refused<M: Tested>() {
+    for v in M::description().variables.iter().filter(|v| v.kind == Kind::Boolean && v.settable_in != 0) {
         for x in [2, -1] {
             let fmu = Fmu::<M>::new();
             assert_eq!(fmu.set_booleans_vr(&[v.vr], &[x]), ERROR, "{} = {x}", v.name);
@@ -276,8 +281,8 @@ type Probe<M> = fn(&Fmu<M>, u32) -> i32;
 /// Proves that value references that name no variable (0, the largest
 /// used + 1, 9999, u32::MAX, those of them no variable has) are refused by
 /// every get and set function with one line naming the value reference.
-pub fn unknown_value_references_are_refused<M: Compiled>() {
-    let d = M::compiled();
+pub fn unknown_value_references_are_refused<M: Tested>() {
+    let d = M::description();
     let unused = [0u32, unused_vr::<M>(), 9999, u32::MAX].into_iter().filter(|&vr| d.variable(vr).is_none());
     for bad in unused {
         let needle = format!("unknown value reference {bad}");
@@ -307,7 +312,7 @@ pub fn unknown_value_references_are_refused<M: Compiled>() {
 }
 
 /// The get and set functions of each type family, with a harmless value.
-fn functions<M: Compiled>(family: Family) -> [(String, Probe<M>); 2] {
+fn functions<M: Tested>(family: Family) -> [(String, Probe<M>); 2] {
     match family {
         Family::Real => [
             ("fmi2GetReal".into(), |f, r| f.get_reals_vr(&[r]).err().unwrap_or(OK)),
@@ -336,8 +341,8 @@ const FAMILIES: [Family; 4] = [Family::Real, Family::Integer, Family::Boolean, F
 /// the first settable variable and the first computed one of every type,
 /// with every other type's get function, and its set function where the
 /// variable could be set.
-pub fn wrong_type_is_refused<M: Compiled>() {
-    let d = M::compiled();
+pub fn wrong_type_is_refused<M: Tested>() {
+    let d = M::description();
     for family in FAMILIES {
         let of_family = d.variables.iter().filter(|v| v.family == family);
         let in_init = |v: &&Variable| v.causality == Causality::Input || (v.initial == Initial::Exact && v.settable_in != 0);
@@ -366,7 +371,7 @@ pub fn wrong_type_is_refused<M: Compiled>() {
 }
 
 /// Sets `v` to a harmless value of its type.
-fn set_any<M: Compiled>(fmu: &Fmu<M>, v: &Variable, x: f64) -> i32 {
+fn set_any<M: Tested>(fmu: &Fmu<M>, v: &Variable, x: f64) -> i32 {
     match v.kind {
         Kind::String => fmu.set_text(&v.name, "x"),
         _ => fmu.set(&v.name, x),
@@ -377,8 +382,8 @@ fn set_any<M: Compiled>(fmu: &Fmu<M>, v: &Variable, x: f64) -> i32 {
 /// ended (step complete: fmi2Error naming the variable and "fixed"; value
 /// kept), and that every output, local and calculated parameter refuses a
 /// set in every phase in which inputs can be set (naming "causality").
-pub fn fixed_parameters_after_init_and_outputs_cannot_be_set<M: Compiled>() {
-    let d = M::compiled();
+pub fn fixed_parameters_after_init_and_outputs_cannot_be_set<M: Tested>() {
+    let d = M::description();
     let fixed = settable_parameters::<M>().into_iter().filter(|v| v.variability == Variability::Fixed);
     for v in fixed {
         let fmu = drive::<M>(Phase::Complete);
@@ -400,12 +405,12 @@ pub fn fixed_parameters_after_init_and_outputs_cannot_be_set<M: Compiled>() {
 
 /// Reads `names` from an instance in initialization mode with `config` set:
 /// what a refused set must leave behind.
-fn values_in_init<M: Compiled>(vars: &[&Variable]) -> Vec<u64> {
+fn values_in_init<M: Tested>(vars: &[&Variable]) -> Vec<u64> {
     let fmu = drive::<M>(Phase::Init);
     vars.iter().map(|v| fmu.get(&v.name).unwrap().to_bits()).collect()
 }
 
-fn values_of<M: Compiled>(fmu: &Fmu<M>, vars: &[&Variable]) -> Vec<u64> {
+fn values_of<M: Tested>(fmu: &Fmu<M>, vars: &[&Variable]) -> Vec<u64> {
     vars.iter().map(|v| fmu.get(&v.name).unwrap_or_else(|s| panic!("get {}: {s}", v.name)).to_bits()).collect()
 }
 
@@ -427,8 +432,8 @@ fn several(mut pick: Vec<&'static Variable>, n: usize) -> Vec<&'static Variable>
 /// last non-finite, an unknown value reference, an output or a variable of
 /// another type as the last element, an enumeration outside its items and a
 /// Boolean other than 0 or 1 after valid values.
-pub fn set_is_atomic<M: Compiled>() {
-    let d = M::compiled();
+pub fn set_is_atomic<M: Tested>() {
+    let d = M::description();
     let mut inputs = real_inputs::<M>();
     let last = inputs.iter().rposition(|v| bounded(v)).expect("a Real input with an allowed range");
     let refused = inputs.remove(last);
