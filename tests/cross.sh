@@ -3,16 +3,19 @@
 # (tests/run.sh runs this; docs/platforms.md).
 #
 #   1. the Rust tests of each target under its emulator (cargo's
-#      CARGO_TARGET_<TRIPLE>_RUNNER, set by fmu/cross_toolchain.sh): the model
-#      core and its solvers, the FMI layer, the span's C API, the hard cases,
-#      the FMI layer's conformance suite and panic boundary on both models
-#      (but its objdump checks, `statics::`, which read only the host's
-#      objects), the Roller's tests
+#      CARGO_TARGET_<TRIPLE>_RUNNER, set by fmu/cross_toolchain.sh): what meets
+#      the platform: the unit tests of the model, the FMI layer and the solvers,
+#      the span's C API, its web records (files and paths), the FMI layer's
+#      conformance suite and panic boundary on both models (but its objdump
+#      checks, `statics::`, which read only the host's objects), the Roller's
+#      profiles. --full adds the tests of pure arithmetic (the span and the
+#      Roller against exact solutions, the solvers, the hard cases), whose
+#      results step 3 compares bit for bit anyway
 #   2. the fuzz harness tests/fuzz built for each target and model: FUZZ_SEQUENCES each,
 #      and FUZZ3_SEQUENCES through its FMI 3 mode (20,000 and 5,000; --full:
 #      200,000 and 50,000); for the Line (its test line), the same harness built as
 #      fmi-fuzz-line: LINE_FUZZ_SEQUENCES and LINE_FUZZ3_SEQUENCES (300 and 100;
-#      --full: 20,000 and 5,000)
+#      only with --full: 20,000 and 5,000; in CI the Line's library runs step 3)
 #   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
 #      the packaged FMUs, bit for bit against Linux x86-64; importer3.c's scene
 #      through the FMI 3 FMU likewise
@@ -28,10 +31,9 @@ source "$ROOT/tests/tools.sh"
 cd "$ROOT"
 export RUST_BACKTRACE=0 # the panic-boundary tests panic on purpose
 case "${1:-}" in
-    --full) FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-200000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-50000}"
+    --full) FULL=1 FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-200000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-50000}"
         LINE_FUZZ_SEQUENCES="${LINE_FUZZ_SEQUENCES:-20000}" LINE_FUZZ3_SEQUENCES="${LINE_FUZZ3_SEQUENCES:-5000}" ;;
-    "") FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-5000}"
-        LINE_FUZZ_SEQUENCES="${LINE_FUZZ_SEQUENCES:-300}" LINE_FUZZ3_SEQUENCES="${LINE_FUZZ3_SEQUENCES:-100}" ;;
+    "") FULL=0 FUZZ_SEQUENCES="${FUZZ_SEQUENCES:-20000}" FUZZ3_SEQUENCES="${FUZZ3_SEQUENCES:-5000}" ;;
     *) echo "usage: $0 [--full]" >&2; exit 2 ;;
 esac
 OUT=target/platforms
@@ -48,14 +50,19 @@ declare -A NAME=([x86_64-pc-windows-gnu]="win64 (Wine)" [aarch64-unknown-linux-g
 # The fuzz harness fuzzes one model per build (tests/fuzz).
 declare -A MODEL_NAME=([span]=ConvertingSpan [roller]=Roller)
 declare -A FUZZ_FEATURES=([span]="" [roller]="--no-default-features --features roller")
+SPAN_TESTS=(--test span_c_api --test conformance --test panic_boundary --test records)
+ROLLER_TESTS=(--test conformance --test panic_boundary --test profiles --test instance_profiles)
+if [ "$FULL" = 1 ]; then
+    SPAN_TESTS+=(--test span_exact --test span_solvers --test hard_cases)
+    ROLLER_TESTS=(--tests)
+fi
 for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     echo "== Rust tests for $target under ${NAME[$target]}"
     t0=$SECONDS
     cross test --profile cross-test --target-dir target/cross-test --features test-hooks --target "$target" \
-        -p converting-span -p solver -p fmi-core \
-        --lib --test span_exact --test span_solvers --test span_c_api --test conformance --test hard_cases --test panic_boundary --test records \
+        -p converting-span -p solver -p fmi-core --lib "${SPAN_TESTS[@]}" \
         -- --skip statics:: 2>&1 | tee "$OUT/rust-$target.log" | grep -E "^test result|FAILED|panicked" || true
-    cross test --profile cross-test --target-dir target/cross-test --features test-hooks --target "$target" -p roller --lib --tests \
+    cross test --profile cross-test --target-dir target/cross-test --features test-hooks --target "$target" -p roller --lib "${ROLLER_TESTS[@]}" \
         -- --skip statics:: 2>&1 | tee -a "$OUT/rust-$target.log" | grep -E "^test result|FAILED|panicked" || true
     if grep -q "FAILED\|error\[" "$OUT/rust-$target.log" || ! grep -q "^test result: ok" "$OUT/rust-$target.log"; then
         echo "Rust tests failed for $target: $OUT/rust-$target.log"; exit 1
@@ -83,6 +90,7 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
         note "fuzz (FMI 3) ${MODEL_NAME[$model]} on ${NAME[$target]}: $(grep '^fuzzed' "$log"), 0 violations ($((SECONDS - t0)) s)"
     done
 
+    [ "$FULL" = 1 ] || continue
     echo "== fuzz harness for $target, the Line: $LINE_FUZZ_SEQUENCES sequences, FMI 3: $LINE_FUZZ3_SEQUENCES"
     t0=$SECONDS
     # fmi-fuzz-line, a member of the Line's own workspace (in the main one the span's `fmu`

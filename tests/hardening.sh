@@ -128,8 +128,9 @@ grep "newest symbol version" "$OUT/portable.log" | sed 's/^\.*//' | while read -
 done
 
 step "2. panic boundary (test-only hook, separate target directory): the span, the Roller"
-cargo test --release --quiet --features test-hooks --target-dir target/test-hooks --test panic_boundary
-cargo test --release --quiet -p roller --features test-hooks --target-dir target/test-hooks --test panic_boundary
+# (the tests' profile: release speed without the LTO a test binary would redo; step 7 checks the LTO build)
+cargo test --profile cross-test --quiet --features test-hooks --target-dir target/test-hooks --test panic_boundary
+cargo test --profile cross-test --quiet -p roller --features test-hooks --target-dir target/test-hooks --test panic_boundary
 
 for model in "${MODELS[@]}"; do
     step "3. fuzz harness, strict (a non-finite output after accepted values fails too), ${NAME[$model]}: $SEQ sequences"

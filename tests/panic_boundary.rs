@@ -1,6 +1,6 @@
 //! The panic boundary of the FMI layer (fmi/testkit: conformance::panic_boundary)
 //! on the span's library. Needs the test-only panic hook:
-//! `cargo test --release --features test-hooks --target-dir target/test-hooks --test panic_boundary`
+//! `cargo test --profile cross-test --features test-hooks --target-dir target/test-hooks --test panic_boundary`
 //! (tests/run.sh uses a separate target directory, so that the feature never
 //! reaches the library that fmu/package.py ships).
 

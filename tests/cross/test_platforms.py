@@ -443,9 +443,9 @@ def panic_libraries():
     libraries = {}
     for p in PLATFORMS:
         if p.target is None:
-            command = ["cargo", "build", "--release", "--lib", "--quiet", "--features", "test-hooks", "-p", "converting-span",
+            command = ["cargo", "build", "--profile", "cross-test", "--lib", "--quiet", "--features", "test-hooks", "-p", "converting-span",
                        "--target-dir", str(ROOT / "target" / "test-hooks")]
-            libraries[p.folder] = ROOT / "target" / "test-hooks" / "release" / "libconverting_span.so"
+            libraries[p.folder] = ROOT / "target" / "test-hooks" / "cross-test" / "libconverting_span.so"
         else:
             command = [os.environ["CROSS_CARGO"], "build", "--profile", "cross-test", "--lib", "--quiet", "--features", "test-hooks",
                        "-p", "converting-span", "--target", p.target, "-Zbuild-std=std,panic_unwind",
