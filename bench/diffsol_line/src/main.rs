@@ -3,7 +3,7 @@
 //!
 //!     cd bench/diffsol_line && nice cargo run --release --target-dir ../../target/diffsol [-- --all]
 //!
-//! Every solver sees the same ODE (`line::stepping::rhs_at`), the same banded
+//! Every solver sees the same ODE (`line::ode::rhs_at`), the same banded
 //! finite-difference Jacobian (`jacobian_at`: kl + ku + 1 extra evaluations)
 //! and the same driver: the line's events (profile breakpoints, `set`
 //! entries) are applied by the Line itself (`event_update`, as in Model
@@ -14,7 +14,7 @@
 use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector};
 use fmi_core::{Experiment, Model, Resources};
 use line::part::Part;
-use line::stepping::{jacobian_at, rhs_at};
+use line::ode::{jacobian_at, rhs_at};
 use line::Line;
 use solver::band::Band;
 use solver::rodas::{Control, Rodas, System};

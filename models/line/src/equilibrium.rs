@@ -6,7 +6,7 @@
 //! roller whose speed a table prescribes.
 
 use crate::part::Part;
-use crate::stepping::residual_and_jacobian;
+use crate::ode::residual_and_jacobian;
 use crate::Line;
 use solver::band::{Band, BandLu};
 

@@ -18,6 +18,7 @@
 pub mod equilibrium;
 pub mod interface;
 pub mod network;
+pub mod ode;
 pub mod part;
 pub mod spec;
 pub mod stepping;

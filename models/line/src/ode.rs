@@ -1,0 +1,119 @@
+//! The line's ODE x' = f(t, x): its right-hand side through the parts' own
+//! equations, and its banded Jacobian by grouped differences. The integrator
+//! (`stepping`), the steady state (`equilibrium`) and outside solvers
+//! (bench/diffsol_line) all evaluate the line here.
+
+use crate::network::Network;
+use crate::part::Part;
+use crate::{Line, Scratch};
+use fmi_core::{FmiError, FmiResult};
+use solver::band::Band;
+use solver::rodas::System;
+
+/// The line as one ODE for the integrator: inputs an importer ramps move
+/// with time; the Jacobian by finite differences over the band, a group of
+/// columns (kl + ku + 1 apart, so no row sees two) per evaluation.
+pub(crate) struct LineSystem<'a> {
+    pub(crate) parts: &'a mut [Part],
+    pub(crate) net: &'a mut Network,
+    pub(crate) ramps: &'a [(usize, u32, f64, f64)],
+    pub(crate) t_start: f64,
+    pub(crate) time_dependent: bool,
+    pub(crate) f0: &'a mut [f64],
+    pub(crate) f1: &'a mut [f64],
+    pub(crate) y: &'a mut [f64],
+}
+
+impl LineSystem<'_> {
+    pub(crate) fn eval(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> FmiResult {
+        for &(part, vr, base, rate) in self.ramps {
+            self.parts[part].set_real(vr, base + rate * (t - self.t_start))?;
+        }
+        self.net.evaluate(self.parts, t, y, Some(dy))
+    }
+}
+
+impl System for LineSystem<'_> {
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), ()> {
+        self.eval(t, y, dy).map_err(drop)
+    }
+
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut Band) -> Result<(), ()> {
+        let n = y.len();
+        let f0 = std::mem::take(&mut self.f0);
+        let result = (|| {
+            self.eval(t, y, f0).map_err(drop)?;
+            let width = jac.lower() + jac.upper() + 1;
+            for group in 0..width.min(n) {
+                self.y.copy_from_slice(y);
+                let mut j = group;
+                while j < n {
+                    self.y[j] += delta(y[j]);
+                    j += width;
+                }
+                let (yp, f1) = (std::mem::take(&mut self.y), std::mem::take(&mut self.f1));
+                let r = self.eval(t, yp, f1);
+                self.y = yp;
+                self.f1 = f1;
+                r.map_err(drop)?;
+                let mut j = group;
+                while j < n {
+                    let d = self.y[j] - y[j];
+                    for i in j.saturating_sub(jac.upper())..(j + jac.lower() + 1).min(n) {
+                        jac.set(i, j, (self.f1[i] - f0[i]) / d);
+                    }
+                    j += width;
+                }
+            }
+            Ok(())
+        })();
+        self.f0 = f0;
+        result
+    }
+
+    fn time_dependent(&self) -> bool {
+        self.time_dependent
+    }
+}
+
+/// A forward-difference increment for a state of size |x| (exactly
+/// representable: (x + d) - x == d).
+fn delta(x: f64) -> f64 {
+    let d = f64::EPSILON.sqrt() * x.abs().max(1e-3);
+    (x + d) - x
+}
+
+/// The line's ODE x' = f(t, x) as the integrator sees it (inputs as set,
+/// held), for tools that integrate the line themselves (bench/: other solvers).
+pub fn rhs_at(line: &mut Line, t: f64, x: &[f64], dx: &mut [f64]) -> FmiResult {
+    let Line { parts, net, ramps, scratch, .. } = line;
+    let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
+    let Scratch { f0, f1, y, .. } = scratch;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y };
+    sys.eval(t, x, dx)
+}
+
+/// df/dx at (t, x), banded as `line.network()` says (kl, ku).
+pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], jac: &mut Band) -> FmiResult {
+    let Line { parts, net, ramps, scratch, .. } = line;
+    let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
+    let Scratch { f0, f1, y, .. } = scratch;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y };
+    jac.clear();
+    sys.jacobian(t, x, jac).map_err(|()| FmiError::error("the line cannot be evaluated there"))
+}
+
+/// For `equilibrium`: f(t, x) and its Jacobian through the same evaluation the integrator uses.
+pub fn residual_and_jacobian(line: &mut Line, x: &[f64], f: &mut [f64], jac: Option<&mut Band>) -> FmiResult {
+    let t = line.time;
+    let Line { parts, net, ramps, scratch, .. } = line;
+    let net = net.as_mut().expect("initialized");
+    let Scratch { f0, f1, y, .. } = scratch;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y };
+    sys.eval(t, x, f)?;
+    if let Some(jac) = jac {
+        jac.clear();
+        sys.jacobian(t, x, jac).map_err(|()| FmiError::error("the line cannot be evaluated near its start state"))?;
+    }
+    Ok(())
+}
