@@ -286,6 +286,7 @@ COUPLING_ERROR = {  # scene: (libcosim and webline, FMPy); measured in the comme
     "dancer": (2e-3, 2e-2),  # 8.4e-4, 7.7e-3
     "emergency_stop": (0.7, 0.7),  # 0.32, 0.33 (the nip's stop: held inputs lag a steep transient)
     "lamination": (3e-3, 4e-2),  # 1.5e-3, 1.6e-2
+    "paper_line": (4e-2, 4e-2),  # 1.7e-2, 1.6e-2 (the pull roll's speed step, held inputs)
     "splice": (5e-3, 5e-3),  # 2.2e-3, 2.3e-3
     "stiff_line": (2e-4, 0.2),  # 6.4e-5, 9.4e-2
 }
