@@ -16,14 +16,16 @@
 #   2. panic boundary through the C API (cargo test --features test-hooks)
 #   3. fuzz harness tests/fuzz, property-based, --strict, for each model (the span,
 #      the Roller): 50,000 / 1,000,000 sequences; its FMI 3 mode (--fmi3): 5,000 / 1,000,000
-#   4. the same harness built with AddressSanitizer (LeakSanitizer included):
-#      10,000 / 200,000 sequences; FMI 3: 2,000 / 100,000
+#   4. (--full) the same harness built with AddressSanitizer (LeakSanitizer
+#      included): 200,000 sequences; FMI 3: 100,000 (in CI, valgrind's run of
+#      step 5 and the ASan runs of step 6 watch the memory)
 #   5. the same harness under valgrind memcheck: 200 / 5,000 sequences
 #   6. tests/hardening/dlopen_cycles.c on each shipped .so, with ASan+UBSan:
 #      1,000 / 1,000 cycles; under valgrind: 100 / 1,000 cycles; and the C importer
 #      reloading the library under a live instance (ASan+UBSan)
-#   7. the same with a panic caught in every cycle, on a portable build with the
-#      test-only hook: ASan 1,000 / 1,000, valgrind 20 / 200 cycles
+#   7. (--full) the same with a panic caught in every cycle, on a portable build
+#      with the test-only hook: ASan 1,000, valgrind 200 cycles (in CI, step 2
+#      and the conformance suite cross the panic boundary through the C API)
 #   8. (--full) the C importer of tests/c_importer under valgrind, if present
 #      (reported, not enforced: it is another program)
 #   9. the Line (its test line, models/line/resources): the same harness built as
@@ -72,10 +74,11 @@ START=$SECONDS
 MODELS=(span roller)
 declare -A FEATURES=([span]="" [roller]="--no-default-features --features roller")
 declare -A NAME=([span]=ConvertingSpan [roller]=Roller)
-fuzz_of() { echo "target/fuzz-$1/fuzz/fuzz_sequences"; }
-build_fuzz() { # MODEL
+fuzz_of() { echo "target/fuzz/fuzz/fuzz_sequences-$1"; }
+build_fuzz() { # MODEL: one target folder for both (their crates are shared), each binary copied aside
     # shellcheck disable=SC2086
-    cargo build --profile fuzz --quiet -p fmi-fuzz ${FEATURES[$1]} --target-dir "target/fuzz-$1"
+    cargo build --profile fuzz --quiet -p fmi-fuzz ${FEATURES[$1]} --target-dir target/fuzz
+    cp target/fuzz/fuzz/fuzz_sequences "$(fuzz_of "$1")"
 }
 
 if [ "$MODE" = afl ]; then
@@ -141,6 +144,7 @@ for model in "${MODELS[@]}"; do
     "$fuzz" --fmi3 --sequences "$SEQ3" --strict | tee "$OUT/fuzz3-$model.log"
     note "fuzz ${NAME[$model]}: $(grep '^fuzzed' "$OUT/fuzz3-$model.log")"
 
+    [ "$MODE" = full ] || continue
     step "4. fuzz harness with AddressSanitizer, ${NAME[$model]}: $SEQ_ASAN sequences"
     # -Zsanitizer needs a nightly flag: RUSTC_BOOTSTRAP=1 lets this stable toolchain take it.
     # shellcheck disable=SC2086
@@ -212,6 +216,7 @@ EOF
     grep -q "^reload,unloaded,1" "$OUT/reload-$model.log" || { echo "${NAME[$model]} stayed loaded after the reload scene"; exit 1; }
     note "${NAME[$model]} reloaded under a live instance (ASan+UBSan): both instances finished, unloaded after the last free"
 
+    [ "$MODE" = full ] || continue
     step "7. a caught panic in every cycle, ${NAME[$model]} (portable build with the test-only hook)"
     cargo zigbuild --release --quiet --lib -p "${PACKAGE[$model]}" --features test-hooks --target x86_64-unknown-linux-gnu.2.17 \
         --target-dir target/portable-hooks
@@ -254,18 +259,19 @@ fi
 # would be unified into the Line), over the Line's test line.
 step "9. fuzz harness, strict, the Line (models/line/resources): $LINE_SEQ sequences, FMI 3: $LINE_SEQ3"
 LINE_START=$SECONDS
-line_fuzz() { # TARGET-DIR [cargo options...]
-    cargo build --profile fuzz --quiet --manifest-path models/line/Cargo.toml -p fmi-fuzz-line --bin fuzz_sequences \
-        --target-dir "$1" "${@:2}"
+line_fuzz() { # PROFILE TARGET-DIR [cargo options...]
+    cargo build --profile "$1" --quiet --manifest-path models/line/Cargo.toml -p fmi-fuzz-line --bin fuzz_sequences \
+        --target-dir "$2" "${@:3}"
 }
-line_fuzz target/fuzz-line
-LINE_FUZZ=target/fuzz-line/fuzz/fuzz_sequences
+# The tests' profile and folder, where tests/run.sh has built the Line's crates already.
+line_fuzz cross-test target/line
+LINE_FUZZ=target/line/cross-test/fuzz_sequences
 "$LINE_FUZZ" --sequences "$LINE_SEQ" --strict | tee "$OUT/fuzz-line.log"
 note "fuzz Line: $(grep '^fuzzed' "$OUT/fuzz-line.log")"
 "$LINE_FUZZ" --fmi3 --sequences "$LINE_SEQ3" --strict | tee "$OUT/fuzz3-line.log"
 note "fuzz Line: $(grep '^fuzzed' "$OUT/fuzz3-line.log")"
 if [ "$MODE" = full ]; then
-    RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" line_fuzz target/fuzz-asan-line --target x86_64-unknown-linux-gnu
+    RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" line_fuzz fuzz target/fuzz-asan-line --target x86_64-unknown-linux-gnu
     asan=target/fuzz-asan-line/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences
     ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 "$asan" --sequences "$LINE_SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan-line.log"
     note "fuzz Line under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan-line.log"), no ASan/LSan report"
