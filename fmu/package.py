@@ -41,6 +41,7 @@ glibc of the machine that built it.
 
 import argparse
 import concurrent.futures
+import io
 import html
 import json
 import os
@@ -455,26 +456,38 @@ def write_fmu3(out, model, libraries):
 def write_line_template(folder, libraries):
     """The Line FMU's generic libraries under FMI 2.0's and FMI 3.0's platform
     folders (fmi2/binaries, fmi3/binaries), replacing what was there."""
-    import shutil
-
     for standard, names in (("fmi2", {f: f for f in SUFFIXES}), ("fmi3", FMI3_FOLDERS)):
         binaries = folder / standard / "binaries"
-        shutil.rmtree(binaries, ignore_errors=True)
-        for platform, library in sorted(libraries.items()):
-            target = binaries / names[platform] / f"Line{SUFFIXES[platform]}"
-            target.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(library, target)
+        wanted = {binaries / names[platform] / f"Line{SUFFIXES[platform]}": library for platform, library in libraries.items()}
+        for stale in [p for p in binaries.rglob("*") if p.is_file() and p not in wanted] if binaries.is_dir() else []:
+            stale.unlink()
+        for target, library in sorted(wanted.items()):
+            write_if_changed(target, library.read_bytes())
     return folder
 
 
-def write_zip(out, entries):
+def write_if_changed(out, data):
+    """Writes data to out unless out holds it already, atomically: a run beside this
+    one (tests that read the FMUs while another packaging runs) never sees half a file."""
+    if out.is_file() and out.read_bytes() == data:
+        return
     out.parent.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
+    part = out.with_name(out.name + ".part")
+    part.write_bytes(data)
+    os.replace(part, out)
+
+
+def write_zip(out, entries):
+    """A zip of entries; the same entries give the same bytes (fixed times), so an
+    unchanged FMU is not written again."""
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as zf:
         for name, data in entries:
             info = zipfile.ZipInfo(name, ZIP_TIME)
             info.compress_type = zipfile.ZIP_DEFLATED
             info.external_attr = 0o644 << 16
             zf.writestr(info, data)
+    write_if_changed(out, buffer.getvalue())
 
 
 def added_binary(text):

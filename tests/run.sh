@@ -34,16 +34,28 @@ stage "Rust tests of the Line" cargo test --profile cross-test --quiet \
     --manifest-path models/line/Cargo.toml --target-dir target/line
 stage "packaging" python3 fmu/package.py
 stage "compatibility files" "$PY" fmu/compat.py out
+# Hardening and the other platforms run beside pytest: they spend their time in cargo and
+# the emulators, pytest in one Python process, so side by side they keep both cores busy.
+# (Packaging again, as both scripts do, rewrites no FMU whose bytes are the same.)
+BESIDE_LOG=target/hardening-and-platforms.log
+mkdir -p target
+t_beside=$SECONDS
+setsid bash -c 'bash tests/hardening.sh "$@" && bash tests/cross.sh "$@"' beside "${FULL[@]}" > "$BESIDE_LOG" 2>&1 &
+BESIDE=$!
+trap 'kill -- -"$BESIDE" 2>/dev/null || true' EXIT
 # --rootdir: webline/pyproject.toml would otherwise become the rootdir (it is among the
 # arguments' folders), and the test ids of tests/python would lose their folder.
 stage "pytest: FMPy, C importer, fmi-sim, libcosim, README, set-up, webline" \
     "$PY" -m pytest --rootdir "$ROOT" tests/python fmu/tests webline/tests -q
-# Hardening (--full for the long runs): the portable .so, the panic boundary,
-# the fuzzed C API of both models, AddressSanitizer and valgrind, dlopen/dlclose cycles.
-stage "hardening" bash tests/hardening.sh "${FULL[@]}"
-# Windows x64 under Wine, ARM64 Linux under QEMU: Rust tests, fuzzing, the C
-# importer on each binary against Linux x86-64's bits (docs/platforms.md).
-stage "other platforms" bash tests/cross.sh "${FULL[@]}"
+if ! wait "$BESIDE"; then
+    tail -60 "$BESIDE_LOG"
+    echo "tests/run.sh: tests/hardening.sh or tests/cross.sh failed (beside pytest); their whole log: $BESIDE_LOG"
+    exit 1
+fi
+trap - EXIT
+TIMES+=("$(printf '%5d s  %s' $((SECONDS - t_beside)) "hardening and other platforms, beside pytest (log: $BESIDE_LOG)")")
+echo
+cat target/hardening/summary.txt target/platforms/summary.txt
 echo
 echo "tests/run.sh ${FULL[*]}: every test passed in $((SECONDS - START)) s"
 printf '%s\n' "${TIMES[@]}"
