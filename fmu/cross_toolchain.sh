@@ -6,8 +6,10 @@
 #                      source, dependencies vendored) and libstd-rust-web,
 #                      fetched with `apt-get download` and unpacked with
 #                      `dpkg-deb -x`: installing rustc-web would replace
-#                      Debian's rustc. It builds std for each target
-#                      (-Zbuild-std), as rustup can add no target here.
+#                      Debian's rustc. rustup can add no target here, so
+#                      std is built once for each cross target (-Zbuild-std)
+#                      into this compiler's own sysroot, as `rustup target
+#                      add` would install it: later builds find it there.
 #   apt                the libraries those packages declare in their own
 #                      Depends (`apt-get satisfy`), and the MinGW-w64 linker.
 #
@@ -107,18 +109,68 @@ rust_web_unpack() { # VERSION DIR
     done
     sort -u -o "$dir.tmp/DEPENDS" "$dir.tmp/DEPENDS"
     rm -rf "$debs"
-    # rustc finds its sysroot from its own path (usr/); its driver library is beside it.
-    cat > "$dir.tmp/bin/rustc" <<EOF
-#!/bin/sh
-LD_LIBRARY_PATH="$dir/usr/lib/x86_64-linux-gnu\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}" exec "$dir/usr/bin/rustc" "\$@"
-EOF
-    # -Zbuild-std is unstable: RUSTC_BOOTSTRAP=1 lets this stable cargo take it.
-    cat > "$dir.tmp/bin/cargo" <<EOF
-#!/bin/sh
-RUSTC="$dir/bin/rustc" RUSTDOC=false RUSTC_BOOTSTRAP=1 exec "$dir/usr/bin/cargo" "\$@"
-EOF
-    chmod +x "$dir.tmp/bin/rustc" "$dir.tmp/bin/cargo"
     rm -rf "$dir" && mv "$dir.tmp" "$dir"
+}
+
+# bin/rustc and bin/cargo: rustc-web's, with its driver library beside rustc (which
+# finds its sysroot, usr/, from its own path). They find the folder from their own
+# path too, so a cache that is moved or copied keeps working.
+rust_web_wrappers() { # DIR
+    local dir="$1" here='here="$(dirname "$(dirname "$(readlink -f "$0")")")"'
+    mkdir -p "$dir/bin"
+    write_if_changed "$dir/bin/rustc" <<EOF
+#!/bin/sh
+$here
+LD_LIBRARY_PATH="\$here/usr/lib/x86_64-linux-gnu\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}" exec "\$here/usr/bin/rustc" "\$@"
+EOF
+    write_if_changed "$dir/bin/cargo" <<EOF
+#!/bin/sh
+$here
+RUSTC="\$here/bin/rustc" RUSTDOC=false exec "\$here/usr/bin/cargo" "\$@"
+EOF
+    chmod +x "$dir/bin/rustc" "$dir/bin/cargo"
+}
+
+write_if_changed() { # FILE < CONTENT: rewrites FILE only when its bytes change
+    local new
+    new="$(cat)"
+    [ -f "$1" ] && [ "$(cat "$1")" = "$new" ] && return 0
+    printf '%s\n' "$new" > "$1.tmp" && mv "$1.tmp" "$1"
+}
+
+# std for each cross target, built once with rustc-web's own std sources into its sysroot
+# (usr/lib/rustlib/TARGET/lib), as `rustup target add` installs it: every build after it
+# (packaging, the tests, the fuzz harness) needs no -Zbuild-std, so none compiles std again.
+# Bitcode stays in the objects, as in rustup's std, so LTO takes std in; test and
+# panic_abort are there for `cargo test` and panic=abort builds.
+CROSS_TARGETS=(x86_64-pc-windows-gnu aarch64-unknown-linux-gnu)
+CROSS_STD_RECIPE=1 # raise it when the recipe changes: every cache builds std again
+rust_web_target_std() { # DIR
+    local dir="$1" target missing=() work lib
+    for target in "${CROSS_TARGETS[@]}"; do
+        [ -f "$dir/usr/lib/rustlib/$target/lib/.std-recipe-$CROSS_STD_RECIPE" ] || missing+=("$target")
+    done
+    [ "${#missing[@]}" = 0 ] && return 0
+    say "building std for ${missing[*]} into rustc-web's sysroot (once, about two minutes)"
+    work="$dir/std-build"
+    rm -rf "$work" && mkdir -p "$work/src"
+    printf '[package]\nname = "std-for-target"\nversion = "0.0.0"\nedition = "2021"\n[workspace]\n' > "$work/Cargo.toml"
+    echo '#![no_std]' > "$work/src/lib.rs"
+    # -Zbuild-std is unstable: RUSTC_BOOTSTRAP=1 lets this stable cargo take it.
+    (cd "$work" && RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Cembed-bitcode=yes" "$dir/bin/cargo" build --quiet --release --lib \
+        -Zbuild-std=std,panic_unwind,panic_abort,test $(printf -- '--target %s ' "${missing[@]}")) || {
+        say "building std for ${missing[*]} with rustc-web failed (its message is above); remove $dir, then run again"
+        return 1
+    }
+    for target in "${missing[@]}"; do
+        lib="$dir/usr/lib/rustlib/$target/lib"
+        rm -rf "$lib.tmp" "$lib" && mkdir -p "$lib.tmp"
+        find "$work/target/$target/release/deps" -maxdepth 1 -type f ! -name '*.d' ! -name '*std_for_target*' \
+            -exec cp {} "$lib.tmp/" \;
+        touch "$lib.tmp/.std-recipe-$CROSS_STD_RECIPE"
+        mv "$lib.tmp" "$lib"
+    done
+    rm -rf "$work"
 }
 
 # cargo, rustc and rustc's driver library, as the build will run them.
@@ -140,7 +192,9 @@ rust_web_setup() {
     fi
     dir="$TOOLS/rust-web-$RUST_WEB_VERSION"
     satisfy_depends "$dir/DEPENDS" || return 1
+    rust_web_wrappers "$dir"
     rust_web_check "$dir" || return 1
+    rust_web_target_std "$dir" || return 1
     export CROSS_CARGO="$dir/bin/cargo" CROSS_RUSTC="$dir/bin/rustc"
 }
 

@@ -23,7 +23,7 @@ The platforms (README, "Platforms"; docs/platforms.md):
 
     linux64        x86-64 Linux, glibc >= 2.17: cargo-zigbuild (zig links
                    against glibc 2.17's symbol versions)
-    win64          x86-64 Windows 10 or later: rustc-web with -Zbuild-std,
+    win64          x86-64 Windows 10 or later: rustc-web (std in its sysroot),
                    x86_64-w64-mingw32-gcc as the linker
     aarch64-linux  ARM64 Linux, glibc >= 2.17: the same rustc-web through
                    cargo-zigbuild; the folder is FMI 3.0's platform tuple,
@@ -212,12 +212,13 @@ def build_crates(platform, selection, what, target_dir):
     if platform.folder == "linux64":
         command = ["cargo", "zigbuild", *common]
     else:
-        # rustup has no standard library for these targets here: rustc-web builds it.
-        command = [os.environ["CROSS_CARGO"], "build", *common, "-Zbuild-std=std,panic_unwind"]
+        # rustup has no standard library for these targets here: rustc-web's, whose
+        # sysroot has it (fmu/cross_toolchain.sh builds it there once).
+        command = [os.environ["CROSS_CARGO"], "build", *common]
         if platform.target.endswith(".2.17"):
             # cargo-zigbuild drives rustc-web's cargo and links with zig (glibc 2.17 floor).
             env.pop("CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER", None)
-            env.update(CARGO=command[0], RUSTC=os.environ["CROSS_RUSTC"], RUSTC_BOOTSTRAP="1")
+            env.update(CARGO=command[0], RUSTC=os.environ["CROSS_RUSTC"])
             command[0:2] = ["cargo-zigbuild", "build"]
     run(f"building the {platform.folder} {what}", command, env=env)
 

@@ -21,10 +21,10 @@
 #      the packaged FMUs, bit for bit against Linux x86-64; importer3.c's scene
 #      through the FMI 3 FMU likewise
 #
-# Each target builds std with rustc-web into target/cross-test once (profile
-# cross-test, with the test hooks: apart from the shipped libraries of
-# target/cross), for its tests and the fuzz harness alike; the Line's harness,
-# of another workspace, into target/cross-test-line.
+# Each target's std is in rustc-web's sysroot (fmu/cross_toolchain.sh builds it
+# there once). The tests and the fuzz harness build into target/cross-test
+# (profile cross-test, with the test hooks: apart from the shipped libraries of
+# target/cross); the Line's harness, of another workspace, into target/cross-test-line.
 # A summary is printed at the end and written to target/platforms/summary.txt.
 set -euo pipefail
 source "$(dirname "$0")/../fmu/env.sh"
@@ -43,8 +43,8 @@ SUMMARY="$OUT/summary.txt"
 : > "$SUMMARY"
 note() { echo "$*" | tee -a "$SUMMARY"; }
 START=$SECONDS
-cross() { # cargo COMMAND ARGS...: rustc-web's cargo, std built for the target
-    "$CROSS_CARGO" "$1" --quiet -Zbuild-std=std,panic_unwind "${@:2}"
+cross() { # cargo COMMAND ARGS...: rustc-web's cargo, whose sysroot has each target's std
+    "$CROSS_CARGO" "$1" --quiet "${@:2}"
 }
 
 declare -A NAME=([x86_64-pc-windows-gnu]="win64 (Wine)" [aarch64-unknown-linux-gnu]="aarch64-linux (QEMU)")

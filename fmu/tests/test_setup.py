@@ -134,3 +134,25 @@ def test_env_sh_stops_with_one_line_when_cargo_is_missing(tmp_path):
     assert out.returncode == 1
     assert out.stderr.strip().splitlines() == [textwrap.dedent("""\
         env.sh: finding cargo failed: the Rust toolchain is not on PATH. Install it with rustup (https://rustup.rs), then run again.""")]
+
+
+@pytest.mark.parametrize("target", ["x86_64-pc-windows-gnu", "aarch64-unknown-linux-gnu"])
+def test_the_cached_compiler_has_std_for_each_cross_target(target, tmp_path):
+    """std is built once into rustc-web's sysroot (fmu/cross_toolchain.sh), so a plain
+    `cargo build --target` works, without -Zbuild-std, and its objects carry bitcode for LTO."""
+    tools, version = cached_version()
+    folder = tools / f"rust-web-{version}"
+    lib = folder / "usr" / "lib" / "rustlib" / target / "lib"
+    assert any(lib.glob(".std-recipe-*")), f"no std for {target} in {lib}"
+    for crate in ("std", "core", "panic_unwind", "panic_abort", "test"):
+        assert list(lib.glob(f"lib{crate}-*.rlib")), f"{lib} lacks {crate}"
+    (tmp_path / "src").mkdir()
+    (tmp_path / "Cargo.toml").write_text('[package]\nname = "probe"\nversion = "0.0.0"\nedition = "2021"\n[workspace]\n')
+    (tmp_path / "src" / "lib.rs").write_text('pub fn probe() -> String { format!("{:?}", std::time::Duration::from_millis(1)) }\n')
+    env = {k: v for k, v in os.environ.items() if k != "RUSTC_BOOTSTRAP"}  # no unstable flag may be needed
+    built = subprocess.run([folder / "bin" / "cargo", "build", "--quiet", "--lib", "--target", target], cwd=tmp_path,
+                           capture_output=True, text=True, env=env)
+    assert built.returncode == 0, built.stderr
+    # The wrappers find their folder from their own path: a copied or moved cache keeps working.
+    for tool in ("cargo", "rustc"):
+        assert str(tools) not in (folder / "bin" / tool).read_text()

@@ -448,7 +448,7 @@ def panic_libraries():
             libraries[p.folder] = ROOT / "target" / "test-hooks" / "cross-test" / "libconverting_span.so"
         else:
             command = [os.environ["CROSS_CARGO"], "build", "--profile", "cross-test", "--lib", "--quiet", "--features", "test-hooks",
-                       "-p", "converting-span", "--target", p.target, "-Zbuild-std=std,panic_unwind",
+                       "-p", "converting-span", "--target", p.target,
                        "--target-dir", str(ROOT / "target" / "cross-test")]
             prefix = "" if p.suffix == ".dll" else "lib"
             libraries[p.folder] = ROOT / "target" / "cross-test" / p.target / "cross-test" / f"{prefix}converting_span{p.suffix}"
