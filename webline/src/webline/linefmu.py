@@ -41,7 +41,7 @@ class LineFmuError(RuntimeError):
 def line_spec(scene: Scene, fmu_dir=None, start: str | None = None) -> dict:
     """The line.json of a scene: its parts in line order with their start
     values and profiles, the connections, the experiment, how it starts."""
-    system = compile_scene(scene, fmu_dir)
+    system = compile_scene(scene, fmu_dir, engine="the Line FMU export")
     components = {c.name: c for c in system.components}
     parts = []
     for c in scene.line:
@@ -147,6 +147,7 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
 
     from .result import Result
 
+    scene.refuse_branches("the fmpy-line engine (the scene as one Line FMU)")
     h = step or scene.step
     with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
         path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=scene.start or "given")
