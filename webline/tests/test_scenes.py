@@ -39,6 +39,8 @@ def test_shipped_scenes_parse_and_use_only_their_effects():
         "emergency_stop": {"preventNegativeTension"},
         "dancer": {"variableLength"},
         "splice": set(),
+        "laminator": {"includeDamping"},
+        "slitter": {"includeDamping"},
     }
     found = {p.stem for p in SCENES.glob("*.json")}
     assert set(expected) <= found
@@ -51,6 +53,9 @@ def test_shipped_scenes_parse_and_use_only_their_effects():
     conv = [sp for sp in lam.spans if sp.wp1 != sp.wp2]
     assert conv and conv[0].wp1.name == "PET" and conv[0].wp2.name == "PET/Al", "the film meets the laminate"
     assert len(load_scene(SCENES / "splice.json").events) == 5
+    # Webs that merge and split: side paths beside the main line (docs/merge-split.md).
+    assert [b.kind for b in load_scene(SCENES / "laminator.json").branches] == ["merge"]
+    assert [b.kind for b in load_scene(SCENES / "slitter.json").branches] == ["split", "split"]
 
 
 def test_base_scene_is_valid():

@@ -103,6 +103,7 @@ def descriptions(text: str, out: Path):
 
 def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None) -> Path:
     """Writes Line.fmu for the scene (FMI 3.0 with fmi3=True); returns its path."""
+    scene.refuse_branches("the Line FMU export")
     fmu_dir = Path(fmu_dir or DEFAULT_FMU_DIR)
     template = fmu_dir / TEMPLATE / ("fmi3" if fmi3 else "fmi2")
     binaries = template / "binaries"
