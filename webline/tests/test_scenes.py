@@ -130,6 +130,10 @@ def test_the_documented_example_is_a_valid_scene(tmp_path):
     assert m, "the complete scene example of docs/scenes.md (marked <!-- scene example -->) is missing"
     s = parse_scene(m.group(1), "docs/scenes.md example")
     assert s.spans and s.nodes
+    m = re.search(r"<!-- merge split example -->\s*```json\n(.*?)```", doc, re.S)
+    assert m, "the merge and split example of docs/scenes.md (marked <!-- merge split example -->) is missing"
+    s = parse_scene(m.group(1), "docs/scenes.md merge and split example")
+    assert [b.kind for b in s.branches] == ["merge", "split"]
 
 
 def test_runner_writes_csv_png_and_a_summary(fmus, tmp_path):
