@@ -21,7 +21,7 @@ from fmpy import read_model_description, simulate_fmu
 from webline import linefmu
 from webline.accuracy import errors
 from webline.reference import reference
-from webline.scene import load_scene, parse_scene
+from webline.scene import SceneError, load_scene, parse_scene
 
 from .conftest import ROOT, SCENES
 
@@ -56,6 +56,14 @@ def worst(result, scene):
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_shipped_scene_matches_the_reference_at_1_and_10_ms(name, h, line_dir):
     scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
+    if scene.branches:
+        # Webs that merge or split (laminator, slitter): the Line FMU does not know them yet
+        # (issue 21); until it does, it refuses them by name instead of running a wrong line.
+        with pytest.raises(SceneError, match="the fmpy-line engine .* does not support merge or split yet"):
+            linefmu.run(scene, line_dir, step=h)
+        with pytest.raises(SceneError, match="the Line FMU export does not support merge or split yet"):
+            linefmu.export(scene, ROOT / "out" / "never.fmu", line_dir)
+        return
     result = linefmu.run(scene, line_dir, step=h)
     assert len(result.time) == int(round(scene.stop_time / h)) + 1
     err, key = worst(result, scene)

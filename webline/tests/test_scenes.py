@@ -39,6 +39,8 @@ def test_shipped_scenes_parse_and_use_only_their_effects():
         "emergency_stop": {"preventNegativeTension"},
         "dancer": {"variableLength"},
         "splice": set(),
+        "laminator": {"includeDamping"},
+        "slitter": {"includeDamping"},
     }
     found = {p.stem for p in SCENES.glob("*.json")}
     assert set(expected) <= found
@@ -51,6 +53,9 @@ def test_shipped_scenes_parse_and_use_only_their_effects():
     conv = [sp for sp in lam.spans if sp.wp1 != sp.wp2]
     assert conv and conv[0].wp1.name == "PET" and conv[0].wp2.name == "PET/Al", "the film meets the laminate"
     assert len(load_scene(SCENES / "splice.json").events) == 5
+    # Webs that merge and split: side paths beside the main line (docs/merge-split.md).
+    assert [b.kind for b in load_scene(SCENES / "laminator.json").branches] == ["merge"]
+    assert [b.kind for b in load_scene(SCENES / "slitter.json").branches] == ["split", "split"]
 
 
 def test_base_scene_is_valid():
@@ -125,6 +130,10 @@ def test_the_documented_example_is_a_valid_scene(tmp_path):
     assert m, "the complete scene example of docs/scenes.md (marked <!-- scene example -->) is missing"
     s = parse_scene(m.group(1), "docs/scenes.md example")
     assert s.spans and s.nodes
+    m = re.search(r"<!-- merge split example -->\s*```json\n(.*?)```", doc, re.S)
+    assert m, "the merge and split example of docs/scenes.md (marked <!-- merge split example -->) is missing"
+    s = parse_scene(m.group(1), "docs/scenes.md merge and split example")
+    assert [b.kind for b in s.branches] == ["merge", "split"]
 
 
 def test_runner_writes_csv_png_and_a_summary(fmus, tmp_path):

@@ -19,6 +19,7 @@ from lxml import etree
 from webline.archive import ArchiveError, Limits, extract
 from webline.engines import agreement, relative_difference, run_fmpy, run_libcosim
 from webline.master import Master, Options
+from webline.scene import SceneError
 from webline.ssp import NS, SspError, read_ssp, write_ssp
 from webline.system import Component, Connection, System
 
@@ -261,7 +262,12 @@ def test_fmpy_boolean_literals_are_converted(two_spans, tmp_path):
 def test_every_shipped_scene_runs_unchanged_in_libcosim_and_fmpy(scene, fmus, tmp_path):
     """Exported at its predicted step, read back, run by libcosim and FMPy: each agrees with webline on its
     coupling to 1e-9, and stays within the coupling error docs/ssp.md states (COUPLING_ERROR) of the
-    monolithic reference. Two runs stop early to keep CI short (STOP)."""
+    monolithic reference. Two runs stop early to keep CI short (STOP). The scenes whose webs merge or
+    split (MERGE_SPLIT) are refused by the export, by name, until the FMUs learn them (issue 21)."""
+    if scene in MERGE_SPLIT:
+        with pytest.raises(SceneError, match="the SSP export .* does not support merge or split yet"):
+            agreement(SCENES / f"{scene}.json", fmus, tmp_path)
+        return
     r = agreement(SCENES / f"{scene}.json", fmus, tmp_path, stop_time=STOP.get(scene))
     assert r["libcosim_vs_webline"] < AGREE, r
     assert r["fmpy_vs_webline"] < AGREE, r
@@ -276,6 +282,8 @@ def test_every_shipped_scene_runs_unchanged_in_libcosim_and_fmpy(scene, fmus, tm
 # splice's entry into the first span (1 s, 1.15 s); the full runs are in docs/ssp.md's table
 # (bench/ssp_agreement.py).
 STOP = {"dancer": 0.4, "splice": 1.2}
+# Webs that merge (a nip) or split (a slitter): the reference runs them; the FMUs, and so SSP, not yet.
+MERGE_SPLIT = ("laminator", "slitter")
 
 # docs/ssp.md: the error against the monolithic reference, largest over the recorded columns relative to each
 # column's largest magnitude, measured at the exported step (and the STOP above), times 2 rounded up, at

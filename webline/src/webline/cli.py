@@ -1,6 +1,6 @@
 """The `webline` command.
 
-    webline run SCENE.json|LINE.ssp [--engine webline|libcosim|fmpy|fmpy-line] [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
+    webline run SCENE.json|LINE.ssp [--engine webline|libcosim|fmpy|fmpy-line|reference] [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
     webline export SCENE.json -o LINE.ssp
     webline export SCENE.json --fmu [-o Line.fmu] [--fmi3]
     webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
@@ -67,13 +67,13 @@ def options_of(args, progress=False) -> dict:
 
 def summary(scene, result: Result) -> str:
     info = result.info
-    lines = [
-        f"{scene.name}: {info['method']}, step {info['step'] * 1e3:g} ms, {info['steps']} steps, "
-        f"{info['rollbacks']} rollbacks, {info['instances']} FMU instances"
-                + f", {info['wall_time']:.2f} s wall time",
-    ]
+    if "instances" in info:
+        cost = f"{info['steps']} steps, {info['rollbacks']} rollbacks, {info['instances']} FMU instances"
+    else:  # the monolithic reference
+        cost = f"{len(result.time)} points, {info['rhs_evaluations']} right-hand sides"
+    lines = [f"{scene.name}: {info['method']}, step {info['step'] * 1e3:g} ms, {cost}, {info['wall_time']:.2f} s wall time"]
     keys = result.keys()
-    spans = [c for c in scene.line if isinstance(c, Span) and f"{c.name}.T" in keys]
+    spans = [c for c in scene.parts if isinstance(c, Span) and f"{c.name}.T" in keys]
     if spans:
         lines.append(f"  {'span':<14}{'T start':>10}{'T min':>10}{'T max':>10}{'T end':>10}  [N]  slack")
         for sp in spans:
@@ -84,13 +84,13 @@ def summary(scene, result: Result) -> str:
                 slack_time = float(np.sum(dt[(T[1:] <= 0.0)]))
                 slack = f"{slack_time:.3f} s"
             lines.append(f"  {sp.name:<14}{T[0]:>10.1f}{T.min():>10.1f}{T.max():>10.1f}{T[-1]:>10.1f}       {slack}")
-    nodes = [c for c in scene.line if not isinstance(c, Span) and f"{c.name}.v" in keys]
+    nodes = [c for c in scene.parts if not isinstance(c, Span) and f"{c.name}.v" in keys]
     if nodes:
         lines.append(f"  {'roller':<14}{'v start':>10}{'v min':>10}{'v max':>10}{'v end':>10}  [m/s]")
         for n in nodes:
             v = result.column(f"{n.name}.v")
             lines.append(f"  {n.name:<14}{v[0]:>10.4f}{v.min():>10.4f}{v.max():>10.4f}{v[-1]:>10.4f}")
-    for d in [c for c in scene.line if isinstance(c, Dancer) and f"{c.name}.y" in keys]:
+    for d in [c for c in scene.parts if isinstance(c, Dancer) and f"{c.name}.y" in keys]:
         y = result.column(f"{d.name}.y")
         lines.append(f"  dancer {d.name}: position {y[0]:.4f} m at start, {y.min():.4f} .. {y.max():.4f} m, {y[-1]:.4f} m at the end")
     for t, name, what in info.get("events", []):
@@ -125,7 +125,7 @@ def cmd_export(args):
         return 0
     if args.fmi3:
         raise SceneError("--fmi3 goes with --fmu (an SSP archive carries the FMI 2.0 FMUs)")
-    system = compile_scene(scene, args.fmu_dir)
+    system = compile_scene(scene, args.fmu_dir, engine="the SSP export")
     system.step = args.step or export_step(system)
     path = write_ssp(system, args.output or Path(args.out) / f"{scene.name}.ssp")
     print(f"{scene.name}: {len(system.components)} FMU components, {len(system.connections)} connections, "
@@ -153,7 +153,7 @@ def run_other(args, progress):
             from .stability import export_step
 
             scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-            system = compile_scene(scene, args.fmu_dir)
+            system = compile_scene(scene, args.fmu_dir, engine=f"the {args.engine} engine (the scene exported to SSP)")
             system.step = export_step(system)
             archive = write_ssp(system, tmp / f"{scene.name}.ssp")
         system = read_ssp(archive, tmp / "extracted")
@@ -178,6 +178,17 @@ def cmd_run(args):
         scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
         result = linefmu.run(scene, args.fmu_dir, args.step)
         return report_run(args, scene, scene.name, result, system_summary(result))
+    if args.engine == "reference":
+        if args.scene.endswith(".ssp"):
+            raise SspError(f"{args.scene}: the reference engine integrates a scene (.json), not an SSP archive")
+        from .reference import reference
+
+        scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+        if args.reference:
+            raise SceneError("--reference compares an engine with the reference; --engine reference is the reference itself")
+        result = reference(scene, times=scene_grid(scene, args.step))
+        result.info["step"] = args.step or scene.step
+        return report_run(args, scene, scene.name, result, None)
     if args.scene.endswith(".ssp") or args.engine != "webline":
         scene, name, result = run_other(args, progress)
         return report_run(args, scene, name, result, system_summary(result))
@@ -237,7 +248,14 @@ def cmd_check(args):
             effects = sorted({e for c in scene.spans for e in c.effects})
             print(f"{path}: {scene.name}: {chain}; effects: {', '.join(effects) or 'none'}; "
                   f"{len(scene.events)} events; step {scene.step * 1e3:g} ms, stop {scene.stop_time:g} s")
+            for b in scene.branches:
+                side = " -> ".join(f"{c.name} ({c.type})" for c in b.parts)
+                print(f"  {b.kind} at {b.node}: " + (f"{side} -> {b.node}" if b.kind == "merge" else f"{b.node} -> {side}"))
             if args.describe_only:
+                continue
+            if scene.branches:  # the stability analysis linearizes the FMUs, which do not merge or split yet
+                print("  stability: not analysed: merge and split run in the monolithic reference only so far "
+                      "(webline run --engine reference)")
                 continue
             system = compile_scene(scene, args.fmu_dir, settle=False)
         try:
@@ -303,7 +321,8 @@ def main(argv=None):
     p.add_argument("--engine", choices=ENGINES, default="webline",
                    help="webline (default; --algorithm and --coupling apply), or libcosim or FMPy on the SSP "
                         "(Jacobi, held inputs, fixed step; a scene is exported to SSP first), or fmpy-line: "
-                        "the scene as one Line FMU in FMPy (solved monolithically at any --step)")
+                        "the scene as one Line FMU in FMPy (solved monolithically at any --step), or reference: "
+                        "the monolithic SciPy reference alone (the one engine that merges and splits webs so far)")
     p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
     p.add_argument("--no-plot", action="store_true")
     p.add_argument("--reference", action="store_true", help="also compute the monolithic reference and print the error")

@@ -184,11 +184,13 @@ def equilibrium_starts(scene: Scene) -> dict:
     return starts
 
 
-def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
+def compile_scene(scene: Scene, fmu_dir=None, settle=True, engine="a line of FMUs") -> System:
     """The System of a scene: a Roller per node (in line order), then a span per
     span (in line order), their profiles, connections and the recorded variables.
     `settle`: connected inputs start at the initial outputs that feed them, read
-    from the FMUs themselves (`master.settle_start_values`)."""
+    from the FMUs themselves (`master.settle_start_values`). A scene whose webs
+    merge or split is refused, naming `engine`: the FMUs do not know them yet."""
+    scene.refuse_branches(engine)
     d = Path(fmu_dir or DEFAULT_FMU_DIR)
     span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
     solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}
@@ -240,7 +242,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
 
 def run_scene(scene, fmu_dir=None, **options) -> Result:
     """A scene compiled and run; the columns named as the scene records them ("film.T [N]")."""
-    result = Master(compile_scene(scene, fmu_dir), Options(**options)).run()
+    result = Master(compile_scene(scene, fmu_dir, engine="webline's co-simulation of FMUs (--engine webline)"),
+                    Options(**options)).run()
     result.scene = scene.name
     result.columns = scene.columns()
     return result

@@ -15,7 +15,7 @@ from .result import Result
 from .ssp import SSD, SspError, _variables
 from .system import System
 
-ENGINES = ("webline", "libcosim", "fmpy", "fmpy-line")
+ENGINES = ("webline", "libcosim", "fmpy", "fmpy-line", "reference")
 
 
 def steps_of(system: System, step: float | None) -> tuple[float, int]:
@@ -152,7 +152,7 @@ def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None
     scene = load_scene(scene_path, fmu_dir=fmu_dir)
     if stop_time is not None:
         scene.stop_time = stop_time
-    exported = compile_scene(scene, fmu_dir)
+    exported = compile_scene(scene, fmu_dir, engine="the SSP export (libcosim, FMPy)")
     exported.step = export_step(exported)
     archive = write_ssp(exported, Path(workdir) / f"{scene.name}.ssp")
     system = read_ssp(archive, Path(workdir) / scene.name)

@@ -41,7 +41,7 @@ class LineFmuError(RuntimeError):
 def line_spec(scene: Scene, fmu_dir=None, start: str | None = None) -> dict:
     """The line.json of a scene: its parts in line order with their start
     values and profiles, the connections, the experiment, how it starts."""
-    system = compile_scene(scene, fmu_dir)
+    system = compile_scene(scene, fmu_dir, engine="the Line FMU export")
     components = {c.name: c for c in system.components}
     parts = []
     for c in scene.line:
@@ -103,6 +103,7 @@ def descriptions(text: str, out: Path):
 
 def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None) -> Path:
     """Writes Line.fmu for the scene (FMI 3.0 with fmi3=True); returns its path."""
+    scene.refuse_branches("the Line FMU export")
     fmu_dir = Path(fmu_dir or DEFAULT_FMU_DIR)
     template = fmu_dir / TEMPLATE / ("fmi3" if fmi3 else "fmi2")
     binaries = template / "binaries"
@@ -147,6 +148,7 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
 
     from .result import Result
 
+    scene.refuse_branches("the fmpy-line engine (the scene as one Line FMU)")
     h = step or scene.step
     with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
         path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=scene.start or "given")

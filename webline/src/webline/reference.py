@@ -10,10 +10,15 @@ scene. States:
   quantity the tension is made of):
       d(eps)/dt = (1+eps)/L * (dL/dt + v_b - (1+eps) * q_a),
       q_a = v_a/(1+eps_a) for v_a >= 0, v_a/(1+eps) for v_a < 0;
+  after a nip where webs i merge (docs/merge-split.md [M1]),
+      q_a = v_a * sum_i (m_i/sum_j m_j)/(1+eps_i),  m_i the webs' mass per length;
+  after a slitter, each lane's eps_a is the strain of the web it cuts ([S1]);
 * each roller's angular speed (roller, unwinder, winder, dancer):
-      (J + m_up*R^2) * d(omega)/dt = R*(F_down - T_up - p_up) + tau - b*omega,
-  where the web mass of the span before it (with includeMass) adds
-  m_up*R^2: F_b = T + p + m*dv_b/dt and v_b = R*omega;
+      (J + sum m_up*R^2) * d(omega)/dt = R*(sum F_down - sum (T_up + p_up)) + tau - b*omega,
+  summed over the spans that end at it (several at a nip, [M4]) and the spans
+  that start at it (several at a slitter, [S3]); the web mass of a span
+  before it (with includeMass) adds m_up*R^2: F_b = T + p + m*dv_b/dt and
+  v_b = R*omega;
 * each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0).
 
 Tension: T = EA*(eps + d_r*deps/dt) (damping), or for a web record's
@@ -54,6 +59,11 @@ class LineODE:
         self.i_omega = {m.name: n_s + i for i, m in enumerate(self.movers)}
         self.i_y = {d.name: n_s + n_m + 2 * i for i, d in enumerate(self.dancers)}
         self.n = n_s + n_m + 2 * len(self.dancers)
+        # The line's shape, once: each span's rollers, each roller's spans in and out.
+        self.up = {sp.name: scene.upstream(sp) for sp in self.spans}
+        self.down = {sp.name: scene.downstream(sp) for sp in self.spans}
+        self.ins = {c.name: scene.spans_in(c) for c in scene.nodes}
+        self.outs = {c.name: scene.spans_out(c) for c in scene.nodes}
         # Mutable parameters (events change them).
         self.web = {sp.name: (sp.wp1, sp.wp2) for sp in self.spans}
         self.inertia = {m.name: [m.J, m.R, m.b] for m in self.movers}
@@ -93,7 +103,7 @@ class LineODE:
         q = {}
         v = {node.name: self.speed(node, t, z) for node in s.nodes}
         for sp in self.spans:
-            up, down = s.upstream(sp), s.downstream(sp)
+            up, down = self.up[sp.name], self.down[sp.name]
             w1, w2 = self.web[sp.name]
             dancer = up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
             if dancer is not None:
@@ -102,15 +112,10 @@ class LineODE:
             else:
                 L, dL = sp.length, 0.0
             eps = z[self.i_eps[sp.name]]
-            if sp.index == 1:
-                src = up.strain
-                eps_in = self.pv(src, t)
-            else:
-                eps_in = z[self.i_eps[s.line[sp.index - 2].name]]
             va, vb = v[up.name], v[down.name]
             if va >= 0:
-                qa = va / (1.0 + eps_in)
-            else:
+                qa = va / self.entry(up, t, z)
+            else:  # web entering backwards carries the span's own strain
                 qa = va / (1.0 + eps)
             deps = (1.0 + eps) / L * (dL + vb - (1.0 + eps) * qa)
             dz[self.i_eps[sp.name]] = deps
@@ -128,23 +133,21 @@ class LineODE:
                 m = w2.rho_l * x
             else:
                 p, m = 0.0, 0.0
-            q[sp.name] = {"T": T, "eps": eps, "L": L, "F_a": T, "p": p, "m": m, "x": x}
+            q[sp.name] = {"T": T, "eps": eps, "L": L, "F_a": T, "p": p, "m": m, "x": x, "q_a": qa}
         accel = {}
         for node in self.movers:
             J, R, b = self.inertia[node.name]
-            before, after = s.span_before(node), s.span_after(node)
             omega = z[self.i_omega[node.name]]
-            F_down = q[after.name]["T"] if after is not None else 0.0
-            if before is not None:
-                qb = q[before.name]
-                num = R * (F_down - qb["T"] - qb["p"]) + self.torque(node, t) - b * omega
-                domega = num / (J + qb["m"] * R * R)
-            else:
-                domega = (R * F_down + self.torque(node, t) - b * omega) / J
+            # Every web leaving pulls forward, every web arriving pulls back (a nip, a slitter: several).
+            F_down = sum(q[sp.name]["T"] for sp in self.outs[node.name])
+            F_up = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[node.name])
+            m_up = sum(q[sp.name]["m"] for sp in self.ins[node.name])
+            num = R * (F_down - F_up) + self.torque(node, t) - b * omega
+            domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
             accel[node.name] = R * domega
         for sp in self.spans:
-            down = s.downstream(sp)
+            down = self.down[sp.name]
             if down.name in accel:
                 dvb = accel[down.name]
             else:
@@ -155,13 +158,27 @@ class LineODE:
         for d in self.dancers:
             i = self.i_y[d.name]
             y, ydot = z[i], z[i + 1]
-            F = self.pv(d.load, t) - q[s.span_before(d).name]["F_b"] - q[s.span_after(d).name]["F_a"]
+            F = (self.pv(d.load, t) - sum(q[sp.name]["F_b"] for sp in self.ins[d.name])
+                 - sum(q[sp.name]["F_a"] for sp in self.outs[d.name]))
             dz[i] = ydot
             dz[i + 1] = (F - d.damping * ydot - d.stiffness * (y - d.y_start)) / d.mass
         return dz, q, v
 
     def rhs(self, t, z):
         return self.evaluate(t, z)[0]
+
+    def entry(self, node, t, z):
+        """1 + eps_a of the web leaving `node` forwards. At the line's first roller its strain
+        profile; after a roller, the strain of the span before it (a slitter's lanes all start
+        at it, [S1]); after a nip, 1/(1+eps_a) is the mass-weighted mean of the arriving webs'
+        1/(1+eps_i) ([M1])."""
+        ins = self.ins[node.name]
+        if not ins:
+            return 1.0 + self.pv(node.strain, t)
+        if len(ins) == 1:
+            return 1.0 + z[self.i_eps[ins[0].name]]
+        m = [self.web[sp.name][1].rho_l for sp in ins]
+        return sum(m) / sum(mi / (1.0 + z[self.i_eps[sp.name]]) for mi, sp in zip(m, ins))
 
     def initial_state(self):
         """The start: the scene's start values, or with `"start": "equilibrium"`
@@ -192,14 +209,14 @@ class LineODE:
             z[self.i_omega[node.name]] = s.initial_speed(node) / node.R
         for d in self.dancers:
             z[self.i_y[d.name]] = d.y_start
-        for sp in self.spans:
+        for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
             if sp.eps_start is not None:
                 eps = sp.eps_start
             else:
                 # equilibrium of the initial inputs: (1+eps) = (v_b/v_a)(1+eps_a), eps_a if v_a = 0
-                up, down = s.upstream(sp), s.downstream(sp)
+                up, down = self.up[sp.name], self.down[sp.name]
                 va, vb = s.initial_speed(up), s.initial_speed(down)
-                eps_a = up.strain.value(0.0) if sp.index == 1 else z[self.i_eps[s.line[sp.index - 2].name]]
+                eps_a = self.entry(up, 0.0, z) - 1.0
                 eps = eps_a if va == 0 else (vb - va + vb * eps_a) / va
             z[self.i_eps[sp.name]] = eps
         return z

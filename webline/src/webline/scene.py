@@ -3,7 +3,9 @@
 A scene is a chain, source -> span -> roller -> span -> ... -> sink, with
 the webs the spans carry, input profiles, the communication step, the stop
 time, events (properties that change on the fly) and the outputs to record.
-The format is documented in docs/scenes.md. Every problem is a
+A roller of the chain may carry side paths: webs that merge into it (a
+laminating nip, "merge") or webs it splits into (a slitter, "split");
+docs/merge-split.md. The format is documented in docs/scenes.md. Every problem is a
 `SceneError` whose message starts with `file:line:column` of the offending
 key or value: an unknown key, a missing value, a wrong unit, a chain that is
 not a line.
@@ -12,7 +14,9 @@ not a line.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 
 from . import jsontree, records, units
@@ -59,6 +63,8 @@ class Web:
     # (its own reader); the line reference evaluates the record's curve.
     record: str | None = None
     curve: records.Curve | None = field(default=None, compare=False)
+    # A laminate made by the law of mixtures: the names of its layers (docs/merge-split.md).
+    layers: tuple = ()
 
     @property
     def area(self):
@@ -124,6 +130,7 @@ class Roller(Component):
     drive: Drive = field(default_factory=lambda: Drive("idler"))
     strain: Profile | None = None  # unwinder: strain of the web leaving the roll
     wrap: float | None = None  # degrees: a load cell on its bearings (Line FMU output <name>.F)
+    trim: float = 0.0  # a slitter: the width cut off as trim (m), which leaves without tension
 
     @property
     def has_fmu(self):
@@ -152,6 +159,20 @@ class Dancer(Component):
 
 
 @dataclass
+class Branch:
+    """Side path of a roller on the main line. "merge": webs that meet at the
+    roller (a nip): parts = [source|unwinder, span, (roller, span)*], the last
+    span ending at the nip. "split": webs the roller cuts the web into (a
+    slitter): parts = [span, (roller, span)*, sink|winder], the first span
+    starting at the slitter."""
+
+    kind: str  # "merge" | "split"
+    node: str  # the roller on the main line
+    parts: list  # one side path
+    where: str = ""
+
+
+@dataclass
 class Event:
     time: float
     component: str
@@ -175,29 +196,76 @@ class Scene:
     # (reference, webline run, Line FMU); "given": from the start values; None: not said
     # (the parts' start values; the Line FMU's default is equilibrium).
     start: str | None = None
+    branches: list = field(default_factory=list)  # merges and splits (Branch), in line order
+
+    @property
+    def parts(self):
+        """Every component, main line and side paths, in the order the web flows: a merge's
+        side paths just before their nip, a split's just after its slitter."""
+        out = []
+        for c in self.line:
+            out += [p for b in self.branches if b.node == c.name and b.kind == "merge" for p in b.parts]
+            out.append(c)
+            out += [p for b in self.branches if b.node == c.name and b.kind == "split" for p in b.parts]
+        return out
+
+    @cached_property
+    def _links(self):
+        """(up, down, ins, outs): each span's roller before and after it, each roller's spans
+        coming in and going out (several at a nip or a slitter)."""
+        up, down, ins, outs = {}, {}, {}, {}
+        paths = [(self.line, None, None)] + [
+            (b.parts, self.component(b.node), b.kind) for b in self.branches]
+        for parts, node, kind in paths:
+            chain = parts + [node] if kind == "merge" else [node] + parts if kind == "split" else parts
+            for a, b in zip(chain[:-1], chain[1:]):
+                if isinstance(b, Span):
+                    up[b.name] = a
+                    outs.setdefault(a.name, []).append(b)
+                else:
+                    down[a.name] = b
+                    ins.setdefault(b.name, []).append(a)
+        return up, down, ins, outs
 
     def component(self, name):
-        return next(c for c in self.line if c.name == name)
+        return next(c for c in self.parts if c.name == name)
 
     @property
     def spans(self):
-        return [c for c in self.line if isinstance(c, Span)]
+        return [c for c in self.parts if isinstance(c, Span)]
 
     @property
     def nodes(self):
-        return [c for c in self.line if not isinstance(c, Span)]
+        return [c for c in self.parts if not isinstance(c, Span)]
 
     def upstream(self, span):
-        return self.line[span.index - 1]
+        return self._links[0][span.name]
 
     def downstream(self, span):
-        return self.line[span.index + 1]
+        return self._links[1][span.name]
+
+    def spans_in(self, node):
+        """The spans that end at a roller: one, none at the line's start, several at a nip."""
+        return self._links[2].get(node.name, [])
+
+    def spans_out(self, node):
+        """The spans that start at a roller: one, none at the line's end, several at a slitter."""
+        return self._links[3].get(node.name, [])
 
     def span_before(self, node):
-        return self.line[node.index - 1] if node.index > 0 else None
+        return _single(self.spans_in(node), node, "merges webs")
 
     def span_after(self, node):
-        return self.line[node.index + 1] if node.index + 1 < len(self.line) else None
+        return _single(self.spans_out(node), node, "splits the web")
+
+    def refuse_branches(self, engine: str):
+        """A merge or split stops an engine that does not know them yet (the FMUs'
+        side comes in a later step of issue 21)."""
+        if self.branches:
+            b = self.branches[0]
+            what = "merges webs" if b.kind == "merge" else "splits the web"
+            raise SceneError(f"{self.path}: roller {b.node!r} {what} ({b.kind}); {engine} does not support merge "
+                             "or split yet: run this scene with the monolithic reference (webline run --engine reference)")
 
     def speed_profile(self, node):
         """The prescribed speed of a node, or None if it has dynamics."""
@@ -234,7 +302,7 @@ class Scene:
     def breakpoints(self):
         """Every time a profile kinks or jumps, and every event time, in (0, stop)."""
         times = set()
-        for c in self.line:
+        for c in self.parts:
             for p in profiles_of(c):
                 times.update(p.breakpoints())
         times.update(e.time for e in self.events)
@@ -243,6 +311,12 @@ class Scene:
     def columns(self):
         """The recorded columns: 'name.quantity [unit]'."""
         return [f"{c}.{q} [{QUANTITIES[self.component(c).type][q]}]" for c, q in self.record]
+
+
+def _single(spans, node, what):
+    if len(spans) > 1:
+        raise ValueError(f"{node.type} {node.name!r} {what}: it has {len(spans)} spans on that side")
+    return spans[0] if spans else None
 
 
 def profiles_of(c):
@@ -357,8 +431,18 @@ class _Reader:
         return Profile(tuple(knots))
 
 
-def _web(r: _Reader, name: str, node: Node, web_library) -> Web:
+def _web(r: _Reader, name: str, node: Node, web_library, webs) -> Web:
     what = f"web {name!r}"
+    if isinstance(node.value, Obj) and "laminate" in node.value.keys():
+        return _laminate(r, name, node, webs)
+    if isinstance(node.value, Obj) and "slit" in node.value.keys():
+        o = r.keys(node, what, required=("slit", "width"), optional=("description",))
+        base = _web_ref(r, webs, o["slit"], f"{what}: slit")
+        width = r.quantity(o["width"], units.LENGTH, f"{what}: width", positive=True)
+        if width > base.width * (1 + WIDTH_TOLERANCE):
+            raise r.err(o["width"], f"{what}: a lane of {width:g} m is wider than the web {base.name!r} it is slit from ({base.width:g} m)")
+        # The same material, narrower; a record's name would give the FMU the record's width.
+        return replace(base, name=name, width=width, record=None)
     if isinstance(node.value, Obj) and "record" in node.value.keys():
         o = r.keys(node, what, required=("record",), optional=("description",))
         record = r.string(o["record"], f"{what}: record")
@@ -377,6 +461,47 @@ def _web(r: _Reader, name: str, node: Node, web_library) -> Web:
         width=r.quantity(o["width"], U.LENGTH, f"{what}: width", positive=True),
         density=r.quantity(o["density"], U.DENSITY, f"{what}: density", positive=True),
         d_r=r.quantity(o["d_r"], U.TIME, f"{what}: d_r", nonnegative=True) if "d_r" in o else 0.0,
+    )
+
+
+# Widths that add up: to this fraction of the web's width (units convert with rounding).
+WIDTH_TOLERANCE = 1e-9
+
+
+def _laminate(r: _Reader, name: str, node: Node, webs) -> Web:
+    """A laminate by the law of mixtures (docs/merge-split.md, "The laminate's properties"):
+    thickness the layers' sum times the compression factor; E and density over that thickness
+    so that E*A and the mass per length add (the adhesive's coat weight added to the mass);
+    d_r weighted by E*A, as Kelvin–Voigt elements in parallel combine."""
+    what = f"web {name!r}"
+    o = r.keys(node, what, required=("laminate",), optional=("compression", "adhesive", "description"))
+    lst = o["laminate"]
+    if not isinstance(lst.value, list) or len(lst.value) < 2:
+        raise r.err(lst, f"{what}: laminate must be a list of at least two webs (its layers)")
+    layers = [_web_ref(r, webs, n, f"{what}: laminate layer") for n in lst.value]
+    for w in layers:
+        if w.curve is not None:
+            raise r.err(lst, f"{what}: layer {w.name!r} has a stress-strain table; the law of mixtures needs linear "
+                             "layers (give the laminate's measured values as a web of its own)")
+        if abs(w.width - layers[0].width) > WIDTH_TOLERANCE * layers[0].width:
+            raise r.err(lst, f"{what}: layers {layers[0].name!r} ({layers[0].width:g} m) and {w.name!r} ({w.width:g} m) "
+                             "differ in width; the law of mixtures stacks equal widths (give the laminate's measured values instead)")
+    compression = 1.0
+    if "compression" in o:
+        compression = r.quantity(o["compression"], units.DIMENSIONLESS, f"{what}: compression", positive=True)
+        if compression > 1:
+            raise r.err(o["compression"], f"{what}: compression {compression:g} must be in (0, 1]: the nip presses, it does not swell")
+    coat = r.quantity(o["adhesive"], units.AREAL_DENSITY, f"{what}: adhesive", nonnegative=True) if "adhesive" in o else 0.0
+    h = compression * sum(w.thickness for w in layers)
+    EA = sum(w.EA for w in layers)
+    return Web(
+        name=name,
+        E=sum(w.E * w.thickness for w in layers) / h,
+        thickness=h,
+        width=layers[0].width,
+        density=(sum(w.density * w.thickness for w in layers) + coat) / h,
+        d_r=sum(w.EA * w.d_r for w in layers) / EA,
+        layers=tuple(w.name for w in layers),
     )
 
 
@@ -469,6 +594,8 @@ def _span(r, o_node, name, webs) -> Span:
 def _roller(r, o_node, name, kind) -> Roller:
     what = f"{kind} {name!r}"
     optional = ["J", "R", "b", "v_start", "drive", "description", "wrap"]
+    if kind == "roller":
+        optional += ["merge", "split", "trim"]  # side paths: read by _branch
     required = ["type", "name"]
     if kind == "unwinder":
         required.append("strain")
@@ -494,6 +621,12 @@ def _roller(r, o_node, name, kind) -> Roller:
     if kind == "unwinder":
         c.strain = r.profile(o["strain"], units.DIMENSIONLESS, f"{what}: strain")
     c.wrap = _wrap(r, o, what)
+    if "merge" in o and "split" in o:
+        raise r.err(r.key_pos(o["split"]), f"{what} carries both merge and split: laminate at one roller, slit at another")
+    if "trim" in o:
+        if "split" not in o:
+            raise r.err(r.key_pos(o["trim"]), f"{what}: trim goes with split (the width a slitter cuts off)")
+        c.trim = r.quantity(o["trim"], units.LENGTH, f"{what}: trim", nonnegative=True)
     return c
 
 
@@ -611,7 +744,9 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     if "web_library" in o:
         web_library = str((Path(base_dir or ".") / r.string(o["web_library"], "web_library")).resolve())
     webs_obj = r.obj(o["webs"], "webs")
-    webs = {k: _web(r, k, v, web_library) for k, v in webs_obj.items.items()}
+    webs = {}
+    for k, v in webs_obj.items.items():
+        webs[k] = _web(r, k, v, web_library, webs)
     if not webs:
         raise r.err(o["webs"], "webs must define at least one web")
 
@@ -620,61 +755,44 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
         raise r.err(line_node, "line must be a list of at least three components: a source, a span and a sink")
     items = line_node.value
     line = []
-    names = set()
+    branches = []
+    raw = {}  # component name -> its JSON node (for messages)
     for i, node in enumerate(items):
-        co = r.obj(node, f"line[{i}]")
-        if "type" not in co:
-            raise r.err(node, f"line[{i}] needs the key 'type'")
-        kind = r.string(co["type"], f"line[{i}].type")
-        if "name" not in co:
-            raise r.err(node, f"line[{i}] needs the key 'name'")
-        cname = r.string(co["name"], f"line[{i}].name")
-        if "." in cname:
-            raise r.err(co["name"], f"line[{i}]: the name {cname!r} must not contain '.'")
-        if cname in names:
-            raise r.err(co["name"], f"line[{i}]: the name {cname!r} is used twice")
-        names.add(cname)
         last = i == len(items) - 1
         if i == 0:
-            allowed = FIRST
+            allowed, place = FIRST, "first"
         elif last:
-            allowed = LAST
+            allowed, place = LAST, "last"
         elif i % 2 == 1:
-            allowed = ("span",)
+            allowed, place = ("span",), "at an odd position (after a roller)"
         else:
-            allowed = MIDDLE
-        if kind not in allowed:
-            place = "first" if i == 0 else "last" if last else "at an odd position (after a roller)" if i % 2 else "between two spans"
-            raise r.err(
-                co["type"],
-                f"line[{i}] is a {kind!r}, but the component {place} must be one of: {', '.join(allowed)} "
-                "(a line is source/unwinder, span, roller/dancer, span, ..., span, sink/winder)",
-            )
-        if kind == "span":
-            c = _span(r, node, cname, webs)
-        elif kind in ("source", "sink"):
-            c = _prescribed(r, node, cname, kind)
-        elif kind == "dancer":
-            c = _dancer(r, node, cname)
-        else:
-            c = _roller(r, node, cname, kind)
+            allowed, place = MIDDLE, "between two spans"
+        c = _component(r, node, f"line[{i}]", allowed, place, raw, webs,
+                       "a line is source/unwinder, span, roller/dancer, span, ..., span, sink/winder")
         c.index = i
         line.append(c)
+        for kind in ("merge", "split"):
+            if isinstance(c, Roller) and kind in node.value:
+                branches += _branches(r, node.value[kind], kind, c, raw, webs)
     if len(line) % 2 == 0:
         raise r.err(line_node, "line must end with a sink or a winder after the last span")
 
+    scene = Scene(name=name, description=description, path=source, stop_time=stop, step=step, webs=webs,
+                  line=line, events=[], record=[], web_library=web_library, start=start, branches=branches)
+    for b in {b.node: b for b in branches}.values():  # once per nip or slitter
+        (_check_merge if b.kind == "merge" else _check_split)(r, scene, b, raw)
+
     # Spans next to a dancer take their length from it; no other span may.
-    for i, c in enumerate(line):
-        if not isinstance(c, Span):
-            continue
-        node = items[i]
-        next_to_dancer = isinstance(line[i - 1], Dancer) or isinstance(line[i + 1], Dancer)
+    for c in scene.spans:
+        node = raw[c.name]
+        up, down = scene.upstream(c), scene.downstream(c)
+        next_to_dancer = isinstance(up, Dancer) or isinstance(down, Dancer)
         if next_to_dancer:
             if "variableLength" not in c.effects:
                 raise r.err(node, f"span {c.name!r} hangs from a dancer: it needs the effect variableLength")
             if c.length is not None:
                 raise r.err(r.key_pos(node.value["L"]), f"span {c.name!r}: L comes from the dancer's position, do not give it")
-            if isinstance(line[i - 1], Dancer) and isinstance(line[i + 1], Dancer):
+            if isinstance(up, Dancer) and isinstance(down, Dancer):
                 raise r.err(node, f"span {c.name!r} between two dancers is not supported")
         else:
             if "variableLength" in c.effects:
@@ -684,12 +802,13 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
         if c.solver == "exact" and next_to_dancer:
             raise r.err(node, f"span {c.name!r}: solver exact holds the length; a span on a dancer needs auto or rosenbrock")
 
+    parts = scene.parts
     events = []
     if "events" in o:
         ev = o["events"]
         if not isinstance(ev.value, list):
             raise r.err(ev, "events must be a list")
-        events = [_event(r, n, i, line, webs, stop) for i, n in enumerate(ev.value)]
+        events = [_event(r, n, i, parts, webs, stop) for i, n in enumerate(ev.value)]
 
     record = []
     if "record" in o:
@@ -699,29 +818,127 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
         for n in rec.value:
             s = r.string(n, "record entry")
             cname, _, q = s.partition(".")
-            comp = next((c for c in line if c.name == cname), None)
+            comp = next((c for c in parts if c.name == cname), None)
             if comp is None:
                 raise r.err(n, f"record: no component {cname!r} in the line")
             if q not in QUANTITIES[comp.type]:
                 raise r.err(n, f"record: a {comp.type} records {', '.join(QUANTITIES[comp.type])}, not {q!r}")
             record.append((cname, q))
     else:
-        record = [(c.name, "T") for c in line if isinstance(c, Span)] + [(c.name, "v") for c in line if not isinstance(c, Span)]
-        record += [(c.name, "y") for c in line if isinstance(c, Dancer)]
+        record = [(c.name, "T") for c in parts if isinstance(c, Span)] + [(c.name, "v") for c in parts if not isinstance(c, Span)]
+        record += [(c.name, "y") for c in parts if isinstance(c, Dancer)]
 
-    return Scene(
-        name=name,
-        description=description,
-        path=source,
-        stop_time=stop,
-        step=step,
-        webs=webs,
-        line=line,
-        events=sorted(events, key=lambda e: e.time),
-        record=record,
-        web_library=web_library,
-        start=start,
-    )
+    scene.events = sorted(events, key=lambda e: e.time)
+    scene.record = record
+    return scene
+
+
+def _component(r, node, what, allowed, place, raw, webs, shape):
+    """One component of a path: `allowed` kinds at its `place`; its name unique in the scene."""
+    co = r.obj(node, what)
+    if "type" not in co:
+        raise r.err(node, f"{what} needs the key 'type'")
+    kind = r.string(co["type"], f"{what}.type")
+    if "name" not in co:
+        raise r.err(node, f"{what} needs the key 'name'")
+    cname = r.string(co["name"], f"{what}.name")
+    if "." in cname:
+        raise r.err(co["name"], f"{what}: the name {cname!r} must not contain '.'")
+    if cname in raw:
+        raise r.err(co["name"], f"{what}: the name {cname!r} is used twice")
+    raw[cname] = node
+    if kind not in allowed:
+        raise r.err(co["type"], f"{what} is a {kind!r}, but the component {place} must be one of: {', '.join(allowed)} ({shape})")
+    if kind == "span":
+        return _span(r, node, cname, webs)
+    if kind in ("source", "sink"):
+        return _prescribed(r, node, cname, kind)
+    if kind == "dancer":
+        return _dancer(r, node, cname)
+    return _roller(r, node, cname, kind)
+
+
+def _branches(r, node, kind, roller, raw, webs) -> list:
+    """A roller's side paths: "merge" (each from a source or unwinder to the span that meets
+    the roller) or "split" (each from the span that leaves the roller to a sink or winder)."""
+    what = f"roller {roller.name!r}: {kind}"
+    if not isinstance(node.value, list) or not node.value:
+        raise r.err(node, f"{what} must be a non-empty list of side paths, each a list of components")
+    out = []
+    for j, path in enumerate(node.value):
+        parts = []
+        pw = f"{what}[{j}]"
+        if kind == "merge":
+            shape = f"a merge path is source/unwinder, span, roller/dancer, span, ..., span: the last span meets {roller.name!r}"
+        else:
+            shape = f"a split path is span, roller/dancer, span, ..., span, sink/winder: the first span leaves {roller.name!r}"
+        if not isinstance(path.value, list) or len(path.value) < 2:
+            raise r.err(path, f"{pw} must be a list of at least two components ({shape})")
+        n = len(path.value)
+        for i, item in enumerate(path.value):
+            span_here = i % 2 == (1 if kind == "merge" else 0)
+            if span_here:
+                allowed, place = ("span",), f"at position {i}"
+            elif kind == "merge" and i == 0:
+                allowed, place = FIRST, "first"
+            elif kind == "split" and i == n - 1:
+                allowed, place = LAST, "last"
+            else:
+                allowed, place = MIDDLE, "between two spans"
+            c = _component(r, item, f"{pw}[{i}]", allowed, place, raw, webs, shape)
+            c.index = i
+            for inner in ("merge", "split"):
+                if inner in item.value:
+                    raise r.err(r.key_pos(item.value[inner]),
+                                f"{c.type} {c.name!r} in a {kind} path of {roller.name!r} carries a {inner}: side paths "
+                                "do not branch again (a web that splits or merges on its way to a nip, or after a "
+                                "slitter, is not supported)")
+            parts.append(c)
+        if kind == "merge" and not isinstance(parts[-1], Span):
+            raise r.err(path, f"{pw} must end with the span that meets {roller.name!r}, not {parts[-1].type} {parts[-1].name!r}")
+        if kind == "split" and isinstance(parts[-1], Span):
+            raise r.err(path, f"{pw} must end with a sink or winder after its span {parts[-1].name!r}")
+        out.append(Branch(kind, roller.name, parts, f"{r.source}:{path.line}:{path.col}"))
+    return out
+
+
+MATERIAL = ("E", "thickness", "density", "d_r")
+
+
+def _check_split(r, scene: Scene, b: Branch, raw):
+    """The lanes of a slitter: the incoming web's material, widths that add up to its width (with the trim)."""
+    node = scene.component(b.node)
+    (incoming,) = scene.spans_in(node)
+    web = incoming.wp2
+    lanes = scene.spans_out(node)
+    for lane in lanes:
+        w = lane.wp1
+        differs = [k for k in MATERIAL if not math.isclose(getattr(w, k), getattr(web, k), rel_tol=1e-12, abs_tol=0.0)]
+        if differs or w.curve is not web.curve:
+            raise r.err(raw[lane.name], f"roller {node.name!r} slits web {web.name!r}, but span {lane.name!r} starts with web "
+                        f"{w.name!r}, which differs in {', '.join(differs) or 'its stress-strain table'}: a slitter cuts the web, "
+                        "it does not change the material")
+    total = sum(lane.wp1.width for lane in lanes) + node.trim
+    if abs(total - web.width) > WIDTH_TOLERANCE * web.width:
+        parts = " + ".join(f"{lane.wp1.width:g}" for lane in lanes)
+        raise r.err(raw[node.name], f"roller {node.name!r} slits web {web.name!r} ({web.width:g} m wide) into {parts} m "
+                    f"with {node.trim:g} m trim = {total:g} m: the lanes and the trim must add up to the web's width")
+
+
+def _check_merge(r, scene: Scene, b: Branch, raw):
+    """The span after a nip carries the laminate: one web (not wp1/wp2), made of the webs that meet there."""
+    node = scene.component(b.node)
+    out = scene.span_after(node)
+    if out.wp1 is not out.wp2:
+        raise r.err(raw[out.name], f"span {out.name!r} leaves roller {node.name!r}, where webs merge: its web is the laminate; "
+                    "give it as \"web\", not wp1 and wp2")
+    if node.trim:
+        raise r.err(raw[node.name], f"roller {node.name!r} merges webs: trim goes with split")
+    layers = out.wp2.layers
+    meeting = sorted(sp.wp2.name for sp in scene.spans_in(node))
+    if layers and sorted(layers) != meeting:
+        raise r.err(raw[out.name], f"span {out.name!r} carries laminate {out.wp2.name!r} of {', '.join(layers)}, but the webs "
+                    f"meeting at {node.name!r} are {', '.join(meeting)}")
 
 
 def load_scene(path, overrides=None, fmu_dir=None) -> Scene:
