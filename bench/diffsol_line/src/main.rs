@@ -1,7 +1,9 @@
-//! The Line FMU's ODE integrated by our RODAS4 and by diffsol's BDF, TR-BDF2
-//! and ESDIRK34 (docs/line-solver.md). Run by hand, prints markdown:
+//! The Line FMU's ODE integrated by our RODAS4 and ROS34PW2 and by diffsol's BDF,
+//! TR-BDF2 and ESDIRK34 (docs/line-solver.md). Run by hand, prints markdown:
 //!
-//!     cd bench/diffsol_line && nice cargo run --release --target-dir ../../target/diffsol [-- --all]
+//!     cd bench/diffsol_line && nice cargo run --release --target-dir ../../target/diffsol [-- --all | --ours]
+//!
+//! `--ours` runs only our two methods (RODAS4, the FMU's; ROS34PW2, a W-method).
 //!
 //! Every solver sees the same ODE (`line::ode::rhs_at`), the same banded
 //! finite-difference Jacobian (`jacobian_at`: kl + ku + 1 extra evaluations)
@@ -17,7 +19,8 @@ use line::part::Part;
 use line::ode::{jacobian_at, rhs_at};
 use line::Line;
 use solver::band::Band;
-use solver::rodas::{Control, Rodas, System};
+use solver::stiff::tableau::{Tableau, RODAS4, ROS34PW2};
+use solver::stiff::{Control, Rosenbrock, System};
 use std::alloc::{GlobalAlloc, Layout, System as Heap};
 use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
@@ -51,6 +54,8 @@ const COMM: [f64; 2] = [1e-3, 1e-2];
 #[derive(Clone, Copy, PartialEq, Debug)]
 enum Method {
     Rodas4,
+    /// Our W-method: its Jacobian kept over steps.
+    Ros34pw2,
     Bdf,
     TrBdf2,
     Esdirk34,
@@ -63,6 +68,7 @@ impl Method {
     fn name(self) -> &'static str {
         match self {
             Method::Rodas4 => "RODAS4 (ours)",
+            Method::Ros34pw2 => "ROS34PW2 (ours)",
             Method::Bdf => "diffsol BDF",
             Method::TrBdf2 => "diffsol TR-BDF2",
             Method::Esdirk34 => "diffsol ESDIRK34",
@@ -143,9 +149,9 @@ impl System for Sys<'_> {
         self.rhs += 1;
         rhs_at(self.line, t, y, dy).map_err(drop)
     }
-    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut Band) -> Result<(), ()> {
+    fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Band) -> Result<(), ()> {
         self.jac += 1;
-        jacobian_at(self.line, t, y, jac).map_err(drop)
+        jacobian_at(self.line, t, y, Some(f0), jac).map_err(drop)
     }
     fn time_dependent(&self) -> bool {
         self.time_dependent
@@ -204,7 +210,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
             jac_count.set(jac_count.get() + 1);
             let mut y = ybuf.borrow_mut();
             to_y(u, &mut y);
-            if jacobian_at(&mut line.borrow_mut(), t, &y, band).is_err() {
+            if jacobian_at(&mut line.borrow_mut(), t, &y, None, band).is_err() {
                 band.clear();
             }
             *ct = t;
@@ -227,8 +233,9 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
         .build()
         .map_err(|e| e.to_string())?;
 
-    // RODAS4 as the FMU runs it.
-    let mut rodas = Rodas::new(n, b.kl, b.ku);
+    // Ours as the FMU runs it.
+    let tableau: &'static Tableau = if method == Method::Ros34pw2 { &ROS34PW2 } else { &RODAS4 };
+    let mut rodas = Rosenbrock::new(tableau, n, b.kl, b.ku);
     let atol: Vec<f64> = b.atol1.iter().map(|a| a * tol).collect();
     let control = Control { rtol: tol, atol: &atol, rtol_scale: &b.rtol_scale, max_steps: 1_000_000, max_step: 0.0 };
 
@@ -260,12 +267,16 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
             break;
         }
         match method {
-            Method::Rodas4 => {
+            Method::Rodas4 | Method::Ros34pw2 => {
                 let mut l = line.borrow_mut();
                 let mut sys = Sys { line: &mut l, time_dependent: b.time_dependent, rhs: 0, jac: 0 };
                 for &s in &seg {
                     let a = ALLOCS.load(Relaxed);
                     rodas.integrate(&mut sys, t, s, &mut x, &control).map_err(|f| format!("{f:?}"))?;
+                    // An event follows the segment's end: the line's Jacobian may change there.
+                    if s == *seg.last().unwrap() {
+                        rodas.renew_jacobian();
+                    }
                     o.allocs += ALLOCS.load(Relaxed) - a;
                     t = s;
                     if is_output(s) || s == b.stop {
@@ -287,7 +298,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
                         Method::Bdf | Method::BdfKept => drive(problem.bdf::<NalgebraLU<f64>>(), t, &mut h_next, &piece, b, &mut o, a)?,
                         Method::TrBdf2 => drive(problem.tr_bdf2::<NalgebraLU<f64>>(), t, &mut h_next, &piece, b, &mut o, a)?,
                         Method::Esdirk34 => drive(problem.esdirk34::<NalgebraLU<f64>>(), t, &mut h_next, &piece, b, &mut o, a)?,
-                        Method::Rodas4 => unreachable!(),
+                        Method::Rodas4 | Method::Ros34pw2 => unreachable!(),
                     };
                     to_y(&u, &mut x);
                     t = *piece.last().unwrap();
@@ -303,7 +314,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
         l.set_continuous_states(&x).map_err(|e| e.message.clone())?;
     }
     o.seconds = clock.elapsed().as_secs_f64();
-    if method == Method::Rodas4 {
+    if matches!(method, Method::Rodas4 | Method::Ros34pw2) {
         o.steps = rodas.stats.accepted;
         o.rejected = rodas.stats.rejected;
         o.lu = rodas.stats.factorizations;
@@ -392,7 +403,11 @@ fn main() {
     let tols = [1e-6, 1e-8, 1e-10];
     // TR-BDF2 (order 2) only with `-- --all`: it is no contender at these tolerances.
     let all = std::env::args().any(|a| a == "--all");
-    let methods: Vec<Method> = [Method::Rodas4, Method::Bdf, Method::TrBdf2, Method::Esdirk34].into_iter().filter(|&m| all || m != Method::TrBdf2).collect();
+    let ours = std::env::args().any(|a| a == "--ours");
+    let methods: Vec<Method> = [Method::Rodas4, Method::Ros34pw2, Method::Bdf, Method::TrBdf2, Method::Esdirk34]
+        .into_iter()
+        .filter(|&m| if ours { matches!(m, Method::Rodas4 | Method::Ros34pw2) } else { all || m != Method::TrBdf2 })
+        .collect();
     let mut full = String::new();
     let mut comm = String::new();
     let mut checks = String::new();
@@ -404,7 +419,8 @@ fn main() {
         if let Ok(c) = run(&b, Method::Rodas4, 1e-11, 0.0) {
             said.push_str(&format!(" RODAS4 at 1e-11: {:.1e};", error(&c, &reference, &b)));
         }
-        for (m, tol) in [(Method::Bdf, 1e-12), (Method::Esdirk34, 1e-12), (Method::Bdf, 1e-11), (Method::Esdirk34, 1e-11)] {
+        let others = if ours { &[][..] } else { &[(Method::Bdf, 1e-12), (Method::Esdirk34, 1e-12), (Method::Bdf, 1e-11), (Method::Esdirk34, 1e-11)][..] };
+        for &(m, tol) in others {
             match run(&b, m, tol, 0.0) {
                 Ok(c) => {
                     said.push_str(&format!(" {} at {tol:.0e}: {:.1e}", m.name(), error(&c, &reference, &b)));
@@ -420,7 +436,7 @@ fn main() {
                 full.push_str(&row(&b, m, tol, &reference));
             }
         }
-        for m in methods.iter().copied().chain([Method::BdfKept]) {
+        for m in methods.iter().copied().chain(if ours { None } else { Some(Method::BdfKept) }) {
             comm.push_str(&comm_row(&b, m, &reference));
         }
     }
@@ -444,7 +460,7 @@ fn row(b: &Bench, m: Method, tol: f64, reference: &Outcome) -> String {
             o.seconds * 1e3,
             o.steps,
             o.rejected,
-            evaluations(b, &o),
+            evaluations(b, &o, m),
             o.jacobians,
             o.lu,
             o.allocs
@@ -453,9 +469,11 @@ fn row(b: &Bench, m: Method, tol: f64, reference: &Outcome) -> String {
     }
 }
 
-/// f evaluations, those of the Jacobians (1 + kl + ku + 1 each) included.
-fn evaluations(b: &Bench, o: &Outcome) -> usize {
-    o.rhs + o.jacobians * ((b.kl + b.ku + 1).min(b.n) + 1)
+/// f evaluations, those of the Jacobians included: kl + ku + 1 each, and f at the
+/// point for diffsol's (ours have it from the step).
+fn evaluations(b: &Bench, o: &Outcome, m: Method) -> usize {
+    let own_f0 = usize::from(!matches!(m, Method::Rodas4 | Method::Ros34pw2));
+    o.rhs + o.jacobians * ((b.kl + b.ku + 1).min(b.n) + own_f0)
 }
 
 /// One row per solver for the co-simulation pattern: each communication step's columns.
@@ -463,7 +481,7 @@ fn comm_row(b: &Bench, m: Method, reference: &Outcome) -> String {
     let mut row = format!("| {} | {} |", b.name, m.name());
     for h in COMM {
         row.push_str(&match measure(b, m, 1e-8, h) {
-            Ok(o) => format!(" {:.1e} | {:.1} | {} | {} | {} | {} |", error(&o, reference, b), o.seconds * 1e3, evaluations(b, &o), o.jacobians, o.lu, o.allocs),
+            Ok(o) => format!(" {:.1e} | {:.1} | {} | {} | {} | {} |", error(&o, reference, b), o.seconds * 1e3, evaluations(b, &o, m), o.jacobians, o.lu, o.allocs),
             Err(e) => format!(" failed {} | | | | | |", e.replace('|', "/")),
         });
     }

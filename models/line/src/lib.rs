@@ -30,7 +30,7 @@ use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Re
 use interface::{Binding, Interface};
 use network::Network;
 use part::Part;
-use solver::rodas::Rodas;
+use solver::stiff::Rosenbrock;
 use spec::{ModelKind, Spec, StartMode};
 use std::sync::Arc;
 
@@ -77,7 +77,7 @@ pub struct Line {
     ramps: Vec<(usize, u32, f64, f64)>,
     /// The parts' next event (a profile's breakpoint or set entry, a web change).
     next_event: f64,
-    integrator: Option<Rodas>,
+    integrator: Option<Rosenbrock>,
     /// A copy of the parts to undo a failed step (kept, so a step allocates nothing).
     backup: Vec<Part>,
     /// Scratch vectors of the line's size (Jacobians, undo), sized at initialization.
@@ -151,7 +151,7 @@ impl Line {
         self.time
     }
 
-    pub fn integrator(&self) -> Option<&Rodas> {
+    pub fn integrator(&self) -> Option<&Rosenbrock> {
         self.integrator.as_ref()
     }
 
@@ -342,9 +342,9 @@ impl Model for Line {
             if x.len() != net.len() {
                 return Err(FmiError::error(format!("the state holds {} line states, the line has {}", x.len(), net.len())));
             }
-            let mut rodas = Rodas::new(net.len(), net.kl, net.ku);
-            rodas.next_step = next_step;
-            self.integrator = Some(rodas);
+            let mut integrator = Rosenbrock::new(stepping::METHOD, net.len(), net.kl, net.ku);
+            integrator.next_step = next_step;
+            self.integrator = Some(integrator);
             self.net = Some(net);
         } else {
             // Before initialization the line has no integrator, so no tolerance scales to keep.

@@ -12,7 +12,8 @@
 //! * a span with `variableLength` and `includeDamping` reads dL/dt: the rates
 //!   of its frame inputs, from the feeding part's state derivatives.
 
-use crate::part::Part;
+use crate::part::{span_output, Part};
+use converting_span::Outputs;
 use crate::spec::Spec;
 use fmi_core::description::{Causality, ModelDescription};
 use fmi_core::{FmiError, FmiResult};
@@ -66,6 +67,8 @@ pub struct Network {
     /// (inactive entries stay as the part has them).
     full: Vec<Vec<f64>>,
     dfull: Vec<Vec<f64>>,
+    /// Per part: a span's outputs once computed in this evaluation (None: not yet, or an input moved since).
+    outputs: Vec<Option<Outputs>>,
     /// Sub- and super-diagonals of the Jacobian.
     pub kl: usize,
     pub ku: usize,
@@ -147,7 +150,8 @@ impl Network {
             full.push(x);
         }
         let dfull = parts.iter().map(|p| vec![0.0; p.state_count()]).collect();
-        let mut net = Network { links, rates, states, first_state, active, full, dfull, kl: 0, ku: 0 };
+        let outputs = vec![None; n_parts];
+        let mut net = Network { links, rates, states, first_state, active, full, dfull, outputs, kl: 0, ku: 0 };
         (net.kl, net.ku) = net.band(parts);
         Ok(net)
     }
@@ -192,15 +196,20 @@ impl Network {
             let rate = self.output_rate(parts, r.from, r.output)?;
             parts[r.span].set_input_derivative(r.input, rate)?;
         }
+        self.outputs.fill(None);
         for i in 0..self.links.len() {
             let l = self.links[i];
             match l.kind {
                 LinkKind::Plain => {
-                    let v = parts[l.from].get_real(l.output)?;
+                    let v = self.output(parts, l.from, l.output)?;
                     parts[l.to].set_real(l.input, v)?;
                 }
-                LinkKind::MassLoop { speed, roller_speed } => self.mass_loop(parts, &l, speed, roller_speed)?,
+                LinkKind::MassLoop { speed, roller_speed } => {
+                    self.mass_loop(parts, &l, speed, roller_speed)?;
+                    self.outputs[l.from] = None;
+                }
             }
+            self.outputs[l.to] = None;
         }
         if let Some(dx) = dx {
             for (p, part) in parts.iter().enumerate() {
@@ -211,6 +220,20 @@ impl Network {
             }
         }
         Ok(())
+    }
+
+    /// Output `vr` of part p: a span's from its outputs, computed once while its inputs stay.
+    #[inline]
+    fn output(&mut self, parts: &[Part], p: usize, vr: u32) -> FmiResult<f64> {
+        if let Part::Span(_) = parts[p] {
+            if self.outputs[p].is_none() {
+                self.outputs[p] = parts[p].span_outputs();
+            }
+            if let Some(v) = self.outputs[p].as_ref().and_then(|o| span_output(o, vr)) {
+                return Ok(v);
+            }
+        }
+        parts[p].get_real(vr)
     }
 
     /// The state derivatives of the parts as last evaluated.

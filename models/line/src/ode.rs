@@ -8,7 +8,7 @@ use crate::part::Part;
 use crate::{Line, Scratch};
 use fmi_core::{FmiError, FmiResult};
 use solver::band::Band;
-use solver::rodas::System;
+use solver::stiff::System;
 
 /// The line as one ODE for the integrator: inputs an importer ramps move
 /// with time; the Jacobian by finite differences over the band, a group of
@@ -38,37 +38,31 @@ impl System for LineSystem<'_> {
         self.eval(t, y, dy).map_err(drop)
     }
 
-    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut Band) -> Result<(), ()> {
+    fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Band) -> Result<(), ()> {
         let n = y.len();
-        let f0 = std::mem::take(&mut self.f0);
-        let result = (|| {
-            self.eval(t, y, f0).map_err(drop)?;
-            let width = jac.lower() + jac.upper() + 1;
-            for group in 0..width.min(n) {
-                self.y.copy_from_slice(y);
-                let mut j = group;
-                while j < n {
-                    self.y[j] += delta(y[j]);
-                    j += width;
-                }
-                let (yp, f1) = (std::mem::take(&mut self.y), std::mem::take(&mut self.f1));
-                let r = self.eval(t, yp, f1);
-                self.y = yp;
-                self.f1 = f1;
-                r.map_err(drop)?;
-                let mut j = group;
-                while j < n {
-                    let d = self.y[j] - y[j];
-                    for i in j.saturating_sub(jac.upper())..(j + jac.lower() + 1).min(n) {
-                        jac.set(i, j, (self.f1[i] - f0[i]) / d);
-                    }
-                    j += width;
-                }
+        let width = jac.lower() + jac.upper() + 1;
+        for group in 0..width.min(n) {
+            self.y.copy_from_slice(y);
+            let mut j = group;
+            while j < n {
+                self.y[j] += delta(y[j]);
+                j += width;
             }
-            Ok(())
-        })();
-        self.f0 = f0;
-        result
+            let (yp, f1) = (std::mem::take(&mut self.y), std::mem::take(&mut self.f1));
+            let r = self.eval(t, yp, f1);
+            self.y = yp;
+            self.f1 = f1;
+            r.map_err(drop)?;
+            let mut j = group;
+            while j < n {
+                let d = self.y[j] - y[j];
+                for i in j.saturating_sub(jac.upper())..(j + jac.lower() + 1).min(n) {
+                    jac.set(i, j, (self.f1[i] - f0[i]) / d);
+                }
+                j += width;
+            }
+        }
+        Ok(())
     }
 
     fn time_dependent(&self) -> bool {
@@ -93,14 +87,22 @@ pub fn rhs_at(line: &mut Line, t: f64, x: &[f64], dx: &mut [f64]) -> FmiResult {
     sys.eval(t, x, dx)
 }
 
-/// df/dx at (t, x), banded as `line.network()` says (kl, ku).
-pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], jac: &mut Band) -> FmiResult {
+/// df/dx at (t, x), banded as `line.network()` says (kl, ku); `f0` is f(t, x) if known
+/// (else one more evaluation).
+pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], f0: Option<&[f64]>, jac: &mut Band) -> FmiResult {
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
-    let Scratch { f0, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y };
+    let Scratch { f0: own, f1, y, .. } = scratch;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0: &mut [], f1, y };
+    let f0 = match f0 {
+        Some(f0) => f0,
+        None => {
+            sys.eval(t, x, own)?;
+            &own[..]
+        }
+    };
     jac.clear();
-    sys.jacobian(t, x, jac).map_err(|()| FmiError::error("the line cannot be evaluated there"))
+    sys.jacobian(t, x, f0, jac).map_err(|()| FmiError::error("the line cannot be evaluated there"))
 }
 
 /// For `equilibrium`: f(t, x) and its Jacobian through the same evaluation the integrator uses.
@@ -113,7 +115,7 @@ pub fn residual_and_jacobian(line: &mut Line, x: &[f64], f: &mut [f64], jac: Opt
     sys.eval(t, x, f)?;
     if let Some(jac) = jac {
         jac.clear();
-        sys.jacobian(t, x, jac).map_err(|()| FmiError::error("the line cannot be evaluated near its start state"))?;
+        sys.jacobian(t, x, f, jac).map_err(|()| FmiError::error("the line cannot be evaluated near its start state"))?;
     }
     Ok(())
 }

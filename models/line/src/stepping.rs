@@ -12,13 +12,18 @@ use crate::network::Network;
 use crate::part::Part;
 use crate::{Line, Scratch};
 use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Resources};
-use solver::rodas::{Control, Rodas};
+use solver::stiff::tableau::{Tableau, RODAS4};
+use solver::stiff::{Control, Rosenbrock};
 use solver::Failure;
 
 /// Rounds of copying outputs to inputs and initializing again until the
 /// parts agree (a span's start depends on its rollers' speeds, a dancer's
 /// spans on its position).
 const SETTLE_ROUNDS: usize = 20;
+
+/// The line's integrator: RODAS4, order 4. The W-method ROS34PW2 keeps its Jacobian over steps
+/// but, of order 3, needs 3 to 5 times the steps at the line's tolerances (docs/line-solver.md).
+pub const METHOD: &Tableau = &RODAS4;
 
 /// Most integrator steps (accepted and rejected) in one communication step.
 const MAX_STEPS: usize = 100_000;
@@ -95,7 +100,7 @@ pub fn initialize(line: &mut Line, experiment: &Experiment, resources: &Resource
     line.x = x;
     line.time = t0;
     line.ramps.clear();
-    line.integrator = Some(Rodas::new(net.len(), net.kl, net.ku));
+    line.integrator = Some(Rosenbrock::new(METHOD, net.len(), net.kl, net.ku));
     line.net = Some(net);
     line.scratch = scratch(line, line.x.len());
     apply_events(line)?;
@@ -127,6 +132,10 @@ fn apply_events(line: &mut Line) -> FmiResult {
     if changed {
         net.gather(&line.parts, &mut line.x)?;
     }
+    // What an event applies (a new web, a new roll, a table's kink) changes the Jacobian.
+    if let Some(r) = line.integrator.as_mut() {
+        r.renew_jacobian();
+    }
     line.next_event = next;
     Ok(())
 }
@@ -136,7 +145,7 @@ fn integrate(line: &mut Line, end: f64) -> FmiResult {
     let t = line.time;
     let time_dependent = !line.ramps.is_empty() || line.shared.spec.parts.iter().any(|p| p.profile.is_some());
     let Line { parts, net, x, ramps, integrator, scratch, rtol, .. } = line;
-    let (net, rodas) = (net.as_mut().expect("initialized"), integrator.as_mut().expect("initialized"));
+    let (net, integrator) = (net.as_mut().expect("initialized"), integrator.as_mut().expect("initialized"));
     let Scratch { f0, f1, y, atol, rtol_scale, .. } = scratch;
     let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent, f0, f1, y };
     if end - t < TINY_STEP {
@@ -152,7 +161,7 @@ fn integrate(line: &mut Line, end: f64) -> FmiResult {
         }
     } else {
         let control = Control { rtol: *rtol, atol, rtol_scale, max_steps: MAX_STEPS, max_step: 0.0 };
-        rodas.integrate(&mut sys, t, end, x, &control).map_err(|f| failure(f, t, end))?;
+        integrator.integrate(&mut sys, t, end, x, &control).map_err(|f| failure(f, t, end))?;
     }
     line.time = end;
     Ok(())
@@ -193,6 +202,8 @@ pub fn step(line: &mut Line, h: f64) -> FmiResult {
             line.next_event = next_event;
             if let Some(r) = line.integrator.as_mut() {
                 r.next_step = next_step;
+                // Formed along the failed attempt, perhaps far from the line as it is again.
+                r.renew_jacobian();
             }
             let _ = line.settle();
             Err(e)

@@ -10,6 +10,16 @@ use std::sync::Arc;
 /// The table keys a roller's profile may have.
 pub const TABLES: [&str; 5] = ["speed", "torque", "tension", "strain", "load"];
 
+/// A table of `TABLES` by position: looked up on every evaluation, so by index, not by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Key {
+    Speed,
+    Torque,
+    Tension,
+    Strain,
+    Load,
+}
+
 /// How the roller is driven: at most one of the profile's drive tables.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Drive {
@@ -30,11 +40,14 @@ pub struct Loaded {
     pub profile: Arc<Profile>,
     pub text: Arc<str>,
     pub drive: Drive,
+    /// The profile's tables in the order of `TABLES`, found once.
+    pub tables: Arc<[Option<Table>; 5]>,
 }
 
 impl Loaded {
-    pub fn table(&self, key: &str) -> Option<&Table> {
-        self.profile.table(key)
+    #[inline]
+    pub fn table(&self, key: Key) -> Option<&Table> {
+        self.tables[key as usize].as_ref()
     }
 }
 
@@ -80,5 +93,6 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
             }
         }
     }
-    Ok(Loaded { profile: Arc::new(profile), text: text.into(), drive })
+    let tables = Arc::new(TABLES.map(|k| profile.table(k).cloned()));
+    Ok(Loaded { profile: Arc::new(profile), text: text.into(), drive, tables })
 }

@@ -3,7 +3,7 @@
 //! (omega, r, y, y') and the inputs. The profile's tables are functions of
 //! time only, so they and their slopes are held.
 
-use crate::drive::Drive;
+use crate::drive::{Drive, Key};
 use crate::physics::{self, Inputs};
 use crate::Roller;
 use std::f64::consts::PI;
@@ -35,7 +35,7 @@ impl Roller {
         let winding = p.winding();
         // [R3]: J(r), and with v = r*omega (or a speed table) r' = s*h_w*v/(2*pi*r).
         let d_j = if winding { 2.0 * PI * p.wound_density * p.wound_width * r.powi(3) * d_r } else { 0.0 };
-        let speed_table = self.table("speed").filter(|_| self.drive() == Drive::Speed);
+        let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
         let v = self.surface_speed();
         let d_v = if speed_table.is_some() { 0.0 } else { omega * d_r + r * d_omega };
         let c = if winding { p.roll_sign() * p.wound_thickness / (2.0 * PI) } else { 0.0 };
@@ -54,7 +54,7 @@ impl Roller {
             // omega' = (r*(F_b - F_a) + tau - b*omega - J'*omega)/J with J' = 2*pi*rho*w*r^3*r'.
             None => {
                 let d_torque = d.u.torque + if self.drive() == Drive::Tension {
-                    p.roll_sign() * self.table("tension").map_or(0.0, |t| t.value(self.time)) * d_r
+                    p.roll_sign() * self.table(Key::Tension).map_or(0.0, |t| t.value(self.time)) * d_r
                 } else {
                     0.0
                 };
@@ -76,7 +76,7 @@ impl Roller {
         };
         Tangents {
             speed: if speed_table.is_some() { 0.0 } else { d_v },
-            strain_leaving: if self.table("strain").is_some() { 0.0 } else { d.u.strain_a },
+            strain_leaving: if self.table(Key::Strain).is_some() { 0.0 } else { d.u.strain_a },
             torque: d_torque,
             derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate],
         }

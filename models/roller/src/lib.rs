@@ -17,7 +17,7 @@ pub mod jacobian;
 pub mod physics;
 
 use description::{Boolean, BooleanKind, Integer, Real, Switch, Text, DESCRIPTION};
-use drive::{Drive, Loaded};
+use drive::{Drive, Key, Loaded};
 use fmi_core::{Compiled, EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use physics::{Inputs, Parameters, Roll};
 use profiles::Value;
@@ -112,13 +112,13 @@ impl Roller {
         self.drive() == Drive::Speed
     }
 
-    fn table(&self, key: &str) -> Option<&profiles::Table> {
+    fn table(&self, key: Key) -> Option<&profiles::Table> {
         self.profile.as_ref().and_then(|l| l.table(key))
     }
 
     /// v [R2]; a speed drive's profile at the time now.
     pub fn surface_speed(&self) -> f64 {
-        match (self.drive(), self.table("speed")) {
+        match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => t.value(self.time),
             _ => physics::surface_speed(self.roll.radius, self.omega.value()),
         }
@@ -126,16 +126,16 @@ impl Roller {
 
     /// The strain of the leaving web: the profile's, else the arriving one's.
     pub fn strain_leaving(&self) -> f64 {
-        self.table("strain").map_or(self.inputs.strain_a, |t| t.value(self.time))
+        self.table(Key::Strain).map_or(self.inputs.strain_a, |t| t.value(self.time))
     }
 
     /// The drive's torque at time t, and its rate (a speed drive: 0, see
     /// `drive_torque`). The profile has at most one drive table.
     fn torque_at(&self, t: f64) -> (f64, f64) {
         let tau_m = self.inputs.torque;
-        if let Some(table) = self.table("torque") {
+        if let Some(table) = self.table(Key::Torque) {
             (tau_m + table.value(t), table.slope(t))
-        } else if let Some(table) = self.table("tension") {
+        } else if let Some(table) = self.table(Key::Tension) {
             let s = self.params.roll_sign() * self.roll.radius;
             (tau_m + s * table.value(t), s * table.slope(t))
         } else {
@@ -145,7 +145,7 @@ impl Roller {
 
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
     pub fn drive_torque(&self) -> f64 {
-        match (self.drive(), self.table("speed")) {
+        match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => {
                 let (j, r, omega) = (self.roll.inertia, self.roll.radius, self.omega.value());
                 j * t.slope(self.time) / r + self.params.damping * omega - physics::web_torque(r, &self.inputs)
@@ -157,7 +157,7 @@ impl Roller {
     /// The carriage's force (load minus the spans' pull) at t, and its rate.
     fn carriage_force(&self, t: f64) -> (f64, f64) {
         let u = &self.inputs;
-        let (load, rate) = self.table("load").map_or((0.0, 0.0), |l| (l.value(t), l.slope(t)));
+        let (load, rate) = self.table(Key::Load).map_or((0.0, 0.0), |l| (l.value(t), l.slope(t)));
         (u.load + load - u.force_a - u.force_b, rate)
     }
 
@@ -182,7 +182,7 @@ impl Roller {
         let v = self.surface_speed();
         let (radius_rate, inertia_rate) =
             if p.winding() { (self.roll.radius_rate(p, v), self.roll.inertia_rate(p, v)) } else { (0.0, 0.0) };
-        let omega_rate = match (self.drive(), self.table("speed")) {
+        let omega_rate = match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => t.slope(self.time) / r - v * radius_rate / (r * r),
             _ => {
                 let torque = physics::web_torque(r, &self.inputs) + self.torque_at(self.time).0;
@@ -227,7 +227,7 @@ impl Roller {
     fn piece(&mut self, t: f64, h: f64) -> FmiResult {
         let p = &self.params;
         let r = self.roll.radius;
-        let speed_table = self.table("speed").filter(|_| self.drive() == Drive::Speed);
+        let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
         let (omega, travel) = match &speed_table {
             Some(table) => {
                 let (v0, slope) = (table.value(t), table.slope(t));
@@ -299,7 +299,7 @@ impl Roller {
     fn start(&mut self, time: f64) {
         let p = &self.params;
         self.roll = Roll::new(p.radius, p.inertia);
-        let speed = match (self.drive(), self.table("speed")) {
+        let speed = match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => t.value(time),
             _ => p.speed_start,
         };

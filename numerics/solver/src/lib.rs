@@ -1,6 +1,7 @@
 //! Numerical building blocks shared by the models: the exact step of a
 //! linear ODE, compensated sums, and a family of integrators on fixed-size
-//! arrays (no heap allocation in a step).
+//! arrays (no heap allocation in a step), and banded Rosenbrock methods for
+//! systems sized at run time (`stiff`).
 
 pub mod band;
 mod compensated;
@@ -9,7 +10,7 @@ pub mod fixed;
 mod linalg;
 mod linear;
 pub mod ode;
-pub mod rodas;
+pub mod stiff;
 pub mod rosenbrock;
 
 pub use compensated::CompensatedSum;
