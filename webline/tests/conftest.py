@@ -1,8 +1,8 @@
 """Fixtures of webline's tests: the packaged FMUs a line is made of, and where the scenes are.
 
-No test here hands FMPy a logger (simulate_fmu/instantiate_fmu with `logger=`), the
-only calls that re-point FMPy's process-wide logger proxy: tests/python/conftest.py
-keeps those alive for a run of both folders.
+A test here hands FMPy a logger (simulate_fmu with `logger=`, the call that re-points
+FMPy's process-wide logger proxy) only through webline.fmpy_log.collecting(), which points
+the proxy back at FMPy's printer afterwards.
 """
 
 import subprocess

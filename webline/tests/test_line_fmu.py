@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from webline import linefmu
+from webline import fmpy_log, linefmu
 from webline.accuracy import errors
 from webline.reference import reference
 from webline.scene import SceneError, load_scene, parse_scene
@@ -161,11 +161,26 @@ def test_a_line_fmu_whose_resources_were_changed_is_refused(line_dir, tmp_path):
                 spec["parts"][1]["start"]["L"] *= 1.1  # a user edits the line inside the FMU
                 data = linefmu.spec_text(spec).encode()
             dst.writestr(item, data)
-    messages = []
-    with pytest.raises(Exception):
-        simulate_fmu(str(bad), stop_time=0.01, step_size=1e-3,
-                     logger=lambda *a: messages.append(a[-1].decode() if isinstance(a[-1], bytes) else str(a[-1])))
+    with fmpy_log.collecting() as (messages, logger), pytest.raises(Exception):
+        simulate_fmu(str(bad), stop_time=0.01, step_size=1e-3, logger=logger)
     assert any("GUID" in m for m in messages), messages
+
+
+def test_a_run_with_a_logger_leaves_fmpys_logger_proxy_at_its_printer(line_dir, tmp_path, capsys):
+    """FMPy's one process-wide logger proxy, pointed at a logger simulate_fmu then drops, once
+    crashed a later SSP run in the same process (an FMU logging through FMPy's default
+    callbacks). After a logged run (linefmu.run collects the Line's messages), an FMU on the
+    default callbacks must log through FMPy's printer again: its message on stdout."""
+    scene = load_scene(SCENES / "splice.json", fmu_dir=line_dir)
+    linefmu.run(scene, line_dir, step=1e-2)
+    good, bad = linefmu.export(scene, tmp_path / "good.fmu", line_dir), tmp_path / "bad.fmu"
+    with zipfile.ZipFile(good) as src, zipfile.ZipFile(bad, "w") as dst:
+        for item in src.infolist():  # an empty line: the Line refuses it, with a logged error
+            dst.writestr(item, "{}" if item.filename == "resources/line.json" else src.read(item))
+    capsys.readouterr()
+    with pytest.raises(Exception):
+        simulate_fmu(str(bad), stop_time=0.01, step_size=1e-3)  # FMPy's default callbacks
+    assert "[ERROR]" in capsys.readouterr().out
 
 
 def test_the_cli_exports_and_runs_a_line(line_dir, tmp_path):

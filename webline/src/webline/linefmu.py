@@ -18,6 +18,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
+from . import fmpy_log
 from .compiler import compile_scene
 from .fmus import DEFAULT_FMU_DIR
 from .scene import Scene, Span
@@ -153,11 +154,10 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
     with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
         path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=scene.start or "given")
         outputs = [f"{c}.{OUTPUTS[q]}" for c, q in scene.record]
-        messages = []
         t0 = clock.perf_counter()
-        out = simulate_fmu(str(path), stop_time=scene.stop_time, step_size=h, output_interval=h, output=outputs,
-                           fmi_type="ModelExchange" if model_exchange else "CoSimulation",
-                           logger=lambda *a: messages.append(a[-1].decode() if isinstance(a[-1], bytes) else str(a[-1])))
+        with fmpy_log.collecting() as (messages, logger):
+            out = simulate_fmu(str(path), stop_time=scene.stop_time, step_size=h, output_interval=h, output=outputs,
+                               fmi_type="ModelExchange" if model_exchange else "CoSimulation", logger=logger)
         wall = clock.perf_counter() - t0
     n = int(round(scene.stop_time / h))
     time = out["time"].astype(float)

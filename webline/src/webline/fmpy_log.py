@@ -1,0 +1,45 @@
+"""An FMU's log messages from FMPy's simulate_fmu, without leaving FMPy's logger proxy dangling.
+
+FMPy 0.3.32 formats every FMI 2.0 log message in one process-wide C proxy that holds a single
+pointer: the last logger handed to it. simulate_fmu(..., logger=f) points it at a ctypes thunk of
+f that it drops when it returns, so the next FMU logging through FMPy's default callbacks (an SSP
+run, FMPy's own simulate_fmu without a logger) calls freed memory and the process dies.
+`collecting()` gives a logger for one call, then points the proxy back at FMPy's own printer,
+through a thunk kept for the life of the process.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from ctypes import byref
+
+_printer = None  # (thunk, callbacks): created once, never freed
+
+
+def _point_proxy_at_printer():
+    global _printer
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+    from fmpy.logging import addLoggerProxy
+
+    if _printer is None:
+        _printer = (fmi2CallbackLoggerTYPE(printLogMessage), fmi2CallbackFunctions())
+    thunk, callbacks = _printer
+    # addLoggerProxy remembers callbacks.logger and replaces it by the proxy: hand it the printer each time.
+    callbacks.logger = thunk
+    addLoggerProxy(byref(callbacks))
+
+
+@contextmanager
+def collecting():
+    """`with collecting() as (messages, logger): simulate_fmu(..., logger=logger)`: each message
+    the FMU logs is appended to `messages` as text."""
+    messages: list[str] = []
+
+    def logger(*args):
+        message = args[-1]
+        messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
+
+    try:
+        yield messages, logger
+    finally:
+        _point_proxy_at_printer()
