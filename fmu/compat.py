@@ -21,6 +21,8 @@ from fmpy.util import write_csv
 
 from demo import scene_inputs
 
+ROLLER_EXTRA_PORTS = [f"web_a{k}.{q}" for k in (2, 3, 4) for q in ("F", "eps")] + [f"web_b{j}.F" for j in (2, 3, 4)]
+
 # The span's default scene is fmu/demo.py's; the Roller's is a motor torque
 # pulse under equal tensions: omega rises from 100 to 110 rad/s and holds.
 SCENES = {
@@ -37,10 +39,12 @@ SCENES = {
     "Roller": {
         "stop": 2.0,
         "step": 1e-3,
+        # The extra inlets' and outlets' inputs at 0: with one inlet and one outlet they are not read.
         "inputs": lambda fmu: table(
-            ["web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load"],
-            [(0.0, 844.0, 844.0, 1e-3, 0.0, 0.0), (0.5, 844.0, 844.0, 1e-3, 0.0, 0.0), (0.5, 844.0, 844.0, 1e-3, 0.5, 0.0),
-             (1.5, 844.0, 844.0, 1e-3, 0.5, 0.0), (1.5, 844.0, 844.0, 1e-3, 0.0, 0.0), (2.0, 844.0, 844.0, 1e-3, 0.0, 0.0)],
+            ["web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load"] + ROLLER_EXTRA_PORTS,
+            [row + (0.0,) * len(ROLLER_EXTRA_PORTS) for row in
+             [(0.0, 844.0, 844.0, 1e-3, 0.0, 0.0), (0.5, 844.0, 844.0, 1e-3, 0.0, 0.0), (0.5, 844.0, 844.0, 1e-3, 0.5, 0.0),
+              (1.5, 844.0, 844.0, 1e-3, 0.5, 0.0), (1.5, 844.0, 844.0, 1e-3, 0.0, 0.0), (2.0, 844.0, 844.0, 1e-3, 0.0, 0.0)]],
         ),
         "outputs": ["web_a.v", "omega"],
         "story": "A roller at 100 rad/s (5 m/s) between two spans at 844 N; the motor gives 0.5 N.m "

@@ -314,16 +314,23 @@ def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind,
 
 # ---------------------------------------------------------------- the Roller
 # The same check on the Roller: states omega, r, y, y' (ME), inputs web_a.F,
-# web_b.F, web_a.eps, tau_m, F_load. The outputs are polynomials in the states
-# and inputs (degree <= 4 in r), so the same steps and tolerances apply.
+# web_b.F, web_a.eps, tau_m, F_load and those of the extra inlets and outlets
+# (a merge and a split: cases with ports; elsewhere unused, their derivatives 0).
+# The outputs are polynomials in the states and inputs (degree <= 4 in r), or
+# the merged strain, a smooth ratio, so the same steps and tolerances apply.
 
-ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load")
+ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load", "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps",
+                 "web_a4.F", "web_a4.eps", "web_b2.F", "web_b3.F", "web_b4.F")
 ROLLER_STATES = ("omega", "r", "y", "y_dot")
 ROLLER_UNKNOWNS = ("web_a.v", "web_b.v", "web_b.eps", "omega", "r", "y", "y_dot", "tau", "web_a.x", "web_a.y",
-                   "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)")
-ROLLER_POINT = {"web_a.F": 180.0, "web_b.F": 230.0, "web_a.eps": 1e-3, "tau_m": 1.5, "F_load": 400.0}
+                   "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)", "web_a2.v", "web_a4.v",
+                   "web_b2.v", "web_b2.eps", "web_b4.eps")
+ROLLER_POINT = {"web_a.F": 180.0, "web_b.F": 230.0, "web_a.eps": 1e-3, "tau_m": 1.5, "F_load": 400.0,
+                "web_a2.F": 120.0, "web_a2.eps": 4e-3, "web_a3.F": 60.0, "web_a3.eps": -5e-4, "web_a4.F": 90.0,
+                "web_a4.eps": 2e-2, "web_b2.F": 70.0, "web_b3.F": 110.0, "web_b4.F": 40.0}
 ROLLER_PARAMS = {"J": 0.3, "R": 0.15, "b": 0.02, "v_start": 5.0, "wound.thickness": 1e-4, "wound.density": 900.0,
-                 "wound.width": 1.2, "carriage.m": 3.0, "carriage.d": 40.0, "carriage.k": 2000.0, "carriage.y_start": 0.5}
+                 "wound.width": 1.2, "carriage.m": 3.0, "carriage.d": 40.0, "carriage.k": 2000.0, "carriage.y_start": 0.5,
+                 "web_a.m": 0.12, "web_a2.m": 0.05, "web_a3.m": 0.3, "web_a4.m": 0.02}
 # Tables linear over the first 10 s: the test points sit inside one piece.
 DRIVES = {
     "idler": {},
@@ -332,17 +339,24 @@ DRIVES = {
     "speed": {"speed": [[0, 5.0], [10, 6.0]]},
 }
 ROLLER_CASES = [
-    (drive, roll, carriage)
+    (drive, roll, carriage, (1, 1))
     for drive in DRIVES
     for roll in (0, 1, 2)
     if not (drive == "tension" and roll == 0)  # a tension drive is an unwinder's or a winder's
     for carriage in (False, True)
+] + [
+    # (inlets, outlets): a nip on a dancer, a slitter's unwinder, a winder of four webs.
+    ("speed", 0, True, (3, 2)),
+    ("tension", 1, False, (2, 4)),
+    ("idler", 2, True, (4, 4)),
+    ("torque", 0, False, (4, 1)),
 ]
 
 
 def roller_label(case):
-    drive, roll, carriage = case
-    return f"{drive}-{['roller', 'unwinder', 'winder'][roll]}{'-dancer' if carriage else ''}"
+    drive, roll, carriage, (inlets, outlets) = case
+    ports = f"-{inlets}in{outlets}out" if (inlets, outlets) != (1, 1) else ""
+    return f"{drive}-{['roller', 'unwinder', 'winder'][roll]}{'-dancer' if carriage else ''}{ports}"
 
 
 @pytest.fixture(scope="module")
@@ -362,7 +376,7 @@ def roller_jacobians(fmu, vr, unknowns, knowns):
         column = fmu.getDirectionalDerivative(u_refs, [vr[k]], [1.0])
         x = fmu.getReal([vr[s] for s in states])
         value = x[states.index(k)] if k in states else fmu.getReal([vr[k]])[0]
-        h = STEP * max(abs(value), 1e-3 if k in ("web_a.eps", "r") else 1.0)
+        h = STEP * max(abs(value), 1e-3 if k.endswith(".eps") or k == "r" else 1.0)
 
         def put(v):
             if k in states:
@@ -390,7 +404,7 @@ def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
     import json
 
     md, unzipdir, vr = roller
-    drive, roll, carriage = case
+    drive, roll, carriage, (inlets, outlets) = case
     profile = dict(DRIVES[drive])
     if carriage:
         profile["load"] = [[0, 50.0], [10, 80.0]]
@@ -399,7 +413,8 @@ def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
     me = kind == "ModelExchange"
     fmu = instantiate(unzipdir, md, kind)
     try:
-        values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "profile": str(path)}
+        values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "profile": str(path),
+                  "inlets": inlets, "outlets": outlets}
         start(fmu, vr, values, me=me)
         if me:
             fmu.setTime(0.25)

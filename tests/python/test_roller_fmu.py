@@ -66,7 +66,13 @@ def test_validates_and_is_the_roller(roller_path, md):
     names = [v.name for v in md.modelVariables]
     assert names[:4] == ["J", "R", "b", "v_start"]
     assert [n for n in names if n.startswith("web_")] == ["web_a.F", "web_b.F", "web_a.eps", "web_a.v", "web_b.v", "web_b.eps",
-                                                          "web_a.x", "web_a.y", "web_b.x", "web_b.y"]
+                                                          "web_a.x", "web_a.y", "web_b.x", "web_b.y",
+                                                          # the extra inlets and outlets, after the plain roller's variables
+                                                          "web_a.m", "web_a2.m", "web_a3.m", "web_a4.m",
+                                                          "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps", "web_a4.F", "web_a4.eps",
+                                                          "web_b2.F", "web_b3.F", "web_b4.F", "web_a2.v", "web_a3.v", "web_a4.v",
+                                                          "web_b2.v", "web_b2.eps", "web_b3.v", "web_b3.eps", "web_b4.v", "web_b4.eps"]
+    assert [v.valueReference for v in md.modelVariables if v.name in ("inlets", "outlets")] == [36, 37]
     assert md.modelExchange is not None and md.modelExchange.modelIdentifier == "Roller"
     units = {v.name: v.unit for v in md.modelVariables}
     assert units["J"] == "kg.m2" and units["b"] == "N.m.s" and units["tau_m"] == "N.m" and units["omega"] == "rad/s"

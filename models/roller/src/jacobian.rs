@@ -4,7 +4,7 @@
 //! time only, so they and their slopes are held.
 
 use crate::drive::{Drive, Key};
-use crate::physics::{self, Inputs};
+use crate::physics::{self, Inputs, Parameters};
 use crate::Roller;
 use std::f64::consts::PI;
 
@@ -25,6 +25,15 @@ pub struct Tangents {
     pub derivatives: [f64; 4],
 }
 
+/// d(eps_b) of [R5] along d(inputs): one inlet passes its strain on.
+fn strain_leaving_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
+    if p.inlets == 1 {
+        return d.strain_a[0];
+    }
+    let gradient = physics::merged_strain_gradient(p, &u.strain_a);
+    gradient.iter().zip(&d.strain_a).map(|(g, x)| g * x).sum()
+}
+
 impl Roller {
     /// d(everything)/d(direction) now.
     pub fn tangents(&self, d: &Direction) -> Tangents {
@@ -41,8 +50,8 @@ impl Roller {
         let c = if winding { p.roll_sign() * p.wound_thickness / (2.0 * PI) } else { 0.0 };
         let r_rate = c * v / r;
         let d_r_rate = c * (d_v * r - v * d_r) / (r * r);
-        let web_torque = physics::web_torque(r, u);
-        let d_web_torque = d_r * (u.force_b - u.force_a) + r * (d.u.force_b - d.u.force_a);
+        let web_torque = physics::web_torque(p, r, u);
+        let d_web_torque = d_r * (u.pull_forward(p) - u.pull_back(p)) + r * (d.u.pull_forward(p) - d.u.pull_back(p));
         let (d_torque, d_omega_rate) = match speed_table {
             // tau = J*v'/r + b*omega - r*(F_b - F_a); omega' = v'/r - v*r'/r^2.
             Some(t) => {
@@ -69,14 +78,14 @@ impl Roller {
         };
         // [R4] on a carriage: y'' = (F_load + load - F_a - F_b - d*y' - k*(y - y_start))/m.
         let (d_y_rate, d_y_dot_rate) = if p.carriage {
-            let force = d.u.load - d.u.force_a - d.u.force_b;
+            let force = d.u.load - d.u.pull_back(p) - d.u.pull_forward(p);
             (d_y_dot, (force - p.carriage_damping * d_y_dot - p.carriage_stiffness * d_y) / p.carriage_mass)
         } else {
             (0.0, 0.0)
         };
         Tangents {
             speed: if speed_table.is_some() { 0.0 } else { d_v },
-            strain_leaving: if self.table(Key::Strain).is_some() { 0.0 } else { d.u.strain_a },
+            strain_leaving: if self.table(Key::Strain).is_some() { 0.0 } else { strain_leaving_tangent(p, u, &d.u) },
             torque: d_torque,
             derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate],
         }

@@ -44,9 +44,9 @@ fmi_core::bind_variables! {
         carriage_d: param(params.carriage_damping),
         carriage_k: param(params.carriage_stiffness),
         carriage_y_start: param(params.carriage_start),
-        web_a_F: input(force_a),
-        web_b_F: input(force_b),
-        web_a_eps: input(strain_a),
+        web_a_F: input(force_a[0]),
+        web_b_F: input(force_b[0]),
+        web_a_eps: input(strain_a[0]),
         tau_m: input(torque),
         F_load: input(load),
         web_a_v: computed(surface_speed()),
@@ -65,9 +65,33 @@ fmi_core::bind_variables! {
         der_r: computed(derivatives()[1]),
         der_y: computed(derivatives()[2]),
         der_y_dot: computed(derivatives()[3]),
+        web_a_m: param(params.mass_a[0]),
+        web_a2_m: param(params.mass_a[1]),
+        web_a3_m: param(params.mass_a[2]),
+        web_a4_m: param(params.mass_a[3]),
+        web_a2_F: input(force_a[1]),
+        web_a2_eps: input(strain_a[1]),
+        web_a3_F: input(force_a[2]),
+        web_a3_eps: input(strain_a[2]),
+        web_a4_F: input(force_a[3]),
+        web_a4_eps: input(strain_a[3]),
+        web_b2_F: input(force_b[1]),
+        web_b3_F: input(force_b[2]),
+        web_b4_F: input(force_b[3]),
+        web_a2_v: computed(surface_speed()),
+        web_a3_v: computed(surface_speed()),
+        web_a4_v: computed(surface_speed()),
+        web_b2_v: computed(surface_speed()),
+        web_b2_eps: computed(strain_leaving()),
+        web_b3_v: computed(surface_speed()),
+        web_b3_eps: computed(strain_leaving()),
+        web_b4_v: computed(surface_speed()),
+        web_b4_eps: computed(strain_leaving()),
     }
     integer {
         roll: param(params.roll),
+        inlets: param(params.inlets),
+        outlets: param(params.outlets),
     }
     boolean {
         carriage: param(params.carriage),
@@ -124,9 +148,10 @@ impl Roller {
         }
     }
 
-    /// The strain of the leaving web: the profile's, else the arriving one's.
+    /// The strain of the leaving web (at every outlet): the profile's, else
+    /// the arriving web's, merged [R5] when several arrive.
     pub fn strain_leaving(&self) -> f64 {
-        self.table(Key::Strain).map_or(self.inputs.strain_a, |t| t.value(self.time))
+        self.table(Key::Strain).map_or_else(|| physics::merged_strain(&self.params, &self.inputs.strain_a), |t| t.value(self.time))
     }
 
     /// The drive's torque at time t, and its rate (a speed drive: 0, see
@@ -148,17 +173,17 @@ impl Roller {
         match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => {
                 let (j, r, omega) = (self.roll.inertia, self.roll.radius, self.omega.value());
-                j * t.slope(self.time) / r + self.params.damping * omega - physics::web_torque(r, &self.inputs)
+                j * t.slope(self.time) / r + self.params.damping * omega - physics::web_torque(&self.params, r, &self.inputs)
             }
             _ => self.torque_at(self.time).0,
         }
     }
 
-    /// The carriage's force (load minus the spans' pull) at t, and its rate.
+    /// The carriage's force (load minus every span's pull) [R4] at t, and its rate.
     fn carriage_force(&self, t: f64) -> (f64, f64) {
-        let u = &self.inputs;
+        let (p, u) = (&self.params, &self.inputs);
         let (load, rate) = self.table(Key::Load).map_or((0.0, 0.0), |l| (l.value(t), l.slope(t)));
-        (u.load + load - u.force_a - u.force_b, rate)
+        (u.load + load - u.pull_back(p) - u.pull_forward(p), rate)
     }
 
     fn contact_a_x(&self) -> f64 {
@@ -185,7 +210,7 @@ impl Roller {
         let omega_rate = match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => t.slope(self.time) / r - v * radius_rate / (r * r),
             _ => {
-                let torque = physics::web_torque(r, &self.inputs) + self.torque_at(self.time).0;
+                let torque = physics::web_torque(p, r, &self.inputs) + self.torque_at(self.time).0;
                 (torque - p.damping * omega - inertia_rate * omega) / self.roll.inertia
             }
         };
@@ -267,7 +292,7 @@ impl Roller {
                 carriage[0],
                 carriage[1],
                 roll.inertia,
-                physics::web_torque(r, &self.inputs)
+                physics::web_torque(p, r, &self.inputs)
             )));
         }
         (self.omega, self.roll, self.carriage) = (omega, roll, carriage);
@@ -427,8 +452,9 @@ impl Model for Roller {
         let t = self.tangents(&d);
         // The same outputs as the bindings above.
         Ok(match real(unknown)? {
-            Real::web_a_v | Real::web_b_v => t.speed,
-            Real::web_b_eps => t.strain_leaving,
+            Real::web_a_v | Real::web_b_v | Real::web_a2_v | Real::web_a3_v | Real::web_a4_v => t.speed,
+            Real::web_b2_v | Real::web_b3_v | Real::web_b4_v => t.speed,
+            Real::web_b_eps | Real::web_b2_eps | Real::web_b3_eps | Real::web_b4_eps => t.strain_leaving,
             Real::omega => d.state[0],
             Real::r => d.state[1],
             Real::y => d.state[2],

@@ -1,10 +1,12 @@
 //! The equations of a line part that is not a span (the Roller FMU's
 //! documentation numbers them):
 //!
-//! [R1]  d(J*omega)/dt = r*(F_b - F_a) + tau - b*omega     (F_a: web_a.F, F_b: web_b.F)
+//! [R1]  d(J*omega)/dt = r*(F_b - F_a) + tau - b*omega     (F_a: sum of web_a*.F, F_b: sum of web_b*.F)
 //! [R2]  v = r*omega
 //! [R3]  d(r^2)/dt = s*h_w*v/pi, J = J0 + (pi/2)*rho*w*(r^4 - r0^4)   (s = -1 unwinder, +1 winder)
 //! [R4]  m*y'' = F_load + load - F_a - F_b - d*y' - k*(y - y_start)    (a dancer's carriage)
+//! [R5]  1/(1+eps_b) = sum_i (m_i/M)/(1+eps_i), M = sum_i m_i          (several inlets: the merge)
+//!       evaluated as eps_b = sum_i q_i*eps_i / sum_i q_i, q_i = m_i/(1+eps_i)
 //!
 //! Over a piece of a communication step where the inputs are held and the
 //! profiles are linear in time, [R1] with r and J held is a linear ODE with
@@ -33,6 +35,20 @@ pub struct Parameters {
     pub carriage_stiffness: f64,
     pub carriage_start: f64,
     pub profile: std::sync::Arc<str>,
+    /// Webs arriving (web_a, web_a2, ...) and leaving (web_b, web_b2, ...), 1..=4.
+    pub inlets: i32,
+    pub outlets: i32,
+    /// Mass per unstretched length of each arriving web [R5], kg/m.
+    pub mass_a: [f64; PORTS],
+}
+
+/// The most webs a roller takes in or gives out.
+pub const PORTS: usize = 4;
+
+/// A count of ports as an index bound: 1..=PORTS (a count outside it is
+/// refused when initialization ends; until then it must not panic).
+fn ports(count: i32) -> usize {
+    count.clamp(1, PORTS as i32) as usize
 }
 
 pub const UNWINDER: i32 = 1;
@@ -55,14 +71,74 @@ impl Parameters {
     }
 }
 
-/// Inputs, SI, held over a communication step.
+/// Inputs, SI, held over a communication step. Port k's (web_a<k>, web_b<k>)
+/// at index k - 1; the ports beyond `inlets` and `outlets` are not read.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Inputs {
-    pub force_a: f64,
-    pub force_b: f64,
-    pub strain_a: f64,
+    pub force_a: [f64; PORTS],
+    pub force_b: [f64; PORTS],
+    pub strain_a: [f64; PORTS],
     pub torque: f64,
     pub load: f64,
+}
+
+/// The sum of the first `count` ports' tensions: one port is read as it
+/// is (the plain roller, bit for bit), and no loop runs over unused ones.
+fn pull(forces: &[f64; PORTS], count: i32) -> f64 {
+    match ports(count) {
+        1 => forces[0],
+        2 => forces[0] + forces[1],
+        3 => forces[0] + forces[1] + forces[2],
+        _ => forces[0] + forces[1] + forces[2] + forces[3],
+    }
+}
+
+impl Inputs {
+    /// F_a of [R1] and [R4]: every arriving web's tension.
+    pub fn pull_back(&self, p: &Parameters) -> f64 {
+        pull(&self.force_a, p.inlets)
+    }
+
+    /// F_b of [R1] and [R4]: every leaving web's tension.
+    pub fn pull_forward(&self, p: &Parameters) -> f64 {
+        pull(&self.force_b, p.outlets)
+    }
+}
+
+/// The strain of the web leaving the nip [R5]: with one inlet the arriving
+/// strain itself; with several, the mean of their strains weighted by
+/// q_i = m_i/(1+eps_i) (each web's share of the mass flowing in). Both sums
+/// have terms of one sign where the strains do, so nothing cancels
+/// (1/(1+eps_b) - 1 would lose digits for small strains).
+pub fn merged_strain(p: &Parameters, strain: &[f64; PORTS]) -> f64 {
+    let n = ports(p.inlets);
+    if n == 1 {
+        return strain[0];
+    }
+    let (mut weighted, mut total) = (0.0, 0.0);
+    for i in 0..n {
+        let q = p.mass_a[i] / (1.0 + strain[i]);
+        weighted += q * strain[i];
+        total += q;
+    }
+    weighted / total
+}
+
+/// d(eps_b)/d(eps_i) of [R5], for each inlet i (0 beyond `inlets`):
+/// (m_i/M)*((1+eps_b)/(1+eps_i))^2, from differentiating 1/(1+eps_b).
+pub fn merged_strain_gradient(p: &Parameters, strain: &[f64; PORTS]) -> [f64; PORTS] {
+    let n = ports(p.inlets);
+    let mut gradient = [0.0; PORTS];
+    if n == 1 {
+        gradient[0] = 1.0;
+        return gradient;
+    }
+    let merged = merged_strain(p, strain);
+    let total: f64 = p.mass_a[..n].iter().sum();
+    for i in 0..n {
+        gradient[i] = p.mass_a[i] / total * ((1.0 + merged) / (1.0 + strain[i])).powi(2);
+    }
+    gradient
 }
 
 /// The roll's size: r, and J as [R3] gives it from a reference (J0 at r0).
@@ -100,9 +176,9 @@ pub fn surface_speed(radius: f64, omega: f64) -> f64 {
     radius * omega
 }
 
-/// The web's torque on the roller, r*(F_b - F_a), N m.
-pub fn web_torque(radius: f64, u: &Inputs) -> f64 {
-    radius * (u.force_b - u.force_a)
+/// The webs' torque on the roller, r*(F_b - F_a) [R1], N m.
+pub fn web_torque(p: &Parameters, radius: f64, u: &Inputs) -> f64 {
+    radius * (u.pull_forward(p) - u.pull_back(p))
 }
 
 /// [R1] with r and J held over a piece of length h: the drive torque is
@@ -111,7 +187,7 @@ pub fn web_torque(radius: f64, u: &Inputs) -> f64 {
 pub fn rotation_step(p: &Parameters, roll: &Roll, u: &Inputs, omega: CompensatedSum, tau0: f64, tau1: f64, h: f64) -> CompensatedSum {
     let j = roll.inertia;
     let decay = p.damping / j;
-    let a0 = (web_torque(roll.radius, u) + tau0) / j;
+    let a0 = (web_torque(p, roll.radius, u) + tau0) / j;
     let a1 = tau1 / j;
     omega.plus((a0 - decay * omega.value()) * decay_integral(decay, h) + a1 * ramp_integral(decay, h))
 }

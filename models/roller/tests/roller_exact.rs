@@ -65,14 +65,14 @@ fn description_is_the_roller() {
     assert!(!range("R").contains(0.0) && !range("R").contains(1e-12) && range("R").contains(1e-6));
     assert!(range("b").contains(0.0) && !range("b").contains(-1e-12));
     assert!(!range("web_a.eps").contains(-1.0) && range("web_a.eps").contains(-0.999));
-    // Only the strain passed on and the drive's torque feed through from an input within a step.
+    // Only the strains passed on and the drive's torque feed through from an input within a step.
     let through: Vec<&str> = DESCRIPTION
         .output_dependencies
         .iter()
         .filter(|d| d.on.as_ref().is_some_and(|on| on.iter().any(|vr| DESCRIPTION.variable(*vr).unwrap().causality == Causality::Input)))
         .map(|d| &*DESCRIPTION.variable(d.vr).unwrap().name)
         .collect();
-    assert_eq!(through, ["web_b.eps", "tau"]);
+    assert_eq!(through, ["web_b.eps", "tau", "web_b2.eps", "web_b3.eps", "web_b4.eps"]);
 }
 
 #[test]
@@ -180,10 +180,10 @@ fn save_and_load_continue_bit_identically() {
 #[test]
 fn physics_helpers_agree_with_the_equation() {
     let p = Parameters { inertia: 2.0, radius: 0.5, damping: 0.4, ..Parameters::default() };
-    let u = Inputs { force_a: 10.0, force_b: 30.0, torque: 1.0, ..Inputs::default() };
+    let u = Inputs { force_a: [10.0, 0.0, 0.0, 0.0], force_b: [30.0, 0.0, 0.0, 0.0], torque: 1.0, ..Inputs::default() };
     // J w' = R (F_b - F_a) + tau - b w = 0.5*20 + 1 - 0.4*3 = 9.8 at w = 3
     let mut m = roller(p.inertia, p.radius, p.damping, 3.0);
-    set_inputs(&mut m, u.force_a, u.force_b, u.torque);
+    set_inputs(&mut m, u.force_a[0], u.force_b[0], u.torque);
     assert!((m.derivatives()[0] - 9.8 / 2.0).abs() < 1e-15);
     assert_eq!(roller::physics::surface_speed(0.5, 3.0), 1.5);
 }

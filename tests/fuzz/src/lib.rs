@@ -201,8 +201,13 @@ fn sane_real(src: &mut Source, v: &Variable) -> f64 {
 }
 
 fn integer(src: &mut Source, v: Option<&Variable>) -> i32 {
-    match (src.pick(3), v.map(|v| v.kind)) {
-        (0, Some(Kind::Enumeration { values, .. })) => values[src.pick(values.len())],
+    match (src.pick(3), v) {
+        (0, Some(Variable { kind: Kind::Enumeration { values, .. }, .. })) => values[src.pick(values.len())],
+        // An Integer inside its range (the Roller's counts of inlets and outlets,
+        // its kind of roll): keeps sequences on the paths where the model computes.
+        (0, Some(Variable { kind: Kind::Integer, range, .. })) if range.lo.is_finite() && range.hi - range.lo < 256.0 => {
+            range.lo as i32 + src.pick((range.hi - range.lo) as usize + 1) as i32
+        }
         (1, _) => NASTY_INTS[src.pick(NASTY_INTS.len())],
         _ => src.u32() as i32,
     }
@@ -2497,6 +2502,37 @@ fn op_arm_panic(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 
 /// A legal move: instantiate, or the next lifecycle call of the state the
 /// slot is in, with sane arguments. Keeps random sequences going deep.
+/// Integer parameters with a small range (the Roller's inlets, outlets and
+/// kind of roll): their values in one valid fmi2SetInteger (fmi3SetInt32) in
+/// the instantiated state, so that sequences run through the configurations
+/// they select (several ports, a roll), which random sets rarely reach.
+fn configured_integers() -> Vec<&'static Variable> {
+    desc()
+        .variables
+        .iter()
+        .filter(|v| v.kind == Kind::Integer && v.causality == Causality::Parameter && v.range.lo.is_finite() && v.range.hi - v.range.lo < 256.0)
+        .collect()
+}
+
+fn configure(r: &mut Run, i: usize, src: &mut Source) -> Result<(), Violation> {
+    let vars = configured_integers();
+    if vars.is_empty() {
+        return Ok(());
+    }
+    let vrs: Vec<u32> = vars.iter().map(|v| v.vr).collect();
+    let values: Vec<i64> = vars.iter().map(|v| v.range.lo as i64 + src.pick((v.range.hi - v.range.lo) as usize + 1) as i64).collect();
+    let (api, c) = (r.api, r.slot(i).c);
+    let what = std::mem::replace(&mut r.what, format!("configuration {:?} [slot {i}]", vrs.iter().zip(&values).collect::<Vec<_>>()));
+    let s = unsafe { api.set_integer(Int::Int32, c, vrs.as_ptr(), vrs.len(), values.as_ptr(), vrs.len()) };
+    r.out.calls += 1;
+    r.check_status(s, &[OK])?;
+    r.after(i, s)?;
+    let slot = r.slot_mut(i);
+    slot.values = slot.values.worsen(Values::Moderate);
+    r.what = what;
+    Ok(())
+}
+
 fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let i = src.pick(2);
     let api = r.api;
@@ -2553,6 +2589,9 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         } else {
             match st {
                 St::Instantiated => {
+                    if src.chance(64) {
+                        configure(r, i, src)?;
+                    }
                     if api == Api::Fmi2 {
                         let s = fmi2SetupExperiment(c, 0, 0.0, time, 0, 0.0);
                         r.check_status(s, &[OK])?;
