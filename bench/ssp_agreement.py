@@ -18,12 +18,7 @@ def main():
           "| FMPy vs reference | webline (Jacobi, held) vs reference |")
     print("|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
-        from webline.scene import load_scene
-
         for path in sorted((ROOT / "webline" / "scenes").glob("*.json")):
-            if load_scene(path).branches:  # merge/split: not in the FMUs yet, so not in SSP (issue 21)
-                print(f"| {path.stem} | merge/split: not exported yet |", flush=True)
-                continue
             r = agreement(path, ROOT / "out", Path(tmp))
             print(f"| {r['scene']} | {r['step'] * 1e3:g} ms | {r['steps']} | {r['libcosim_vs_webline']:.1e} "
                   f"| {r['fmpy_vs_webline']:.1e} | {r['libcosim_vs_reference']:.1e} | {r['fmpy_vs_reference']:.1e} "

@@ -125,7 +125,7 @@ def cmd_export(args):
         return 0
     if args.fmi3:
         raise SceneError("--fmi3 goes with --fmu (an SSP archive carries the FMI 2.0 FMUs)")
-    system = compile_scene(scene, args.fmu_dir, engine="the SSP export")
+    system = compile_scene(scene, args.fmu_dir)
     system.step = args.step or export_step(system)
     path = write_ssp(system, args.output or Path(args.out) / f"{scene.name}.ssp")
     print(f"{scene.name}: {len(system.components)} FMU components, {len(system.connections)} connections, "
@@ -153,7 +153,7 @@ def run_other(args, progress):
             from .stability import export_step
 
             scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-            system = compile_scene(scene, args.fmu_dir, engine=f"the {args.engine} engine (the scene exported to SSP)")
+            system = compile_scene(scene, args.fmu_dir)
             system.step = export_step(system)
             archive = write_ssp(system, tmp / f"{scene.name}.ssp")
         system = read_ssp(archive, tmp / "extracted")
@@ -252,10 +252,6 @@ def cmd_check(args):
                 side = " -> ".join(f"{c.name} ({c.type})" for c in b.parts)
                 print(f"  {b.kind} at {b.node}: " + (f"{side} -> {b.node}" if b.kind == "merge" else f"{b.node} -> {side}"))
             if args.describe_only:
-                continue
-            if scene.branches:  # the stability analysis linearizes the FMUs, which do not merge or split yet
-                print("  stability: not analysed: merge and split run in the monolithic reference only so far "
-                      "(webline run --engine reference)")
                 continue
             system = compile_scene(scene, args.fmu_dir, settle=False)
         try:

@@ -13,6 +13,9 @@ roller.web_a.F <- span.web_b.F; the strain goes span to span
 (span2.web_a.eps <- span1.web_b.eps), the first span's from the line's
 first roller (web_b.eps); spans on a dancer take the height of their moving
 end from its tangent points (web_a.y, web_b.y; the x are constants).
+A nip where webs merge and a slitter that splits the web use the Roller's
+extra ports (web_a2..4, web_b2..4; docs/merge-split.md, "The FMUs' wiring"):
+there the strain goes through the roller (web_a<k>.eps in, web_b<j>.eps out).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile, span_effects
 from .master import Master, Options, settle_start_values
 from .profiles import Profile
 from .result import Result
-from .scene import Dancer, Scene, Span
+from .scene import Dancer, Scene, SceneError, Span
 from .system import Component, Connection, System
 
 # A roller whose surface speed is prescribed (source, sink, speed drive) needs
@@ -31,6 +34,7 @@ from .system import Component, Connection, System
 PRESCRIBED_J = 0.01  # kg.m2
 PRESCRIBED_R = 0.1  # m
 ROLL = {"unwinder": 1, "winder": 2}  # the Roller's Integer `roll`; 0 otherwise
+MAX_PORTS = 4  # the Roller's inlets web_a..web_a4 and outlets web_b..web_b4
 WEB_FIELDS = ("E", "thickness", "width", "density", "d_r")
 
 # A scene's recorded quantity -> the FMU variable that holds it.
@@ -163,7 +167,7 @@ def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
     if isinstance(c, Span):
         return SPAN_VARIABLES[quantity]
     if quantity == "v":
-        return "web_b.v" if c.index == 0 else "web_a.v"
+        return "web_b.v" if not scene.spans_in(c) else "web_a.v"
     return ROLLER_VARIABLES[quantity]
 
 
@@ -184,23 +188,67 @@ def equilibrium_starts(scene: Scene) -> dict:
     return starts
 
 
-def compile_scene(scene: Scene, fmu_dir=None, settle=True, engine="a line of FMUs") -> System:
-    """The System of a scene: a Roller per node (in line order), then a span per
-    span (in line order), their profiles, connections and the recorded variables.
-    `settle`: connected inputs start at the initial outputs that feed them, read
-    from the FMUs themselves (`master.settle_start_values`). A scene whose webs
-    merge or split is refused, naming `engine`: the FMUs do not know them yet."""
-    scene.refuse_branches(engine)
+def port(side: str, k: int) -> str:
+    """The Roller's port k (1-based) on side "web_a" (inlets) or "web_b" (outlets): web_a, web_a2, ..."""
+    return side if k == 1 else f"{side}{k}"
+
+
+def _ports(scene: Scene, node, side: str, spans: list) -> int:
+    """How many webs meet at (side "web_a") or leave (side "web_b") a roller: the Roller has four of each."""
+    if len(spans) > MAX_PORTS:
+        what = "merges" if side == "web_a" else "splits the web into"
+        webs = "webs" if side == "web_a" else "lanes"
+        raise SceneError(f"{scene.path}: {node.type} {node.name!r} {what} {len(spans)} {webs} ({', '.join(sp.name for sp in spans)}); "
+                         f"the Roller FMU has at most {MAX_PORTS} {'inlets' if side == 'web_a' else 'outlets'}")
+    return len(spans)
+
+
+def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
+    """The System of a scene: a Roller per node (in the order the web flows), then a span per
+    span (the same order, side paths included), their profiles, connections and the recorded
+    variables. `settle`: connected inputs start at the initial outputs that feed them, read
+    from the FMUs themselves (`master.settle_start_values`).
+
+    A nip where webs merge is a Roller with `inlets` = the number of webs arriving: the main
+    line's span at web_a, each side path's last span at web_a2..4, their masses per unstretched
+    length (`Web.rho_l`, as the reference weights them) as web_a.m, web_a2..4.m; the span after
+    the nip takes the merged strain, the nip's web_b.eps [R5]. A slitter has `outlets` = the
+    number of lanes: the main line's lane at web_b, each side path's first span at web_b2..4,
+    each taking its strain from its port (the strain arriving, through the slitter's web_a.eps).
+    More than four webs at a roller are refused, naming it. (The Line FMU, whose network is its
+    own, refuses merges and splits itself: `linefmu`.)"""
     d = Path(fmu_dir or DEFAULT_FMU_DIR)
     span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
     solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}
     equilibrium = equilibrium_starts(scene)
     effects = span_effects(d)
-    rollers = [_roller(scene, n, roller_fmu) for n in scene.nodes]
+    rollers = []
+    for n in scene.nodes:
+        comp = _roller(scene, n, roller_fmu)
+        ins, outs = scene.spans_in(n), scene.spans_out(n)
+        if _ports(scene, n, "web_a", ins) > 1:
+            comp.start["inlets"] = len(ins)
+            comp.start.update({f"{port('web_a', k)}.m": float(m) for k, m in enumerate(scene.inlet_masses(n), 1)})
+        if _ports(scene, n, "web_b", outs) > 1:
+            comp.start["outlets"] = len(outs)
+        rollers.append(comp)
+    # Strains a span starts at when its scene gives none: with side paths the reference's own start
+    # (the same rule, with the merged strain [M2] after a nip), so that every engine starts alike.
+    given = None
+    if scene.branches:
+        from .reference import LineODE
+
+        ode = LineODE(scene)
+        z = ode.given_state()
+        given = {sp.name: float(z[ode.i_eps[sp.name]]) for sp in scene.spans}
     spans = []
     eps_in = _start_strain(scene.line[0])
     for sp in scene.spans:
+        if given is not None:
+            eps_in = given[sp.name]  # used only when the span has no eps_start: then it is its start
         comp = _span(scene, sp, eps_in, span_fmu, solvers, effects)
+        if given is not None and sp.eps_start is None:
+            comp.start["eps_start"] = given[sp.name]
         eps_in = comp.start["eps_start"]
         spans.append(comp)
     for comp in rollers + spans:
@@ -211,20 +259,28 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, engine="a line of FMU
     def connect(src, out, dst, inp):
         connections.append(Connection((src, out), (dst, inp)))
 
+    def branched(node):  # a nip or a slitter: the strain goes through the Roller
+        return len(scene.spans_in(node)) > 1 or len(scene.spans_out(node)) > 1
+
     for sp in scene.spans:
         up, down = scene.upstream(sp), scene.downstream(sp)
-        connect(up.name, "web_b.v", sp.name, "web_a.v")
-        if sp.index == 1:
-            connect(up.name, "web_b.eps", sp.name, "web_a.eps")
+        a = port("web_b", scene.spans_out(up).index(sp) + 1)  # the port of `up` the span leaves from
+        b = port("web_a", scene.spans_in(down).index(sp) + 1)  # the port of `down` it arrives at
+        connect(up.name, f"{a}.v", sp.name, "web_a.v")
+        before = scene.spans_in(up)
+        if not before or branched(up):
+            connect(up.name, f"{a}.eps", sp.name, "web_a.eps")
         else:
-            connect(scene.line[sp.index - 2].name, "web_b.eps", sp.name, "web_a.eps")
-        connect(down.name, "web_a.v", sp.name, "web_b.v")
+            connect(before[0].name, "web_b.eps", sp.name, "web_a.eps")
+        connect(down.name, f"{b}.v", sp.name, "web_b.v")
+        if branched(down):
+            connect(sp.name, "web_b.eps", down.name, f"{b}.eps")
         if isinstance(down, Dancer):
             connect(down.name, "web_a.y", sp.name, "frame_b.y")
         if isinstance(up, Dancer):
             connect(up.name, "web_b.y", sp.name, "frame_a.y")
-        connect(sp.name, "web_a.F", up.name, "web_b.F")
-        connect(sp.name, "web_b.F", down.name, "web_a.F")
+        connect(sp.name, "web_a.F", up.name, f"{a}.F")
+        connect(sp.name, "web_b.F", down.name, f"{b}.F")
 
     system = System(
         name=scene.name,
@@ -242,7 +298,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, engine="a line of FMU
 
 def run_scene(scene, fmu_dir=None, **options) -> Result:
     """A scene compiled and run; the columns named as the scene records them ("film.T [N]")."""
-    result = Master(compile_scene(scene, fmu_dir, engine="webline's co-simulation of FMUs (--engine webline)"),
+    result = Master(compile_scene(scene, fmu_dir),
                     Options(**options)).run()
     result.scene = scene.name
     result.columns = scene.columns()

@@ -177,7 +177,7 @@ class LineODE:
             return 1.0 + self.pv(node.strain, t)
         if len(ins) == 1:
             return 1.0 + z[self.i_eps[ins[0].name]]
-        m = [self.web[sp.name][1].rho_l for sp in ins]
+        m = self.s.inlet_masses(node, lambda sp: self.web[sp.name][1])
         return sum(m) / sum(mi / (1.0 + z[self.i_eps[sp.name]]) for mi, sp in zip(m, ins))
 
     def initial_state(self):

@@ -252,6 +252,13 @@ class Scene:
         """The spans that start at a roller: one, none at the line's end, several at a slitter."""
         return self._links[3].get(node.name, [])
 
+    def inlet_masses(self, node, web_of=None):
+        """The masses per unstretched length m_i = rho_i*A_i of the webs arriving at `node`, in port
+        order (the main line's first, then the side paths'): the weights of a merge ([M1], the Roller's
+        [R5]). Each is the web its span carries at its end (wp2), or `web_of(span)` (the reference's,
+        after an event changed it). The reference and the FMUs' compiler both take them from here."""
+        return [(web_of(sp) if web_of else sp.wp2).rho_l for sp in self.spans_in(node)]
+
     def span_before(self, node):
         return _single(self.spans_in(node), node, "merges webs")
 
@@ -259,13 +266,14 @@ class Scene:
         return _single(self.spans_out(node), node, "splits the web")
 
     def refuse_branches(self, engine: str):
-        """A merge or split stops an engine that does not know them yet (the FMUs'
-        side comes in a later step of issue 21)."""
+        """A merge or split stops an engine that does not know them yet: the Line FMU, whose
+        network of parts is its own (issue 21). webline's co-simulation and the SSP export run them."""
         if self.branches:
             b = self.branches[0]
             what = "merges webs" if b.kind == "merge" else "splits the web"
             raise SceneError(f"{self.path}: roller {b.node!r} {what} ({b.kind}); {engine} does not support merge "
-                             "or split yet: run this scene with the monolithic reference (webline run --engine reference)")
+                             "or split yet: run this scene as a line of FMUs (webline run --engine webline, or exported to SSP) "
+                             "or with the monolithic reference (webline run --engine reference)")
 
     def speed_profile(self, node):
         """The prescribed speed of a node, or None if it has dynamics."""
