@@ -399,8 +399,8 @@ def test_the_nip_and_the_slitter_are_wired_to_their_ports():
     assert {(("nip", "web_a.F"), ("film", "web_b.F")), (("nip", "web_a.eps"), ("film", "web_b.eps")),
             (("film", "web_b.v"), ("nip", "web_a.v")), (("nip", "web_a2.F"), ("foil", "web_b.F")),
             (("nip", "web_a2.eps"), ("foil", "web_b.eps")), (("foil", "web_b.v"), ("nip", "web_a2.v")),
-            (("laminate", "web_a.eps"), ("nip", "web_b.eps")), (("foil", "web_a.eps"), ("foil_in", "web_b.eps")),
-            (("foil_in", "web_a.eps"), ("foil_unwind", "web_b.eps"))} <= links
+            (("laminate", "web_a.eps"), ("nip", "web_b.eps")), (("foil", "web_a.eps"), ("infeed", "web_b.eps")),
+            (("infeed", "web_a.eps"), ("unwind_foil", "web_b.eps"))} <= links
     assert not any(t == ("idler", "web_a.eps") for t, _ in links)  # a plain roller: span to span
     assert system.component("laminate").start["wp1.density"] == lam.webs["PET/Al"].density
     sl = load_scene(SCENES / "slitter.json")

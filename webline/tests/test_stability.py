@@ -274,7 +274,7 @@ LINES = {
     "light_idler": (light_idler_scene, "idler"),
     "lamination": (lambda tmp: SCENES / "lamination.json", "idler"),
     # A nip where two webs merge: the foil's side path (its idler, the line's fastest mode) is in the analysis.
-    "laminator": (lambda tmp: SCENES / "laminator.json", "foil_idler"),
+    "laminator": (lambda tmp: SCENES / "laminator.json", "guide_foil"),
 }
 OBSERVED = {}
 

@@ -130,6 +130,10 @@ def cmd_export(args):
     path = write_ssp(system, args.output or Path(args.out) / f"{scene.name}.ssp")
     print(f"{scene.name}: {len(system.components)} FMU components, {len(system.connections)} connections, "
           f"step {system.step * 1e3:g} ms, stop {system.stop_time:g} s; wrote {path}")
+    names = [c.name for c in system.components]
+    for a, b in ((a, b) for a in names for b in names if a != b and b.startswith(a)):
+        print(f"webline export: warning: part '{a}' begins the name of part '{b}': FMPy 0.3's simulate_ssp "
+              f"gives {b}'s parameters to {a} and stops; rename one of them (docs/ssp.md)", file=sys.stderr)
     return 0
 
 
