@@ -453,7 +453,7 @@ NIP_MASS = """{
      "merge": [[{"type": "source", "name": "feed_b", "strain": 0.001, "speed": "10 m/s"},
                 {"type": "span", "name": "b", "L": "4 m", "web": "board", "effects": ["includeDamping", "includeMass"]}]]},
     {"type": "span", "name": "out", "L": "2 m", "web": "lam", "effects": ["includeDamping", "includeMass"]},
-    {"type": "sink", "name": "pull", "speed": {"step": {"time": "0.1005 s", "from": "10.02 m/s", "to": "10.05 m/s"}}}
+    {"type": "sink", "name": "pull", "speed": {"step": {"time": "0.1 s", "from": "10.02 m/s", "to": "10.05 m/s"}}}
   ],
   "record": ["a.T", "b.T", "out.T", "nip.v", "a.eps", "b.eps", "out.eps"]
 }"""
@@ -463,10 +463,9 @@ def test_the_line_fmu_solves_webs_with_mass_pulling_a_free_nip_together(fmus):
     """Both arriving webs carry their mass into a free nip: their pulls T + p + m dv/dt share the
     nip's one acceleration, solved at once (the nip's inertia J/R^2 = 50 kg plus 0.65 and 1.5 kg
     of web, [M4]). Against the reference at 1 ms and 10 ms, to 1e-6 of each signal's scale as
-    test_line_fmu's shipped scenes (measured 3.3e-9 and 4.1e-9); a solve that leaves out the side
-    web's mass is 6e-4 off. (The
-    pull's speed steps between communication points: at a point on the step the Line FMU reports
-    the speed after it and the reference the speed before, which moves a damped tension.)"""
+    test_line_fmu's shipped scenes (measured 2.5e-9 and 3.2e-9); a solve that leaves out the side
+    web's mass is 6e-4 off. The pull's speed steps on a communication point: there every engine
+    reports the line before the step, which applies from the next step on."""
     from webline import linefmu
     from webline.accuracy import errors
 
