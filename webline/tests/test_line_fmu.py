@@ -62,7 +62,7 @@ def test_every_shipped_scene_matches_the_reference_at_1_and_10_ms(name, h, line_
     assert err <= TOL, f"{name} at h = {h}: {key} off the reference by {err:.2e} of its scale"
 
 
-@pytest.mark.parametrize("name", ["splice", "stiff_line", "paper_line"])
+@pytest.mark.parametrize("name", ["splice", "stiff_line", "paper_line", "laminator"])
 def test_model_exchange_in_fmpys_cvode_matches_the_reference(name, line_dir, tmp_path):
     scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
     path = linefmu.export(scene, tmp_path / f"{name}.fmu", line_dir, start=scene.start or "given")
@@ -81,13 +81,14 @@ def test_model_exchange_in_fmpys_cvode_matches_the_reference(name, line_dir, tmp
         assert err <= 1e-4, f"{name}, Model Exchange: {o} off by {err:.2e}"
 
 
-def test_the_fmi3_fmu_gives_the_fmi2_fmus_numbers(line_dir, tmp_path):
-    scene = load_scene(SCENES / "lamination.json", fmu_dir=line_dir)
+@pytest.mark.parametrize("name,outputs", [("lamination", ["film.T", "laminate.T", "idler.v"]),
+                                          ("laminator", ["film.T", "foil.T", "laminate.T", "nip.v"])])
+def test_the_fmi3_fmu_gives_the_fmi2_fmus_numbers(name, outputs, line_dir, tmp_path):
+    scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
     scene.stop_time = 0.5
     fmu2 = linefmu.export(scene, tmp_path / "line2.fmu", line_dir)
     fmu3 = linefmu.export(scene, tmp_path / "line3.fmu", line_dir, fmi3=True)
     assert read_model_description(str(fmu3)).fmiVersion == "3.0"
-    outputs = ["film.T", "laminate.T", "idler.v"]
     a = simulate_fmu(str(fmu2), stop_time=0.5, step_size=1e-3, output_interval=1e-3, output=outputs)
     b = simulate_fmu(str(fmu3), stop_time=0.5, step_size=1e-3, output_interval=1e-3, output=outputs)
     for o in outputs:
