@@ -196,9 +196,9 @@ pub fn initial_dependencies_are_exact<M: Tested>(hints: &Hints) {
             Ok(fmu)
         };
         // None where initialization refuses the values.
-        let read = |fmu: &Fmu<M>| -> Option<Vec<f64>> {
-            unknowns.iter().map(|u| fmu.get_reals_vr(&[u.vr]).ok().map(|x| x[0])).collect()
-        };
+        // One call for every unknown, as an importer reads them (a refusal of any is a refusal).
+        let vrs: Vec<u32> = unknowns.iter().map(|u| u.vr).collect();
+        let read = |fmu: &Fmu<M>| -> Option<Vec<f64>> { fmu.get_reals_vr(&vrs).ok() };
         let probe = in_init(None).unwrap_or_else(|why| panic!("{base:?}: {why}"));
         let Some(baseline) = read(&probe) else {
             // A variant the model refuses adds nothing; a hint must initialize.
