@@ -53,6 +53,9 @@ pub struct Parameters {
     pub span_record: Arc<str>,
     /// `webLibrary`: a user's JSON file of records, searched first ("": none).
     pub web_library: Arc<str>,
+    /// The five values (E, thickness, width, density, d_r) a record last wrote into wp1 and wp2:
+    /// initialization runs again when a value changes in initialization mode, and these are not the user's.
+    pub from_records: [Option<[f64; 5]>; 2],
     /// `profile`: a JSON file of timed web changes ("": the FMU's own, if any).
     pub profile: Arc<str>,
     /// The effects on (one field each, named after their Boolean parameters).

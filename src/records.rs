@@ -183,15 +183,17 @@ impl<'a> Lookup<'a> {
 pub fn apply(p: &mut Parameters, resources: &Resources) -> FmiResult {
     let mut lookup = Lookup::new(&p.web_library, resources);
     let (wp1, wp2) = (p.incoming_record.clone(), p.span_record.clone());
-    for (prefix, name, web, vars) in [("wp1", wp1, &mut p.incoming, WP1), ("wp2", wp2, &mut p.span_web, WP2)] {
+    let from_records = &mut p.from_records;
+    for (k, (prefix, name, web, vars)) in [("wp1", wp1, &mut p.incoming, WP1), ("wp2", wp2, &mut p.span_web, WP2)].into_iter().enumerate() {
         if name.is_empty() {
             web.curve = None;
             continue;
         }
         let record = lookup.find(&name, &format!("{prefix}.record"))?;
-        for ((var, set), given) in vars.iter().zip(fields(web)).zip(fields(&record.web)) {
+        let written = from_records[k].unwrap_or([f64::NAN; 5]);
+        for (((var, set), given), earlier) in vars.iter().zip(fields(web)).zip(fields(&record.web)).zip(written) {
             let Some(Start::Real(start)) = DESCRIPTION.variable(var.vr()).map(|v| v.start) else { continue };
-            if set != start && set != given {
+            if set != start && set != given && set != earlier {
                 return Err(FmiError::error(format!(
                     "{0} = {set} was set, but {prefix}.record = \"{name}\" selects the web, and its record gives {given}: \
                      leave {0} at its start value {start} or set {prefix}.record = \"\"",
@@ -199,6 +201,7 @@ pub fn apply(p: &mut Parameters, resources: &Resources) -> FmiResult {
                 )));
             }
         }
+        from_records[k] = Some(fields(&record.web));
         *web = record.web;
     }
     Ok(())

@@ -70,6 +70,9 @@ pub struct Instance<M: Model> {
     model: M,
     /// The model as instantiated: what a reset returns to, and what FMU states are read into.
     start: M,
+    /// In initialization mode: the initial values are computed for the values set so far (a get
+    /// computes them once, not once per call; anything that changes the model clears it).
+    settled: bool,
     #[cfg(feature = "test-hooks")]
     panic_in_next_step: bool,
 }
@@ -87,6 +90,7 @@ impl<M: Model> Instance<M> {
             resources,
             start: model.clone(),
             model,
+            settled: false,
             #[cfg(feature = "test-hooks")]
             panic_in_next_step: false,
         };
@@ -178,11 +182,13 @@ impl<M: Model> Instance<M> {
         }
         self.experiment = Experiment { tolerance, start_time: start, stop_time: stop, ..self.experiment };
         self.time = start;
+        self.settled = false;
         Ok(())
     }
 
     pub fn enter_initialization_mode(&mut self) -> FmiResult {
         self.phase = Phase::InitializationMode;
+        self.settled = false;
         self.log_event("entered initialization mode");
         Ok(())
     }
@@ -234,6 +240,7 @@ impl<M: Model> Instance<M> {
 
     pub fn reset(&mut self) -> FmiResult {
         self.model = self.start.clone();
+        self.settled = false;
         self.phase = Phase::Instantiated;
         self.time = 0.0;
         self.experiment = Experiment { model_exchange: self.experiment.model_exchange, ..Experiment::default() };

@@ -10,6 +10,7 @@ impl<M: Model> Instance<M> {
         }
         self.time = time;
         self.model.set_time(time);
+        self.settled = false;
         Ok(())
     }
 
@@ -34,6 +35,7 @@ impl<M: Model> Instance<M> {
         if let Some(bad) = x.iter().find(|v| !v.is_finite()) {
             return Err(FmiError::error(format!("{}: a state value is {bad}", call)));
         }
+        self.settled = false;
         self.model.set_continuous_states(x).map_err(|e| e.prefixed(call))
     }
 

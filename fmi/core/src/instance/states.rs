@@ -24,6 +24,7 @@ impl<M: Model> Instance<M> {
         self.time = snapshot.time;
         self.experiment = snapshot.experiment;
         self.model.clone_from(&snapshot.model);
+        self.settled = false;
         self.log_event(&format!("FMU state restored at t = {}", self.time));
         Ok(())
     }

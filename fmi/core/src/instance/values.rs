@@ -35,8 +35,13 @@ impl<M: Model> Instance<M> {
     #[cold]
     #[inline(never)]
     fn settle_for_get(&mut self, call: CallName) -> FmiResult {
+        if self.settled {
+            return Ok(());
+        }
         // Warnings are logged once, when initialization ends.
-        self.settle_initial_values().map(drop).map_err(|e| e.prefixed(call))
+        self.settle_initial_values().map(drop).map_err(|e| e.prefixed(call))?;
+        self.settled = true;
+        Ok(())
     }
 
     /// Parameters and inputs are always there, but computed values only where
@@ -146,6 +151,7 @@ impl<M: Model> Instance<M> {
             self.check_settable(call, v)?;
             check(v, value).map_err(|e| e.prefixed(call))?;
         }
+        self.settled = false;
         for (&vr, &value) in vrs.iter().zip(values) {
             apply(&mut self.model, vr, value)?;
         }
@@ -169,6 +175,7 @@ impl<M: Model> Instance<M> {
                 return Err(out_of_range(&d.variables[slot.row as usize], x).prefixed(call));
             }
         }
+        self.settled = false;
         for (&vr, &x) in vrs.iter().zip(values) {
             self.model.set_real(vr, x)?;
         }
@@ -248,6 +255,7 @@ impl<M: Model> Instance<M> {
             model.set_input_derivative(vr, value).map_err(|e| FmiError::error(format!("{}: {}", call, e.message)))?;
         }
         self.model = model;
+        self.settled = false;
         Ok(())
     }
 }

@@ -182,22 +182,24 @@ pub fn initial_dependencies_are_exact<M: Tested>(hints: &Hints) {
         assert!(hints.refusals.iter().any(|r| refusal.contains(r)), "{what} refused: {refusal}");
     };
     for base in points::<M>(hints) {
+        // One call for every unknown, as an importer reads them (a refusal of any is a refusal).
+        let vrs: Vec<u32> = unknowns.iter().map(|u| u.vr).collect();
         let in_init = |change: Option<(&Variable, f64)>| -> Result<Fmu<M>, String> {
             let fmu = at::<M>(&base)?;
+            assert_eq!(fmu.setup_experiment(0.0), OK);
+            assert_eq!(fmu.enter_init(), OK);
             if let Some((v, x)) = change {
+                // Read first, then perturb in initialization mode: the next read must see the change.
+                let _ = fmu.get_reals_vr(&vrs);
                 let status = match v.kind {
                     Kind::String => fmu.set_text(&v.name, &text_of(v).unwrap()),
                     _ => fmu.set(&v.name, x),
                 };
-                assert_eq!(status, OK, "perturbing {}", v.name);
+                assert_eq!(status, OK, "perturbing {} in initialization mode", v.name);
             }
-            assert_eq!(fmu.setup_experiment(0.0), OK);
-            assert_eq!(fmu.enter_init(), OK);
             Ok(fmu)
         };
         // None where initialization refuses the values.
-        // One call for every unknown, as an importer reads them (a refusal of any is a refusal).
-        let vrs: Vec<u32> = unknowns.iter().map(|u| u.vr).collect();
         let read = |fmu: &Fmu<M>| -> Option<Vec<f64>> { fmu.get_reals_vr(&vrs).ok() };
         let probe = in_init(None).unwrap_or_else(|why| panic!("{base:?}: {why}"));
         let Some(baseline) = read(&probe) else {
