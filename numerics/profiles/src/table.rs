@@ -37,7 +37,11 @@ impl Table {
 
     /// The value at `t`; at a jump, the value after it.
     pub fn value(&self, t: f64) -> f64 {
-        let i = self.after(t);
+        self.on_piece_ending_at(self.after(t), t)
+    }
+
+    /// The value at `t` on the piece that ends at entry `i` (constant outside the table).
+    fn on_piece_ending_at(&self, i: usize, t: f64) -> f64 {
         if i == 0 {
             return self.points[0][1];
         }
@@ -52,20 +56,16 @@ impl Table {
     /// limit), what a model shows at an event it has not yet applied. A break less than `within`
     /// before `t` counts as at `t` (a communication point a few ulps past it).
     pub fn value_before(&self, t: f64, within: f64) -> f64 {
-        let i = self.reaching(t - within);
-        if i == 0 {
-            return self.points[0][1];
-        }
-        if i == self.points.len() {
-            return self.points[i - 1][1];
-        }
-        let ([t0, x0], [t1, x1]) = (self.points[i - 1], self.points[i]);
-        x0 + (x1 - x0) * ((t - t0) / (t1 - t0))
+        self.on_piece_ending_at(self.reaching(t - within), t)
     }
 
     /// The slope on the piece that ends at `t` (0 outside the table); `within` as for `value_before`.
     pub fn slope_before(&self, t: f64, within: f64) -> f64 {
-        let i = self.reaching(t - within);
+        self.slope_of_piece_ending_at(self.reaching(t - within))
+    }
+
+    /// The slope of the piece that ends at entry `i` (0 outside the table).
+    fn slope_of_piece_ending_at(&self, i: usize) -> f64 {
         if i == 0 || i == self.points.len() {
             return 0.0;
         }
@@ -80,12 +80,7 @@ impl Table {
 
     /// The slope on the piece that starts at `t` (0 outside the table).
     pub fn slope(&self, t: f64) -> f64 {
-        let i = self.after(t);
-        if i == 0 || i == self.points.len() {
-            return 0.0;
-        }
-        let ([t0, x0], [t1, x1]) = (self.points[i - 1], self.points[i]);
-        (x1 - x0) / (t1 - t0)
+        self.slope_of_piece_ending_at(self.after(t))
     }
 
     /// The first entry time later than `t`: where the piece that starts at `t` ends.
