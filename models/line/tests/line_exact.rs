@@ -168,6 +168,24 @@ fn the_equilibrium_start_is_steady_and_has_the_drives_tensions() {
     assert!((get(&line, "pull.F") - t_exit).abs() < 1e-9 * t_exit);
 }
 
+/// The paper line without bearing friction and with its pull roll an undriven
+/// roller: the unwinder's 400 N pass the idler unchanged and nothing holds
+/// them at the end, so there is no steady state. A failed search leaves the
+/// parts as they were (not at its last trial point).
+#[test]
+fn a_failed_equilibrium_search_leaves_the_parts_as_they_were() {
+    let mut spec = paper_line("given");
+    spec["parts"][0]["start"]["b"] = json!(0.0);
+    spec["parts"][2]["start"]["b"] = json!(0.0);
+    spec["parts"][4] = roller("pull", "roller", json!({"J": 0.01, "R": 0.1, "b": 0.0, "v_start": 10.0}), None);
+    let mut line = initialized(&spec);
+    let (parts, x) = (line.parts.clone(), line.states().to_vec());
+    let why = line::equilibrium::solve(&mut line).expect_err("this line has no steady state");
+    assert!(why.starts_with("no steady state"), "{why}");
+    assert_eq!(line.states(), &x[..]);
+    assert!(line.parts == parts, "the parts were left at the search's last trial point");
+}
+
 #[test]
 fn a_given_start_that_is_not_steady_rings() {
     let mut line = initialized(&paper_line("given"));
