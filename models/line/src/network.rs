@@ -11,8 +11,14 @@
 //!   roller's own partial derivatives (the effective inertia `J + m r^2`);
 //! * a span with `variableLength` and `includeDamping` reads dL/dt: the rates
 //!   of its frame inputs, from the feeding part's state derivatives.
+//!
+//! An evaluation goes straight to the parts' fields and functions: each
+//! link's output and input are resolved once, when the line is built, to the
+//! part's own variable (`Port`), and the states and derivatives are written
+//! and read by the parts' own functions, without value references or state
+//! vectors copied per part.
 
-use crate::part::{span_output, Part};
+use crate::part::{span_output_of, Part};
 use converting_span::Outputs;
 use crate::spec::Spec;
 use fmi_core::description::{Causality, ModelDescription};
@@ -27,7 +33,29 @@ pub struct Link {
     pub to: usize,
     pub input: u32,
     pub kind: LinkKind,
+    /// `output` and `input` as the parts' own variables.
+    pub source: Port,
+    pub target: Port,
 }
+
+/// A variable of a part, resolved from its value reference when the line is built.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Port {
+    Span(converting_span::description::Real),
+    Roller(roller::description::Real),
+}
+
+impl Port {
+    fn of(part: &Part, vr: u32) -> Option<Port> {
+        match part {
+            Part::Span(_) => converting_span::description::Real::from_vr(vr).map(Port::Span),
+            Part::Roller(_) => roller::description::Real::from_vr(vr).map(Port::Roller),
+        }
+    }
+}
+
+/// Most states a part has (its Model Exchange state vector).
+const MAX_PART_STATES: usize = 8;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LinkKind {
@@ -63,10 +91,6 @@ pub struct Network {
     /// Per part: its first state in the line's vector, and its active states.
     pub first_state: Vec<usize>,
     pub active: Vec<Vec<usize>>,
-    /// Per part: its whole Model Exchange state vector and its derivatives
-    /// (inactive entries stay as the part has them).
-    full: Vec<Vec<f64>>,
-    dfull: Vec<Vec<f64>>,
     /// Per part: a span's outputs once computed in this evaluation (None: not yet, or an input moved since).
     outputs: Vec<Option<Outputs>>,
     /// Sub- and super-diagonals of the Jacobian.
@@ -98,7 +122,11 @@ impl Network {
             if links.iter().any(|l: &Link| l.to == to && l.input == input) {
                 return Err(format!("input {}.{} is connected twice", c.to.0, c.to.1));
             }
-            links.push(Link { from, output, to, input, kind: LinkKind::Plain });
+            let port = |p: usize, vr: u32, name: &str| {
+                Port::of(&parts[p], vr).ok_or_else(|| format!("connection {}.{} -> {}.{}: {name} is no Real", c.from.0, c.from.1, c.to.0, c.to.1))
+            };
+            let (source, target) = (port(from, output, &c.from.1)?, port(to, input, &c.to.1)?);
+            links.push(Link { from, output, to, input, kind: LinkKind::Plain, source, target });
         }
         // The web-mass loops: a span's web_b.F into the roller whose web_a.v feeds its web_b.v.
         for i in 0..links.len() {
@@ -143,15 +171,11 @@ impl Network {
             states.extend(a.iter().map(|&index| StateRef { part: p, index }));
             active.push(a);
         }
-        let mut full = Vec::with_capacity(n_parts);
-        for part in parts {
-            let mut x = vec![0.0; part.state_count()];
-            part.get_states(&mut x).map_err(|e| e.into_message())?;
-            full.push(x);
+        if let Some(part) = parts.iter().find(|p| p.state_count() > MAX_PART_STATES) {
+            return Err(format!("a part ({}) has more than {MAX_PART_STATES} states", part.description().model_identifier));
         }
-        let dfull = parts.iter().map(|p| vec![0.0; p.state_count()]).collect();
         let outputs = vec![None; n_parts];
-        let mut net = Network { links, rates, states, first_state, active, full, dfull, outputs, kl: 0, ku: 0 };
+        let mut net = Network { links, rates, states, first_state, active, outputs, kl: 0, ku: 0 };
         (net.kl, net.ku) = net.band(parts);
         Ok(net)
     }
@@ -171,10 +195,12 @@ impl Network {
 
     /// Reads the parts' states into x (after initialization or an event).
     pub fn gather(&mut self, parts: &[Part], x: &mut [f64]) -> FmiResult {
+        let mut full = [0.0; MAX_PART_STATES];
         for (p, part) in parts.iter().enumerate() {
-            part.get_states(&mut self.full[p])?;
+            let full = &mut full[..part.state_count()];
+            part.get_states(full)?;
             for (k, &i) in self.active[p].iter().enumerate() {
-                x[self.first_state[p] + k] = self.full[p][i];
+                x[self.first_state[p] + k] = full[i];
             }
         }
         Ok(())
@@ -184,12 +210,26 @@ impl Network {
     /// and writes the state derivatives into dx (if given). Afterwards every
     /// part's outputs are those of (t, x).
     pub fn evaluate(&mut self, parts: &mut [Part], t: f64, x: &[f64], dx: Option<&mut [f64]>) -> FmiResult {
+        use fmi_core::Model;
         for (p, part) in parts.iter_mut().enumerate() {
-            part.set_time(t);
-            for (k, &i) in self.active[p].iter().enumerate() {
-                self.full[p][i] = x[self.first_state[p] + k];
+            let first = self.first_state[p];
+            match part {
+                // A span's one state.
+                Part::Span(s) => {
+                    s.set_time(t);
+                    s.set_continuous_states(&x[first..first + 1])?;
+                }
+                Part::Roller(r) => {
+                    r.set_time(t);
+                    let mut full = [0.0; MAX_PART_STATES];
+                    let full = &mut full[..r.description().states.len()];
+                    r.get_continuous_states(full)?;
+                    for (k, &i) in self.active[p].iter().enumerate() {
+                        full[i] = x[first + k];
+                    }
+                    r.set_continuous_states(full)?;
+                }
             }
-            part.set_states(&self.full[p])?;
         }
         for i in 0..self.rates.len() {
             let r = self.rates[i];
@@ -201,8 +241,12 @@ impl Network {
             let l = self.links[i];
             match l.kind {
                 LinkKind::Plain => {
-                    let v = self.output(parts, l.from, l.output)?;
-                    parts[l.to].set_real(l.input, v)?;
+                    let v = self.output(parts, l.from, l.source);
+                    match (&mut parts[l.to], l.target) {
+                        (Part::Span(s), Port::Span(var)) => s.set_real_var(var, v)?,
+                        (Part::Roller(r), Port::Roller(var)) => r.set_real_var(var, v)?,
+                        _ => unreachable!("a port is resolved from its own part"),
+                    }
                 }
                 LinkKind::MassLoop { speed, roller_speed } => {
                     self.mass_loop(parts, &l, speed, roller_speed)?;
@@ -212,38 +256,37 @@ impl Network {
             self.outputs[l.to] = None;
         }
         if let Some(dx) = dx {
-            for (p, part) in parts.iter().enumerate() {
-                part.get_derivatives(&mut self.dfull[p])?;
-                for (k, &i) in self.active[p].iter().enumerate() {
-                    dx[self.first_state[p] + k] = self.dfull[p][i];
-                }
-            }
+            self.derivatives(parts, dx)?;
         }
         Ok(())
     }
 
-    /// Output `vr` of part p: a span's from its outputs, computed once while its inputs stay.
+    /// Output `port` of part p: a span's from its outputs, computed once while its inputs stay.
     #[inline]
-    fn output(&mut self, parts: &[Part], p: usize, vr: u32) -> FmiResult<f64> {
-        if let Part::Span(_) = parts[p] {
-            if self.outputs[p].is_none() {
-                self.outputs[p] = parts[p].span_outputs();
+    fn output(&mut self, parts: &[Part], p: usize, port: Port) -> f64 {
+        match (&parts[p], port) {
+            (Part::Span(s), Port::Span(var)) => {
+                let o = self.outputs[p].get_or_insert_with(|| s.outputs());
+                span_output_of(o, var).unwrap_or_else(|| s.real(var))
             }
-            if let Some(v) = self.outputs[p].as_ref().and_then(|o| span_output(o, vr)) {
-                return Ok(v);
-            }
+            (Part::Roller(r), Port::Roller(var)) => r.real(var),
+            _ => unreachable!("a port is resolved from its own part"),
         }
-        parts[p].get_real(vr)
     }
 
-    /// The state derivatives of the parts as last evaluated.
+    /// The state derivatives of the parts as last evaluated, by the parts' own
+    /// functions (those their `get_derivatives` calls).
     pub fn derivatives(&self, parts: &[Part], dx: &mut [f64]) -> FmiResult {
-        let mut full = [0.0; 8];
         for (p, part) in parts.iter().enumerate() {
-            let n = part.state_count();
-            part.get_derivatives(&mut full[..n])?;
-            for (k, &i) in self.active[p].iter().enumerate() {
-                dx[self.first_state[p] + k] = full[i];
+            let first = self.first_state[p];
+            match part {
+                Part::Span(s) => dx[first] = s.unstretched_rate(),
+                Part::Roller(r) => {
+                    let d = r.derivatives();
+                    for (k, &i) in self.active[p].iter().enumerate() {
+                        dx[first + k] = d[i];
+                    }
+                }
             }
         }
         Ok(())
@@ -252,11 +295,13 @@ impl Network {
     /// d(output)/dt of part p now: sum over its states of d(output)/dx * dx/dt.
     fn output_rate(&mut self, parts: &[Part], p: usize, output: u32) -> FmiResult<f64> {
         let part = &parts[p];
-        part.get_derivatives(&mut self.dfull[p])?;
+        let mut full = [0.0; MAX_PART_STATES];
+        let full = &mut full[..part.state_count()];
+        part.get_derivatives(full)?;
         let d = part.description();
         let mut rate = 0.0;
         for (i, &state) in d.states.iter().enumerate() {
-            let dx = self.dfull[p][i];
+            let dx = full[i];
             if dx != 0.0 {
                 rate += part.partial_derivative(output, state)? * dx;
             }
