@@ -36,6 +36,10 @@ pub struct Link {
     /// `output` and `input` as the parts' own variables.
     pub source: Port,
     pub target: Port,
+    /// A span's outputs are computed here, all at once: the first link in
+    /// the evaluation order to read them after the last one that moved an
+    /// input of the span (found when the line is built).
+    pub fresh: bool,
 }
 
 /// A variable of a part, resolved from its value reference when the line is built.
@@ -91,8 +95,8 @@ pub struct Network {
     /// Per part: its first state in the line's vector, and its active states.
     pub first_state: Vec<usize>,
     pub active: Vec<Vec<usize>>,
-    /// Per part: a span's outputs once computed in this evaluation (None: not yet, or an input moved since).
-    outputs: Vec<Option<Outputs>>,
+    /// Per part: a span's outputs as last computed in this evaluation (`Link::fresh`).
+    outputs: Vec<Outputs>,
     /// Sub- and super-diagonals of the Jacobian.
     pub kl: usize,
     pub ku: usize,
@@ -126,7 +130,7 @@ impl Network {
                 Port::of(&parts[p], vr).ok_or_else(|| format!("connection {}.{} -> {}.{}: {name} is no Real", c.from.0, c.from.1, c.to.0, c.to.1))
             };
             let (source, target) = (port(from, output, &c.from.1)?, port(to, input, &c.to.1)?);
-            links.push(Link { from, output, to, input, kind: LinkKind::Plain, source, target });
+            links.push(Link { from, output, to, input, kind: LinkKind::Plain, source, target, fresh: true });
         }
         // The web-mass loops: a span's web_b.F into the roller whose web_a.v feeds its web_b.v.
         for i in 0..links.len() {
@@ -160,7 +164,18 @@ impl Network {
                 }
             }
         }
-        let links = order(&links, parts, spec)?;
+        let mut links = order(&links, parts, spec)?;
+        // Where each span's outputs are computed: at the start of an evaluation every part's
+        // states moved; a link moves its target's inputs (a web-mass loop its span's input rate too).
+        let mut moved = vec![true; n_parts];
+        for l in &mut links {
+            l.fresh = moved[l.from];
+            moved[l.from] = false;
+            moved[l.to] = true;
+            if let LinkKind::MassLoop { .. } = l.kind {
+                moved[l.from] = true;
+            }
+        }
         // States in line order.
         let mut states = Vec::new();
         let mut first_state = Vec::with_capacity(n_parts);
@@ -174,7 +189,8 @@ impl Network {
         if let Some(part) = parts.iter().find(|p| p.state_count() > MAX_PART_STATES) {
             return Err(format!("a part ({}) has more than {MAX_PART_STATES} states", part.description().model_identifier));
         }
-        let outputs = vec![None; n_parts];
+        let none = Outputs { length: 0.0, strain: 0.0, tension: 0.0, exit_force: 0.0, stress: 0.0, sensor_speed: 0.0, sensor_tension: 0.0 };
+        let outputs = vec![none; n_parts];
         let mut net = Network { links, rates, states, first_state, active, outputs, kl: 0, ku: 0 };
         (net.kl, net.ku) = net.band(parts);
         Ok(net)
@@ -233,45 +249,36 @@ impl Network {
         }
         for i in 0..self.rates.len() {
             let r = self.rates[i];
-            let rate = self.output_rate(parts, r.from, r.output)?;
+            let rate = output_rate(parts, r.from, r.output)?;
             parts[r.span].set_input_derivative(r.input, rate)?;
         }
-        self.outputs.fill(None);
-        for i in 0..self.links.len() {
-            let l = self.links[i];
+        for l in &self.links {
             match l.kind {
                 LinkKind::Plain => {
-                    let v = self.output(parts, l.from, l.source);
+                    let v = match (&parts[l.from], l.source) {
+                        (Part::Span(s), Port::Span(var)) => {
+                            let o = &mut self.outputs[l.from];
+                            if l.fresh {
+                                *o = s.outputs();
+                            }
+                            span_output_of(o, var).unwrap_or_else(|| s.real(var))
+                        }
+                        (Part::Roller(r), Port::Roller(var)) => r.real(var),
+                        _ => unreachable!("a port is resolved from its own part"),
+                    };
                     match (&mut parts[l.to], l.target) {
                         (Part::Span(s), Port::Span(var)) => s.set_real_var(var, v)?,
                         (Part::Roller(r), Port::Roller(var)) => r.set_real_var(var, v)?,
                         _ => unreachable!("a port is resolved from its own part"),
                     }
                 }
-                LinkKind::MassLoop { speed, roller_speed } => {
-                    self.mass_loop(parts, &l, speed, roller_speed)?;
-                    self.outputs[l.from] = None;
-                }
+                LinkKind::MassLoop { speed, roller_speed } => mass_loop(parts, l, speed, roller_speed)?,
             }
-            self.outputs[l.to] = None;
         }
         if let Some(dx) = dx {
             self.derivatives(parts, dx)?;
         }
         Ok(())
-    }
-
-    /// Output `port` of part p: a span's from its outputs, computed once while its inputs stay.
-    #[inline]
-    fn output(&mut self, parts: &[Part], p: usize, port: Port) -> f64 {
-        match (&parts[p], port) {
-            (Part::Span(s), Port::Span(var)) => {
-                let o = self.outputs[p].get_or_insert_with(|| s.outputs());
-                span_output_of(o, var).unwrap_or_else(|| s.real(var))
-            }
-            (Part::Roller(r), Port::Roller(var)) => r.real(var),
-            _ => unreachable!("a port is resolved from its own part"),
-        }
     }
 
     /// The state derivatives of the parts as last evaluated, by the parts' own
@@ -290,50 +297,6 @@ impl Network {
             }
         }
         Ok(())
-    }
-
-    /// d(output)/dt of part p now: sum over its states of d(output)/dx * dx/dt.
-    fn output_rate(&mut self, parts: &[Part], p: usize, output: u32) -> FmiResult<f64> {
-        let part = &parts[p];
-        let mut full = [0.0; MAX_PART_STATES];
-        let full = &mut full[..part.state_count()];
-        part.get_derivatives(full)?;
-        let d = part.description();
-        let mut rate = 0.0;
-        for (i, &state) in d.states.iter().enumerate() {
-            let dx = full[i];
-            if dx != 0.0 {
-                rate += part.partial_derivative(output, state)? * dx;
-            }
-        }
-        Ok(rate)
-    }
-
-    /// F = F0 + m a, a = a0 + beta F (the roller's surface acceleration, linear
-    /// in the force on it): a = (a0 + beta F0) / (1 - beta m), exactly.
-    fn mass_loop(&mut self, parts: &mut [Part], l: &Link, speed: u32, roller_speed: u32) -> FmiResult {
-        let (span, roller) = (l.from, l.to);
-        parts[span].set_input_derivative(speed, 0.0)?;
-        let f0 = parts[span].get_real(l.output)?;
-        let mass_vr = parts[span].description().variable_by_name("m_web").map(|v| v.vr).expect("the span has m_web");
-        let m = parts[span].get_real(mass_vr)?;
-        parts[roller].set_real(l.input, f0)?;
-        let a0 = self.output_rate(parts, roller, roller_speed)?;
-        let d = parts[roller].description();
-        let mut beta = 0.0;
-        for (i, &state) in d.states.iter().enumerate() {
-            let dv = parts[roller].partial_derivative(roller_speed, state)?;
-            if dv != 0.0 {
-                beta += dv * parts[roller].partial_derivative(d.derivatives[i].vr, l.input)?;
-            }
-        }
-        let a = a0 / (1.0 - beta * m);
-        if !a.is_finite() {
-            return Err(FmiError::discard(format!("the web mass loop has no solution (1 - beta m = {})", 1.0 - beta * m)));
-        }
-        parts[span].set_input_derivative(speed, a)?;
-        let f = parts[span].get_real(l.output)?;
-        parts[roller].set_real(l.input, f)
     }
 
     /// The Jacobian's band from the model structures: which states each
@@ -402,6 +365,50 @@ impl Network {
         }
         (kl, ku)
     }
+}
+
+/// d(output)/dt of part p now: sum over its states of d(output)/dx * dx/dt.
+fn output_rate(parts: &[Part], p: usize, output: u32) -> FmiResult<f64> {
+    let part = &parts[p];
+    let mut full = [0.0; MAX_PART_STATES];
+    let full = &mut full[..part.state_count()];
+    part.get_derivatives(full)?;
+    let d = part.description();
+    let mut rate = 0.0;
+    for (i, &state) in d.states.iter().enumerate() {
+        let dx = full[i];
+        if dx != 0.0 {
+            rate += part.partial_derivative(output, state)? * dx;
+        }
+    }
+    Ok(rate)
+}
+
+/// F = F0 + m a, a = a0 + beta F (the roller's surface acceleration, linear
+/// in the force on it): a = (a0 + beta F0) / (1 - beta m), exactly.
+fn mass_loop(parts: &mut [Part], l: &Link, speed: u32, roller_speed: u32) -> FmiResult {
+    let (span, roller) = (l.from, l.to);
+    parts[span].set_input_derivative(speed, 0.0)?;
+    let f0 = parts[span].get_real(l.output)?;
+    let mass_vr = parts[span].description().variable_by_name("m_web").map(|v| v.vr).expect("the span has m_web");
+    let m = parts[span].get_real(mass_vr)?;
+    parts[roller].set_real(l.input, f0)?;
+    let a0 = output_rate(parts, roller, roller_speed)?;
+    let d = parts[roller].description();
+    let mut beta = 0.0;
+    for (i, &state) in d.states.iter().enumerate() {
+        let dv = parts[roller].partial_derivative(roller_speed, state)?;
+        if dv != 0.0 {
+            beta += dv * parts[roller].partial_derivative(d.derivatives[i].vr, l.input)?;
+        }
+    }
+    let a = a0 / (1.0 - beta * m);
+    if !a.is_finite() {
+        return Err(FmiError::discard(format!("the web mass loop has no solution (1 - beta m = {})", 1.0 - beta * m)));
+    }
+    parts[span].set_input_derivative(speed, a)?;
+    let f = parts[span].get_real(l.output)?;
+    parts[roller].set_real(l.input, f)
 }
 
 /// The links in an order where each one's output is computed after every
