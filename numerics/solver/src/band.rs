@@ -91,13 +91,15 @@ pub struct BandLu {
     /// n rows of 2 kl + ku + 1: entry (i, j) at i * (2 kl + ku + 1) + j + kl - i
     /// (row i holds columns i - kl ..= i + ku + kl).
     m: Vec<f64>,
+    /// The multipliers of column k (rows k + 1 ..= k + kl) at k * kl: the forward solve reads them in a row.
+    low: Vec<f64>,
     pivot: Vec<usize>,
 }
 
 impl BandLu {
     pub fn new(n: usize, kl: usize, ku: usize) -> BandLu {
         let (kl, ku) = (kl.min(n.saturating_sub(1)), ku.min(n.saturating_sub(1)));
-        BandLu { n, kl, ku, m: vec![0.0; n * (2 * kl + ku + 1)], pivot: vec![0; n] }
+        BandLu { n, kl, ku, m: vec![0.0; n * (2 * kl + ku + 1)], low: vec![0.0; n * kl], pivot: vec![0; n] }
     }
 
     /// Factors `c * I - a` (what an implicit step solves with), in place of
@@ -140,12 +142,14 @@ impl BandLu {
             if d == 0.0 || !d.is_finite() {
                 return false;
             }
-            for i in k + 1..last_row {
+            let low = &mut self.low[k * kl..(k + 1) * kl];
+            for (i, l) in (k + 1..last_row).zip(low.iter_mut()) {
                 // Row i's columns k..last_col.
                 let q = (i - k - 1) * w + kl + k - i;
                 let row_i = &mut lower[q..q + (last_col - k)];
                 let f = row_i[0] / d;
                 row_i[0] = f;
+                *l = f;
                 if f != 0.0 {
                     for (x, y) in row_i[1..].iter_mut().zip(&row_k[1..]) {
                         *x -= f * y;
@@ -160,27 +164,25 @@ impl BandLu {
     pub fn solve(&self, b: &mut [f64]) {
         let (n, kl) = (self.n, self.kl);
         let w = 2 * kl + self.ku + 1;
-        let m = &self.m;
-        for k in 0..n {
-            let p = self.pivot[k];
-            if p != k {
-                b.swap(k, p);
-            }
-            let bk = b[k];
+        let b = &mut b[..n];
+        for (k, (&p, low)) in self.pivot.iter().zip(self.low.chunks_exact(kl.max(1))).enumerate() {
+            b.swap(k, p);
+            let (head, tail) = b.split_at_mut(k + 1);
+            let bk = head[k];
             if bk != 0.0 {
-                for i in k + 1..(k + kl + 1).min(n) {
-                    b[i] -= m[i * w + k + kl - i] * bk;
+                for (x, l) in tail.iter_mut().zip(&low[..kl]) {
+                    *x -= l * bk;
                 }
             }
         }
-        for k in (0..n).rev() {
-            let hi = (k + w - kl).min(n);
-            let row = &m[k * w + kl..k * w + kl + (hi - k)];
-            let mut s = b[k];
-            for (x, y) in row[1..].iter().zip(&b[k + 1..hi]) {
+        for (k, row) in self.m.chunks_exact(w).enumerate().rev() {
+            // U's row k: columns k ..= k + kl + ku.
+            let (head, tail) = b.split_at_mut(k + 1);
+            let mut s = head[k];
+            for (x, y) in row[kl + 1..].iter().zip(tail.iter()) {
                 s -= x * y;
             }
-            b[k] = s / row[0];
+            head[k] = s / row[kl];
         }
     }
 }
