@@ -180,13 +180,19 @@ fn failure(f: Failure, t: f64, end: f64) -> FmiError {
 }
 
 /// One communication step of length h.
+///
+/// A failed step is undone without copying the parts in advance: the parts
+/// enter a step evaluated at (time, x), and evaluations change only what an
+/// evaluation at (time, x) sets again (times, states, connected inputs, input
+/// rates) and the inputs an importer ramps. Only an event applies more (a
+/// web, a roll, a table's next entry): the parts are copied before the first.
 pub fn step(line: &mut Line, h: f64) -> FmiResult {
     let t0 = line.time;
     let next_event = line.next_event;
     let next_step = line.integrator.as_ref().map_or(0.0, |r| r.next_step);
-    line.backup.clone_from(&line.parts);
     line.scratch.x.copy_from_slice(&line.x);
-    match advance(line, t0 + h) {
+    let mut copied = false;
+    match advance(line, t0 + h, &mut copied) {
         Ok(()) => {
             // The ramped inputs end the step where their derivatives took them.
             for &(part, vr, base, rate) in &line.ramps {
@@ -196,7 +202,12 @@ pub fn step(line: &mut Line, h: f64) -> FmiResult {
             line.settle()
         }
         Err(e) => {
-            std::mem::swap(&mut line.parts, &mut line.backup);
+            if copied {
+                std::mem::swap(&mut line.parts, &mut line.backup);
+            }
+            for &(part, vr, base, _) in &line.ramps {
+                let _ = line.parts[part].set_real(vr, base);
+            }
             line.x.copy_from_slice(&line.scratch.x);
             line.time = t0;
             line.next_event = next_event;
@@ -211,7 +222,8 @@ pub fn step(line: &mut Line, h: f64) -> FmiResult {
     }
 }
 
-fn advance(line: &mut Line, end: f64) -> FmiResult {
+/// `copied`: the parts were copied to `line.backup` before an event (see `step`).
+fn advance(line: &mut Line, end: f64, copied: &mut bool) -> FmiResult {
     let mut scratch = std::mem::take(&mut line.scratch);
     tolerances(line, &mut scratch);
     line.scratch = scratch;
@@ -219,6 +231,10 @@ fn advance(line: &mut Line, end: f64) -> FmiResult {
     let last = end - profiles_tolerance(end);
     loop {
         if line.next_event <= line.time + profiles_tolerance(line.time) {
+            if !*copied {
+                line.backup.clone_from(&line.parts);
+                *copied = true;
+            }
             apply_events(line)?;
         }
         let stop = if line.next_event < last { line.next_event } else { end };

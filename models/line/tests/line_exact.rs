@@ -222,6 +222,30 @@ fn a_restored_state_continues_bit_for_bit_and_a_failed_step_changes_nothing() {
     line.do_step(0.01).unwrap();
 }
 
+/// A failed step leaves every part exactly as it was, whether or not an
+/// event was applied inside it (here the sink's bearing friction set at
+/// 0.02 s, and a breakpoint of its speed table): the parts are copied only
+/// before an event, and otherwise evaluated again where the step began.
+#[test]
+fn a_failed_step_leaves_every_part_as_it_was_with_or_without_an_event_inside() {
+    for event in [false, true] {
+        let mut src = prescribed("src", "source", json!([[0.0, 1.0]]));
+        src["start"]["web_a.eps"] = json!(0.0);
+        let mut snk = prescribed("snk", "sink", json!([[0.0, 20.0]]));
+        if event {
+            snk["profile"] = json!({"speed": [[0.0, 20.0], [0.03, 20.0], [1.0, 20.5]], "set": [{"time": 0.02, "b": 0.5}]});
+        }
+        let parts = vec![src, span("film", 1.0, 0.0, &["includeDamping"]), snk];
+        let mut line = initialized(&line_spec(parts, chain(&["src", "film", "snk"]), "given"));
+        line.do_step(0.01).unwrap();
+        let (parts, x, t) = (line.parts.clone(), line.states().to_vec(), line.time());
+        line.do_step(10.0).unwrap_err();
+        assert_eq!((line.states(), line.time()), (&x[..], t), "event {event}");
+        assert!(line.parts == parts, "event {event}: a part changed in a failed step");
+        line.do_step(0.01).unwrap();
+    }
+}
+
 #[test]
 fn a_torque_input_ramped_over_the_step_is_integrated_exactly() {
     // The paper line's idler: tau_m ramped over one step against the same
