@@ -93,13 +93,15 @@ pub struct BandLu {
     m: Vec<f64>,
     /// The multipliers of column k (rows k + 1 ..= k + kl) at k * kl: the forward solve reads them in a row.
     low: Vec<f64>,
+    /// 1 / U's diagonal: the back substitution multiplies (a division's latency, per row, on its critical path).
+    inverse: Vec<f64>,
     pivot: Vec<usize>,
 }
 
 impl BandLu {
     pub fn new(n: usize, kl: usize, ku: usize) -> BandLu {
         let (kl, ku) = (kl.min(n.saturating_sub(1)), ku.min(n.saturating_sub(1)));
-        BandLu { n, kl, ku, m: vec![0.0; n * (2 * kl + ku + 1)], low: vec![0.0; n * kl], pivot: vec![0; n] }
+        BandLu { n, kl, ku, m: vec![0.0; n * (2 * kl + ku + 1)], low: vec![0.0; n * kl], inverse: vec![0.0; n], pivot: vec![0; n] }
     }
 
     /// Factors `c * I - a` (what an implicit step solves with), in place of
@@ -142,6 +144,7 @@ impl BandLu {
             if d == 0.0 || !d.is_finite() {
                 return false;
             }
+            self.inverse[k] = 1.0 / d;
             let low = &mut self.low[k * kl..(k + 1) * kl];
             for (i, l) in (k + 1..last_row).zip(low.iter_mut()) {
                 // Row i's columns k..last_col.
@@ -175,14 +178,14 @@ impl BandLu {
                 }
             }
         }
-        for (k, row) in self.m.chunks_exact(w).enumerate().rev() {
+        for (k, (row, inverse)) in self.m.chunks_exact(w).zip(&self.inverse).enumerate().rev() {
             // U's row k: columns k ..= k + kl + ku.
             let (head, tail) = b.split_at_mut(k + 1);
             let mut s = head[k];
             for (x, y) in row[kl + 1..].iter().zip(tail.iter()) {
                 s -= x * y;
             }
-            head[k] = s / row[kl];
+            head[k] = s * inverse;
         }
     }
 }
