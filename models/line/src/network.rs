@@ -97,6 +97,14 @@ pub struct Network {
     pub active: Vec<Vec<usize>>,
     /// Per part: a span's outputs as last computed in this evaluation (`Link::fresh`).
     outputs: Vec<Outputs>,
+    /// The point of the last evaluation, if it succeeded and nothing has changed the parts
+    /// since (`evaluated_at`): the time and the states.
+    evaluated: Option<f64>,
+    evaluated_x: Vec<f64>,
+    /// A span of variable length checks its state against the frames the last
+    /// evaluation gave it (and a frame's rate is read before the links run): an
+    /// evaluation then depends on the one before, not only on (t, x) and the inputs.
+    pub reads_earlier_inputs: bool,
     /// Sub- and super-diagonals of the Jacobian.
     pub kl: usize,
     pub ku: usize,
@@ -191,7 +199,10 @@ impl Network {
         }
         let none = Outputs { length: 0.0, strain: 0.0, tension: 0.0, exit_force: 0.0, stress: 0.0, sensor_speed: 0.0, sensor_tension: 0.0 };
         let outputs = vec![none; n_parts];
-        let mut net = Network { links, rates, states, first_state, active, outputs, kl: 0, ku: 0 };
+        let evaluated_x = vec![0.0; states.len()];
+        let reads_earlier_inputs = parts.iter().any(|p| matches!(p, Part::Span(s) if s.params.effects.variable_length));
+        let mut net =
+            Network { links, rates, states, first_state, active, outputs, evaluated: None, evaluated_x, reads_earlier_inputs, kl: 0, ku: 0 };
         (net.kl, net.ku) = net.band(parts);
         Ok(net)
     }
@@ -227,6 +238,7 @@ impl Network {
     /// part's outputs are those of (t, x).
     pub fn evaluate(&mut self, parts: &mut [Part], t: f64, x: &[f64], dx: Option<&mut [f64]>) -> FmiResult {
         use fmi_core::Model;
+        self.evaluated = None;
         for (p, part) in parts.iter_mut().enumerate() {
             let first = self.first_state[p];
             match part {
@@ -278,7 +290,20 @@ impl Network {
         if let Some(dx) = dx {
             self.derivatives(parts, dx)?;
         }
+        self.evaluated = Some(t);
+        self.evaluated_x.copy_from_slice(x);
         Ok(())
+    }
+
+    /// Whether the parts are as the last evaluation left them, and it was at (t, x): their
+    /// derivatives are then f(t, x) with the inputs as they are.
+    pub fn evaluated_at(&self, t: f64, x: &[f64]) -> bool {
+        self.evaluated == Some(t) && self.evaluated_x == x
+    }
+
+    /// Something other than an evaluation changed the parts (an event).
+    pub fn parts_changed(&mut self) {
+        self.evaluated = None;
     }
 
     /// The state derivatives of the parts as last evaluated, by the parts' own

@@ -22,6 +22,9 @@ pub(crate) struct LineSystem<'a> {
     pub(crate) f0: &'a mut [f64],
     pub(crate) f1: &'a mut [f64],
     pub(crate) y: &'a mut [f64],
+    /// The parts are evaluated at the integrator's first point (`Network::evaluated_at`): its
+    /// first f is their derivatives, no evaluation needed.
+    pub(crate) evaluated: bool,
 }
 
 impl LineSystem<'_> {
@@ -35,6 +38,9 @@ impl LineSystem<'_> {
 
 impl System for LineSystem<'_> {
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), ()> {
+        if std::mem::take(&mut self.evaluated) && self.net.evaluated_at(t, y) {
+            return self.net.derivatives(self.parts, dy).map_err(drop);
+        }
         self.eval(t, y, dy).map_err(drop)
     }
 
@@ -83,7 +89,7 @@ pub fn rhs_at(line: &mut Line, t: f64, x: &[f64], dx: &mut [f64]) -> FmiResult {
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
     let Scratch { f0, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y, evaluated: false };
     sys.eval(t, x, dx)
 }
 
@@ -93,7 +99,7 @@ pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], f0: Option<&[f64]>, jac: 
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
     let Scratch { f0: own, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0: &mut [], f1, y };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0: &mut [], f1, y, evaluated: false };
     let f0 = match f0 {
         Some(f0) => f0,
         None => {
@@ -111,7 +117,7 @@ pub fn residual_and_jacobian(line: &mut Line, x: &[f64], f: &mut [f64], jac: Opt
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().expect("initialized");
     let Scratch { f0, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y, evaluated: false };
     sys.eval(t, x, f)?;
     if let Some(jac) = jac {
         jac.clear();
