@@ -115,11 +115,14 @@ impl BandLu {
         let m = &mut self.m;
         // Row i of both starts at column i - kl: the same offsets.
         for (row, arow) in m.chunks_exact_mut(w).zip(a.a.chunks_exact(wa)) {
-            for (x, y) in row[..wa].iter_mut().zip(arow) {
+            let (band, fill) = row.split_at_mut(wa);
+            for (x, y) in band.iter_mut().zip(arow) {
                 *x = -y;
             }
-            row[wa..].fill(0.0);
-            row[kl] += c;
+            for x in fill {
+                *x = 0.0;
+            }
+            band[kl] += c;
         }
         for k in 0..n {
             let last_row = (k + kl + 1).min(n);
