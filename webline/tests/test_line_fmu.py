@@ -56,21 +56,13 @@ def worst(result, scene):
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_shipped_scene_matches_the_reference_at_1_and_10_ms(name, h, line_dir):
     scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
-    if scene.branches:
-        # Webs that merge or split (laminator, slitter): the Line FMU does not know them yet
-        # (issue 21); until it does, it refuses them by name instead of running a wrong line.
-        with pytest.raises(SceneError, match="the fmpy-line engine .* does not support merge or split yet"):
-            linefmu.run(scene, line_dir, step=h)
-        with pytest.raises(SceneError, match="the Line FMU export does not support merge or split yet"):
-            linefmu.export(scene, ROOT / "out" / "never.fmu", line_dir)
-        return
     result = linefmu.run(scene, line_dir, step=h)
     assert len(result.time) == int(round(scene.stop_time / h)) + 1
     err, key = worst(result, scene)
     assert err <= TOL, f"{name} at h = {h}: {key} off the reference by {err:.2e} of its scale"
 
 
-@pytest.mark.parametrize("name", ["splice", "stiff_line", "paper_line"])
+@pytest.mark.parametrize("name", ["splice", "stiff_line", "paper_line", "laminator"])
 def test_model_exchange_in_fmpys_cvode_matches_the_reference(name, line_dir, tmp_path):
     scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
     path = linefmu.export(scene, tmp_path / f"{name}.fmu", line_dir, start=scene.start or "given")
@@ -89,13 +81,14 @@ def test_model_exchange_in_fmpys_cvode_matches_the_reference(name, line_dir, tmp
         assert err <= 1e-4, f"{name}, Model Exchange: {o} off by {err:.2e}"
 
 
-def test_the_fmi3_fmu_gives_the_fmi2_fmus_numbers(line_dir, tmp_path):
-    scene = load_scene(SCENES / "lamination.json", fmu_dir=line_dir)
+@pytest.mark.parametrize("name,outputs", [("lamination", ["film.T", "laminate.T", "idler.v"]),
+                                          ("laminator", ["film.T", "foil.T", "laminate.T", "nip.v"])])
+def test_the_fmi3_fmu_gives_the_fmi2_fmus_numbers(name, outputs, line_dir, tmp_path):
+    scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
     scene.stop_time = 0.5
     fmu2 = linefmu.export(scene, tmp_path / "line2.fmu", line_dir)
     fmu3 = linefmu.export(scene, tmp_path / "line3.fmu", line_dir, fmi3=True)
     assert read_model_description(str(fmu3)).fmiVersion == "3.0"
-    outputs = ["film.T", "laminate.T", "idler.v"]
     a = simulate_fmu(str(fmu2), stop_time=0.5, step_size=1e-3, output_interval=1e-3, output=outputs)
     b = simulate_fmu(str(fmu3), stop_time=0.5, step_size=1e-3, output_interval=1e-3, output=outputs)
     for o in outputs:
@@ -257,6 +250,75 @@ def test_lines_a_user_writes_match_the_reference(seed, line_dir):
         result = linefmu.run(scene, line_dir, step=h)
         err, key = worst(result, scene)
         assert err <= TOL, f"random scene {seed} ({' -> '.join(c.type for c in scene.line)}) at h = {h}: {key} off by {err:.2e}"
+
+
+def random_branched_scene(seed: int) -> str:
+    """A line with a merge or a split, as a user writes one: a web from its own source or
+    unwinder laminated on at a nip (speed-driven or free), or a slitter cutting the web into two
+    lanes (with trim), each to its own sink or winder; random webs, lengths, inertias, effects."""
+    rnd = random.Random(1000 + seed)
+    width = float(f"{rnd.uniform(0.5, 2):.4g}")  # as the web gives it, so that the lanes add up
+
+    def web():
+        return {"E": f"{rnd.uniform(2, 70):.3g} GPa", "thickness": f"{rnd.uniform(10, 120):.3g} um", "width": f"{width:.4g} m",
+                "density": f"{rnd.uniform(800, 2800):.4g} kg/m3", "d_r": f"{rnd.uniform(0.3, 2):.3g} ms"}
+
+    def effects():
+        return [e for e in ("includeDamping", "includeMass") if rnd.random() < 0.5]
+
+    def span(name, w):
+        return {"type": "span", "name": name, "L": f"{rnd.uniform(0.3, 2.5):.3g} m", "web": w, "effects": effects()}
+
+    def start(name, v):
+        if rnd.random() < 0.5:
+            return {"type": "source", "name": name, "speed": f"{v:.4g} m/s", "strain": f"{rnd.uniform(0, 1e-3):.3g}"}
+        return {"type": "unwinder", "name": name, "J": f"{rnd.uniform(0.2, 3):.3g} kg.m2", "R": f"{rnd.uniform(0.1, 0.4):.3g} m",
+                "b": f"{rnd.uniform(0, 0.05):.3g} N.m.s", "drive": {"tension": f"{rnd.uniform(50, 250):.4g} N"},
+                "strain": 0.0, "v_start": f"{v:.4g} m/s"}
+
+    def end(name, v, ramp):
+        if rnd.random() < 0.5:
+            return {"type": "sink", "name": name, "speed": {"table": ramp}}
+        return {"type": "winder", "name": name, "J": f"{rnd.uniform(0.2, 3):.3g} kg.m2", "R": f"{rnd.uniform(0.1, 0.4):.3g} m",
+                "b": f"{rnd.uniform(0, 0.05):.3g} N.m.s", "drive": {"tension": f"{rnd.uniform(50, 250):.4g} N"}, "v_start": f"{v:.4g} m/s"}
+
+    v = rnd.uniform(1, 6)
+    ramp = [["0 s", f"{v:.4g} m/s"], ["0.2 s", f"{v:.4g} m/s"], ["0.5 s", f"{v * rnd.uniform(0.95, 1.05):.4g} m/s"]]
+    webs = {"main": web(), "side": web()}
+    if rnd.random() < 0.5:  # a laminating nip, speed-driven or free
+        webs["lam"] = {"laminate": ["main", "side"], "adhesive": f"{rnd.uniform(0, 5):.2g} g/m2"}
+        nip = {"type": "roller", "name": "nip", "merge": [[start("side_in", v), span("side", "side")]]}
+        if rnd.random() < 0.5:
+            nip["drive"] = {"speed": {"table": ramp}}
+        else:
+            nip.update({"J": f"{rnd.uniform(0.05, 1):.3g} kg.m2", "R": f"{rnd.uniform(0.05, 0.2):.3g} m", "v_start": f"{v:.4g} m/s"})
+        line = [start("feed", v), span("film", "main"), nip, span("laminate", "lam"), {"type": "sink", "name": "out", "speed": {"table": ramp}}]
+    else:  # a slitter into two lanes and trim
+        share = rnd.uniform(0.3, 0.6)
+        trim = rnd.uniform(0, 0.05) * width
+        webs["a"] = {"slit": "main", "width": f"{share * width!r} m"}
+        webs["b"] = {"slit": "main", "width": f"{width - trim - share * width!r} m"}
+        slitter = {"type": "roller", "name": "slitter", "trim": f"{trim!r} m", "split": [[span("lane_b", "b"), end("out_b", v, ramp)]]}
+        if rnd.random() < 0.5:
+            slitter["drive"] = {"speed": {"table": ramp}}
+        else:
+            slitter.update({"J": f"{rnd.uniform(0.05, 1):.3g} kg.m2", "R": f"{rnd.uniform(0.05, 0.2):.3g} m", "v_start": f"{v:.4g} m/s"})
+        line = [{"type": "source", "name": "feed", "speed": f"{v:.4g} m/s", "strain": f"{rnd.uniform(2e-4, 1e-3):.3g}"},
+                span("web", "main"), slitter, span("lane_a", "a"), end("out_a", v, ramp)]
+    scene = {"name": f"branched{seed}", "stop_time": "0.8 s", "step": "1 ms", "webs": webs, "line": line}
+    if rnd.random() < 0.5:
+        scene["start"] = "equilibrium"
+    return json.dumps(scene)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_lines_a_user_writes_with_a_merge_or_a_split_match_the_reference(seed, line_dir):
+    scene = parse_scene(random_branched_scene(seed), source=f"branched{seed}", fmu_dir=line_dir)
+    assert scene.branches
+    for h in (1e-3, 1e-2):
+        result = linefmu.run(scene, line_dir, step=h)
+        err, key = worst(result, scene)
+        assert err <= TOL, f"branched scene {seed} ({scene.branches[0].kind}) at h = {h}: {key} off by {err:.2e}"
 
 
 def test_the_closed_loop_example_holds_its_set_point(line_dir, tmp_path):

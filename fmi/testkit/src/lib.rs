@@ -551,7 +551,8 @@ unsafe fn raw_call<M: Tested>(c: fmi2Component, api: Api, state: fmi2FMUstate, b
             fmi2SerializedFMUstateSize(c, state, &mut n)
         }
         Api::SerializeFMUstate => {
-            let mut buffer = vec![0u8; 4096];
+            // Room for any state here (a line of many parts needs some kB); fmu_states tests a short buffer.
+            let mut buffer = vec![0u8; 1 << 20];
             fmi2SerializeFMUstate(c, state, buffer.as_mut_ptr() as *mut fmi2Byte, buffer.len())
         }
         Api::DeSerializeFMUstate => {

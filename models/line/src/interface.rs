@@ -182,7 +182,7 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
                 if let Some(w) = ps.wrap {
                     let vr = b.own(
                         format!("{}.F", ps.name),
-                        &format!("{}: load cell, the resultant of the two web forces on the bearings (wrap {w} degrees)", ps.name),
+                        &format!("{}: load cell, the resultant of the web forces on the bearings (wrap {w} degrees; the lanes leaving a slitter summed)", ps.name),
                         Kind::Real,
                         Causality::Output,
                         Start::None,

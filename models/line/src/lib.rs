@@ -168,8 +168,17 @@ impl Line {
     fn load_cell(&self, part: usize, cos_wrap: f64) -> FmiResult<f64> {
         let p = &self.parts[part];
         let d = p.description();
-        let force = |name: &str| p.get_real(d.variable_by_name(name).expect("a roller has web forces").vr);
-        let (a, b) = (force("web_a.F")?, force("web_b.F")?);
+        let vr = |name: &str| d.variable_by_name(name).expect("a roller has web forces and ports").vr;
+        // Where webs merge or split, the webs at one side taken as parallel (the lanes of a slitter are).
+        let side = |end: &str, ports: &str| -> FmiResult<f64> {
+            let n = p.get_integer(vr(ports))?;
+            let mut sum = p.get_real(vr(&format!("{end}.F")))?;
+            for k in 2..=n {
+                sum += p.get_real(vr(&format!("{end}{k}.F")))?;
+            }
+            Ok(sum)
+        };
+        let (a, b) = (side("web_a", "inlets")?, side("web_b", "outlets")?);
         Ok((a * a + b * b - 2.0 * a * b * cos_wrap).max(0.0).sqrt())
     }
 }

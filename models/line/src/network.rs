@@ -9,6 +9,7 @@
 //!   and `dv_b/dt` is that roller's acceleration, which the pull drives: a
 //!   loop, linear in `dv_b/dt`, solved exactly per evaluation from the
 //!   roller's own partial derivatives (the effective inertia `J + m r^2`);
+//!   where webs merge, every such span into the nip in one solve;
 //! * a span with `variableLength` and `includeDamping` reads dL/dt: the rates
 //!   of its frame inputs, from the feeding part's state derivatives.
 //!
@@ -65,8 +66,27 @@ const MAX_PART_STATES: usize = 8;
 pub enum LinkKind {
     Plain,
     /// A span's exit force into its exit roller, the span carrying web mass:
-    /// `speed` is the span's web_b.v input, `roller_speed` the roller's output feeding it.
-    MassLoop { speed: u32, roller_speed: u32 },
+    /// one of the pulls of `groups[group]`, all solved when the `lead` is evaluated.
+    MassLoop { group: usize, lead: bool },
+}
+
+/// One span carrying web mass and pulling a roller: its web_b.F into the
+/// roller's `input`, its web_b.v (`speed`) fed by the roller's `roller_speed`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pull {
+    pub span: usize,
+    pub output: u32,
+    pub input: u32,
+    pub speed: u32,
+    pub roller_speed: u32,
+}
+
+/// The pulls on one roller (several where webs merge at a nip): linear in
+/// the roller's one acceleration, so solved together.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MassGroup {
+    pub roller: usize,
+    pub pulls: Vec<Pull>,
 }
 
 /// An input whose rate a span reads (its frame, on a moving roller): the
@@ -90,6 +110,7 @@ pub struct StateRef {
 pub struct Network {
     /// In evaluation order.
     pub links: Vec<Link>,
+    pub groups: Vec<MassGroup>,
     pub rates: Vec<RateLink>,
     pub states: Vec<StateRef>,
     /// Per part: its first state in the line's vector, and its active states.
@@ -141,6 +162,7 @@ impl Network {
             links.push(Link { from, output, to, input, kind: LinkKind::Plain, source, target, fresh: true });
         }
         // The web-mass loops: a span's web_b.F into the roller whose web_a.v feeds its web_b.v.
+        let mut groups: Vec<MassGroup> = Vec::new();
         for i in 0..links.len() {
             let l = links[i];
             if !parts[l.from].includes_mass() {
@@ -160,7 +182,16 @@ impl Network {
                     spec.parts[l.from].name, spec.parts[l.to].name, spec.parts[feed.from].name
                 ));
             }
-            links[i].kind = LinkKind::MassLoop { speed, roller_speed: feed.output };
+            let pull = Pull { span: l.from, output: l.output, input: l.input, speed, roller_speed: feed.output };
+            let group = match groups.iter().position(|g| g.roller == l.to) {
+                Some(g) => g,
+                None => {
+                    groups.push(MassGroup { roller: l.to, pulls: Vec::new() });
+                    groups.len() - 1
+                }
+            };
+            groups[group].pulls.push(pull);
+            links[i].kind = LinkKind::MassLoop { group, lead: false };
         }
         // Frames whose rates a damped span of variable length reads.
         let mut rates = Vec::new();
@@ -173,15 +204,29 @@ impl Network {
             }
         }
         let mut links = order(&links, parts, spec)?;
+        // A group is solved at its first link in evaluation order; the others only mark its inputs.
+        for i in 0..links.len() {
+            if let LinkKind::MassLoop { group, .. } = links[i].kind {
+                let first = !links[..i].iter().any(|k| matches!(k.kind, LinkKind::MassLoop { group: g, .. } if g == group));
+                links[i].kind = LinkKind::MassLoop { group, lead: first };
+            }
+        }
         // Where each span's outputs are computed: at the start of an evaluation every part's
-        // states moved; a link moves its target's inputs (a web-mass loop its span's input rate too).
+        // states moved; a link moves its target's inputs, a web-mass group's lead the input
+        // rates of all its spans and the forces on its roller.
         let mut moved = vec![true; n_parts];
         for l in &mut links {
             l.fresh = moved[l.from];
             moved[l.from] = false;
             moved[l.to] = true;
-            if let LinkKind::MassLoop { .. } = l.kind {
+            if let LinkKind::MassLoop { group, lead } = l.kind {
                 moved[l.from] = true;
+                if lead {
+                    for pull in &groups[group].pulls {
+                        moved[pull.span] = true;
+                    }
+                    moved[groups[group].roller] = true;
+                }
             }
         }
         // States in line order.
@@ -201,8 +246,20 @@ impl Network {
         let outputs = vec![none; n_parts];
         let evaluated_x = vec![0.0; states.len()];
         let reads_earlier_inputs = parts.iter().any(|p| matches!(p, Part::Span(s) if s.params.effects.variable_length));
-        let mut net =
-            Network { links, rates, states, first_state, active, outputs, evaluated: None, evaluated_x, reads_earlier_inputs, kl: 0, ku: 0 };
+        let mut net = Network {
+            links,
+            groups,
+            rates,
+            states,
+            first_state,
+            active,
+            outputs,
+            evaluated: None,
+            evaluated_x,
+            reads_earlier_inputs,
+            kl: 0,
+            ku: 0,
+        };
         (net.kl, net.ku) = net.band(parts);
         Ok(net)
     }
@@ -284,7 +341,11 @@ impl Network {
                         _ => unreachable!("a port is resolved from its own part"),
                     }
                 }
-                LinkKind::MassLoop { speed, roller_speed } => mass_loop(parts, l, speed, roller_speed)?,
+                LinkKind::MassLoop { group, lead } => {
+                    if lead {
+                        mass_loop(parts, &self.groups[group])?;
+                    }
+                }
             }
         }
         if let Some(dx) = dx {
@@ -354,10 +415,16 @@ impl Network {
             let d = parts[l.from].description();
             let on = d.output_dependencies.iter().find(|u| u.vr == l.output).map(|u| u.on.clone()).unwrap_or(None);
             let mut deps = knowns(l.from, &on, &input_deps);
-            if let LinkKind::MassLoop { .. } = l.kind {
+            if let LinkKind::MassLoop { group, .. } = l.kind {
                 deps.extend(own_states(l.to));
                 for (_, others) in &input_deps[l.to] {
                     deps.extend(others.iter().copied());
+                }
+                // Through the common acceleration each pull's force depends on the others' spans.
+                for pull in &self.groups[group].pulls {
+                    let d = parts[pull.span].description();
+                    let on = d.output_dependencies.iter().find(|u| u.vr == pull.output).map(|u| u.on.clone()).unwrap_or(None);
+                    deps.extend(knowns(pull.span, &on, &input_deps));
                 }
             }
             input_deps[l.to].push((l.input, deps));
@@ -409,47 +476,67 @@ fn output_rate(parts: &[Part], p: usize, output: u32) -> FmiResult<f64> {
     Ok(rate)
 }
 
-/// F = F0 + m a, a = a0 + beta F (the roller's surface acceleration, linear
-/// in the force on it): a = (a0 + beta F0) / (1 - beta m), exactly.
-fn mass_loop(parts: &mut [Part], l: &Link, speed: u32, roller_speed: u32) -> FmiResult {
-    let (span, roller) = (l.from, l.to);
-    parts[span].set_input_derivative(speed, 0.0)?;
-    let f0 = parts[span].get_real(l.output)?;
-    let mass_vr = parts[span].description().variable_by_name("m_web").map(|v| v.vr).expect("the span has m_web");
-    let m = parts[span].get_real(mass_vr)?;
-    parts[roller].set_real(l.input, f0)?;
-    let a0 = output_rate(parts, roller, roller_speed)?;
-    let d = parts[roller].description();
-    let mut beta = 0.0;
-    for (i, &state) in d.states.iter().enumerate() {
-        let dv = parts[roller].partial_derivative(roller_speed, state)?;
-        if dv != 0.0 {
-            beta += dv * parts[roller].partial_derivative(d.derivatives[i].vr, l.input)?;
+/// F_k = F0_k + m_k a for each pull k, a = a0 + sum_k beta_k (F_k - F0_k) (the roller's
+/// surface acceleration, linear in the forces on it): a = a0 / (1 - sum_k beta_k m_k), exactly.
+fn mass_loop(parts: &mut [Part], group: &MassGroup) -> FmiResult {
+    let roller = group.roller;
+    let mut sum = 0.0;
+    for pull in &group.pulls {
+        parts[pull.span].set_input_derivative(pull.speed, 0.0)?;
+        let f0 = parts[pull.span].get_real(pull.output)?;
+        let mass_vr = parts[pull.span].description().variable_by_name("m_web").map(|v| v.vr).expect("the span has m_web");
+        let m = parts[pull.span].get_real(mass_vr)?;
+        parts[roller].set_real(pull.input, f0)?;
+        let d = parts[roller].description();
+        let mut beta = 0.0;
+        for (i, &state) in d.states.iter().enumerate() {
+            let dv = parts[roller].partial_derivative(pull.roller_speed, state)?;
+            if dv != 0.0 {
+                beta += dv * parts[roller].partial_derivative(d.derivatives[i].vr, pull.input)?;
+            }
         }
+        sum += beta * m;
     }
-    let a = a0 / (1.0 - beta * m);
+    // Every port of a roller moves with its surface: one acceleration for all the pulls.
+    let a0 = output_rate(parts, roller, group.pulls[0].roller_speed)?;
+    let a = a0 / (1.0 - sum);
     if !a.is_finite() {
-        return Err(FmiError::discard(format!("the web mass loop has no solution (1 - beta m = {})", 1.0 - beta * m)));
+        return Err(FmiError::discard(format!("the web mass loop has no solution (1 - sum beta m = {})", 1.0 - sum)));
     }
-    parts[span].set_input_derivative(speed, a)?;
-    let f = parts[span].get_real(l.output)?;
-    parts[roller].set_real(l.input, f)
+    for pull in &group.pulls {
+        parts[pull.span].set_input_derivative(pull.speed, a)?;
+        let f = parts[pull.span].get_real(pull.output)?;
+        parts[roller].set_real(pull.input, f)?;
+    }
+    Ok(())
 }
 
 /// The links in an order where each one's output is computed after every
 /// link into the inputs that output depends on (ModelStructure); a web-mass
 /// loop after every other link into its roller.
 fn order(links: &[Link], parts: &[Part], spec: &Spec) -> Result<Vec<Link>, String> {
+    // The links into the inputs output `l` depends on.
+    let feeding = |l: &Link| -> Vec<usize> {
+        let d = parts[l.from].description();
+        let on = d.output_dependencies.iter().find(|u| u.vr == l.output).and_then(|u| u.on.clone());
+        let depends = |vr: u32| on.as_ref().is_none_or(|list| list.contains(&vr));
+        links.iter().enumerate().filter(|(_, k)| k.to == l.from && depends(k.input)).map(|(i, _)| i).collect()
+    };
+    let group_of = |l: &Link| match l.kind {
+        LinkKind::MassLoop { group, .. } => Some(group),
+        LinkKind::Plain => None,
+    };
     let needs: Vec<Vec<usize>> = links
         .iter()
         .map(|l| {
-            let d = parts[l.from].description();
-            let on = d.output_dependencies.iter().find(|u| u.vr == l.output).and_then(|u| u.on.clone());
-            let depends = |vr: u32| on.as_ref().is_none_or(|list| list.contains(&vr));
-            let mut need: Vec<usize> = links.iter().enumerate().filter(|(_, k)| k.to == l.from && depends(k.input)).map(|(i, _)| i).collect();
-            if let LinkKind::MassLoop { .. } = l.kind {
-                need.extend(links.iter().enumerate().filter(|(_, k)| k.to == l.to && k.input != l.input).map(|(i, _)| i));
+            let Some(group) = group_of(l) else { return feeding(l) };
+            // A mass group is solved at once: each pull needs what every pull of its group
+            // needs, and every other link into the roller, but not the group's other pulls.
+            let mut need = Vec::new();
+            for k in links.iter().filter(|k| group_of(k) == Some(group)) {
+                need.extend(feeding(k));
             }
+            need.extend(links.iter().enumerate().filter(|(_, k)| k.to == l.to && group_of(k) != Some(group)).map(|(i, _)| i));
             need
         })
         .collect();

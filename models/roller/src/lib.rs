@@ -112,6 +112,9 @@ pub struct Roller {
     carriage: [f64; 2],
     /// The time now, s: profiles are tables of it.
     time: f64,
+    /// The time up to which the profile's breaks and events are applied. Later, a table is read on
+    /// the piece that reaches the time now: at a jump not yet applied, its value before the jump.
+    events_at: f64,
     /// The profile's next `set` event not yet applied.
     next_event: usize,
     profile: Option<Loaded>,
@@ -140,24 +143,34 @@ impl Roller {
         self.profile.as_ref().and_then(|l| l.table(key))
     }
 
+    /// A table's value and slope at t (the time now, or a piece's start).
+    fn read(&self, table: &profiles::Table, t: f64) -> (f64, f64) {
+        if t > self.events_at {
+            let within = profiles::tolerance(t).min(t - self.events_at);
+            (table.value_before(t, within), table.slope_before(t, within))
+        } else {
+            (table.value(t), table.slope(t))
+        }
+    }
+
     /// v [R2]; a speed drive's profile at the time now.
     pub fn surface_speed(&self) -> f64 {
         match (self.drive(), self.table(Key::Speed)) {
-            (Drive::Speed, Some(t)) => t.value(self.time),
+            (Drive::Speed, Some(t)) => self.read(t, self.time).0,
             _ => physics::surface_speed(self.roll.radius, self.omega.value()),
         }
     }
 
     /// Whether the equations depend on time at fixed states and inputs on the
-    /// piece of the profile that starts at t: one of its tables has a slope there.
+    /// piece of the profile they read at t: one of its tables has a slope there.
     pub fn varies_with_time(&self, t: f64) -> bool {
-        self.profile.as_ref().is_some_and(|l| l.tables.iter().flatten().any(|table| table.slope(t) != 0.0))
+        self.profile.as_ref().is_some_and(|l| l.tables.iter().flatten().any(|table| self.read(table, t).1 != 0.0))
     }
 
     /// The strain of the leaving web (at every outlet): the profile's, else
     /// the arriving web's, merged [R5] when several arrive.
     pub fn strain_leaving(&self) -> f64 {
-        self.table(Key::Strain).map_or_else(|| physics::merged_strain(&self.params, &self.inputs.strain_a), |t| t.value(self.time))
+        self.table(Key::Strain).map_or_else(|| physics::merged_strain(&self.params, &self.inputs.strain_a), |t| self.read(t, self.time).0)
     }
 
     /// The drive's torque at time t, and its rate (a speed drive: 0, see
@@ -165,10 +178,12 @@ impl Roller {
     fn torque_at(&self, t: f64) -> (f64, f64) {
         let tau_m = self.inputs.torque;
         if let Some(table) = self.table(Key::Torque) {
-            (tau_m + table.value(t), table.slope(t))
+            let (x, rate) = self.read(table, t);
+            (tau_m + x, rate)
         } else if let Some(table) = self.table(Key::Tension) {
             let s = self.params.roll_sign() * self.roll.radius;
-            (tau_m + s * table.value(t), s * table.slope(t))
+            let (x, rate) = self.read(table, t);
+            (tau_m + s * x, s * rate)
         } else {
             (tau_m, 0.0)
         }
@@ -179,7 +194,7 @@ impl Roller {
         match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => {
                 let (j, r, omega) = (self.roll.inertia, self.roll.radius, self.omega.value());
-                j * t.slope(self.time) / r + self.params.damping * omega - physics::web_torque(&self.params, r, &self.inputs)
+                j * self.read(t, self.time).1 / r + self.params.damping * omega - physics::web_torque(&self.params, r, &self.inputs)
             }
             _ => self.torque_at(self.time).0,
         }
@@ -188,7 +203,7 @@ impl Roller {
     /// The carriage's force (load minus every span's pull) [R4] at t, and its rate.
     fn carriage_force(&self, t: f64) -> (f64, f64) {
         let (p, u) = (&self.params, &self.inputs);
-        let (load, rate) = self.table(Key::Load).map_or((0.0, 0.0), |l| (l.value(t), l.slope(t)));
+        let (load, rate) = self.table(Key::Load).map_or((0.0, 0.0), |l| self.read(l, t));
         (u.load + load - u.pull_back(p) - u.pull_forward(p), rate)
     }
 
@@ -214,7 +229,7 @@ impl Roller {
         let (radius_rate, inertia_rate) =
             if p.winding() { (self.roll.radius_rate(p, v), self.roll.inertia_rate(p, v)) } else { (0.0, 0.0) };
         let omega_rate = match (self.drive(), self.table(Key::Speed)) {
-            (Drive::Speed, Some(t)) => t.slope(self.time) / r - v * radius_rate / (r * r),
+            (Drive::Speed, Some(t)) => self.read(t, self.time).1 / r - v * radius_rate / (r * r),
             _ => {
                 let torque = physics::web_torque(p, r, &self.inputs) + self.torque_at(self.time).0;
                 (torque - p.damping * omega - inertia_rate * omega) / self.roll.inertia
@@ -230,6 +245,7 @@ impl Roller {
 
     /// Applies the `set` events due at t; whether one changed the roll.
     fn apply_due(&mut self, t: f64) -> bool {
+        self.events_at = self.events_at.max(t);
         let Some(loaded) = self.profile.clone() else { return false };
         let mut rolled = false;
         while let Some(event) = loaded.profile.events.get(self.next_event).filter(|e| profiles::due(e.time, t)) {
@@ -261,7 +277,7 @@ impl Roller {
         let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
         let (omega, travel) = match &speed_table {
             Some(table) => {
-                let (v0, slope) = (table.value(t), table.slope(t));
+                let (v0, slope) = self.read(table, t); // at the piece's start, after its events
                 let v1 = v0 + slope * h; // the left limit at a jump that ends the piece
                 (CompensatedSum::from_parts(v1 / r, 0.0), 0.5 * (v0 + v1) * h)
             }
@@ -324,6 +340,9 @@ impl Roller {
             }
         }
         self.time = end;
+        // A master holds the outputs over the next step: at its end, read the tables after a break
+        // there (its `set` events still apply when the next step starts).
+        self.events_at = end;
         Ok(())
     }
 
@@ -337,6 +356,7 @@ impl Roller {
         self.omega = CompensatedSum::from_parts(speed / p.radius, 0.0);
         self.carriage = [p.carriage_start, 0.0];
         self.time = time;
+        self.events_at = time;
         self.next_event = 0;
     }
 }
@@ -355,7 +375,7 @@ impl Model for Roller {
         out.f64(self.omega.hi());
         out.f64(self.omega.lo());
         let r = &self.roll;
-        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.time] {
+        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.time, self.events_at] {
             out.f64(x);
         }
         out.i32(self.next_event as i32);
@@ -372,6 +392,7 @@ impl Model for Roller {
         };
         self.carriage = [r.finite("y")?, r.finite("y_dot")?];
         self.time = r.finite("time")?;
+        self.events_at = r.finite("events applied until")?;
         let next = r.i32("next event")?;
         let text = r.string("profile")?;
         self.profile = match text {
@@ -506,14 +527,19 @@ mod tests {
     use super::*;
 
     /// A roller varies with time on a piece of its profile where a table has a slope, and
-    /// only there (the Line forms df/dt only then).
+    /// only there (the Line forms df/dt only then): the piece it reads, the one that starts
+    /// at t once the events there are applied, else the one that reaches t.
     #[test]
     fn varies_with_time_only_where_a_table_has_a_slope() {
         let mut roller = Roller::at_start_values();
         assert!(!roller.varies_with_time(0.0), "no profile");
         roller.profile = Some(drive::parse(&roller.params, r#"{"speed": [[0, 1], [1, 1], [2, 3], [2, 4]]}"#).unwrap());
         for (t, varies) in [(-1.0, false), (0.5, false), (1.0, true), (1.5, true), (2.0, false), (3.0, false)] {
+            roller.events_at = t;
             assert_eq!(roller.varies_with_time(t), varies, "t = {t}");
         }
+        roller.events_at = 0.5;
+        assert!(!roller.varies_with_time(1.0), "the break at 1 s not yet applied");
+        assert!(roller.varies_with_time(1.5));
     }
 }

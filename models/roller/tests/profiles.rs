@@ -66,6 +66,30 @@ fn a_speed_drive_follows_its_table_through_kinks_and_jumps() {
 }
 
 #[test]
+fn at_a_break_not_yet_applied_the_table_is_read_before_it() {
+    // Model Exchange: at a time event the model shows the values before it until its event
+    // update. Co-Simulation: at a communication point on a break the values after it, which the
+    // master holds over the next step.
+    let text = r#"{"speed": [[0, 1], [0.25, 2], [0.5, 2], [0.5, 3]]}"#;
+    let make = || roller(&[(Real::R, 0.1), (Real::J, 0.2), (Real::b, 0.1)], Some(text), |_| {}).unwrap();
+    let mut me = make();
+    me.set_time(0.25); // the kink: the slope of the piece that ends there, 4 m/s2, then 0
+    assert_eq!(me.derivatives()[0], 4.0 / 0.1);
+    me.event_update();
+    assert_eq!(me.derivatives()[0], 0.0);
+    me.set_time(0.5); // the jump: 2 m/s, then 3 m/s
+    assert_eq!(get(&me, Real::web_b_v), 2.0);
+    me.event_update();
+    assert_eq!(get(&me, Real::web_b_v), 3.0);
+    for h in [0.1, 0.25] {
+        let (mut cs, mut t) = (make(), 0.0);
+        step_to(&mut cs, &mut t, 0.5, h); // sums to 0.5 exactly
+        assert_eq!(get(&cs, Real::web_b_v), 3.0, "h = {h}, t = {t}");
+        assert_eq!(cs.omega(), 2.0 / 0.1, "h = {h}: the roll turns at the speed before the jump until the next step");
+    }
+}
+
+#[test]
 fn a_torque_ramp_is_integrated_exactly_across_steps_and_breakpoints() {
     // J w' = tau(t) - b w, tau a ramp from 0 to 2 N.m over [0.1, 0.6] s, then held.
     let (j, b) = (0.5, 0.2);

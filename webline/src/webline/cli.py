@@ -322,7 +322,7 @@ def main(argv=None):
                    help="webline (default; --algorithm and --coupling apply), or libcosim or FMPy on the SSP "
                         "(Jacobi, held inputs, fixed step; a scene is exported to SSP first), or fmpy-line: "
                         "the scene as one Line FMU in FMPy (solved monolithically at any --step), or reference: "
-                        "the monolithic SciPy reference alone (the one engine that merges and splits webs so far)")
+                        "the monolithic SciPy reference alone")
     p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
     p.add_argument("--no-plot", action="store_true")
     p.add_argument("--reference", action="store_true", help="also compute the monolithic reference and print the error")

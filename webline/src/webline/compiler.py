@@ -215,8 +215,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
     the nip takes the merged strain, the nip's web_b.eps [R5]. A slitter has `outlets` = the
     number of lanes: the main line's lane at web_b, each side path's first span at web_b2..4,
     each taking its strain from its port (the strain arriving, through the slitter's web_a.eps).
-    More than four webs at a roller are refused, naming it. (The Line FMU, whose network is its
-    own, refuses merges and splits itself: `linefmu`.)"""
+    More than four webs at a roller are refused, naming it. The Line FMU takes the same parts and
+    connections (`linefmu.line_spec`)."""
     d = Path(fmu_dir or DEFAULT_FMU_DIR)
     span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
     solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}

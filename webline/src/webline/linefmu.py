@@ -42,11 +42,10 @@ class LineFmuError(RuntimeError):
 def line_spec(scene: Scene, fmu_dir=None, start: str | None = None) -> dict:
     """The line.json of a scene: its parts in line order with their start
     values and profiles, the connections, the experiment, how it starts."""
-    scene.refuse_branches("the Line FMU export")  # its Rust network does not merge or split yet
     system = compile_scene(scene, fmu_dir)
     components = {c.name: c for c in system.components}
     parts = []
-    for c in scene.line:
+    for c in scene.parts:
         comp = components[c.name]
         part = {"name": c.name, "start": comp.start}
         if isinstance(c, Span):
@@ -105,7 +104,6 @@ def descriptions(text: str, out: Path):
 
 def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None) -> Path:
     """Writes Line.fmu for the scene (FMI 3.0 with fmi3=True); returns its path."""
-    scene.refuse_branches("the Line FMU export")
     fmu_dir = Path(fmu_dir or DEFAULT_FMU_DIR)
     template = fmu_dir / TEMPLATE / ("fmi3" if fmi3 else "fmi2")
     binaries = template / "binaries"
@@ -150,15 +148,17 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
 
     from .result import Result
 
-    scene.refuse_branches("the fmpy-line engine (the scene as one Line FMU)")
     h = step or scene.step
     with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
         path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=scene.start or "given")
         outputs = [f"{c}.{OUTPUTS[q]}" for c, q in scene.record]
         t0 = clock.perf_counter()
         with fmpy_log.collecting() as (messages, logger):
-            out = simulate_fmu(str(path), stop_time=scene.stop_time, step_size=h, output_interval=h, output=outputs,
-                               fmi_type="ModelExchange" if model_exchange else "CoSimulation", logger=logger)
+            try:
+                out = simulate_fmu(str(path), stop_time=scene.stop_time, step_size=h, output_interval=h, output=outputs,
+                                   fmi_type="ModelExchange" if model_exchange else "CoSimulation", logger=logger)
+            except Exception as e:  # FMPy's FMICallException names the call; the FMU's log says why
+                raise LineFmuError(f"{scene.name}: {e}" + "".join(f"\n  {m}" for m in messages[-3:])) from e
         wall = clock.perf_counter() - t0
     n = int(round(scene.stop_time / h))
     time = out["time"].astype(float)

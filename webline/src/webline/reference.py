@@ -194,9 +194,13 @@ class LineODE:
 
     def equilibrium(self, z0, t=0.0):
         """The state where every rate vanishes, from z0."""
-        scale = np.maximum(np.abs(z0), atol_of(self, z0) * 1e6)
-        sol = root(lambda u: self.rhs(t, u * scale), z0 / scale, method="hybr", options={"xtol": 1e-15})
-        z = sol.x * scale
+        z = z0
+        # Scaled by the start, then again by the first answer: a strain that starts at 0 is scaled
+        # by its tolerance at first, a thousand times below its steady value, and hybr stalls there.
+        for _ in range(2):
+            scale = np.maximum(np.abs(z), atol_of(self, z0) * 1e6)
+            sol = root(lambda u: self.rhs(t, u * scale), z / scale, method="hybr", options={"xtol": 1e-15})
+            z = sol.x * scale
         residual = np.max(np.abs(self.rhs(t, z)) / scale) if len(z) else 0.0
         if not residual < 1e-9:
             raise EquilibriumError(f"no steady state ({sol.message.strip()}; largest rate {residual:.3g} of the state's size per second)")

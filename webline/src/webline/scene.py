@@ -265,16 +265,6 @@ class Scene:
     def span_after(self, node):
         return _single(self.spans_out(node), node, "splits the web")
 
-    def refuse_branches(self, engine: str):
-        """A merge or split stops an engine that does not know them yet: the Line FMU, whose
-        network of parts is its own (issue 21). webline's co-simulation and the SSP export run them."""
-        if self.branches:
-            b = self.branches[0]
-            what = "merges webs" if b.kind == "merge" else "splits the web"
-            raise SceneError(f"{self.path}: roller {b.node!r} {what} ({b.kind}); {engine} does not support merge "
-                             "or split yet: run this scene as a line of FMUs (webline run --engine webline, or exported to SSP) "
-                             "or with the monolithic reference (webline run --engine reference)")
-
     def speed_profile(self, node):
         """The prescribed speed of a node, or None if it has dynamics."""
         if isinstance(node, Prescribed):
@@ -942,6 +932,9 @@ def _check_merge(r, scene: Scene, b: Branch, raw):
                     "give it as \"web\", not wp1 and wp2")
     if node.trim:
         raise r.err(raw[node.name], f"roller {node.name!r} merges webs: trim goes with split")
+    if getattr(node, "wrap", None) is not None:
+        raise r.err(raw[node.name], f"roller {node.name!r} merges webs, which arrive from different directions: one wrap "
+                    "angle cannot place its load cell; put the load cell on a roller before or after the nip")
     layers = out.wp2.layers
     meeting = sorted(sp.wp2.name for sp in scene.spans_in(node))
     if layers and sorted(layers) != meeting:
