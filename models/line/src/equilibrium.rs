@@ -33,6 +33,9 @@ pub fn solve(line: &mut Line) -> Result<(), String> {
         .collect();
     let size: Vec<f64> = (0..n).map(|k| line.scratch.atol[k] / (line.rtol * line.scratch.rtol_scale[k])).collect();
     let x0 = line.x.clone();
+    // The parts as they are: a failed search leaves them where its last trial took them (a
+    // span's frames at a dancer's far position), where the start state may not even evaluate.
+    line.backup.clone_from(&line.parts);
     let mut x = x0.clone();
     let (mut f, mut trial_f) = (vec![0.0; n], vec![0.0; n]);
     let mut jac = Band::zeros(n, kl, ku);
@@ -94,6 +97,7 @@ pub fn solve(line: &mut Line) -> Result<(), String> {
         }
         Err(why) => {
             line.x = x0;
+            std::mem::swap(&mut line.parts, &mut line.backup);
             Err(why)
         }
     }

@@ -12,8 +12,14 @@
 //!   where webs merge, every such span into the nip in one solve;
 //! * a span with `variableLength` and `includeDamping` reads dL/dt: the rates
 //!   of its frame inputs, from the feeding part's state derivatives.
+//!
+//! An evaluation goes straight to the parts' fields and functions: each
+//! link's output and input are resolved once, when the line is built, to the
+//! part's own variable (`Port`), and the states and derivatives are written
+//! and read by the parts' own functions, without value references or state
+//! vectors copied per part.
 
-use crate::part::{span_output, Part};
+use crate::part::{span_output_of, Part};
 use converting_span::Outputs;
 use crate::spec::Spec;
 use fmi_core::description::{Causality, ModelDescription};
@@ -28,7 +34,33 @@ pub struct Link {
     pub to: usize,
     pub input: u32,
     pub kind: LinkKind,
+    /// `output` and `input` as the parts' own variables.
+    pub source: Port,
+    pub target: Port,
+    /// A span's outputs are computed here, all at once: the first link in
+    /// the evaluation order to read them after the last one that moved an
+    /// input of the span (found when the line is built).
+    pub fresh: bool,
 }
+
+/// A variable of a part, resolved from its value reference when the line is built.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Port {
+    Span(converting_span::description::Real),
+    Roller(roller::description::Real),
+}
+
+impl Port {
+    fn of(part: &Part, vr: u32) -> Option<Port> {
+        match part {
+            Part::Span(_) => converting_span::description::Real::from_vr(vr).map(Port::Span),
+            Part::Roller(_) => roller::description::Real::from_vr(vr).map(Port::Roller),
+        }
+    }
+}
+
+/// Most states a part has (its Model Exchange state vector).
+const MAX_PART_STATES: usize = 8;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LinkKind {
@@ -84,12 +116,16 @@ pub struct Network {
     /// Per part: its first state in the line's vector, and its active states.
     pub first_state: Vec<usize>,
     pub active: Vec<Vec<usize>>,
-    /// Per part: its whole Model Exchange state vector and its derivatives
-    /// (inactive entries stay as the part has them).
-    full: Vec<Vec<f64>>,
-    dfull: Vec<Vec<f64>>,
-    /// Per part: a span's outputs once computed in this evaluation (None: not yet, or an input moved since).
-    outputs: Vec<Option<Outputs>>,
+    /// Per part: a span's outputs as last computed in this evaluation (`Link::fresh`).
+    outputs: Vec<Outputs>,
+    /// The point of the last evaluation, if it succeeded and nothing has changed the parts
+    /// since (`evaluated_at`): the time and the states.
+    evaluated: Option<f64>,
+    evaluated_x: Vec<f64>,
+    /// A span of variable length checks its state against the frames the last
+    /// evaluation gave it (and a frame's rate is read before the links run): an
+    /// evaluation then depends on the one before, not only on (t, x) and the inputs.
+    pub reads_earlier_inputs: bool,
     /// Sub- and super-diagonals of the Jacobian.
     pub kl: usize,
     pub ku: usize,
@@ -119,7 +155,11 @@ impl Network {
             if links.iter().any(|l: &Link| l.to == to && l.input == input) {
                 return Err(format!("input {}.{} is connected twice", c.to.0, c.to.1));
             }
-            links.push(Link { from, output, to, input, kind: LinkKind::Plain });
+            let port = |p: usize, vr: u32, name: &str| {
+                Port::of(&parts[p], vr).ok_or_else(|| format!("connection {}.{} -> {}.{}: {name} is no Real", c.from.0, c.from.1, c.to.0, c.to.1))
+            };
+            let (source, target) = (port(from, output, &c.from.1)?, port(to, input, &c.to.1)?);
+            links.push(Link { from, output, to, input, kind: LinkKind::Plain, source, target, fresh: true });
         }
         // The web-mass loops: a span's web_b.F into the roller whose web_a.v feeds its web_b.v.
         let mut groups: Vec<MassGroup> = Vec::new();
@@ -171,6 +211,24 @@ impl Network {
                 links[i].kind = LinkKind::MassLoop { group, lead: first };
             }
         }
+        // Where each span's outputs are computed: at the start of an evaluation every part's
+        // states moved; a link moves its target's inputs, a web-mass group's lead the input
+        // rates of all its spans and the forces on its roller.
+        let mut moved = vec![true; n_parts];
+        for l in &mut links {
+            l.fresh = moved[l.from];
+            moved[l.from] = false;
+            moved[l.to] = true;
+            if let LinkKind::MassLoop { group, lead } = l.kind {
+                moved[l.from] = true;
+                if lead {
+                    for pull in &groups[group].pulls {
+                        moved[pull.span] = true;
+                    }
+                    moved[groups[group].roller] = true;
+                }
+            }
+        }
         // States in line order.
         let mut states = Vec::new();
         let mut first_state = Vec::with_capacity(n_parts);
@@ -181,15 +239,27 @@ impl Network {
             states.extend(a.iter().map(|&index| StateRef { part: p, index }));
             active.push(a);
         }
-        let mut full = Vec::with_capacity(n_parts);
-        for part in parts {
-            let mut x = vec![0.0; part.state_count()];
-            part.get_states(&mut x).map_err(|e| e.into_message())?;
-            full.push(x);
+        if let Some(part) = parts.iter().find(|p| p.state_count() > MAX_PART_STATES) {
+            return Err(format!("a part ({}) has more than {MAX_PART_STATES} states", part.description().model_identifier));
         }
-        let dfull = parts.iter().map(|p| vec![0.0; p.state_count()]).collect();
-        let outputs = vec![None; n_parts];
-        let mut net = Network { links, groups, rates, states, first_state, active, full, dfull, outputs, kl: 0, ku: 0 };
+        let none = Outputs { length: 0.0, strain: 0.0, tension: 0.0, exit_force: 0.0, stress: 0.0, sensor_speed: 0.0, sensor_tension: 0.0 };
+        let outputs = vec![none; n_parts];
+        let evaluated_x = vec![0.0; states.len()];
+        let reads_earlier_inputs = parts.iter().any(|p| matches!(p, Part::Span(s) if s.params.effects.variable_length));
+        let mut net = Network {
+            links,
+            groups,
+            rates,
+            states,
+            first_state,
+            active,
+            outputs,
+            evaluated: None,
+            evaluated_x,
+            reads_earlier_inputs,
+            kl: 0,
+            ku: 0,
+        };
         (net.kl, net.ku) = net.band(parts);
         Ok(net)
     }
@@ -209,10 +279,12 @@ impl Network {
 
     /// Reads the parts' states into x (after initialization or an event).
     pub fn gather(&mut self, parts: &[Part], x: &mut [f64]) -> FmiResult {
+        let mut full = [0.0; MAX_PART_STATES];
         for (p, part) in parts.iter().enumerate() {
-            part.get_states(&mut self.full[p])?;
+            let full = &mut full[..part.state_count()];
+            part.get_states(full)?;
             for (k, &i) in self.active[p].iter().enumerate() {
-                x[self.first_state[p] + k] = self.full[p][i];
+                x[self.first_state[p] + k] = full[i];
             }
         }
         Ok(())
@@ -222,123 +294,93 @@ impl Network {
     /// and writes the state derivatives into dx (if given). Afterwards every
     /// part's outputs are those of (t, x).
     pub fn evaluate(&mut self, parts: &mut [Part], t: f64, x: &[f64], dx: Option<&mut [f64]>) -> FmiResult {
+        use fmi_core::Model;
+        self.evaluated = None;
         for (p, part) in parts.iter_mut().enumerate() {
-            part.set_time(t);
-            for (k, &i) in self.active[p].iter().enumerate() {
-                self.full[p][i] = x[self.first_state[p] + k];
+            let first = self.first_state[p];
+            match part {
+                // A span's one state.
+                Part::Span(s) => {
+                    s.set_time(t);
+                    s.set_continuous_states(&x[first..first + 1])?;
+                }
+                Part::Roller(r) => {
+                    r.set_time(t);
+                    let mut full = [0.0; MAX_PART_STATES];
+                    let full = &mut full[..r.description().states.len()];
+                    r.get_continuous_states(full)?;
+                    for (k, &i) in self.active[p].iter().enumerate() {
+                        full[i] = x[first + k];
+                    }
+                    r.set_continuous_states(full)?;
+                }
             }
-            part.set_states(&self.full[p])?;
         }
         for i in 0..self.rates.len() {
             let r = self.rates[i];
-            let rate = self.output_rate(parts, r.from, r.output)?;
+            let rate = output_rate(parts, r.from, r.output)?;
             parts[r.span].set_input_derivative(r.input, rate)?;
         }
-        self.outputs.fill(None);
-        for i in 0..self.links.len() {
-            let l = self.links[i];
+        for l in &self.links {
             match l.kind {
                 LinkKind::Plain => {
-                    let v = self.output(parts, l.from, l.output)?;
-                    parts[l.to].set_real(l.input, v)?;
+                    let v = match (&parts[l.from], l.source) {
+                        (Part::Span(s), Port::Span(var)) => {
+                            let o = &mut self.outputs[l.from];
+                            if l.fresh {
+                                *o = s.outputs();
+                            }
+                            span_output_of(o, var).unwrap_or_else(|| s.real(var))
+                        }
+                        (Part::Roller(r), Port::Roller(var)) => r.real(var),
+                        _ => unreachable!("a port is resolved from its own part"),
+                    };
+                    match (&mut parts[l.to], l.target) {
+                        (Part::Span(s), Port::Span(var)) => s.set_real_var(var, v)?,
+                        (Part::Roller(r), Port::Roller(var)) => r.set_real_var(var, v)?,
+                        _ => unreachable!("a port is resolved from its own part"),
+                    }
                 }
                 LinkKind::MassLoop { group, lead } => {
                     if lead {
-                        self.mass_loop(parts, group)?;
-                        for k in 0..self.groups[group].pulls.len() {
-                            self.outputs[self.groups[group].pulls[k].span] = None;
-                        }
+                        mass_loop(parts, &self.groups[group])?;
                     }
                 }
             }
-            self.outputs[l.to] = None;
         }
         if let Some(dx) = dx {
-            for (p, part) in parts.iter().enumerate() {
-                part.get_derivatives(&mut self.dfull[p])?;
-                for (k, &i) in self.active[p].iter().enumerate() {
-                    dx[self.first_state[p] + k] = self.dfull[p][i];
-                }
-            }
+            self.derivatives(parts, dx)?;
         }
+        self.evaluated = Some(t);
+        self.evaluated_x.copy_from_slice(x);
         Ok(())
     }
 
-    /// Output `vr` of part p: a span's from its outputs, computed once while its inputs stay.
-    #[inline]
-    fn output(&mut self, parts: &[Part], p: usize, vr: u32) -> FmiResult<f64> {
-        if let Part::Span(_) = parts[p] {
-            if self.outputs[p].is_none() {
-                self.outputs[p] = parts[p].span_outputs();
-            }
-            if let Some(v) = self.outputs[p].as_ref().and_then(|o| span_output(o, vr)) {
-                return Ok(v);
-            }
-        }
-        parts[p].get_real(vr)
+    /// Whether the parts are as the last evaluation left them, and it was at (t, x): their
+    /// derivatives are then f(t, x) with the inputs as they are.
+    pub fn evaluated_at(&self, t: f64, x: &[f64]) -> bool {
+        self.evaluated == Some(t) && self.evaluated_x == x
     }
 
-    /// The state derivatives of the parts as last evaluated.
+    /// Something other than an evaluation changed the parts (an event).
+    pub fn parts_changed(&mut self) {
+        self.evaluated = None;
+    }
+
+    /// The state derivatives of the parts as last evaluated, by the parts' own
+    /// functions (those their `get_derivatives` calls).
     pub fn derivatives(&self, parts: &[Part], dx: &mut [f64]) -> FmiResult {
-        let mut full = [0.0; 8];
         for (p, part) in parts.iter().enumerate() {
-            let n = part.state_count();
-            part.get_derivatives(&mut full[..n])?;
-            for (k, &i) in self.active[p].iter().enumerate() {
-                dx[self.first_state[p] + k] = full[i];
-            }
-        }
-        Ok(())
-    }
-
-    /// d(output)/dt of part p now: sum over its states of d(output)/dx * dx/dt.
-    fn output_rate(&mut self, parts: &[Part], p: usize, output: u32) -> FmiResult<f64> {
-        let part = &parts[p];
-        part.get_derivatives(&mut self.dfull[p])?;
-        let d = part.description();
-        let mut rate = 0.0;
-        for (i, &state) in d.states.iter().enumerate() {
-            let dx = self.dfull[p][i];
-            if dx != 0.0 {
-                rate += part.partial_derivative(output, state)? * dx;
-            }
-        }
-        Ok(rate)
-    }
-
-    /// F_k = F0_k + m_k a for each pull k, a = a0 + sum_k beta_k (F_k - F0_k) (the roller's
-    /// surface acceleration, linear in the forces on it): a = a0 / (1 - sum_k beta_k m_k), exactly.
-    fn mass_loop(&mut self, parts: &mut [Part], group: usize) -> FmiResult {
-        let roller = self.groups[group].roller;
-        let mut sum = 0.0;
-        for k in 0..self.groups[group].pulls.len() {
-            let pull = self.groups[group].pulls[k];
-            parts[pull.span].set_input_derivative(pull.speed, 0.0)?;
-            let f0 = parts[pull.span].get_real(pull.output)?;
-            let mass_vr = parts[pull.span].description().variable_by_name("m_web").map(|v| v.vr).expect("the span has m_web");
-            let m = parts[pull.span].get_real(mass_vr)?;
-            parts[roller].set_real(pull.input, f0)?;
-            let d = parts[roller].description();
-            let mut beta = 0.0;
-            for (i, &state) in d.states.iter().enumerate() {
-                let dv = parts[roller].partial_derivative(pull.roller_speed, state)?;
-                if dv != 0.0 {
-                    beta += dv * parts[roller].partial_derivative(d.derivatives[i].vr, pull.input)?;
+            let first = self.first_state[p];
+            match part {
+                Part::Span(s) => dx[first] = s.unstretched_rate(),
+                Part::Roller(r) => {
+                    let d = r.derivatives();
+                    for (k, &i) in self.active[p].iter().enumerate() {
+                        dx[first + k] = d[i];
+                    }
                 }
             }
-            sum += beta * m;
-        }
-        // Every port of a roller moves with its surface: one acceleration for all the pulls.
-        let a0 = self.output_rate(parts, roller, self.groups[group].pulls[0].roller_speed)?;
-        let a = a0 / (1.0 - sum);
-        if !a.is_finite() {
-            return Err(FmiError::discard(format!("the web mass loop has no solution (1 - sum beta m = {})", 1.0 - sum)));
-        }
-        for k in 0..self.groups[group].pulls.len() {
-            let pull = self.groups[group].pulls[k];
-            parts[pull.span].set_input_derivative(pull.speed, a)?;
-            let f = parts[pull.span].get_real(pull.output)?;
-            parts[roller].set_real(pull.input, f)?;
         }
         Ok(())
     }
@@ -415,6 +457,58 @@ impl Network {
         }
         (kl, ku)
     }
+}
+
+/// d(output)/dt of part p now: sum over its states of d(output)/dx * dx/dt.
+fn output_rate(parts: &[Part], p: usize, output: u32) -> FmiResult<f64> {
+    let part = &parts[p];
+    let mut full = [0.0; MAX_PART_STATES];
+    let full = &mut full[..part.state_count()];
+    part.get_derivatives(full)?;
+    let d = part.description();
+    let mut rate = 0.0;
+    for (i, &state) in d.states.iter().enumerate() {
+        let dx = full[i];
+        if dx != 0.0 {
+            rate += part.partial_derivative(output, state)? * dx;
+        }
+    }
+    Ok(rate)
+}
+
+/// F_k = F0_k + m_k a for each pull k, a = a0 + sum_k beta_k (F_k - F0_k) (the roller's
+/// surface acceleration, linear in the forces on it): a = a0 / (1 - sum_k beta_k m_k), exactly.
+fn mass_loop(parts: &mut [Part], group: &MassGroup) -> FmiResult {
+    let roller = group.roller;
+    let mut sum = 0.0;
+    for pull in &group.pulls {
+        parts[pull.span].set_input_derivative(pull.speed, 0.0)?;
+        let f0 = parts[pull.span].get_real(pull.output)?;
+        let mass_vr = parts[pull.span].description().variable_by_name("m_web").map(|v| v.vr).expect("the span has m_web");
+        let m = parts[pull.span].get_real(mass_vr)?;
+        parts[roller].set_real(pull.input, f0)?;
+        let d = parts[roller].description();
+        let mut beta = 0.0;
+        for (i, &state) in d.states.iter().enumerate() {
+            let dv = parts[roller].partial_derivative(pull.roller_speed, state)?;
+            if dv != 0.0 {
+                beta += dv * parts[roller].partial_derivative(d.derivatives[i].vr, pull.input)?;
+            }
+        }
+        sum += beta * m;
+    }
+    // Every port of a roller moves with its surface: one acceleration for all the pulls.
+    let a0 = output_rate(parts, roller, group.pulls[0].roller_speed)?;
+    let a = a0 / (1.0 - sum);
+    if !a.is_finite() {
+        return Err(FmiError::discard(format!("the web mass loop has no solution (1 - sum beta m = {})", 1.0 - sum)));
+    }
+    for pull in &group.pulls {
+        parts[pull.span].set_input_derivative(pull.speed, a)?;
+        let f = parts[pull.span].get_real(pull.output)?;
+        parts[roller].set_real(pull.input, f)?;
+    }
+    Ok(())
 }
 
 /// The links in an order where each one's output is computed after every

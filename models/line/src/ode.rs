@@ -22,6 +22,11 @@ pub(crate) struct LineSystem<'a> {
     pub(crate) f0: &'a mut [f64],
     pub(crate) f1: &'a mut [f64],
     pub(crate) y: &'a mut [f64],
+    /// The parts are evaluated at the integrator's first point (`Network::evaluated_at`): its
+    /// first f is their derivatives, no evaluation needed.
+    pub(crate) evaluated: bool,
+    /// The time of the last Jacobian (where `time_dependent` is asked).
+    pub(crate) t_jacobian: f64,
 }
 
 impl LineSystem<'_> {
@@ -35,10 +40,14 @@ impl LineSystem<'_> {
 
 impl System for LineSystem<'_> {
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), ()> {
+        if std::mem::take(&mut self.evaluated) && self.net.evaluated_at(t, y) {
+            return self.net.derivatives(self.parts, dy).map_err(drop);
+        }
         self.eval(t, y, dy).map_err(drop)
     }
 
     fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Band) -> Result<(), ()> {
+        self.t_jacobian = t;
         let n = y.len();
         let width = jac.lower() + jac.upper() + 1;
         for group in 0..width.min(n) {
@@ -65,8 +74,12 @@ impl System for LineSystem<'_> {
         Ok(())
     }
 
+    /// An interval between the line's events is one piece of every profile table (each
+    /// breakpoint is an event), so f depends on t there only through ramped inputs and
+    /// tables with a slope on that piece: with none, df/dt is zero and not formed.
     fn time_dependent(&self) -> bool {
         self.time_dependent
+            && (!self.ramps.is_empty() || self.parts.iter().any(|p| matches!(p, Part::Roller(r) if r.varies_with_time(self.t_jacobian))))
     }
 }
 
@@ -83,7 +96,7 @@ pub fn rhs_at(line: &mut Line, t: f64, x: &[f64], dx: &mut [f64]) -> FmiResult {
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
     let Scratch { f0, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y, evaluated: false, t_jacobian: t };
     sys.eval(t, x, dx)
 }
 
@@ -93,7 +106,7 @@ pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], f0: Option<&[f64]>, jac: 
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
     let Scratch { f0: own, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0: &mut [], f1, y };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0: &mut [], f1, y, evaluated: false, t_jacobian: t };
     let f0 = match f0 {
         Some(f0) => f0,
         None => {
@@ -111,7 +124,7 @@ pub fn residual_and_jacobian(line: &mut Line, x: &[f64], f: &mut [f64], jac: Opt
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().expect("initialized");
     let Scratch { f0, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y, evaluated: false, t_jacobian: t };
     sys.eval(t, x, f)?;
     if let Some(jac) = jac {
         jac.clear();

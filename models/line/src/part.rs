@@ -170,8 +170,14 @@ impl Part {
 /// its bindings (variables.rs); None for a variable that is not among them.
 #[inline]
 pub fn span_output(o: &Outputs, vr: u32) -> Option<f64> {
+    span_output_of(o, converting_span::description::Real::from_vr(vr)?)
+}
+
+/// The same, for the variable itself.
+#[inline]
+pub fn span_output_of(o: &Outputs, var: converting_span::description::Real) -> Option<f64> {
     use converting_span::description::Real;
-    Some(match Real::from_vr(vr)? {
+    Some(match var {
         Real::v => o.sensor_speed,
         Real::T => o.sensor_tension,
         Real::web_a_F | Real::summary_Tension => o.tension,

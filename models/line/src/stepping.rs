@@ -124,6 +124,7 @@ fn apply_events(line: &mut Line) -> FmiResult {
     net.evaluate(&mut line.parts, line.time, &line.x, None)?;
     let mut next = f64::INFINITY;
     let mut changed = false;
+    net.parts_changed();
     for part in &mut line.parts {
         let update = part.event_update();
         next = next.min(update.next_event_time.unwrap_or(f64::INFINITY));
@@ -147,7 +148,10 @@ fn integrate(line: &mut Line, end: f64) -> FmiResult {
     let Line { parts, net, x, ramps, integrator, scratch, rtol, .. } = line;
     let (net, integrator) = (net.as_mut().expect("initialized"), integrator.as_mut().expect("initialized"));
     let Scratch { f0, f1, y, atol, rtol_scale, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent, f0, f1, y };
+    // The parts enter a step evaluated where it begins (every change is evaluated at once), unless an
+    // event changed them since; where an evaluation depends on the one before, the integrator's own is kept.
+    let evaluated = net.evaluated_at(t, x) && !net.reads_earlier_inputs;
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent, f0, f1, y, evaluated, t_jacobian: t };
     if end - t < TINY_STEP {
         // An interval no dynamics of a line can resolve (a denormal h from an importer), where
         // the integrator's step control underflows: one explicit Euler step, exact to rounding there.
@@ -180,13 +184,25 @@ fn failure(f: Failure, t: f64, end: f64) -> FmiError {
 }
 
 /// One communication step of length h.
+///
+/// A failed step is undone without copying the parts in advance when they
+/// enter it evaluated at (time, x), as every change leaves them: evaluations
+/// change only what an evaluation at (time, x) sets again (times, states,
+/// connected inputs, input rates) and the inputs an importer ramps. An event
+/// applies more (a web, a roll, a table's next entry): the parts are copied
+/// before the first. They are copied before the step where an evaluation
+/// failed on them (an input an importer set that they refuse) or where an
+/// evaluation depends on the one before (`Network::reads_earlier_inputs`).
 pub fn step(line: &mut Line, h: f64) -> FmiResult {
     let t0 = line.time;
     let next_event = line.next_event;
     let next_step = line.integrator.as_ref().map_or(0.0, |r| r.next_step);
-    line.backup.clone_from(&line.parts);
     line.scratch.x.copy_from_slice(&line.x);
-    match advance(line, t0 + h) {
+    let mut copied = !line.net.as_ref().is_some_and(|n| n.evaluated_at(t0, &line.x) && !n.reads_earlier_inputs);
+    if copied {
+        line.backup.clone_from(&line.parts);
+    }
+    match advance(line, t0 + h, &mut copied) {
         Ok(()) => {
             // The ramped inputs end the step where their derivatives took them.
             for &(part, vr, base, rate) in &line.ramps {
@@ -196,7 +212,12 @@ pub fn step(line: &mut Line, h: f64) -> FmiResult {
             line.settle()
         }
         Err(e) => {
-            std::mem::swap(&mut line.parts, &mut line.backup);
+            if copied {
+                std::mem::swap(&mut line.parts, &mut line.backup);
+            }
+            for &(part, vr, base, _) in &line.ramps {
+                let _ = line.parts[part].set_real(vr, base);
+            }
             line.x.copy_from_slice(&line.scratch.x);
             line.time = t0;
             line.next_event = next_event;
@@ -211,7 +232,8 @@ pub fn step(line: &mut Line, h: f64) -> FmiResult {
     }
 }
 
-fn advance(line: &mut Line, end: f64) -> FmiResult {
+/// `copied`: the parts were copied to `line.backup` before an event (see `step`).
+fn advance(line: &mut Line, end: f64, copied: &mut bool) -> FmiResult {
     let mut scratch = std::mem::take(&mut line.scratch);
     tolerances(line, &mut scratch);
     line.scratch = scratch;
@@ -219,6 +241,10 @@ fn advance(line: &mut Line, end: f64) -> FmiResult {
     let last = end - profiles_tolerance(end);
     loop {
         if line.next_event <= line.time + profiles_tolerance(line.time) {
+            if !*copied {
+                line.backup.clone_from(&line.parts);
+                *copied = true;
+            }
             apply_events(line)?;
         }
         let stop = if line.next_event < last { line.next_event } else { end };

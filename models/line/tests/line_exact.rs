@@ -168,6 +168,24 @@ fn the_equilibrium_start_is_steady_and_has_the_drives_tensions() {
     assert!((get(&line, "pull.F") - t_exit).abs() < 1e-9 * t_exit);
 }
 
+/// The paper line without bearing friction and with its pull roll an undriven
+/// roller: the unwinder's 400 N pass the idler unchanged and nothing holds
+/// them at the end, so there is no steady state. A failed search leaves the
+/// parts as they were (not at its last trial point).
+#[test]
+fn a_failed_equilibrium_search_leaves_the_parts_as_they_were() {
+    let mut spec = paper_line("given");
+    spec["parts"][0]["start"]["b"] = json!(0.0);
+    spec["parts"][2]["start"]["b"] = json!(0.0);
+    spec["parts"][4] = roller("pull", "roller", json!({"J": 0.01, "R": 0.1, "b": 0.0, "v_start": 10.0}), None);
+    let mut line = initialized(&spec);
+    let (parts, x) = (line.parts.clone(), line.states().to_vec());
+    let why = line::equilibrium::solve(&mut line).expect_err("this line has no steady state");
+    assert!(why.starts_with("no steady state"), "{why}");
+    assert_eq!(line.states(), &x[..]);
+    assert!(line.parts == parts, "the parts were left at the search's last trial point");
+}
+
 #[test]
 fn a_given_start_that_is_not_steady_rings() {
     let mut line = initialized(&paper_line("given"));
@@ -202,6 +220,30 @@ fn a_restored_state_continues_bit_for_bit_and_a_failed_step_changes_nothing() {
     assert!(err.message.contains("line"), "{}", err.message);
     assert_eq!((line.states().to_vec(), line.time(), get(&line, "film.T")), before);
     line.do_step(0.01).unwrap();
+}
+
+/// A failed step leaves every part exactly as it was, whether or not an
+/// event was applied inside it (here the sink's bearing friction set at
+/// 0.02 s, and a breakpoint of its speed table): the parts are copied only
+/// before an event, and otherwise evaluated again where the step began.
+#[test]
+fn a_failed_step_leaves_every_part_as_it_was_with_or_without_an_event_inside() {
+    for event in [false, true] {
+        let mut src = prescribed("src", "source", json!([[0.0, 1.0]]));
+        src["start"]["web_a.eps"] = json!(0.0);
+        let mut snk = prescribed("snk", "sink", json!([[0.0, 20.0]]));
+        if event {
+            snk["profile"] = json!({"speed": [[0.0, 20.0], [0.03, 20.0], [1.0, 20.5]], "set": [{"time": 0.02, "b": 0.5}]});
+        }
+        let parts = vec![src, span("film", 1.0, 0.0, &["includeDamping"]), snk];
+        let mut line = initialized(&line_spec(parts, chain(&["src", "film", "snk"]), "given"));
+        line.do_step(0.01).unwrap();
+        let (parts, x, t) = (line.parts.clone(), line.states().to_vec(), line.time());
+        line.do_step(10.0).unwrap_err();
+        assert_eq!((line.states(), line.time()), (&x[..], t), "event {event}");
+        assert!(line.parts == parts, "event {event}: a part changed in a failed step");
+        line.do_step(0.01).unwrap();
+    }
 }
 
 #[test]

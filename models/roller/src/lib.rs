@@ -161,6 +161,12 @@ impl Roller {
         }
     }
 
+    /// Whether the equations depend on time at fixed states and inputs on the
+    /// piece of the profile they read at t: one of its tables has a slope there.
+    pub fn varies_with_time(&self, t: f64) -> bool {
+        self.profile.as_ref().is_some_and(|l| l.tables.iter().flatten().any(|table| self.read(table, t).1 != 0.0))
+    }
+
     /// The strain of the leaving web (at every outlet): the profile's, else
     /// the arriving web's, merged [R5] when several arrive.
     pub fn strain_leaving(&self) -> f64 {
@@ -513,5 +519,27 @@ impl Model for Roller {
             next_event_time: self.profile.as_ref().and_then(|l| l.profile.next_break(self.time)),
             states_changed: rolled || speed_drive,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A roller varies with time on a piece of its profile where a table has a slope, and
+    /// only there (the Line forms df/dt only then): the piece it reads, the one that starts
+    /// at t once the events there are applied, else the one that reaches t.
+    #[test]
+    fn varies_with_time_only_where_a_table_has_a_slope() {
+        let mut roller = Roller::at_start_values();
+        assert!(!roller.varies_with_time(0.0), "no profile");
+        roller.profile = Some(drive::parse(&roller.params, r#"{"speed": [[0, 1], [1, 1], [2, 3], [2, 4]]}"#).unwrap());
+        for (t, varies) in [(-1.0, false), (0.5, false), (1.0, true), (1.5, true), (2.0, false), (3.0, false)] {
+            roller.events_at = t;
+            assert_eq!(roller.varies_with_time(t), varies, "t = {t}");
+        }
+        roller.events_at = 0.5;
+        assert!(!roller.varies_with_time(1.0), "the break at 1 s not yet applied");
+        assert!(roller.varies_with_time(1.5));
     }
 }

@@ -3,8 +3,9 @@
 //! (ordered along the web) has few diagonals, and elimination costs
 //! O(n * kl * (kl + ku)) instead of O(n^3).
 //!
-//! Storage is dense row-major (n * n): simple to fill and to read; only the
-//! band (widened by kl for the pivots' fill-in) is ever touched.
+//! Storage is compact and row-major: row i holds columns i - kl ..= i + ku
+//! (the LU's rows kl more, for the pivots' fill-in), so nothing outside the
+//! band is stored, cleared or copied, and each row's band is one slice.
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Band {
@@ -12,12 +13,14 @@ pub struct Band {
     /// Sub- and super-diagonals that may be non-zero.
     kl: usize,
     ku: usize,
+    /// n rows of kl + ku + 1: entry (i, j) at i * (kl + ku + 1) + j + kl - i.
     a: Vec<f64>,
 }
 
 impl Band {
     pub fn zeros(n: usize, kl: usize, ku: usize) -> Band {
-        Band { n, kl: kl.min(n.saturating_sub(1)), ku: ku.min(n.saturating_sub(1)), a: vec![0.0; n * n] }
+        let (kl, ku) = (kl.min(n.saturating_sub(1)), ku.min(n.saturating_sub(1)));
+        Band { n, kl, ku, a: vec![0.0; n * (kl + ku + 1)] }
     }
 
     pub fn n(&self) -> usize {
@@ -39,15 +42,30 @@ impl Band {
     }
 
     #[inline]
-    pub fn get(&self, i: usize, j: usize) -> f64 {
-        self.a[i * self.n + j]
+    fn index(&self, i: usize, j: usize) -> usize {
+        i * (self.kl + self.ku + 1) + j + self.kl - i
     }
 
-    /// Sets an entry; one outside the band is a bug of the caller's structure.
+    /// Entry (i, j); 0 outside the band.
+    #[inline]
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        if i < self.n && j < self.n && self.in_band(i, j) {
+            self.a[self.index(i, j)]
+        } else {
+            0.0
+        }
+    }
+
+    /// Sets an entry; one outside the band is a bug of the caller's structure
+    /// (a zero there is no entry, and is dropped).
     #[inline]
     pub fn set(&mut self, i: usize, j: usize, x: f64) {
         debug_assert!(self.in_band(i, j) || x == 0.0, "({i}, {j}) = {x} outside the band ({}, {})", self.kl, self.ku);
-        self.a[i * self.n + j] = x;
+        assert!(i < self.n && j < self.n, "({i}, {j}) outside a matrix of {} rows", self.n);
+        if self.in_band(i, j) {
+            let k = self.index(i, j);
+            self.a[k] = x;
+        }
     }
 
     pub fn clear(&mut self) {
@@ -67,55 +85,80 @@ impl Band {
 /// row exchanges) and the pivot rows.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BandLu {
-    m: Band,
+    n: usize,
+    kl: usize,
+    ku: usize,
+    /// n rows of 2 kl + ku + 1: entry (i, j) at i * (2 kl + ku + 1) + j + kl - i
+    /// (row i holds columns i - kl ..= i + ku + kl).
+    m: Vec<f64>,
+    /// The multipliers of column k (rows k + 1 ..= k + kl) at k * kl: the forward solve reads them in a row.
+    low: Vec<f64>,
+    /// 1 / U's diagonal: the back substitution multiplies (a division's latency, per row, on its critical path).
+    inverse: Vec<f64>,
     pivot: Vec<usize>,
 }
 
 impl BandLu {
     pub fn new(n: usize, kl: usize, ku: usize) -> BandLu {
-        BandLu { m: Band::zeros(n, kl, ku), pivot: vec![0; n] }
+        let (kl, ku) = (kl.min(n.saturating_sub(1)), ku.min(n.saturating_sub(1)));
+        BandLu { n, kl, ku, m: vec![0.0; n * (2 * kl + ku + 1)], low: vec![0.0; n * kl], inverse: vec![0.0; n], pivot: vec![0; n] }
     }
 
     /// Factors `c * I - a` (what an implicit step solves with), in place of
     /// the previous factors. False if it is singular (or not finite).
     pub fn factor_shifted(&mut self, c: f64, a: &Band) -> bool {
         let (n, kl, ku) = (a.n, a.kl, a.ku);
-        debug_assert!(self.m.n == n && self.m.kl == kl && self.m.ku == ku);
+        debug_assert!(self.n == n && self.kl == kl && self.ku == ku);
+        let wa = kl + ku + 1;
         // The factors need kl more super-diagonals than the matrix (fill-in of the pivoting).
-        let width = kl + ku;
-        self.m.a.fill(0.0);
-        for i in 0..n {
-            for j in i.saturating_sub(kl)..(i + ku + 1).min(n) {
-                self.m.a[i * n + j] = -a.get(i, j);
+        let w = wa + kl;
+        let m = &mut self.m;
+        // Row i of both starts at column i - kl: the same offsets.
+        for (row, arow) in m.chunks_exact_mut(w).zip(a.a.chunks_exact(wa)) {
+            let (band, fill) = row.split_at_mut(wa);
+            for (x, y) in band.iter_mut().zip(arow) {
+                *x = -y;
             }
-            self.m.a[i * n + i] += c;
+            for x in fill {
+                *x = 0.0;
+            }
+            band[kl] += c;
         }
-        let m = &mut self.m.a;
         for k in 0..n {
             let last_row = (k + kl + 1).min(n);
-            let last_col = (k + width + 1).min(n);
+            let last_col = (k + kl + ku + 1).min(n);
+            // (i, k) sits at i * w + k + kl - i.
             let mut p = k;
+            let mut best = m[k * w + kl].abs();
             for i in k + 1..last_row {
-                if m[i * n + k].abs() > m[p * n + k].abs() {
-                    p = i;
+                let x = m[i * w + k + kl - i].abs();
+                if x > best {
+                    (p, best) = (i, x);
                 }
             }
             self.pivot[k] = p;
-            let d = m[p * n + k];
+            let (upper, lower) = m.split_at_mut((k + 1) * w);
+            let row_k = &mut upper[k * w + kl..k * w + kl + (last_col - k)];
+            if p != k {
+                let q = (p - k - 1) * w + kl + k - p;
+                row_k.swap_with_slice(&mut lower[q..q + (last_col - k)]);
+            }
+            let d = row_k[0];
             if d == 0.0 || !d.is_finite() {
                 return false;
             }
-            if p != k {
-                for j in k..last_col {
-                    m.swap(k * n + j, p * n + j);
-                }
-            }
-            for i in k + 1..last_row {
-                let f = m[i * n + k] / d;
-                m[i * n + k] = f;
+            self.inverse[k] = 1.0 / d;
+            let low = &mut self.low[k * kl..(k + 1) * kl];
+            for (i, l) in (k + 1..last_row).zip(low.iter_mut()) {
+                // Row i's columns k..last_col.
+                let q = (i - k - 1) * w + kl + k - i;
+                let row_i = &mut lower[q..q + (last_col - k)];
+                let f = row_i[0] / d;
+                row_i[0] = f;
+                *l = f;
                 if f != 0.0 {
-                    for j in k + 1..last_col {
-                        m[i * n + j] -= f * m[k * n + j];
+                    for (x, y) in row_i[1..].iter_mut().zip(&row_k[1..]) {
+                        *x -= f * y;
                     }
                 }
             }
@@ -125,27 +168,27 @@ impl BandLu {
 
     /// Solves in place with the last factors.
     pub fn solve(&self, b: &mut [f64]) {
-        let (n, kl) = (self.m.n, self.m.kl);
-        let width = kl + self.m.ku;
-        let m = &self.m.a;
-        for k in 0..n {
-            let p = self.pivot[k];
-            if p != k {
-                b.swap(k, p);
-            }
-            let bk = b[k];
+        let (n, kl) = (self.n, self.kl);
+        let w = 2 * kl + self.ku + 1;
+        let b = &mut b[..n];
+        for (k, (&p, low)) in self.pivot.iter().zip(self.low.chunks_exact(kl.max(1))).enumerate() {
+            b.swap(k, p);
+            let (head, tail) = b.split_at_mut(k + 1);
+            let bk = head[k];
             if bk != 0.0 {
-                for i in k + 1..(k + kl + 1).min(n) {
-                    b[i] -= m[i * n + k] * bk;
+                for (x, l) in tail.iter_mut().zip(&low[..kl]) {
+                    *x -= l * bk;
                 }
             }
         }
-        for k in (0..n).rev() {
-            let mut s = b[k];
-            for j in k + 1..(k + width + 1).min(n) {
-                s -= m[k * n + j] * b[j];
+        for (k, (row, inverse)) in self.m.chunks_exact(w).zip(&self.inverse).enumerate().rev() {
+            // U's row k: columns k ..= k + kl + ku.
+            let (head, tail) = b.split_at_mut(k + 1);
+            let mut s = head[k];
+            for (x, y) in row[kl + 1..].iter().zip(tail.iter()) {
+                s -= x * y;
             }
-            b[k] = s / m[k * n + k];
+            head[k] = s * inverse;
         }
     }
 }

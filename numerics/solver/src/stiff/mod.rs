@@ -291,6 +291,7 @@ impl Rosenbrock {
     fn try_step<S: System>(&mut self, sys: &mut S, t: f64, y: &[f64], h: f64, f: &mut [f64], c: &Control) -> Option<f64> {
         let (n, m) = (self.n, self.method);
         let stage = &mut self.stage;
+        // Every sum below runs over the earlier stages in order, a vector at a time.
         for i in 0..m.stages {
             let (done, rest) = self.k.split_at_mut(i);
             let ki = &mut rest[0];
@@ -299,38 +300,42 @@ impl Rosenbrock {
             let fi: &[f64] = if i == 0 {
                 &self.f0
             } else {
-                for r in 0..n {
-                    let mut s = y[r];
-                    for (j, kj) in done.iter().enumerate() {
-                        s += a[j] * kj[r];
+                stage.copy_from_slice(y);
+                for (&aj, kj) in a.iter().zip(done.iter()) {
+                    for (s, k) in stage.iter_mut().zip(kj) {
+                        *s += aj * k;
                     }
-                    stage[r] = s;
                 }
                 sys.rhs(t + m.alpha[i] * h, stage, f).ok()?;
                 self.stats.rhs += 1;
                 f
             };
             let dh = m.d[i] * h;
-            for r in 0..n {
-                let mut s = 0.0;
-                for (j, kj) in done.iter().enumerate() {
-                    s += cc[j] * kj[r];
+            ki.fill(0.0);
+            for (&cj, kj) in cc.iter().zip(done.iter()) {
+                for (s, k) in ki.iter_mut().zip(kj) {
+                    *s += cj * k;
                 }
-                ki[r] = fi[r] + dh * self.ft[r] + s / h;
+            }
+            for ((x, fr), ft) in ki.iter_mut().zip(fi).zip(&self.ft) {
+                *x = fr + dh * ft + *x / h;
             }
             self.lu.solve(ki);
         }
+        // The new solution in stage, the error estimate in f.
+        stage.copy_from_slice(y);
+        f.fill(0.0);
+        for ((&mj, &ej), kj) in m.m.iter().zip(&m.e).zip(&self.k[..m.stages]) {
+            for ((s, e), k) in stage.iter_mut().zip(f.iter_mut()).zip(kj) {
+                *s += mj * k;
+                *e += ej * k;
+            }
+        }
         let mut sum = 0.0;
         for r in 0..n {
-            let (mut y_new, mut err) = (y[r], 0.0);
-            for (j, kj) in self.k[..m.stages].iter().enumerate() {
-                y_new += m.m[j] * kj[r];
-                err += m.e[j] * kj[r];
-            }
             let rtol = c.rtol * c.rtol_scale.get(r).copied().unwrap_or(1.0);
-            let scale = c.atol[r] + rtol * y[r].abs().max(y_new.abs());
-            sum += (err / scale).powi(2);
-            stage[r] = y_new;
+            let scale = c.atol[r] + rtol * y[r].abs().max(stage[r].abs());
+            sum += (f[r] / scale).powi(2);
         }
         let norm = (sum / n.max(1) as f64).sqrt();
         (norm.is_finite() && stage.iter().all(|x| x.is_finite())).then_some(norm)
