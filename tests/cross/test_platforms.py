@@ -522,7 +522,7 @@ def line_fmu(tmp_path_factory):
 
 @pytest.mark.parametrize("platform", OTHERS)
 def test_a_line_fmu_gives_the_same_bits_on_every_platform(importers, line_fmu, platform, tmp_path):
-    """The splice scene as one Line FMU (RODAS4 inside, events at their times, a
+    """The splice scene as one Line FMU (Rodas5P inside, events at their times, a
     motor torque stepped, an FMU state saved and restored): every output of every
     1 ms step the same as on Linux x86-64."""
     unpacked, guid, variables = line_fmu

@@ -131,7 +131,7 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
     let positive = Range { min: 0.0, min_inclusive: false, max: 1e-2, max_inclusive: true, lo: f64::MIN_POSITIVE, hi: 1e-2 };
     b.own(
         "tolerance".into(),
-        "relative tolerance of the line's integrator (RODAS4, error-controlled)",
+        "relative tolerance of the line's integrator (Rodas5P, error-controlled)",
         Kind::Real,
         Causality::Parameter,
         Start::Real(DEFAULT_TOLERANCE),

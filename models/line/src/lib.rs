@@ -4,7 +4,7 @@
 //! `resources/line.json` when it is instantiated, and the interface follows
 //! from it (`interface`). The parts are the span's and the Roller's own
 //! models (`part`), joined into one ODE (`network`) that one implicit
-//! integrator steps (RODAS4 with the line's banded Jacobian, `stepping`).
+//! integrator steps (Rodas5P with the line's banded Jacobian, `stepping`).
 //!
 //! * `spec` — line.json;
 //! * `interface` — the variables, `<part>.<variable>`, and what each is bound to;
@@ -219,7 +219,10 @@ impl Variables for Line {
             Binding::Part { part, vr } => {
                 self.parts[part].set_real(vr, value)?;
                 // An input moves the outputs that depend on it; a failure shows when they are read.
-                let _ = self.settle();
+                // One that moves no connection (a motor torque) changes only what its part computes when read.
+                if self.net.as_ref().is_none_or(|net| net.input_moves_connections(part, vr)) {
+                    let _ = self.settle();
+                }
                 Ok(())
             }
             Binding::Tolerance => {

@@ -126,6 +126,10 @@ pub struct Network {
     /// evaluation gave it (and a frame's rate is read before the links run): an
     /// evaluation then depends on the one before, not only on (t, x) and the inputs.
     pub reads_earlier_inputs: bool,
+    /// Per part: the inputs an output read by a connection depends on (None: every input).
+    /// Setting another input moves no connection, only the part's own derivatives and
+    /// outputs, which the part computes when they are read.
+    moving_inputs: Vec<Option<Vec<u32>>>,
     /// Sub- and super-diagonals of the Jacobian.
     pub kl: usize,
     pub ku: usize,
@@ -246,6 +250,14 @@ impl Network {
         let outputs = vec![none; n_parts];
         let evaluated_x = vec![0.0; states.len()];
         let reads_earlier_inputs = parts.iter().any(|p| matches!(p, Part::Span(s) if s.params.effects.variable_length));
+        let mut moving_inputs: Vec<Option<Vec<u32>>> = vec![Some(Vec::new()); n_parts];
+        for l in &links {
+            let on = parts[l.from].description().output_dependencies.iter().find(|u| u.vr == l.output).and_then(|u| u.on.clone());
+            match (&mut moving_inputs[l.from], on) {
+                (Some(list), Some(on)) => list.extend(on.iter().copied()),
+                (m, _) => *m = None,
+            }
+        }
         let mut net = Network {
             links,
             groups,
@@ -257,6 +269,7 @@ impl Network {
             evaluated: None,
             evaluated_x,
             reads_earlier_inputs,
+            moving_inputs,
             kl: 0,
             ku: 0,
         };
@@ -360,6 +373,13 @@ impl Network {
     /// derivatives are then f(t, x) with the inputs as they are.
     pub fn evaluated_at(&self, t: f64, x: &[f64]) -> bool {
         self.evaluated == Some(t) && self.evaluated_x == x
+    }
+
+    /// Whether setting input `vr` of part `part` moves a connection: then the line must be
+    /// evaluated again before its outputs are read. Where web mass or a length's rate is
+    /// coupled, an acceleration or a rate is carried by the connections: every input moves them.
+    pub fn input_moves_connections(&self, part: usize, vr: u32) -> bool {
+        !self.groups.is_empty() || !self.rates.is_empty() || self.reads_earlier_inputs || self.moving_inputs[part].as_ref().is_none_or(|list| list.contains(&vr))
     }
 
     /// Something other than an evaluation changed the parts (an event).

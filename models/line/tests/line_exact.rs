@@ -266,6 +266,38 @@ fn a_torque_input_ramped_over_the_step_is_integrated_exactly() {
     assert!((a - b).abs() < 1e-8 * a.abs(), "{a} vs {b}");
 }
 
+/// A motor torque moves no connection (no output a span reads depends on it): setting it
+/// does not evaluate the line, yet derivatives, outputs and the next step are exactly
+/// those of a line evaluated after the set.
+#[test]
+fn a_torque_set_without_evaluating_the_line_acts_as_one_evaluated() {
+    let mut lazy = initialized(&paper_line("equilibrium"));
+    let tau = vr(&lazy, "idler.tau_m");
+    let n = lazy.states().len();
+    let (mut before, mut after, mut settled) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    lazy.get_derivatives(&mut before).unwrap();
+    lazy.set_real(tau, 0.5).unwrap();
+    let mut evaluated = lazy.clone();
+    let x = evaluated.states().to_vec();
+    evaluated.set_continuous_states(&x).unwrap(); // evaluates the line
+    lazy.get_derivatives(&mut after).unwrap();
+    evaluated.get_derivatives(&mut settled).unwrap();
+    assert_eq!(after, settled);
+    // The idler's speed (its state after the entry span's) gains tau/J; nothing else moves.
+    let idler = 2;
+    assert!((after[idler] - before[idler] - 0.5 / 0.05).abs() < 1e-9, "{} -> {}", before[idler], after[idler]);
+    for k in (0..n).filter(|&k| k != idler) {
+        assert_eq!(after[k], before[k], "state {k}");
+    }
+    for name in ["entry.T", "exit.T", "idler.v", "pull.F"] {
+        assert_eq!(get(&lazy, name).to_bits(), get(&evaluated, name).to_bits(), "{name}");
+    }
+    lazy.do_step(0.01).unwrap();
+    evaluated.do_step(0.01).unwrap();
+    assert_eq!(lazy.states(), evaluated.states());
+    assert!((get(&lazy, "idler.omega") - get(&initialized(&paper_line("equilibrium")), "idler.omega")).abs() > 1e-3);
+}
+
 #[test]
 fn bad_line_files_are_refused_with_the_reason() {
     let good = paper_line("equilibrium");

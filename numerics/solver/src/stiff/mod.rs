@@ -105,7 +105,7 @@ impl Rosenbrock {
             n,
             jac: Band::zeros(n, kl, ku),
             lu: BandLu::new(n, kl, ku),
-            k: [v(), v(), v(), v(), v(), v()],
+            k: std::array::from_fn(|_| v()),
             stage: v(),
             y_now: v(),
             f: v(),

@@ -1,8 +1,8 @@
-//! Both methods against solutions known in closed form: the order each
+//! The methods against solutions known in closed form: the order each
 //! claims, L-stability, the tolerance met under error control; and what makes
 //! ROS34PW2 a W-method: its order with a wrong Jacobian, and a Jacobian kept.
 
-use super::tableau::{Tableau, RODAS4, ROS34PW2};
+use super::tableau::{Tableau, RODAS4, RODAS5P, ROS34PW2};
 use super::*;
 
 /// y1' = -y2 + 2t, y2' = y1 - t^2: linear in y, forced in t; y = (cos t + t^2, sin t).
@@ -92,6 +92,19 @@ fn rodas4_converges_with_order_four() {
 }
 
 #[test]
+fn rodas5p_converges_with_order_five() {
+    // Riccati: 26.8 and 29.7 per halving from 16 steps. The forced problem is linear, where
+    // Rodas5P does better than its order (65 and 87 per halving from 4 steps, then rounding).
+    let [forced, riccati] = errors(&RODAS5P, 1.0, [4, 8, 16]);
+    for w in forced.windows(2) {
+        assert!(w[0] / w[1] > 0.8 * 32.0, "Rodas5P, forced: {forced:?}");
+    }
+    let [_, riccati_fine] = errors(&RODAS5P, 1.0, [16, 32, 64]);
+    assert_order(&[riccati_fine.clone(), riccati_fine], 5, "Rodas5P, Riccati");
+    assert!(riccati[2] < 1e-7, "Rodas5P, Riccati at 16 steps: {riccati:?}");
+}
+
+#[test]
 fn ros34pw2_converges_with_order_three_with_any_jacobian() {
     // Exact, half, none at all, and of the wrong sign: a W-method keeps its
     // order (the farther W from J, the more steps before the asymptotic range).
@@ -133,13 +146,13 @@ impl System for Prothero {
 #[test]
 fn both_damp_stiff_modes_at_any_step() {
     // Started off the smooth solution by 1, one step must remove the
-    // offset: the two results differ by |R(h lambda)| ~ 1/(h |lambda|) = 1e-8
-    // (R(inf) = 0). Both stay near cos t: order reduction on this problem
+    // offset: the two results differ by |R(h lambda)|, a small multiple of
+    // 1/(h |lambda|) = 1e-8 (R(inf) = 0; Rodas5P: 1.3e-7). Both stay near cos t: order reduction on this problem
     // allows 1e-6 at h = 0.1 for RODAS4; ROS34PW2, of order 3, 1e-5.
-    for (method, near) in [(&RODAS4, 1e-6), (&ROS34PW2, 1e-5)] {
+    for (method, near) in [(&RODAS4, 1e-6), (&RODAS5P, 1e-6), (&ROS34PW2, 1e-5)] {
         let off = fixed(method, &mut Prothero { lambda: -1e9 }, 1, &[2.0], 0.1, 1).0[0];
         let on = fixed(method, &mut Prothero { lambda: -1e9 }, 1, &[1.0], 0.1, 1).0[0];
-        assert!((off - on).abs() < 1e-7, "{}: offset left: {}", method.name, off - on);
+        assert!((off - on).abs() < 2e-7, "{}: offset left: {}", method.name, off - on);
         assert!((on - 0.1f64.cos()).abs() < near, "{}: {}", method.name, on - 0.1f64.cos());
     }
 }
@@ -148,7 +161,7 @@ fn both_damp_stiff_modes_at_any_step() {
 fn both_meet_their_tolerance_with_error_control() {
     // 20 calls of 0.5 (communication steps): the global error stays within
     // 100 times the local tolerance (1e-10) at t = 10, few steps rejected.
-    for method in [&RODAS4, &ROS34PW2] {
+    for method in [&RODAS4, &RODAS5P, &ROS34PW2] {
         let mut r = Rosenbrock::new(method, 2, 1, 1);
         let atol = [1e-12, 1e-12];
         let c = Control { rtol: 1e-10, atol: &atol, rtol_scale: &[], max_steps: 10_000, max_step: 0.0 };
