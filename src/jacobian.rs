@@ -49,29 +49,93 @@ pub struct Point<'a> {
     pub sensor: &'a SensorScale,
 }
 
-impl Point<'_> {
+impl<'a> Point<'a> {
     /// d(everything)/d(direction) at this point.
+    #[inline]
     pub fn tangents(&self, d: &Direction) -> Tangents {
+        self.linearize().along(d)
+    }
+
+    /// What the tangents along every direction share: the point's own values.
+    #[inline]
+    pub fn linearize(&self) -> Linearization<'a> {
         let (p, u) = (self.params, self.inputs);
         let x = self.x.value();
         let length = physics::span_length(p, u);
+        // [1]: 1 + eps_b = L/x.
+        let strain = physics::strain(length, self.x, 0.0);
+        let forward = u.speed_a >= 0.0;
+        let length_rate = self.rates.length;
+        let rate = physics::unstretched_rate(u, strain);
+        let web = &p.span_web;
+        // The stress-strain curve's tangent and curvature at the strain (unused without a curve).
+        let (tangent, curvature) = match &web.curve {
+            None => (0.0, 0.0),
+            Some(curve) => (curve.at(strain).1, if p.effects.include_damping { curve.curvature(strain) } else { 0.0 }),
+        };
+        Linearization {
+            params: p,
+            inputs: u,
+            given: self.given,
+            sensor: self.sensor,
+            speed_b_rate: self.rates.speed_b,
+            x,
+            length,
+            stretch: 1.0 + strain,
+            forward,
+            strain_in: if forward { u.strain_a } else { strain },
+            inflow: physics::inflow(u, strain),
+            rate,
+            length_rate,
+            factor: (1.0 + strain) * (1.0 + strain) / length,
+            strain_rate: physics::strain_rate(length, length_rate, x, strain, rate),
+            tangent,
+            curvature,
+            force: physics::web_force(p, u, length, x, strain, length_rate),
+        }
+    }
+}
+
+/// A point's values the tangents along any direction use (`Point::linearize`).
+pub struct Linearization<'a> {
+    params: &'a Parameters,
+    inputs: &'a Inputs,
+    given: Option<&'a Inputs>,
+    sensor: &'a SensorScale,
+    speed_b_rate: f64,
+    x: f64,
+    length: f64,
+    stretch: f64,
+    forward: bool,
+    strain_in: f64,
+    inflow: f64,
+    rate: f64,
+    length_rate: f64,
+    factor: f64,
+    strain_rate: f64,
+    tangent: f64,
+    curvature: f64,
+    force: f64,
+}
+
+impl Linearization<'_> {
+    /// d(everything)/d(direction).
+    #[inline]
+    pub fn along(&self, d: &Direction) -> Tangents {
+        let (p, u) = (self.params, self.inputs);
+        let (x, length, stretch) = (self.x, self.length, self.stretch);
         let [sx, sy] = u.span_vector();
         let [dsx, dsy] = d.u.span_vector();
         let d_length = if p.effects.variable_length { (sx * dsx + sy * dsy) / length } else { 0.0 };
-        // [1]: 1 + eps_b = L/x.
-        let strain = physics::strain(length, self.x, 0.0);
-        let stretch = 1.0 + strain;
         let d_strain = (d_length - stretch * d.x) / x;
         // [2]: q_a - v_b/(1+eps_b). At v_a = 0 exactly: the forward branch, as `physics::inflow` takes it.
-        let forward = u.speed_a >= 0.0;
-        let (strain_in, d_strain_in) = if forward { (u.strain_a, d.u.strain_a) } else { (strain, d_strain) };
-        let inflow = physics::inflow(u, strain);
-        let d_inflow = (d.u.speed_a - inflow * d_strain_in) / (1.0 + strain_in);
+        let d_strain_in = if self.forward { d.u.strain_a } else { d_strain };
+        let inflow = self.inflow;
+        let d_inflow = (d.u.speed_a - inflow * d_strain_in) / (1.0 + self.strain_in);
         let d_outflow = (d.u.speed_b - u.speed_b / stretch * d_strain) / stretch;
-        let rate = physics::unstretched_rate(u, strain);
         let d_rate = d_inflow - d_outflow;
         // [9]: dL/dt = (r_b - r_a).(given rates)/L moves with the positions; an estimate is held.
-        let length_rate = self.rates.length;
+        let length_rate = self.length_rate;
         let d_length_rate = match self.given {
             Some(r) if p.effects.variable_length => {
                 let [rx, ry] = r.span_vector();
@@ -80,32 +144,30 @@ impl Point<'_> {
             _ => 0.0,
         };
         // [4]: d(eps_b)/dt = dL/dt / x - (1+eps_b)^2/L * dx/dt.
-        let factor = stretch * stretch / length;
-        let strain_rate = physics::strain_rate(length, length_rate, x, strain, rate);
+        let factor = self.factor;
         let d_factor = (2.0 * stretch * d_strain - factor * d_length) / length;
-        let d_strain_rate = d_length_rate / x - length_rate * d.x / (x * x) - (d_factor * rate + factor * d_rate);
+        let d_strain_rate = d_length_rate / x - length_rate * d.x / (x * x) - (d_factor * self.rate + factor * d_rate);
         // [5], [5a].
         let web = &p.span_web;
         let damping = if p.effects.include_damping { web.retardation_time } else { 0.0 };
         let d_force = match &web.curve {
             None => web.stiffness() * (d_strain + damping * d_strain_rate),
-            Some(curve) => {
-                let tangent = curve.at(strain).1;
-                let d_tangent = if damping != 0.0 { curve.curvature(strain) * d_strain } else { 0.0 };
-                web.area() * (tangent * d_strain + damping * (d_tangent * strain_rate + tangent * d_strain_rate))
+            Some(_) => {
+                let tangent = self.tangent;
+                let d_tangent = if damping != 0.0 { self.curvature * d_strain } else { 0.0 };
+                web.area() * (tangent * d_strain + damping * (d_tangent * self.strain_rate + tangent * d_strain_rate))
             }
         };
-        let force = physics::web_force(p, u, length, x, strain, length_rate);
         // The slack clamp: at a force of exactly 0 the slack side (derivative 0).
-        let d_tension = if !p.effects.prevent_negative_tension || force > 0.0 { d_force } else { 0.0 };
+        let d_tension = if !p.effects.prevent_negative_tension || self.force > 0.0 { d_force } else { 0.0 };
         // [10]: F_b - F_a = q_a (rho_l2 v_b - rho_in v_a) + rho_l2 x dv_b/dt, dv_b/dt held.
         let d_exit_force = if p.effects.include_mass {
             let rho_span = web.linear_density();
-            let rho_in = if forward { p.incoming.linear_density() } else { rho_span };
+            let rho_in = if self.forward { p.incoming.linear_density() } else { rho_span };
             d_tension
                 + d_inflow * (rho_span * u.speed_b - rho_in * u.speed_a)
                 + inflow * (rho_span * d.u.speed_b - rho_in * d.u.speed_a)
-                + rho_span * d.x * self.rates.speed_b
+                + rho_span * d.x * self.speed_b_rate
         } else {
             d_tension
         };

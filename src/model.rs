@@ -8,7 +8,7 @@ use crate::sensor::SensorScale;
 use crate::stepping;
 use crate::records;
 use crate::schedule::{self, WebChange};
-use crate::jacobian::{self, Direction, Point};
+use crate::jacobian::{self, Direction, Linearization, Point, Tangents};
 use fmi_core::{Compiled, Event, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use crate::web_state;
 use solver::CompensatedSum;
@@ -84,15 +84,34 @@ impl ConvertingSpan {
     /// an output, the state or its derivative; during initialization the
     /// state is the initial state's function of the inputs.
     pub fn partial_derivative(&self, unknown: Real, known: Real, of: Jacobian) -> FmiResult<f64> {
+        let mut d = Self::direction(known).ok_or_else(|| FmiError::error(format!("{} is not a known", known.name())))?;
+        if of == Jacobian::Initialization {
+            d.x = jacobian::initial_state_tangent(&self.params, &self.inputs, &d.u);
+        }
+        let t = self.tangents(&d);
+        Self::along(&t, &d, unknown).ok_or_else(|| FmiError::error(format!("{} is not an unknown", unknown.name())))
+    }
+
+    /// The unit direction of one known: the state or an input (None: neither).
+    pub fn direction(known: Real) -> Option<Direction> {
         let mut d = Direction::default();
         if known == Real::unstretchedLength {
             d.x = 1.0;
         } else {
-            *Self::input_field(&mut d.u, known).ok_or_else(|| FmiError::error(format!("{} is not a known", known.name())))? = 1.0;
+            *Self::input_field(&mut d.u, known)? = 1.0;
         }
-        if of == Jacobian::Initialization {
-            d.x = jacobian::initial_state_tangent(&self.params, &self.inputs, &d.u);
-        }
+        Some(d)
+    }
+
+    /// How everything moves along `d` now, at the input rates the outputs use (held).
+    #[inline]
+    pub fn tangents(&self, d: &Direction) -> Tangents {
+        self.linearize().along(d)
+    }
+
+    /// What the tangents along every direction share, now (several directions: `along` each).
+    #[inline]
+    pub fn linearize(&self) -> Linearization<'_> {
         let p = &self.params;
         let effects = physics::needs_input_rates(&p.effects);
         let point = Point {
@@ -103,9 +122,14 @@ impl ConvertingSpan {
             given: self.input_rates.as_ref().filter(|_| effects),
             sensor: &self.sensor,
         };
-        let t = point.tangents(&d);
+        point.linearize()
+    }
+
+    /// d(unknown) from the tangents `t` along `d` (None: not an unknown).
+    #[inline]
+    pub fn along(t: &Tangents, d: &Direction, unknown: Real) -> Option<f64> {
         // The same outputs as the bindings in variables.rs.
-        Ok(match unknown {
+        Some(match unknown {
             Real::v => t.outputs.sensor_speed,
             Real::T => t.outputs.sensor_tension,
             Real::web_a_F | Real::summary_Tension => t.outputs.tension,
@@ -116,7 +140,7 @@ impl ConvertingSpan {
             Real::m_web => t.web_mass,
             Real::unstretchedLength => d.x,
             Real::der_unstretchedLength => t.unstretched_rate,
-            other => return Err(FmiError::error(format!("{} is not an unknown", other.name()))),
+            _ => return None,
         })
     }
 

@@ -151,7 +151,7 @@ impl System for Sys<'_> {
     }
     fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Band) -> Result<(), ()> {
         self.jac += 1;
-        jacobian_at(self.line, t, y, Some(f0), jac).map_err(drop)
+        jacobian_at(self.line, t, y, Some(f0), jac, false).map_err(drop)
     }
     fn time_dependent(&self) -> bool {
         self.time_dependent
@@ -210,7 +210,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
             jac_count.set(jac_count.get() + 1);
             let mut y = ybuf.borrow_mut();
             to_y(u, &mut y);
-            if jacobian_at(&mut line.borrow_mut(), t, &y, None, band).is_err() {
+            if jacobian_at(&mut line.borrow_mut(), t, &y, None, band, false).is_err() {
                 band.clear();
             }
             *ct = t;

@@ -9,12 +9,14 @@
 //! * `spec` — line.json;
 //! * `interface` — the variables, `<part>.<variable>`, and what each is bound to;
 //! * `network` — states, connections, the web-mass loop, the band;
+//! * `chain` — the Jacobian chained from the parts' tangents;
 //! * `stepping` — a communication step: events at their times, the integrator between;
 //! * `equilibrium` — the steady state a line starts in;
 //! * this file — the FMI model hooks.
 
 #![deny(unsafe_code)]
 
+pub mod chain;
 pub mod equilibrium;
 pub mod interface;
 pub mod network;

@@ -19,6 +19,7 @@
 //! and read by the parts' own functions, without value references or state
 //! vectors copied per part.
 
+use crate::chain::Chain;
 use crate::part::{span_output_of, Part};
 use converting_span::Outputs;
 use crate::spec::Spec;
@@ -51,7 +52,7 @@ pub enum Port {
 }
 
 impl Port {
-    fn of(part: &Part, vr: u32) -> Option<Port> {
+    pub fn of(part: &Part, vr: u32) -> Option<Port> {
         match part {
             Part::Span(_) => converting_span::description::Real::from_vr(vr).map(Port::Span),
             Part::Roller(_) => roller::description::Real::from_vr(vr).map(Port::Roller),
@@ -130,6 +131,8 @@ pub struct Network {
     /// Setting another input moves no connection, only the part's own derivatives and
     /// outputs, which the part computes when they are read.
     moving_inputs: Vec<Option<Vec<u32>>>,
+    /// The Jacobian chained from the parts' tangents, where every connection carries a value only.
+    pub chain: Option<Chain>,
     /// Sub- and super-diagonals of the Jacobian.
     pub kl: usize,
     pub ku: usize,
@@ -270,10 +273,15 @@ impl Network {
             evaluated_x,
             reads_earlier_inputs,
             moving_inputs,
+            chain: None,
             kl: 0,
             ku: 0,
         };
-        (net.kl, net.ku) = net.band(parts);
+        let depends;
+        (net.kl, net.ku, depends) = net.band(parts);
+        if net.groups.is_empty() && net.rates.is_empty() && !net.reads_earlier_inputs {
+            net.chain = Chain::new(parts, &net.links, &depends, &net.first_state, &net.active);
+        }
         Ok(net)
     }
 
@@ -407,7 +415,8 @@ impl Network {
 
     /// The Jacobian's band from the model structures: which states each
     /// derivative can depend on, through the connections.
-    fn band(&self, parts: &[Part]) -> (usize, usize) {
+    /// Also, per link, the states its value can depend on: [lo, hi).
+    fn band(&self, parts: &[Part]) -> (usize, usize, Vec<(usize, usize)>) {
         let n_parts = parts.len();
         // Per part and input vr: the global states it depends on.
         let mut input_deps: Vec<Vec<(u32, BTreeSet<usize>)>> = vec![Vec::new(); n_parts];
@@ -431,6 +440,7 @@ impl Network {
             }
             set
         };
+        let mut depends = Vec::with_capacity(self.links.len());
         for l in &self.links {
             let d = parts[l.from].description();
             let on = d.output_dependencies.iter().find(|u| u.vr == l.output).map(|u| u.on.clone()).unwrap_or(None);
@@ -447,6 +457,7 @@ impl Network {
                     deps.extend(knowns(pull.span, &on, &input_deps));
                 }
             }
+            depends.push(deps.first().zip(deps.last()).map_or((0, 0), |(&lo, &hi)| (lo, hi + 1)));
             input_deps[l.to].push((l.input, deps));
         }
         for r in &self.rates {
@@ -475,7 +486,7 @@ impl Network {
                 }
             }
         }
-        (kl, ku)
+        (kl, ku, depends)
     }
 }
 

@@ -1,5 +1,6 @@
 //! The line's ODE x' = f(t, x): its right-hand side through the parts' own
-//! equations, and its banded Jacobian by grouped differences. The integrator
+//! equations, and its banded Jacobian, chained from the parts' tangents
+//! (`chain`) or, where the line has no chain, by grouped differences. The integrator
 //! (`stepping`), the steady state (`equilibrium`) and outside solvers
 //! (bench/diffsol_line) all evaluate the line here.
 
@@ -11,8 +12,9 @@ use solver::band::Band;
 use solver::stiff::System;
 
 /// The line as one ODE for the integrator: inputs an importer ramps move
-/// with time; the Jacobian by finite differences over the band, a group of
-/// columns (kl + ku + 1 apart, so no row sees two) per evaluation.
+/// with time; the Jacobian chained from the parts' tangents, else by finite
+/// differences over the band, a group of columns (kl + ku + 1 apart, so no
+/// row sees two) per evaluation.
 pub(crate) struct LineSystem<'a> {
     pub(crate) parts: &'a mut [Part],
     pub(crate) net: &'a mut Network,
@@ -27,6 +29,8 @@ pub(crate) struct LineSystem<'a> {
     pub(crate) evaluated: bool,
     /// The time of the last Jacobian (where `time_dependent` is asked).
     pub(crate) t_jacobian: f64,
+    /// Difference the Jacobian even where the line has a chain (to check one against the other).
+    pub(crate) differences: bool,
 }
 
 impl LineSystem<'_> {
@@ -48,6 +52,19 @@ impl System for LineSystem<'_> {
 
     fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Band) -> Result<(), ()> {
         self.t_jacobian = t;
+        if !self.differences && self.net.chain.is_some() {
+            if !self.net.evaluated_at(t, y) {
+                let f1 = std::mem::take(&mut self.f1);
+                let r = self.eval(t, y, f1);
+                self.f1 = f1;
+                r.map_err(drop)?;
+            }
+            if self.net.chain.as_mut().is_some_and(|c| c.jacobian(self.parts, jac).is_ok()) {
+                return Ok(());
+            }
+            // A partial outside the structure the chain was planned for: differences cover it.
+            jac.clear();
+        }
         let n = y.len();
         let width = jac.lower() + jac.upper() + 1;
         for group in 0..width.min(n) {
@@ -96,17 +113,18 @@ pub fn rhs_at(line: &mut Line, t: f64, x: &[f64], dx: &mut [f64]) -> FmiResult {
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
     let Scratch { f0, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y, evaluated: false, t_jacobian: t };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y, evaluated: false, t_jacobian: t, differences: false };
     sys.eval(t, x, dx)
 }
 
 /// df/dx at (t, x), banded as `line.network()` says (kl, ku); `f0` is f(t, x) if known
-/// (else one more evaluation).
-pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], f0: Option<&[f64]>, jac: &mut Band) -> FmiResult {
+/// (else one more evaluation). `differences`: by grouped differences even where the line
+/// chains its parts' tangents.
+pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], f0: Option<&[f64]>, jac: &mut Band, differences: bool) -> FmiResult {
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
     let Scratch { f0: own, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0: &mut [], f1, y, evaluated: false, t_jacobian: t };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0: &mut [], f1, y, evaluated: false, t_jacobian: t, differences };
     let f0 = match f0 {
         Some(f0) => f0,
         None => {
@@ -124,7 +142,7 @@ pub fn residual_and_jacobian(line: &mut Line, x: &[f64], f: &mut [f64], jac: Opt
     let Line { parts, net, ramps, scratch, .. } = line;
     let net = net.as_mut().expect("initialized");
     let Scratch { f0, f1, y, .. } = scratch;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y, evaluated: false, t_jacobian: t };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y, evaluated: false, t_jacobian: t, differences: false };
     sys.eval(t, x, f)?;
     if let Some(jac) = jac {
         jac.clear();

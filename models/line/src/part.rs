@@ -7,6 +7,7 @@
 use converting_span::{ConvertingSpan, Outputs};
 use fmi_core::description::ModelDescription;
 use fmi_core::{Compiled, EventUpdate, Experiment, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
+use crate::network::Port;
 use roller::Roller;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -117,6 +118,34 @@ impl Part {
     }
     pub fn inputs_valid(&self) -> FmiResult {
         each!(self, m => m.inputs_valid())
+    }
+
+    /// The partials of `unknowns` (its outputs, states, derivatives) along each of `knowns` (its
+    /// states and inputs) by the part's own tangents, a row of `out` per known; false if one of
+    /// them is neither.
+    pub fn partials(&self, knowns: &[Port], unknowns: &[Port], out: &mut [f64]) -> bool {
+        let rows = out.chunks_exact_mut(unknowns.len().max(1));
+        match self {
+            Part::Span(s) => {
+                let at = s.linearize();
+                knowns.iter().zip(rows).all(|(k, row)| {
+                    let Some(d) = (match *k { Port::Span(k) => ConvertingSpan::direction(k), Port::Roller(_) => None }) else { return false };
+                    let t = at.along(&d);
+                    unknowns.iter().zip(row).all(|(u, o)| match *u {
+                        Port::Span(u) => ConvertingSpan::along(&t, &d, u).map(|x| *o = x).is_some(),
+                        Port::Roller(_) => false,
+                    })
+                })
+            }
+            Part::Roller(r) => knowns.iter().zip(rows).all(|(k, row)| {
+                let Some(d) = (match *k { Port::Roller(k) => Roller::direction(k), Port::Span(_) => None }) else { return false };
+                let t = r.tangents(&d);
+                unknowns.iter().zip(row).all(|(u, o)| match *u {
+                    Port::Roller(u) => Roller::along(&t, &d, u).map(|x| *o = x).is_some(),
+                    Port::Span(_) => false,
+                })
+            }),
+        }
     }
 
     /// The span's outputs, all at once (one evaluation of its physics for every output a link reads).

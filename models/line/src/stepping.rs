@@ -152,7 +152,7 @@ fn integrate(line: &mut Line, end: f64) -> FmiResult {
     // The parts enter a step evaluated where it begins (every change is evaluated at once), unless an
     // event changed them since; where an evaluation depends on the one before, the integrator's own is kept.
     let evaluated = net.evaluated_at(t, x) && !net.reads_earlier_inputs;
-    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent, f0, f1, y, evaluated, t_jacobian: t };
+    let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent, f0, f1, y, evaluated, t_jacobian: t, differences: false };
     if end - t < TINY_STEP {
         // An interval no dynamics of a line can resolve (a denormal h from an importer), where
         // the integrator's step control underflows: one explicit Euler step, exact to rounding there.

@@ -8,6 +8,7 @@ use fmi_core::phase::Phase;
 use fmi_core::{Experiment, FmiResult, Model, Resources, Variables};
 use line::Line;
 use serde_json::{json, Value};
+use solver::band::Band;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -296,6 +297,83 @@ fn a_torque_set_without_evaluating_the_line_acts_as_one_evaluated() {
     evaluated.do_step(0.01).unwrap();
     assert_eq!(lazy.states(), evaluated.states());
     assert!((get(&lazy, "idler.omega") - get(&initialized(&paper_line("equilibrium")), "idler.omega")).abs() > 1e-3);
+}
+
+/// A winder (its radius a state) taking web from a source through an idler and a nip where a
+/// second web from another source merges (two inlets), spans slack-clamped and damped.
+fn winding_merge_line() -> Value {
+    let mut src = prescribed("src", "source", json!([[0.0, 8.0]]));
+    src["start"]["web_a.eps"] = json!(5e-4);
+    let mut side = prescribed("side", "source", json!([[0.0, 8.0]]));
+    side["start"]["web_a.eps"] = json!(2e-4);
+    let idler = roller("idler", "roller", json!({"J": 0.03, "R": 0.07, "b": 0.001, "v_start": 8.0}), None);
+    let nip = roller("nip", "roller", json!({"J": 0.2, "R": 0.1, "b": 0.01, "v_start": 8.0, "inlets": 2}), None);
+    let wind = roller(
+        "wind",
+        "winder",
+        json!({"J": 2.0, "R": 0.2, "b": 0.05, "v_start": 8.0, "roll": 2, "wound.thickness": 1e-4, "wound.density": 900.0, "wound.width": 1.0}),
+        Some(json!({"tension": [[0.0, 150.0]]})),
+    );
+    let effects = ["includeDamping", "preventNegativeTension"];
+    let parts = vec![
+        src,
+        span("a", 1.2, 1e-3, &effects),
+        idler,
+        span("b", 0.8, 1e-3, &effects),
+        side,
+        span("c", 1.0, 8e-4, &["includeDamping"]),
+        nip,
+        span("d", 1.5, 1e-3, &effects),
+        wind,
+    ];
+    let mut c = chain(&["src", "a", "idler", "b", "nip"]);
+    c.extend([
+        connect("side", "web_b.v", "c", "web_a.v"),
+        connect("side", "web_b.eps", "c", "web_a.eps"),
+        connect("nip", "web_a2.v", "c", "web_b.v"),
+        connect("c", "web_a.F", "side", "web_b.F"),
+        connect("c", "web_b.F", "nip", "web_a2.F"),
+        connect("c", "web_b.eps", "nip", "web_a2.eps"),
+        connect("b", "web_b.eps", "nip", "web_a.eps"),
+        connect("nip", "web_b.v", "d", "web_a.v"),
+        connect("nip", "web_b.eps", "d", "web_a.eps"),
+        connect("wind", "web_a.v", "d", "web_b.v"),
+        connect("d", "web_a.F", "nip", "web_b.F"),
+        connect("d", "web_b.F", "wind", "web_a.F"),
+    ]);
+    line_spec(parts, c, "given")
+}
+
+/// The Jacobian chained from the parts' tangents against the line's own grouped differences,
+/// off equilibrium (a torque step, a line started unsteady): every entry within 1e-6 of its
+/// row's largest (forward differences are good to about 1e-7 of it here).
+#[test]
+fn the_chained_jacobian_is_the_lines_own() {
+    for (name, spec) in [("paper line", paper_line("equilibrium")), ("winding merge", winding_merge_line())] {
+        let mut line = initialized(&spec);
+        if name == "paper line" {
+            let tau = vr(&line, "idler.tau_m");
+            line.set_real(tau, 2.0).unwrap();
+        }
+        line.do_step(0.02).unwrap();
+        let net = line.network().unwrap();
+        assert!(net.chain.is_some(), "{name}: no chain");
+        let (t, x, kl, ku) = (line.time(), line.states().to_vec(), net.kl, net.ku);
+        let n = x.len();
+        let (mut chained, mut differenced) = (Band::zeros(n, kl, ku), Band::zeros(n, kl, ku));
+        line::ode::jacobian_at(&mut line, t, &x, None, &mut chained, false).unwrap();
+        line::ode::jacobian_at(&mut line, t, &x, None, &mut differenced, true).unwrap();
+        let mut checked = 0;
+        for i in 0..n {
+            let scale = (0..n).map(|j| differenced.get(i, j).abs()).fold(0.0, f64::max);
+            for j in 0..n {
+                let (a, b) = (chained.get(i, j), differenced.get(i, j));
+                assert!((a - b).abs() <= 1e-6 * scale, "{name}: J[{i}][{j}] chained {a}, differenced {b} (row scale {scale})");
+                checked += (b != 0.0) as usize;
+            }
+        }
+        assert!(checked >= 2 * n, "{name}: only {checked} entries");
+    }
 }
 
 #[test]

@@ -36,6 +36,7 @@ fn strain_leaving_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
 
 impl Roller {
     /// d(everything)/d(direction) now.
+    #[inline]
     pub fn tangents(&self, d: &Direction) -> Tangents {
         let p = &self.params;
         let u = &self.inputs;

@@ -243,6 +243,43 @@ impl Roller {
         [omega_rate, radius_rate, carriage[0], carriage[1]]
     }
 
+    /// The unit direction of one known: a state or an input (None: neither).
+    pub fn direction(known: Real) -> Option<jacobian::Direction> {
+        let mut d = jacobian::Direction::default();
+        match known {
+            Real::omega => d.state[0] = 1.0,
+            Real::r => d.state[1] = 1.0,
+            Real::y => d.state[2] = 1.0,
+            Real::y_dot => d.state[3] = 1.0,
+            k => *Self::input_field(&mut d.u, k)? = 1.0,
+        }
+        Some(d)
+    }
+
+    /// d(unknown) from the tangents `t` along `d` (None: not an unknown).
+    #[inline]
+    pub fn along(t: &jacobian::Tangents, d: &jacobian::Direction, unknown: Real) -> Option<f64> {
+        // The same outputs as the bindings above.
+        Some(match unknown {
+            Real::web_a_v | Real::web_b_v | Real::web_a2_v | Real::web_a3_v | Real::web_a4_v => t.speed,
+            Real::web_b2_v | Real::web_b3_v | Real::web_b4_v => t.speed,
+            Real::web_b_eps | Real::web_b2_eps | Real::web_b3_eps | Real::web_b4_eps => t.strain_leaving,
+            Real::omega => d.state[0],
+            Real::r => d.state[1],
+            Real::y => d.state[2],
+            Real::y_dot => d.state[3],
+            Real::tau => t.torque,
+            Real::web_a_x => 0.0,
+            Real::web_a_y | Real::web_b_y => -d.state[2],
+            Real::web_b_x => 2.0 * d.state[1],
+            Real::der_omega => t.derivatives[0],
+            Real::der_r => t.derivatives[1],
+            Real::der_y => t.derivatives[2],
+            Real::der_y_dot => t.derivatives[3],
+            _ => return None,
+        })
+    }
+
     /// Applies the `set` events due at t; whether one changed the roll.
     fn apply_due(&mut self, t: f64) -> bool {
         self.events_at = self.events_at.max(t);
@@ -468,34 +505,10 @@ impl Model for Roller {
     /// the same partial derivatives (the layer allows the states as knowns only in ME).
     fn partial_derivative(&self, unknown: u32, known: u32, _of: Jacobian) -> FmiResult<f64> {
         let real = |vr| Real::from_vr(vr).ok_or_else(|| fmi_core::model::unknown_vr(vr));
-        let mut d = jacobian::Direction::default();
-        match real(known)? {
-            Real::omega => d.state[0] = 1.0,
-            Real::r => d.state[1] = 1.0,
-            Real::y => d.state[2] = 1.0,
-            Real::y_dot => d.state[3] = 1.0,
-            k => *Self::input_field(&mut d.u, k).ok_or_else(|| FmiError::error(format!("{} is not a known", k.name())))? = 1.0,
-        }
-        let t = self.tangents(&d);
-        // The same outputs as the bindings above.
-        Ok(match real(unknown)? {
-            Real::web_a_v | Real::web_b_v | Real::web_a2_v | Real::web_a3_v | Real::web_a4_v => t.speed,
-            Real::web_b2_v | Real::web_b3_v | Real::web_b4_v => t.speed,
-            Real::web_b_eps | Real::web_b2_eps | Real::web_b3_eps | Real::web_b4_eps => t.strain_leaving,
-            Real::omega => d.state[0],
-            Real::r => d.state[1],
-            Real::y => d.state[2],
-            Real::y_dot => d.state[3],
-            Real::tau => t.torque,
-            Real::web_a_x => 0.0,
-            Real::web_a_y | Real::web_b_y => -d.state[2],
-            Real::web_b_x => 2.0 * d.state[1],
-            Real::der_omega => t.derivatives[0],
-            Real::der_r => t.derivatives[1],
-            Real::der_y => t.derivatives[2],
-            Real::der_y_dot => t.derivatives[3],
-            other => return Err(FmiError::error(format!("{} is not an unknown", other.name()))),
-        })
+        let known = real(known)?;
+        let d = Self::direction(known).ok_or_else(|| FmiError::error(format!("{} is not a known", known.name())))?;
+        let unknown = real(unknown)?;
+        Self::along(&self.tangents(&d), &d, unknown).ok_or_else(|| FmiError::error(format!("{} is not an unknown", unknown.name())))
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {

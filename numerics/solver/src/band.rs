@@ -68,6 +68,14 @@ impl Band {
         }
     }
 
+    /// Row i's band, column i - kl first (entries for columns outside the matrix are kept 0
+    /// by the caller).
+    #[inline]
+    pub fn row_mut(&mut self, i: usize) -> &mut [f64] {
+        let w = self.kl + self.ku + 1;
+        &mut self.a[i * w..(i + 1) * w]
+    }
+
     pub fn clear(&mut self) {
         self.a.fill(0.0);
     }
