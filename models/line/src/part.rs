@@ -137,14 +137,17 @@ impl Part {
                     })
                 })
             }
-            Part::Roller(r) => knowns.iter().zip(rows).all(|(k, row)| {
-                let Some(d) = (match *k { Port::Roller(k) => Roller::direction(k), Port::Span(_) => None }) else { return false };
-                let t = r.tangents(&d);
-                unknowns.iter().zip(row).all(|(u, o)| match *u {
-                    Port::Roller(u) => Roller::along(&t, &d, u).map(|x| *o = x).is_some(),
-                    Port::Span(_) => false,
+            Part::Roller(r) => {
+                let at = r.linearize();
+                knowns.iter().zip(rows).all(|(k, row)| {
+                    let Some(d) = (match *k { Port::Roller(k) => Roller::direction(k), Port::Span(_) => None }) else { return false };
+                    let t = at.along(&d);
+                    unknowns.iter().zip(row).all(|(u, o)| match *u {
+                        Port::Roller(u) => Roller::along(&t, &d, u).map(|x| *o = x).is_some(),
+                        Port::Span(_) => false,
+                    })
                 })
-            }),
+            }
         }
     }
 

@@ -38,44 +38,91 @@ impl Roller {
     /// d(everything)/d(direction) now.
     #[inline]
     pub fn tangents(&self, d: &Direction) -> Tangents {
+        self.linearize().along(d)
+    }
+
+    /// What the tangents along every direction share: the roller's values now.
+    #[inline]
+    pub fn linearize(&self) -> Linearization<'_> {
         let p = &self.params;
-        let u = &self.inputs;
+        let (omega, r) = (self.omega(), self.radius());
+        let winding = p.winding();
+        let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
+        let v = self.surface_speed();
+        let c = if winding { p.roll_sign() * p.wound_thickness / (2.0 * PI) } else { 0.0 };
+        let r_rate = c * v / r;
+        let (slope, tension) = match speed_table {
+            Some(t) => (t.slope(self.time), 0.0),
+            None if self.drive() == Drive::Tension => (0.0, self.table(Key::Tension).map_or(0.0, |t| t.value(self.time))),
+            None => (0.0, 0.0),
+        };
+        Linearization {
+            roller: self,
+            speed_table: speed_table.is_some(),
+            omega,
+            r,
+            v,
+            c,
+            r_rate,
+            slope,
+            tension,
+            web_torque: physics::web_torque(p, r, &self.inputs),
+            torque: if speed_table.is_some() { 0.0 } else { self.drive_torque() },
+            strain_table: self.table(Key::Strain).is_some(),
+        }
+    }
+}
+
+/// A roller's values the tangents along any direction use (`Roller::linearize`).
+pub struct Linearization<'a> {
+    roller: &'a Roller,
+    /// The surface speed follows a speed table.
+    speed_table: bool,
+    omega: f64,
+    r: f64,
+    v: f64,
+    /// r' = c v / r on a roll being wound.
+    c: f64,
+    r_rate: f64,
+    /// The speed table's slope, the tension table's value (a tension drive).
+    slope: f64,
+    tension: f64,
+    web_torque: f64,
+    torque: f64,
+    strain_table: bool,
+}
+
+impl Linearization<'_> {
+    /// d(everything)/d(direction).
+    #[inline]
+    pub fn along(&self, d: &Direction) -> Tangents {
+        let roller = self.roller;
+        let p = &roller.params;
+        let u = &roller.inputs;
         let [d_omega, d_r, d_y, d_y_dot] = d.state;
-        let (omega, r, j) = (self.omega(), self.radius(), self.roll.inertia);
+        let (omega, r, j, v, c, r_rate) = (self.omega, self.r, roller.roll.inertia, self.v, self.c, self.r_rate);
         let winding = p.winding();
         // [R3]: J(r), and with v = r*omega (or a speed table) r' = s*h_w*v/(2*pi*r).
         let d_j = if winding { 2.0 * PI * p.wound_density * p.wound_width * r.powi(3) * d_r } else { 0.0 };
-        let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
-        let v = self.surface_speed();
-        let d_v = if speed_table.is_some() { 0.0 } else { omega * d_r + r * d_omega };
-        let c = if winding { p.roll_sign() * p.wound_thickness / (2.0 * PI) } else { 0.0 };
-        let r_rate = c * v / r;
+        let d_v = if self.speed_table { 0.0 } else { omega * d_r + r * d_omega };
         let d_r_rate = c * (d_v * r - v * d_r) / (r * r);
-        let web_torque = physics::web_torque(p, r, u);
+        let web_torque = self.web_torque;
         let d_web_torque = d_r * (u.pull_forward(p) - u.pull_back(p)) + r * (d.u.pull_forward(p) - d.u.pull_back(p));
-        let (d_torque, d_omega_rate) = match speed_table {
+        let (d_torque, d_omega_rate) = if self.speed_table {
             // tau = J*v'/r + b*omega - r*(F_b - F_a); omega' = v'/r - v*r'/r^2.
-            Some(t) => {
-                let slope = t.slope(self.time);
-                let d_torque = d_j * slope / r - j * slope * d_r / (r * r) + p.damping * d_omega - d_web_torque;
-                let d_omega_rate = -slope * d_r / (r * r) - (d_v * r_rate + v * d_r_rate) / (r * r) + 2.0 * v * r_rate * d_r / r.powi(3);
-                (d_torque, d_omega_rate)
-            }
+            let slope = self.slope;
+            let d_torque = d_j * slope / r - j * slope * d_r / (r * r) + p.damping * d_omega - d_web_torque;
+            let d_omega_rate = -slope * d_r / (r * r) - (d_v * r_rate + v * d_r_rate) / (r * r) + 2.0 * v * r_rate * d_r / r.powi(3);
+            (d_torque, d_omega_rate)
+        } else {
             // omega' = (r*(F_b - F_a) + tau - b*omega - J'*omega)/J with J' = 2*pi*rho*w*r^3*r'.
-            None => {
-                let d_torque = d.u.torque + if self.drive() == Drive::Tension {
-                    p.roll_sign() * self.table(Key::Tension).map_or(0.0, |t| t.value(self.time)) * d_r
-                } else {
-                    0.0
-                };
-                let k = 2.0 * PI * p.wound_density * p.wound_width;
-                let j_rate = if winding { k * r.powi(3) * r_rate } else { 0.0 };
-                let d_j_rate = if winding { k * (3.0 * r * r * d_r * r_rate + r.powi(3) * d_r_rate) } else { 0.0 };
-                let torque = self.drive_torque();
-                let omega_rate = (web_torque + torque - p.damping * omega - j_rate * omega) / j;
-                let d_net = d_web_torque + d_torque - p.damping * d_omega - d_j_rate * omega - j_rate * d_omega;
-                (d_torque, (d_net - omega_rate * d_j) / j)
-            }
+            let d_torque = d.u.torque + p.roll_sign() * self.tension * d_r;
+            let k = 2.0 * PI * p.wound_density * p.wound_width;
+            let j_rate = if winding { k * r.powi(3) * r_rate } else { 0.0 };
+            let d_j_rate = if winding { k * (3.0 * r * r * d_r * r_rate + r.powi(3) * d_r_rate) } else { 0.0 };
+            let omega_rate = (web_torque + self.torque - p.damping * omega - j_rate * omega) / j;
+            let d_net = d_web_torque + d_torque - p.damping * d_omega - d_j_rate * omega - j_rate * d_omega;
+            (d_torque, (d_net - omega_rate * d_j) / j)
         };
         // [R4] on a carriage: y'' = (F_load + load - F_a - F_b - d*y' - k*(y - y_start))/m.
         let (d_y_rate, d_y_dot_rate) = if p.carriage {
@@ -85,8 +132,8 @@ impl Roller {
             (0.0, 0.0)
         };
         Tangents {
-            speed: if speed_table.is_some() { 0.0 } else { d_v },
-            strain_leaving: if self.table(Key::Strain).is_some() { 0.0 } else { strain_leaving_tangent(p, u, &d.u) },
+            speed: if self.speed_table { 0.0 } else { d_v },
+            strain_leaving: if self.strain_table { 0.0 } else { strain_leaving_tangent(p, u, &d.u) },
             torque: d_torque,
             derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate],
         }
