@@ -2,169 +2,176 @@
 //! directional derivatives, the ones their FMUs give importers): each part's
 //! partial derivatives along each of its knowns (its states, its connected
 //! inputs), then the chain rule through the connections in evaluation order.
-//! Exact to rounding, and cheaper than the kl + ku + 1 evaluations of the
-//! line a difference quotient needs.
+//! Exact to rounding, and no evaluation of the line.
 //!
+//! The chain rule is compiled when the line is built into terms `c * window`:
+//! a connection's value depends on the states in a window (the band's
+//! structure), and so does every known of a part (a state: a window of one).
 //! Where a connection carries more than a value (a web-mass loop, a length's
-//! rate), the line keeps its difference quotient: no plan is made.
+//! rate), the line keeps its difference quotient: no chain is made.
 
 use crate::network::{Link, Port};
-use crate::part::Part;
+use crate::part::{Directions, Part};
 use solver::band::Band;
+use std::ops::Range;
 
-/// Where a part's known comes from: one of the line's states, or a connection.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Source {
-    State(usize),
-    Link(usize),
-}
-
-/// One part's knowns and unknowns: its partials fill `knowns.len()` rows of `unknowns.len()`.
+/// One part's knowns and unknowns: its partials, a row of `unknowns.len()` per known.
 #[derive(Clone, Debug, PartialEq)]
 struct PartPlan {
-    knowns: Vec<Port>,
-    sources: Vec<Source>,
+    directions: Directions,
     /// The outputs its connections read, then its active states' derivatives.
     unknowns: Vec<Port>,
-    /// How many of `unknowns` are outputs.
-    outputs: usize,
     /// Its first partial in `Chain::partials`.
     offset: usize,
+}
+
+/// `dest[to..to + len] += partials[partial] * totals[from..from + len]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Term {
+    partial: usize,
+    from: usize,
+    to: usize,
+    len: usize,
 }
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Chain {
     plans: Vec<PartPlan>,
     partials: Vec<f64>,
-    /// Per connection (evaluation order): its part and its place among that part's unknowns.
-    slots: Vec<(usize, usize)>,
-    /// Per connection: d(value)/d(states) over the states it can depend on, [lo, hi), at `offset`.
-    windows: Vec<(usize, usize, usize)>,
+    /// d(value)/d(states) of each connection over its window; `totals[0]` is 1, the window of
+    /// every state (a state's derivative by itself).
     totals: Vec<f64>,
-    /// Per part: its first state and the indices of its active states.
-    first_state: Vec<usize>,
+    /// Per connection, in evaluation order: its window in `totals` and its terms.
+    links: Vec<(Range<usize>, Range<usize>)>,
+    /// The terms of the band's rows, all at once (their `to` index the band's storage).
+    rows: Range<usize>,
+    terms: Vec<Term>,
 }
 
 impl Chain {
-    /// The plan for `links` (in evaluation order), each depending on the states in
-    /// `depends[l]` (the band's structure); None where a part has no tangent for a known.
-    pub fn new(parts: &[Part], links: &[Link], depends: &[(usize, usize)], first_state: &[usize], active: &[Vec<usize>]) -> Option<Chain> {
-        let mut plans = Vec::with_capacity(parts.len());
-        let mut slots = vec![(0, 0); links.len()];
-        let mut offset = 0;
-        for (p, part) in parts.iter().enumerate() {
-            let d = part.description();
-            let port = |vr: u32| Port::of(part, vr);
-            let (mut knowns, mut sources) = (Vec::new(), Vec::new());
-            for (k, &i) in active[p].iter().enumerate() {
-                knowns.push(port(d.states[i])?);
-                sources.push(Source::State(first_state[p] + k));
-            }
-            for (l, link) in links.iter().enumerate().filter(|(_, l)| l.to == p) {
-                knowns.push(link.target);
-                sources.push(Source::Link(l));
-            }
-            let mut unknowns = Vec::new();
-            for (l, link) in links.iter().enumerate().filter(|(_, l)| l.from == p) {
-                slots[l] = (p, unknowns.len());
-                unknowns.push(link.source);
-            }
-            let outputs = unknowns.len();
-            for &i in &active[p] {
-                unknowns.push(port(d.derivatives.get(i)?.vr)?);
-            }
-            let size = knowns.len() * unknowns.len();
-            plans.push(PartPlan { knowns, sources, unknowns, outputs, offset });
-            offset += size;
-        }
+    /// The chain for `links` (in evaluation order), each depending on the states in
+    /// `depends[l]` (the band's structure) and the Jacobian's band; None where a part has no
+    /// tangent for one of its knowns or a term would leave the band.
+    pub fn new(parts: &[Part], links: &[Link], depends: &[(usize, usize)], band: &Band, first_state: &[usize], active: &[Vec<usize>]) -> Option<Chain> {
+        // Each connection's window in `totals`, after the unit at 0.
         let mut windows = Vec::with_capacity(links.len());
-        let mut total = 0;
+        let mut total = 1;
         for &(lo, hi) in depends {
             windows.push((total, lo, hi));
             total += hi - lo;
         }
-        let chain = Chain { plans, partials: vec![0.0; offset], slots, windows, totals: vec![0.0; total], first_state: first_state.to_vec() };
+        // A known's window: (offset in totals, first state, states).
+        let state = |g: usize| (0, g, 1);
+        let link = |m: usize| (windows[m].0, windows[m].1, windows[m].2 - windows[m].1);
+        let mut plans = Vec::with_capacity(parts.len());
+        let mut link_terms: Vec<Vec<Term>> = vec![Vec::new(); links.len()];
+        let mut row_terms = Vec::new();
+        let mut offset = 0;
+        let (kl, width) = (band.lower(), band.lower() + band.upper() + 1);
+        for (p, part) in parts.iter().enumerate() {
+            let d = part.description();
+            let port = |vr: u32| Port::of(part, vr);
+            let (mut knowns, mut sources, mut known_vrs) = (Vec::new(), Vec::new(), Vec::new());
+            for (k, &i) in active[p].iter().enumerate() {
+                knowns.push(port(d.states[i])?);
+                sources.push(state(first_state[p] + k));
+                known_vrs.push(d.states[i]);
+            }
+            for (m, l) in links.iter().enumerate().filter(|(_, l)| l.to == p) {
+                knowns.push(l.target);
+                sources.push(link(m));
+                known_vrs.push(l.input);
+            }
+            let outs: Vec<usize> = (0..links.len()).filter(|&l| links[l].from == p).collect();
+            // What each unknown depends on, by the part's model structure (None: everything).
+            let output_on = |vr: u32| d.output_dependencies.iter().find(|u| u.vr == vr).and_then(|u| u.on.clone());
+            let on = |list: &Option<std::borrow::Cow<'static, [u32]>>, vr: u32| list.as_ref().is_none_or(|l| l.contains(&vr));
+            let mut unknowns: Vec<Port> = outs.iter().map(|&l| links[l].source).collect();
+            for &i in &active[p] {
+                unknowns.push(port(d.derivatives.get(i)?.vr)?);
+            }
+            let n = unknowns.len();
+            // The chain rule, each known's window into the unknown's: within it, else the
+            // structure is not what the band says and the line differences instead.
+            for (k, &(from, lo, len)) in sources.iter().enumerate() {
+                if len == 0 {
+                    continue;
+                }
+                for (u, &l) in outs.iter().enumerate() {
+                    if !on(&output_on(links[l].output), known_vrs[k]) {
+                        continue;
+                    }
+                    let (to, dlo, dhi) = windows[l];
+                    if lo < dlo || lo + len > dhi {
+                        return None;
+                    }
+                    link_terms[l].push(Term { partial: offset + k * n + u, from, to: to + lo - dlo, len });
+                }
+                for (r, &i) in active[p].iter().enumerate() {
+                    if !on(&d.derivatives[i].on, known_vrs[k]) {
+                        continue;
+                    }
+                    let row = first_state[p] + r;
+                    if lo + kl < row || lo + len + kl > row + width {
+                        return None;
+                    }
+                    let to = row * width + lo + kl - row;
+                    row_terms.push(Term { partial: offset + k * n + outs.len() + r, from, to, len });
+                }
+            }
+            plans.push(PartPlan { directions: part.directions(&knowns)?, unknowns, offset });
+            offset += knowns.len() * n;
+        }
+        let mut terms = Vec::new();
+        let mut chained = Vec::with_capacity(links.len());
+        for (l, own) in link_terms.into_iter().enumerate() {
+            let start = terms.len();
+            // A term reads a connection earlier in evaluation order (its value is complete).
+            if own.iter().any(|t| t.from >= windows[l].0 && t.from != 0) {
+                return None;
+            }
+            terms.extend(own);
+            chained.push((windows[l].0..windows[l].0 + windows[l].2 - windows[l].1, start..terms.len()));
+        }
+        let rows = terms.len()..terms.len() + row_terms.len();
+        terms.extend(row_terms);
+        let mut totals = vec![0.0; total];
+        totals[0] = 1.0;
+        let mut chain = Chain { plans, partials: vec![0.0; offset], totals, links: chained, rows, terms };
         // Every known of every part must have a tangent: tried once here, at the parts' start.
-        chain.clone().partials(parts).then_some(chain)
+        chain.partials(parts).then_some(chain)
     }
 
     /// Every part's partials at the point the parts are evaluated at.
     fn partials(&mut self, parts: &[Part]) -> bool {
+        let partials = &mut self.partials;
         self.plans.iter().zip(parts).all(|(plan, part)| {
-            let size = plan.knowns.len() * plan.unknowns.len();
-            part.partials(&plan.knowns, &plan.unknowns, &mut self.partials[plan.offset..plan.offset + size])
+            let size = plan.directions.len() * plan.unknowns.len();
+            part.partials(&plan.directions, &plan.unknowns, &mut partials[plan.offset..plan.offset + size])
         })
     }
 
-    /// df/dx into `jac` (cleared), the parts evaluated at the point. Err where a partial
-    /// reaches outside the structure the plan was made for (then the caller differences).
+    /// df/dx into `jac` (cleared, its band the one the chain was made for), the parts
+    /// evaluated at the point; Err where a part has no tangent there.
     pub fn jacobian(&mut self, parts: &[Part], jac: &mut Band) -> Result<(), ()> {
         if !self.partials(parts) {
             return Err(());
         }
-        // Each connection's value, d/d(states): its source's partials, chained through the
-        // connections into that source (earlier in evaluation order).
-        for l in 0..self.slots.len() {
-            let (p, slot) = self.slots[l];
-            let plan = &self.plans[p];
-            let (offset, lo, hi) = self.windows[l];
-            let (done, rest) = self.totals.split_at_mut(offset);
-            let row = &mut rest[..hi - lo];
-            row.fill(0.0);
-            let width = plan.unknowns.len();
-            for (k, &source) in plan.sources.iter().enumerate() {
-                let c = self.partials[plan.offset + k * width + slot];
-                if c == 0.0 {
-                    continue;
-                }
-                match source {
-                    Source::State(g) if (lo..hi).contains(&g) => row[g - lo] += c,
-                    Source::Link(m) if m < l => {
-                        let (o, mlo, mhi) = self.windows[m];
-                        if mlo < lo || mhi > hi {
-                            return Err(());
-                        }
-                        for (x, y) in row[mlo - lo..mhi - lo].iter_mut().zip(&done[o..o + mhi - mlo]) {
-                            *x += c * y;
-                        }
-                    }
-                    _ => return Err(()),
+        let Chain { partials, totals, links, rows, terms, .. } = self;
+        for (window, own) in links.iter() {
+            totals[window.clone()].fill(0.0);
+            for t in &terms[own.clone()] {
+                let c = partials[t.partial];
+                for i in 0..t.len {
+                    totals[t.to + i] += c * totals[t.from + i];
                 }
             }
         }
-        // Each state derivative: its part's partials, chained the same way, into its band row
-        // (column j at j + kl - row).
-        let kl = jac.lower();
-        let w = kl + jac.upper() + 1;
-        for (p, plan) in self.plans.iter().enumerate() {
-            let width = plan.unknowns.len();
-            for r in 0..width - plan.outputs {
-                let row = self.first_state[p] + r;
-                let band = jac.row_mut(row);
-                for (k, &source) in plan.sources.iter().enumerate() {
-                    let c = self.partials[plan.offset + k * width + plan.outputs + r];
-                    if c == 0.0 {
-                        continue;
-                    }
-                    let (o, lo, hi) = match source {
-                        Source::State(g) => (usize::MAX, g, g + 1),
-                        Source::Link(m) => self.windows[m],
-                    };
-                    if lo == hi {
-                        continue;
-                    }
-                    if lo + kl < row || hi + kl > row + w {
-                        return Err(());
-                    }
-                    let cols = &mut band[lo + kl - row..hi + kl - row];
-                    if o == usize::MAX {
-                        cols[0] += c;
-                    } else {
-                        for (x, y) in cols.iter_mut().zip(&self.totals[o..o + hi - lo]) {
-                            *x += c * y;
-                        }
-                    }
-                }
+        let band = jac.values_mut();
+        for t in &terms[rows.clone()] {
+            let c = partials[t.partial];
+            for (x, y) in band[t.to..t.to + t.len].iter_mut().zip(&totals[t.from..t.from + t.len]) {
+                *x += c * y;
             }
         }
         Ok(())

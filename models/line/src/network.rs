@@ -280,7 +280,8 @@ impl Network {
         let depends;
         (net.kl, net.ku, depends) = net.band(parts);
         if net.groups.is_empty() && net.rates.is_empty() && !net.reads_earlier_inputs {
-            net.chain = Chain::new(parts, &net.links, &depends, &net.first_state, &net.active);
+            let band = solver::band::Band::zeros(net.len(), net.kl, net.ku);
+            net.chain = Chain::new(parts, &net.links, &depends, &band, &net.first_state, &net.active);
         }
         Ok(net)
     }

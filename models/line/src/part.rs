@@ -10,6 +10,26 @@ use fmi_core::{Compiled, EventUpdate, Experiment, FmiResult, Jacobian, Model, Re
 use crate::network::Port;
 use roller::Roller;
 
+/// A part's unit directions of its knowns, made once (`Part::directions`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Directions {
+    Span(Vec<converting_span::jacobian::Direction>),
+    Roller(Vec<roller::jacobian::Direction>),
+}
+
+impl Directions {
+    pub fn len(&self) -> usize {
+        match self {
+            Directions::Span(d) => d.len(),
+            Directions::Roller(d) => d.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum Part {
     Span(ConvertingSpan),
@@ -120,34 +140,45 @@ impl Part {
         each!(self, m => m.inputs_valid())
     }
 
-    /// The partials of `unknowns` (its outputs, states, derivatives) along each of `knowns` (its
-    /// states and inputs) by the part's own tangents, a row of `out` per known; false if one of
-    /// them is neither.
-    pub fn partials(&self, knowns: &[Port], unknowns: &[Port], out: &mut [f64]) -> bool {
+    /// The unit directions of `knowns` (its states and inputs); None if one is neither.
+    pub fn directions(&self, knowns: &[Port]) -> Option<Directions> {
+        Some(match self {
+            Part::Span(_) => Directions::Span(
+                knowns.iter().map(|k| if let Port::Span(k) = *k { ConvertingSpan::direction(k) } else { None }).collect::<Option<_>>()?,
+            ),
+            Part::Roller(_) => Directions::Roller(
+                knowns.iter().map(|k| if let Port::Roller(k) = *k { Roller::direction(k) } else { None }).collect::<Option<_>>()?,
+            ),
+        })
+    }
+
+    /// The partials of `unknowns` (its outputs, states, derivatives) along each of its knowns'
+    /// `directions` by the part's own tangents, a row of `out` per direction; false if one is
+    /// no unknown of the part.
+    pub fn partials(&self, directions: &Directions, unknowns: &[Port], out: &mut [f64]) -> bool {
         let rows = out.chunks_exact_mut(unknowns.len().max(1));
-        match self {
-            Part::Span(s) => {
+        match (self, directions) {
+            (Part::Span(s), Directions::Span(ds)) => {
                 let at = s.linearize();
-                knowns.iter().zip(rows).all(|(k, row)| {
-                    let Some(d) = (match *k { Port::Span(k) => ConvertingSpan::direction(k), Port::Roller(_) => None }) else { return false };
-                    let t = at.along(&d);
+                ds.iter().zip(rows).all(|(d, row)| {
+                    let t = at.along(d);
                     unknowns.iter().zip(row).all(|(u, o)| match *u {
-                        Port::Span(u) => ConvertingSpan::along(&t, &d, u).map(|x| *o = x).is_some(),
+                        Port::Span(u) => ConvertingSpan::along(&t, d, u).map(|x| *o = x).is_some(),
                         Port::Roller(_) => false,
                     })
                 })
             }
-            Part::Roller(r) => {
+            (Part::Roller(r), Directions::Roller(ds)) => {
                 let at = r.linearize();
-                knowns.iter().zip(rows).all(|(k, row)| {
-                    let Some(d) = (match *k { Port::Roller(k) => Roller::direction(k), Port::Span(_) => None }) else { return false };
-                    let t = at.along(&d);
+                ds.iter().zip(rows).all(|(d, row)| {
+                    let t = at.along(d);
                     unknowns.iter().zip(row).all(|(u, o)| match *u {
-                        Port::Roller(u) => Roller::along(&t, &d, u).map(|x| *o = x).is_some(),
+                        Port::Roller(u) => Roller::along(&t, d, u).map(|x| *o = x).is_some(),
                         Port::Span(_) => false,
                     })
                 })
             }
+            _ => false,
         }
     }
 

@@ -345,8 +345,9 @@ fn winding_merge_line() -> Value {
 }
 
 /// The Jacobian chained from the parts' tangents against the line's own grouped differences,
-/// off equilibrium (a torque step, a line started unsteady): every entry within 1e-6 of its
-/// row's largest (forward differences are good to about 1e-7 of it here).
+/// off equilibrium (a torque step, a line started unsteady): every entry within 1e-5 of its
+/// row's largest. Forward differences are good to about 1e-7 of it, less in a row of small
+/// entries (a roll's radius rate: 2e-6); a connection left out of the chain costs a whole entry.
 #[test]
 fn the_chained_jacobian_is_the_lines_own() {
     for (name, spec) in [("paper line", paper_line("equilibrium")), ("winding merge", winding_merge_line())] {
@@ -368,7 +369,7 @@ fn the_chained_jacobian_is_the_lines_own() {
             let scale = (0..n).map(|j| differenced.get(i, j).abs()).fold(0.0, f64::max);
             for j in 0..n {
                 let (a, b) = (chained.get(i, j), differenced.get(i, j));
-                assert!((a - b).abs() <= 1e-6 * scale, "{name}: J[{i}][{j}] chained {a}, differenced {b} (row scale {scale})");
+                assert!((a - b).abs() <= 1e-5 * scale, "{name}: J[{i}][{j}] chained {a}, differenced {b} (row scale {scale})");
                 checked += (b != 0.0) as usize;
             }
         }

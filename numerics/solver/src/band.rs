@@ -68,6 +68,12 @@ impl Band {
         }
     }
 
+    /// The stored band, row by row: entry (i, j) at i * (kl + ku + 1) + j + kl - i.
+    #[inline]
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.a
+    }
+
     /// Row i's band, column i - kl first (entries for columns outside the matrix are kept 0
     /// by the caller).
     #[inline]
@@ -190,13 +196,17 @@ impl BandLu {
             }
         }
         for (k, (row, inverse)) in self.m.chunks_exact(w).zip(&self.inverse).enumerate().rev() {
-            // U's row k: columns k ..= k + kl + ku.
+            // U's row k: columns k ..= k + kl + ku. The next unknown, solved just before, is
+            // added last: the sum over the farther ones does not wait for it (a solve is a chain
+            // of rows, each waiting on the one before).
             let (head, tail) = b.split_at_mut(k + 1);
-            let mut s = head[k];
-            for (x, y) in row[kl + 1..].iter().zip(tail.iter()) {
-                s -= x * y;
+            let (next, far) = row[kl + 1..].split_first().unwrap_or((&0.0, &[]));
+            let mut s = 0.0;
+            for (x, y) in far.iter().zip(tail.iter().skip(1)) {
+                s += x * y;
             }
-            head[k] = s * inverse;
+            let first = tail.first().map_or(0.0, |y| next * y);
+            head[k] = ((head[k] - s) - first) * inverse;
         }
     }
 }
