@@ -79,11 +79,13 @@ impl<'a> Point<'a> {
             given: self.given,
             sensor: self.sensor,
             speed_b_rate: self.rates.speed_b,
-            x,
             length,
             stretch: 1.0 + strain,
             forward,
-            strain_in: if forward { u.strain_a } else { strain },
+            inv_in: 1.0 / (1.0 + if forward { u.strain_a } else { strain }),
+            inv_x: 1.0 / x,
+            inv_length: 1.0 / length,
+            inv_stretch: 1.0 / (1.0 + strain),
             inflow: physics::inflow(u, strain),
             rate,
             length_rate,
@@ -103,11 +105,14 @@ pub struct Linearization<'a> {
     given: Option<&'a Inputs>,
     sensor: &'a SensorScale,
     speed_b_rate: f64,
-    x: f64,
     length: f64,
     stretch: f64,
     forward: bool,
-    strain_in: f64,
+    /// 1/(1 + the entering strain), 1/x, 1/L, 1/(1 + eps_b).
+    inv_in: f64,
+    inv_x: f64,
+    inv_length: f64,
+    inv_stretch: f64,
     inflow: f64,
     rate: f64,
     length_rate: f64,
@@ -123,16 +128,18 @@ impl Linearization<'_> {
     #[inline]
     pub fn along(&self, d: &Direction) -> Tangents {
         let (p, u) = (self.params, self.inputs);
-        let (x, length, stretch) = (self.x, self.length, self.stretch);
+        let (length, stretch) = (self.length, self.stretch);
         let [sx, sy] = u.span_vector();
         let [dsx, dsy] = d.u.span_vector();
         let d_length = if p.effects.variable_length { (sx * dsx + sy * dsy) / length } else { 0.0 };
-        let d_strain = (d_length - stretch * d.x) / x;
+        // Products with the point's reciprocals (`linearize`): a tangent is asked along many directions.
+        let (inv_x, inv_length) = (self.inv_x, self.inv_length);
+        let d_strain = (d_length - stretch * d.x) * inv_x;
         // [2]: q_a - v_b/(1+eps_b). At v_a = 0 exactly: the forward branch, as `physics::inflow` takes it.
         let d_strain_in = if self.forward { d.u.strain_a } else { d_strain };
         let inflow = self.inflow;
-        let d_inflow = (d.u.speed_a - inflow * d_strain_in) / (1.0 + self.strain_in);
-        let d_outflow = (d.u.speed_b - u.speed_b / stretch * d_strain) / stretch;
+        let d_inflow = (d.u.speed_a - inflow * d_strain_in) * self.inv_in;
+        let d_outflow = (d.u.speed_b - u.speed_b * self.inv_stretch * d_strain) * self.inv_stretch;
         let d_rate = d_inflow - d_outflow;
         // [9]: dL/dt = (r_b - r_a).(given rates)/L moves with the positions; an estimate is held.
         let length_rate = self.length_rate;
@@ -145,8 +152,8 @@ impl Linearization<'_> {
         };
         // [4]: d(eps_b)/dt = dL/dt / x - (1+eps_b)^2/L * dx/dt.
         let factor = self.factor;
-        let d_factor = (2.0 * stretch * d_strain - factor * d_length) / length;
-        let d_strain_rate = d_length_rate / x - length_rate * d.x / (x * x) - (d_factor * self.rate + factor * d_rate);
+        let d_factor = (2.0 * stretch * d_strain - factor * d_length) * inv_length;
+        let d_strain_rate = d_length_rate * inv_x - length_rate * d.x * inv_x * inv_x - (d_factor * self.rate + factor * d_rate);
         // [5], [5a].
         let web = &p.span_web;
         let damping = if p.effects.include_damping { web.retardation_time } else { 0.0 };
