@@ -69,8 +69,6 @@ impl Roller {
             web_torque: physics::web_torque(p, r, &self.inputs),
             torque: if speed_table.is_some() { 0.0 } else { self.drive_torque() },
             strain_table: self.table(Key::Strain).is_some(),
-            inv_r2: 1.0 / (r * r),
-            inv_j: 1.0 / self.roll.inertia,
         }
     }
 }
@@ -92,9 +90,6 @@ pub struct Linearization<'a> {
     web_torque: f64,
     torque: f64,
     strain_table: bool,
-    /// 1/r^2 and 1/J.
-    inv_r2: f64,
-    inv_j: f64,
 }
 
 impl Linearization<'_> {
@@ -110,16 +105,14 @@ impl Linearization<'_> {
         // [R3]: J(r), and with v = r*omega (or a speed table) r' = s*h_w*v/(2*pi*r).
         let d_j = if winding { 2.0 * PI * p.wound_density * p.wound_width * r.powi(3) * d_r } else { 0.0 };
         let d_v = if self.speed_table { 0.0 } else { omega * d_r + r * d_omega };
-        // Products with the point's reciprocals (`linearize`): a tangent is asked along many directions.
-        let d_r_rate = if winding { c * (d_v * r - v * d_r) * self.inv_r2 } else { 0.0 };
+        let d_r_rate = c * (d_v * r - v * d_r) / (r * r);
         let web_torque = self.web_torque;
         let d_web_torque = d_r * (u.pull_forward(p) - u.pull_back(p)) + r * (d.u.pull_forward(p) - d.u.pull_back(p));
         let (d_torque, d_omega_rate) = if self.speed_table {
             // tau = J*v'/r + b*omega - r*(F_b - F_a); omega' = v'/r - v*r'/r^2.
             let slope = self.slope;
-            let inv_r2 = self.inv_r2;
-            let d_torque = d_j * slope / r - j * slope * d_r * inv_r2 + p.damping * d_omega - d_web_torque;
-            let d_omega_rate = -slope * d_r * inv_r2 - (d_v * r_rate + v * d_r_rate) * inv_r2 + 2.0 * v * r_rate * d_r * inv_r2 / r;
+            let d_torque = d_j * slope / r - j * slope * d_r / (r * r) + p.damping * d_omega - d_web_torque;
+            let d_omega_rate = -slope * d_r / (r * r) - (d_v * r_rate + v * d_r_rate) / (r * r) + 2.0 * v * r_rate * d_r / r.powi(3);
             (d_torque, d_omega_rate)
         } else {
             // omega' = (r*(F_b - F_a) + tau - b*omega - J'*omega)/J with J' = 2*pi*rho*w*r^3*r'.
@@ -127,9 +120,9 @@ impl Linearization<'_> {
             let k = 2.0 * PI * p.wound_density * p.wound_width;
             let j_rate = if winding { k * r.powi(3) * r_rate } else { 0.0 };
             let d_j_rate = if winding { k * (3.0 * r * r * d_r * r_rate + r.powi(3) * d_r_rate) } else { 0.0 };
-            let omega_rate = (web_torque + self.torque - p.damping * omega - j_rate * omega) * self.inv_j;
+            let omega_rate = (web_torque + self.torque - p.damping * omega - j_rate * omega) / j;
             let d_net = d_web_torque + d_torque - p.damping * d_omega - d_j_rate * omega - j_rate * d_omega;
-            (d_torque, (d_net - omega_rate * d_j) * self.inv_j)
+            (d_torque, (d_net - omega_rate * d_j) / j)
         };
         // [R4] on a carriage: y'' = (F_load + load - F_a - F_b - d*y' - k*(y - y_start))/m.
         let (d_y_rate, d_y_dot_rate) = if p.carriage {
