@@ -1,16 +1,17 @@
-//! The Line FMU's ODE integrated by our RODAS4 and ROS34PW2 and by diffsol's BDF,
-//! TR-BDF2 and ESDIRK34 (docs/line-solver.md). Run by hand, prints markdown:
+//! The Line FMU's ODE integrated by our Rodas5P (the FMU's), RODAS4 and ROS34PW2 and by
+//! diffsol's BDF, TR-BDF2 and ESDIRK34 (docs/line-solver.md). Run by hand, prints markdown:
 //!
 //!     cd bench/diffsol_line && nice cargo run --release --target-dir ../../target/diffsol [-- --all | --ours]
 //!
-//! `--ours` runs only our two methods (RODAS4, the FMU's; ROS34PW2, a W-method).
+//! `--ours` runs only our three methods (Rodas5P, the FMU's; RODAS4; ROS34PW2, a W-method).
 //!
 //! Every solver sees the same ODE (`line::ode::rhs_at`), the same banded
-//! finite-difference Jacobian (`jacobian_at`: kl + ku + 1 extra evaluations)
+//! finite-difference Jacobian (`jacobian_at`: kl + ku + 1 extra evaluations; the FMU
+//! chains its parts' tangents instead, which changes no solver's count of steps)
 //! and the same driver: the line's events (profile breakpoints, `set`
 //! entries) are applied by the Line itself (`event_update`, as in Model
 //! Exchange) and each solver integrates between them; diffsol starts a new
-//! solver after each event (its history is no longer valid), RODAS4 keeps its
+//! solver after each event (its history is no longer valid), ours keep their
 //! step size as the FMU does.
 
 use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector};
@@ -19,7 +20,7 @@ use line::part::Part;
 use line::ode::{jacobian_at, rhs_at};
 use line::Line;
 use solver::band::Band;
-use solver::stiff::tableau::{Tableau, RODAS4, ROS34PW2};
+use solver::stiff::tableau::{Tableau, RODAS4, RODAS5P, ROS34PW2};
 use solver::stiff::{Control, Rosenbrock, System};
 use std::alloc::{GlobalAlloc, Layout, System as Heap};
 use std::cell::{Cell, RefCell};
@@ -54,6 +55,8 @@ const COMM: [f64; 2] = [1e-3, 1e-2];
 #[derive(Clone, Copy, PartialEq, Debug)]
 enum Method {
     Rodas4,
+    /// The Line's integrator since RODAS4: order 5, eight stages.
+    Rodas5p,
     /// Our W-method: its Jacobian kept over steps.
     Ros34pw2,
     Bdf,
@@ -68,6 +71,7 @@ impl Method {
     fn name(self) -> &'static str {
         match self {
             Method::Rodas4 => "RODAS4 (ours)",
+            Method::Rodas5p => "Rodas5P (ours)",
             Method::Ros34pw2 => "ROS34PW2 (ours)",
             Method::Bdf => "diffsol BDF",
             Method::TrBdf2 => "diffsol TR-BDF2",
@@ -151,7 +155,7 @@ impl System for Sys<'_> {
     }
     fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Band) -> Result<(), ()> {
         self.jac += 1;
-        jacobian_at(self.line, t, y, Some(f0), jac, false).map_err(drop)
+        jacobian_at(self.line, t, y, Some(f0), jac, true).map_err(drop)
     }
     fn time_dependent(&self) -> bool {
         self.time_dependent
@@ -210,7 +214,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
             jac_count.set(jac_count.get() + 1);
             let mut y = ybuf.borrow_mut();
             to_y(u, &mut y);
-            if jacobian_at(&mut line.borrow_mut(), t, &y, None, band, false).is_err() {
+            if jacobian_at(&mut line.borrow_mut(), t, &y, None, band, true).is_err() {
                 band.clear();
             }
             *ct = t;
@@ -234,7 +238,11 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
         .map_err(|e| e.to_string())?;
 
     // Ours as the FMU runs it.
-    let tableau: &'static Tableau = if method == Method::Ros34pw2 { &ROS34PW2 } else { &RODAS4 };
+    let tableau: &'static Tableau = match method {
+        Method::Ros34pw2 => &ROS34PW2,
+        Method::Rodas5p => &RODAS5P,
+        _ => &RODAS4,
+    };
     let mut rodas = Rosenbrock::new(tableau, n, b.kl, b.ku);
     let atol: Vec<f64> = b.atol1.iter().map(|a| a * tol).collect();
     let control = Control { rtol: tol, atol: &atol, rtol_scale: &b.rtol_scale, max_steps: 1_000_000, max_step: 0.0 };
@@ -267,7 +275,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
             break;
         }
         match method {
-            Method::Rodas4 | Method::Ros34pw2 => {
+            Method::Rodas4 | Method::Rodas5p | Method::Ros34pw2 => {
                 let mut l = line.borrow_mut();
                 let mut sys = Sys { line: &mut l, time_dependent: b.time_dependent, rhs: 0, jac: 0 };
                 for &s in &seg {
@@ -298,7 +306,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
                         Method::Bdf | Method::BdfKept => drive(problem.bdf::<NalgebraLU<f64>>(), t, &mut h_next, &piece, b, &mut o, a)?,
                         Method::TrBdf2 => drive(problem.tr_bdf2::<NalgebraLU<f64>>(), t, &mut h_next, &piece, b, &mut o, a)?,
                         Method::Esdirk34 => drive(problem.esdirk34::<NalgebraLU<f64>>(), t, &mut h_next, &piece, b, &mut o, a)?,
-                        Method::Rodas4 | Method::Ros34pw2 => unreachable!(),
+                        Method::Rodas4 | Method::Rodas5p | Method::Ros34pw2 => unreachable!(),
                     };
                     to_y(&u, &mut x);
                     t = *piece.last().unwrap();
@@ -314,7 +322,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
         l.set_continuous_states(&x).map_err(|e| e.message.clone())?;
     }
     o.seconds = clock.elapsed().as_secs_f64();
-    if matches!(method, Method::Rodas4 | Method::Ros34pw2) {
+    if matches!(method, Method::Rodas4 | Method::Rodas5p | Method::Ros34pw2) {
         o.steps = rodas.stats.accepted;
         o.rejected = rodas.stats.rejected;
         o.lu = rodas.stats.factorizations;
@@ -404,9 +412,9 @@ fn main() {
     // TR-BDF2 (order 2) only with `-- --all`: it is no contender at these tolerances.
     let all = std::env::args().any(|a| a == "--all");
     let ours = std::env::args().any(|a| a == "--ours");
-    let methods: Vec<Method> = [Method::Rodas4, Method::Ros34pw2, Method::Bdf, Method::TrBdf2, Method::Esdirk34]
+    let methods: Vec<Method> = [Method::Rodas4, Method::Rodas5p, Method::Ros34pw2, Method::Bdf, Method::TrBdf2, Method::Esdirk34]
         .into_iter()
-        .filter(|&m| if ours { matches!(m, Method::Rodas4 | Method::Ros34pw2) } else { all || m != Method::TrBdf2 })
+        .filter(|&m| if ours { matches!(m, Method::Rodas4 | Method::Rodas5p | Method::Ros34pw2) } else { all || m != Method::TrBdf2 })
         .collect();
     let mut full = String::new();
     let mut comm = String::new();
@@ -472,7 +480,7 @@ fn row(b: &Bench, m: Method, tol: f64, reference: &Outcome) -> String {
 /// f evaluations, those of the Jacobians included: kl + ku + 1 each, and f at the
 /// point for diffsol's (ours have it from the step).
 fn evaluations(b: &Bench, o: &Outcome, m: Method) -> usize {
-    let own_f0 = usize::from(!matches!(m, Method::Rodas4 | Method::Ros34pw2));
+    let own_f0 = usize::from(!matches!(m, Method::Rodas4 | Method::Rodas5p | Method::Ros34pw2));
     o.rhs + o.jacobians * ((b.kl + b.ku + 1).min(b.n) + own_f0)
 }
 
