@@ -38,7 +38,7 @@ pub mod web_state;
 
 pub use model::{effective_tolerance, ConvertingSpan};
 pub use parameters::Rates;
-pub use physics::Outputs;
+pub use physics::{Forces, Outputs};
 
 // The FMU's C API (feature `fmu`, on by default); the Line FMU links the
 // model as a library without it, so that its own API is the only one.

@@ -144,6 +144,14 @@ impl ConvertingSpan {
         })
     }
 
+    /// The forces and strain at the span's ends and dx/dt, at once (what a line's rollers read).
+    #[inline(always)]
+    pub fn forces(&self) -> physics::Forces {
+        let p = &self.params;
+        let rates = if physics::needs_input_rates(&p.effects) { self.input_rates() } else { Rates::default() };
+        physics::forces(p, &self.inputs, self.unstretched, rates)
+    }
+
     /// dx/dt [2] now, with the inputs as they are.
     pub fn unstretched_rate(&self) -> f64 {
         let length = physics::span_length(&self.params, &self.inputs);

@@ -30,11 +30,7 @@ pub struct Outputs {
 /// rates of the inputs. Effects that are off are not computed at all.
 #[inline(always)]
 pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sensor: &SensorScale) -> Outputs {
-    let length = span_length(p, u);
-    let strain = strain(length, x, 0.0);
-    let tension = tension(p, web_force(p, u, length, x.value(), strain, rates.length));
-    let exit_force =
-        if p.effects.include_mass { tension + momentum_difference(p, u, strain, x.value(), rates.speed_b) } else { tension };
+    let Forces { length, strain, tension, exit_force, .. } = forces(p, u, x, rates);
     let sensor_on = |value: f64| if p.use_sensor { value } else { 0.0 };
     Outputs {
         length,
@@ -47,13 +43,42 @@ pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sens
     }
 }
 
+/// The part of the outputs the rollers at a span's ends read (its forces and strain), with
+/// dx/dt [2], which the damped force needs too: computed once for both.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Forces {
+    pub length: f64,
+    pub strain: f64,
+    pub tension: f64,
+    pub exit_force: f64,
+    pub unstretched_rate: f64,
+}
+
+/// `Forces` for the state x, the inputs u and the rates of the inputs.
+#[inline(always)]
+pub fn forces(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates) -> Forces {
+    let length = span_length(p, u);
+    let strain = strain(length, x, 0.0);
+    let rate = unstretched_rate(u, strain);
+    let tension = tension(p, force_of(p, length, x.value(), strain, rates.length, || rate));
+    let exit_force =
+        if p.effects.include_mass { tension + momentum_difference(p, u, strain, x.value(), rates.speed_b) } else { tension };
+    Forces { length, strain, tension, exit_force, unstretched_rate: rate }
+}
+
 /// The web's pull before the slack clamp [5]: E*A*(eps_b + d_r2*deps_b/dt),
 /// or with a stress–strain table [5a] A*(sigma(eps_b) + d_r2*E_t(eps_b)*deps_b/dt)
 /// with the tangent modulus E_t. The rate [4] is computed only with damping.
 #[inline(always)]
 pub fn web_force(p: &Parameters, u: &Inputs, length: f64, x: f64, strain_b: f64, length_rate: f64) -> f64 {
+    force_of(p, length, x, strain_b, length_rate, || unstretched_rate(u, strain_b))
+}
+
+/// `web_force` with dx/dt [2] from `unstretched_rate`, called only where damping needs it.
+#[inline(always)]
+fn force_of(p: &Parameters, length: f64, x: f64, strain_b: f64, length_rate: f64, unstretched_rate: impl Fn() -> f64) -> f64 {
     let web = &p.span_web;
-    let rate = || strain_rate(length, length_rate, x, strain_b, unstretched_rate(u, strain_b));
+    let rate = || strain_rate(length, length_rate, x, strain_b, unstretched_rate());
     match &web.curve {
         None if p.effects.include_damping => web.stiffness() * (strain_b + web.retardation_time * rate()),
         None => web.stiffness() * strain_b,

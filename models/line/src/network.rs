@@ -20,8 +20,8 @@
 //! vectors copied per part.
 
 use crate::chain::Chain;
-use crate::part::{span_output_of, Part};
-use converting_span::Outputs;
+use crate::part::{span_force_of, Part};
+use converting_span::Forces;
 use crate::spec::Spec;
 use fmi_core::description::{Causality, ModelDescription};
 use fmi_core::{FmiError, FmiResult};
@@ -117,8 +117,12 @@ pub struct Network {
     /// Per part: its first state in the line's vector, and its active states.
     pub first_state: Vec<usize>,
     pub active: Vec<Vec<usize>>,
-    /// Per part: a span's outputs as last computed in this evaluation (`Link::fresh`).
-    outputs: Vec<Outputs>,
+    /// Per part: a span's forces as last computed in this evaluation (`Link::fresh`).
+    outputs: Vec<Forces>,
+    /// Per part: a span whose forces are computed after the last connection into it, so that
+    /// their dx/dt is the span's state derivative in this evaluation (in a line without web
+    /// mass or moving spans, whose connections carry values only).
+    rate_ready: Vec<bool>,
     /// The point of the last evaluation, if it succeeded and nothing has changed the parts
     /// since (`evaluated_at`): the time and the states.
     evaluated: Option<f64>,
@@ -236,6 +240,13 @@ impl Network {
                 }
             }
         }
+        let plain = groups.is_empty() && rates.is_empty();
+        let mut read = vec![false; n_parts];
+        for l in &links {
+            read[l.from] = true;
+        }
+        let rate_ready: Vec<bool> =
+            (0..n_parts).map(|p| plain && read[p] && !moved[p] && matches!(&parts[p], Part::Span(s) if !s.params.effects.variable_length)).collect();
         // States in line order.
         let mut states = Vec::new();
         let mut first_state = Vec::with_capacity(n_parts);
@@ -249,8 +260,7 @@ impl Network {
         if let Some(part) = parts.iter().find(|p| p.state_count() > MAX_PART_STATES) {
             return Err(format!("a part ({}) has more than {MAX_PART_STATES} states", part.description().model_identifier));
         }
-        let none = Outputs { length: 0.0, strain: 0.0, tension: 0.0, exit_force: 0.0, stress: 0.0, sensor_speed: 0.0, sensor_tension: 0.0 };
-        let outputs = vec![none; n_parts];
+        let outputs = vec![Forces::default(); n_parts];
         let evaluated_x = vec![0.0; states.len()];
         let reads_earlier_inputs = parts.iter().any(|p| matches!(p, Part::Span(s) if s.params.effects.variable_length));
         let mut moving_inputs: Vec<Option<Vec<u32>>> = vec![Some(Vec::new()); n_parts];
@@ -269,6 +279,7 @@ impl Network {
             first_state,
             active,
             outputs,
+            rate_ready,
             evaluated: None,
             evaluated_x,
             reads_earlier_inputs,
@@ -350,9 +361,9 @@ impl Network {
                         (Part::Span(s), Port::Span(var)) => {
                             let o = &mut self.outputs[l.from];
                             if l.fresh {
-                                *o = s.outputs();
+                                *o = s.forces();
                             }
-                            span_output_of(o, var).unwrap_or_else(|| s.real(var))
+                            span_force_of(o, var).unwrap_or_else(|| s.real(var))
                         }
                         (Part::Roller(r), Port::Roller(var)) => r.real(var),
                         _ => unreachable!("a port is resolved from its own part"),
@@ -371,7 +382,7 @@ impl Network {
             }
         }
         if let Some(dx) = dx {
-            self.derivatives(parts, dx)?;
+            self.derivatives_from(parts, dx, true)?;
         }
         self.evaluated = Some(t);
         self.evaluated_x.copy_from_slice(x);
@@ -399,9 +410,16 @@ impl Network {
     /// The state derivatives of the parts as last evaluated, by the parts' own
     /// functions (those their `get_derivatives` calls).
     pub fn derivatives(&self, parts: &[Part], dx: &mut [f64]) -> FmiResult {
+        self.derivatives_from(parts, dx, false)
+    }
+
+    /// `in_evaluation`: right after the connections ran, where a span's dx/dt is the one its
+    /// forces computed (`rate_ready`).
+    fn derivatives_from(&self, parts: &[Part], dx: &mut [f64], in_evaluation: bool) -> FmiResult {
         for (p, part) in parts.iter().enumerate() {
             let first = self.first_state[p];
             match part {
+                Part::Span(_) if in_evaluation && self.rate_ready[p] => dx[first] = self.outputs[p].unstretched_rate,
                 Part::Span(s) => dx[first] = s.unstretched_rate(),
                 Part::Roller(r) => {
                     let d = r.derivatives();

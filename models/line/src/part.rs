@@ -4,7 +4,7 @@
 //! of the line (to undo a failed step) allocates nothing: the models share
 //! their profiles and records by `Arc`.
 
-use converting_span::{ConvertingSpan, Outputs};
+use converting_span::{ConvertingSpan, Forces};
 use fmi_core::description::ModelDescription;
 use fmi_core::{Compiled, EventUpdate, Experiment, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
 use crate::network::Port;
@@ -182,15 +182,6 @@ impl Part {
         }
     }
 
-    /// The span's outputs, all at once (one evaluation of its physics for every output a link reads).
-    #[inline]
-    pub fn span_outputs(&self) -> Option<Outputs> {
-        match self {
-            Part::Span(s) => Some(s.outputs()),
-            Part::Roller(_) => None,
-        }
-    }
-
     /// The part's continuous states the line integrates (indices into its
     /// Model Exchange state vector): a Roller's radius only on a roll being
     /// wound, its carriage only on a dancer.
@@ -229,25 +220,16 @@ impl Part {
     }
 }
 
-/// The span's output `vr` from its outputs computed once: the same fields as
-/// its bindings (variables.rs); None for a variable that is not among them.
+/// The span's output `var` from its forces computed once: the same fields as its bindings
+/// (variables.rs); None for a variable that is not among them.
 #[inline]
-pub fn span_output(o: &Outputs, vr: u32) -> Option<f64> {
-    span_output_of(o, converting_span::description::Real::from_vr(vr)?)
-}
-
-/// The same, for the variable itself.
-#[inline]
-pub fn span_output_of(o: &Outputs, var: converting_span::description::Real) -> Option<f64> {
+pub fn span_force_of(f: &Forces, var: converting_span::description::Real) -> Option<f64> {
     use converting_span::description::Real;
     Some(match var {
-        Real::v => o.sensor_speed,
-        Real::T => o.sensor_tension,
-        Real::web_a_F | Real::summary_Tension => o.tension,
-        Real::web_b_F => o.exit_force,
-        Real::web_b_eps | Real::summary_Strain => o.strain,
-        Real::summary_Length => o.length,
-        Real::summary_Stress => o.stress,
+        Real::web_a_F | Real::summary_Tension => f.tension,
+        Real::web_b_F => f.exit_force,
+        Real::web_b_eps | Real::summary_Strain => f.strain,
+        Real::summary_Length => f.length,
         _ => return None,
     })
 }
