@@ -186,13 +186,13 @@ impl BandLu {
         let w = 2 * kl + self.ku + 1;
         let b = &mut b[..n];
         for (k, (&p, low)) in self.pivot.iter().zip(self.low.chunks_exact(kl.max(1))).enumerate() {
-            b.swap(k, p);
+            if p != k {
+                b.swap(k, p);
+            }
             let (head, tail) = b.split_at_mut(k + 1);
             let bk = head[k];
-            if bk != 0.0 {
-                for (x, l) in tail.iter_mut().zip(&low[..kl]) {
-                    *x -= l * bk;
-                }
+            for (x, l) in tail.iter_mut().zip(&low[..kl]) {
+                *x -= l * bk;
             }
         }
         for (k, (row, inverse)) in self.m.chunks_exact(w).zip(&self.inverse).enumerate().rev() {
