@@ -156,27 +156,14 @@ impl Part {
     /// `directions` by the part's own tangents, a row of `out` per direction; false if one is
     /// no unknown of the part.
     pub fn partials(&self, directions: &Directions, unknowns: &[Port], out: &mut [f64]) -> bool {
-        let rows = out.chunks_exact_mut(unknowns.len().max(1));
         match (self, directions) {
             (Part::Span(s), Directions::Span(ds)) => {
                 let at = s.linearize();
-                ds.iter().zip(rows).all(|(d, row)| {
-                    let t = at.along(d);
-                    unknowns.iter().zip(row).all(|(u, o)| match *u {
-                        Port::Span(u) => ConvertingSpan::along(&t, d, u).map(|x| *o = x).is_some(),
-                        Port::Roller(_) => false,
-                    })
-                })
+                rows(ds, unknowns, out, |d| at.along(d), |t, d, u| if let Port::Span(u) = u { ConvertingSpan::along(t, d, u) } else { None })
             }
             (Part::Roller(r), Directions::Roller(ds)) => {
                 let at = r.linearize();
-                ds.iter().zip(rows).all(|(d, row)| {
-                    let t = at.along(d);
-                    unknowns.iter().zip(row).all(|(u, o)| match *u {
-                        Port::Roller(u) => Roller::along(&t, d, u).map(|x| *o = x).is_some(),
-                        Port::Span(_) => false,
-                    })
-                })
+                rows(ds, unknowns, out, |d| at.along(d), |t, d, u| if let Port::Roller(u) = u { Roller::along(t, d, u) } else { None })
             }
             _ => false,
         }
@@ -231,5 +218,14 @@ pub fn span_force_of(f: &Forces, var: converting_span::description::Real) -> Opt
         Real::web_b_eps | Real::summary_Strain => f.strain,
         Real::summary_Length => f.length,
         _ => return None,
+    })
+}
+
+/// Per direction, the tangents (`along`) and from them each unknown's partial (`pick`), a row
+/// of `out` each; false if `pick` knows an unknown not.
+fn rows<D, T>(ds: &[D], unknowns: &[Port], out: &mut [f64], along: impl Fn(&D) -> T, pick: impl Fn(&T, &D, Port) -> Option<f64>) -> bool {
+    ds.iter().zip(out.chunks_exact_mut(unknowns.len().max(1))).all(|(d, row)| {
+        let t = along(d);
+        unknowns.iter().zip(row).all(|(&u, o)| pick(&t, d, u).map(|x| *o = x).is_some())
     })
 }
