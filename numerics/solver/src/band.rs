@@ -97,6 +97,24 @@ impl Band {
 
 /// The LU factors of a banded matrix (the band widened by kl above for the
 /// row exchanges) and the pivot rows.
+/// Calls `$f(kl, ku)` with kl and ku as constants for the bands lines have (a chain of
+/// parts: a few diagonals), so that the compiler unrolls the rows' short loops; any other
+/// band runs the same code with them as variables.
+macro_rules! small_bands {
+    ($kl:expr, $ku:expr, |$l:ident, $u:ident| $f:expr) => {
+        match ($kl, $ku) {
+            (1, 1) => { let ($l, $u) = (1, 1); $f }
+            (2, 1) => { let ($l, $u) = (2, 1); $f }
+            (2, 2) => { let ($l, $u) = (2, 2); $f }
+            (3, 2) => { let ($l, $u) = (3, 2); $f }
+            (3, 3) => { let ($l, $u) = (3, 3); $f }
+            (4, 3) => { let ($l, $u) = (4, 3); $f }
+            (4, 4) => { let ($l, $u) = (4, 4); $f }
+            ($l, $u) => $f,
+        }
+    };
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct BandLu {
     n: usize,
@@ -107,7 +125,7 @@ pub struct BandLu {
     m: Vec<f64>,
     /// The multipliers of column k (rows k + 1 ..= k + kl) at k * kl: the forward solve reads them in a row.
     low: Vec<f64>,
-    /// 1 / U's diagonal: the back substitution multiplies (a division's latency, per row, on its critical path).
+    /// 1 / U's diagonal (U's rows are stored divided by it, the diagonal aside).
     inverse: Vec<f64>,
     pivot: Vec<usize>,
 }
@@ -121,8 +139,14 @@ impl BandLu {
     /// Factors `c * I - a` (what an implicit step solves with), in place of
     /// the previous factors. False if it is singular (or not finite).
     pub fn factor_shifted(&mut self, c: f64, a: &Band) -> bool {
-        let (n, kl, ku) = (a.n, a.kl, a.ku);
-        debug_assert!(self.n == n && self.kl == kl && self.ku == ku);
+        debug_assert!(self.n == a.n && self.kl == a.kl && self.ku == a.ku);
+        small_bands!(self.kl, self.ku, |kl, ku| self.factor_with(c, a, kl, ku))
+    }
+
+    /// `factor_shifted` for kl and ku (constants where `small_bands!` calls it).
+    #[inline(always)]
+    fn factor_with(&mut self, c: f64, a: &Band, kl: usize, ku: usize) -> bool {
+        let n = a.n;
         let wa = kl + ku + 1;
         // The factors need kl more super-diagonals than the matrix (fill-in of the pivoting).
         let w = wa + kl;
@@ -138,9 +162,11 @@ impl BandLu {
             }
             band[kl] += c;
         }
+        // A row's columns k ..= k + kl + ku, whole even past the matrix's last column (its storage
+        // has them, zeros that stay zeros): loops of one length, unrolled for small bands.
+        let span = kl + ku + 1;
         for k in 0..n {
             let last_row = (k + kl + 1).min(n);
-            let last_col = (k + kl + ku + 1).min(n);
             // (i, k) sits at i * w + k + kl - i.
             let mut p = k;
             let mut best = m[k * w + kl].abs();
@@ -152,27 +178,33 @@ impl BandLu {
             }
             self.pivot[k] = p;
             let (upper, lower) = m.split_at_mut((k + 1) * w);
-            let row_k = &mut upper[k * w + kl..k * w + kl + (last_col - k)];
+            let row_k = &mut upper[k * w + kl..k * w + kl + span];
             if p != k {
                 let q = (p - k - 1) * w + kl + k - p;
-                row_k.swap_with_slice(&mut lower[q..q + (last_col - k)]);
+                row_k.swap_with_slice(&mut lower[q..q + span]);
             }
             let d = row_k[0];
             if d == 0.0 || !d.is_finite() {
                 return false;
             }
-            self.inverse[k] = 1.0 / d;
+            let inverse = 1.0 / d;
+            self.inverse[k] = inverse;
+            // U's row k over its diagonal: in the back substitution a row then waits on the one
+            // before for one multiply and one subtraction.
+            for y in &mut row_k[1..] {
+                *y *= inverse;
+            }
             let low = &mut self.low[k * kl..(k + 1) * kl];
             for (i, l) in (k + 1..last_row).zip(low.iter_mut()) {
-                // Row i's columns k..last_col.
+                // Row i's columns k ..= k + kl + ku.
                 let q = (i - k - 1) * w + kl + k - i;
-                let row_i = &mut lower[q..q + (last_col - k)];
-                let f = row_i[0] / d;
-                row_i[0] = f;
-                *l = f;
-                if f != 0.0 {
+                let row_i = &mut lower[q..q + span];
+                let g = row_i[0];
+                row_i[0] = g * inverse;
+                *l = row_i[0];
+                if g != 0.0 {
                     for (x, y) in row_i[1..].iter_mut().zip(&row_k[1..]) {
-                        *x -= f * y;
+                        *x -= g * y;
                     }
                 }
             }
@@ -182,8 +214,14 @@ impl BandLu {
 
     /// Solves in place with the last factors.
     pub fn solve(&self, b: &mut [f64]) {
-        let (n, kl) = (self.n, self.kl);
-        let w = 2 * kl + self.ku + 1;
+        small_bands!(self.kl, self.ku, |kl, ku| self.solve_with(b, kl, ku))
+    }
+
+    /// `solve` for kl and ku (constants where `small_bands!` calls it).
+    #[inline(always)]
+    fn solve_with(&self, b: &mut [f64], kl: usize, ku: usize) {
+        let n = self.n;
+        let w = 2 * kl + ku + 1;
         let b = &mut b[..n];
         for (k, (&p, low)) in self.pivot.iter().zip(self.low.chunks_exact(kl.max(1))).enumerate() {
             if p != k {
@@ -194,6 +232,24 @@ impl BandLu {
             for (x, l) in tail.iter_mut().zip(&low[..kl]) {
                 *x -= l * bk;
             }
+        }
+        if (1..=WINDOW).contains(&(kl + ku)) {
+            // The unknowns a row reads (the next kl + ku, 0 past the end) carried in registers.
+            let mut win = [0.0; WINDOW];
+            for (k, (row, inverse)) in self.m.chunks_exact(w).zip(&self.inverse).enumerate().rev() {
+                let row = &row[kl + 1..];
+                let mut s = 0.0;
+                for j in 1..kl + ku {
+                    s += row[j] * win[j];
+                }
+                let x = (b[k] * inverse - s) - row[0] * win[0];
+                for j in (1..kl + ku).rev() {
+                    win[j] = win[j - 1];
+                }
+                win[0] = x;
+                b[k] = x;
+            }
+            return;
         }
         for (k, (row, inverse)) in self.m.chunks_exact(w).zip(&self.inverse).enumerate().rev() {
             // U's row k: columns k ..= k + kl + ku. The next unknown, solved just before, is
@@ -206,10 +262,13 @@ impl BandLu {
                 s += x * y;
             }
             let first = tail.first().map_or(0.0, |y| next * y);
-            head[k] = ((head[k] - s) - first) * inverse;
+            head[k] = (head[k] * inverse - s) - first;
         }
     }
 }
+
+/// The most unknowns a row of U reads that `solve` carries in registers.
+const WINDOW: usize = 8;
 
 #[cfg(test)]
 mod tests {
