@@ -339,13 +339,8 @@ impl Network {
                 }
                 Part::Roller(r) => {
                     r.set_time(t);
-                    let mut full = [0.0; MAX_PART_STATES];
-                    let full = &mut full[..r.description().states.len()];
-                    r.get_continuous_states(full)?;
-                    for (k, &i) in self.active[p].iter().enumerate() {
-                        full[i] = x[first + k];
-                    }
-                    r.set_continuous_states(full)?;
+                    let active = &self.active[p];
+                    r.set_active_states(active, &x[first..first + active.len()])?;
                 }
             }
         }
@@ -402,9 +397,13 @@ impl Network {
         !self.groups.is_empty() || !self.rates.is_empty() || self.reads_earlier_inputs || self.moving_inputs[part].as_ref().is_none_or(|list| list.contains(&vr))
     }
 
-    /// Something other than an evaluation changed the parts (an event).
+    /// Something other than an evaluation changed the parts (an event, a parameter, a failed
+    /// step's parts put back).
     pub fn parts_changed(&mut self) {
         self.evaluated = None;
+        if let Some(chain) = self.chain.as_mut() {
+            chain.renew();
+        }
     }
 
     /// The state derivatives of the parts as last evaluated, by the parts' own

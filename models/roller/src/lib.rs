@@ -121,6 +121,22 @@ pub struct Roller {
 }
 
 impl Roller {
+    /// Sets the Model Exchange states at `active` (indices into (omega, r, y, y')) to `x`, the
+    /// others kept: what `set_continuous_states` does with the full vector, without forming it
+    /// where only omega moves (a roller that neither winds nor carries a dancer).
+    pub fn set_active_states(&mut self, active: &[usize], x: &[f64]) -> FmiResult {
+        if let ([0], &[omega]) = (active, x) {
+            self.omega = CompensatedSum::from_parts(omega, 0.0);
+            return Ok(());
+        }
+        let mut full = [0.0; 4];
+        self.get_continuous_states(&mut full)?;
+        for (&i, &value) in active.iter().zip(x) {
+            full[i] = value;
+        }
+        self.set_continuous_states(&full)
+    }
+
     pub fn omega(&self) -> f64 {
         self.omega.value()
     }
@@ -129,6 +145,7 @@ impl Roller {
         self.roll.radius
     }
 
+    #[inline]
     fn drive(&self) -> Drive {
         self.profile.as_ref().map_or(Drive::Torque, |l| l.drive)
     }
@@ -139,21 +156,24 @@ impl Roller {
         self.drive() == Drive::Speed
     }
 
+    #[inline]
     fn table(&self, key: Key) -> Option<&profiles::Table> {
         self.profile.as_ref().and_then(|l| l.table(key))
     }
 
     /// A table's value and slope at t (the time now, or a piece's start).
+    #[inline]
     fn read(&self, table: &profiles::Table, t: f64) -> (f64, f64) {
         if t > self.events_at {
             let within = profiles::tolerance(t).min(t - self.events_at);
-            (table.value_before(t, within), table.slope_before(t, within))
+            table.before(t, within)
         } else {
             (table.value(t), table.slope(t))
         }
     }
 
     /// v [R2]; a speed drive's profile at the time now.
+    #[inline]
     pub fn surface_speed(&self) -> f64 {
         match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => self.read(t, self.time).0,
@@ -175,6 +195,7 @@ impl Roller {
 
     /// The drive's torque at time t, and its rate (a speed drive: 0, see
     /// `drive_torque`). The profile has at most one drive table.
+    #[inline]
     fn torque_at(&self, t: f64) -> (f64, f64) {
         let tau_m = self.inputs.torque;
         if let Some(table) = self.table(Key::Torque) {

@@ -84,6 +84,7 @@ pub struct Inputs {
 
 /// The sum of the first `count` ports' tensions: one port is read as it
 /// is (the plain roller, bit for bit), and no loop runs over unused ones.
+#[inline]
 fn pull(forces: &[f64; PORTS], count: i32) -> f64 {
     match ports(count) {
         1 => forces[0],
@@ -95,11 +96,13 @@ fn pull(forces: &[f64; PORTS], count: i32) -> f64 {
 
 impl Inputs {
     /// F_a of [R1] and [R4]: every arriving web's tension.
+    #[inline]
     pub fn pull_back(&self, p: &Parameters) -> f64 {
         pull(&self.force_a, p.inlets)
     }
 
     /// F_b of [R1] and [R4]: every leaving web's tension.
+    #[inline]
     pub fn pull_forward(&self, p: &Parameters) -> f64 {
         pull(&self.force_b, p.outlets)
     }
@@ -177,6 +180,7 @@ pub fn surface_speed(radius: f64, omega: f64) -> f64 {
 }
 
 /// The webs' torque on the roller, r*(F_b - F_a) [R1], N m.
+#[inline]
 pub fn web_torque(p: &Parameters, radius: f64, u: &Inputs) -> f64 {
     radius * (u.pull_forward(p) - u.pull_back(p))
 }

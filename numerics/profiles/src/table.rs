@@ -52,16 +52,13 @@ impl Table {
         x0 + (x1 - x0) * ((t - t0) / (t1 - t0))
     }
 
-    /// The value at `t` on the piece that ends there: at a jump, the value before it (the left
-    /// limit), what a model shows at an event it has not yet applied. A break less than `within`
-    /// before `t` counts as at `t` (a communication point a few ulps past it).
-    pub fn value_before(&self, t: f64, within: f64) -> f64 {
-        self.on_piece_ending_at(self.reaching(t - within), t)
-    }
-
-    /// The slope on the piece that ends at `t` (0 outside the table); `within` as for `value_before`.
-    pub fn slope_before(&self, t: f64, within: f64) -> f64 {
-        self.slope_of_piece_ending_at(self.reaching(t - within))
+    /// The value and the slope at `t` on the piece that ends there: at a jump, the value before
+    /// it (the left limit), what a model shows at an event it has not yet applied; at a kink, the
+    /// slope before it. A break less than `within` before `t` counts as at `t` (a communication
+    /// point a few ulps past it). Outside the table: its end values, slope 0.
+    pub fn before(&self, t: f64, within: f64) -> (f64, f64) {
+        let i = self.reaching(t - within);
+        (self.on_piece_ending_at(i, t), self.slope_of_piece_ending_at(i))
     }
 
     /// The slope of the piece that ends at entry `i` (0 outside the table).
@@ -111,19 +108,19 @@ mod tests {
     #[test]
     fn before_a_break_the_piece_that_ends_there() {
         let t = Table::new(vec![[0.0, 0.0], [1.0, 2.0], [1.0, 5.0], [3.0, 5.0], [4.0, 7.0]]).unwrap();
-        assert_eq!((t.value_before(1.0, 0.0), t.slope_before(1.0, 0.0)), (2.0, 2.0)); // the jump, from below
+        assert_eq!(t.before(1.0, 0.0), (2.0, 2.0)); // the jump, from below
         assert_eq!((t.value(1.0), t.slope(1.0)), (5.0, 0.0));
-        assert_eq!((t.value_before(3.0, 0.0), t.slope_before(3.0, 0.0)), (5.0, 0.0)); // the kink, from below
+        assert_eq!(t.before(3.0, 0.0), (5.0, 0.0)); // the kink, from below
         assert_eq!(t.slope(3.0), 2.0);
-        assert_eq!((t.value_before(0.5, 0.0), t.slope_before(0.5, 0.0)), (t.value(0.5), t.slope(0.5))); // inside a piece: the same
-        assert_eq!((t.value_before(-1.0, 0.0), t.slope_before(-1.0, 0.0)), (0.0, 0.0));
-        assert_eq!((t.value_before(9.0, 0.0), t.slope_before(9.0, 0.0)), (7.0, 0.0));
-        assert_eq!((t.value_before(4.0, 0.0), t.slope_before(4.0, 0.0)), (7.0, 2.0));
+        assert_eq!(t.before(0.5, 0.0), (t.value(0.5), t.slope(0.5))); // inside a piece: the same
+        assert_eq!(t.before(-1.0, 0.0), (0.0, 0.0));
+        assert_eq!(t.before(9.0, 0.0), (7.0, 0.0));
+        assert_eq!(t.before(4.0, 0.0), (7.0, 2.0));
         // A few ulps past the jump, within the tolerance: still before it.
         let past = 1.0 + 4.0 * f64::EPSILON;
-        assert_eq!(t.slope_before(past, 1e-9), 2.0);
-        assert!((t.value_before(past, 1e-9) - 2.0).abs() < 1e-14);
-        assert_eq!(t.value_before(past, 0.0), 5.0);
+        assert_eq!(t.before(past, 1e-9).1, 2.0);
+        assert!((t.before(past, 1e-9).0 - 2.0).abs() < 1e-14);
+        assert_eq!(t.before(past, 0.0).0, 5.0);
     }
 
     #[test]
