@@ -19,6 +19,8 @@ use std::ops::Range;
 #[derive(Clone, Debug, PartialEq)]
 struct PartPlan {
     directions: Directions,
+    /// Its partials stay until an event or a parameter changes the part (`Part::tangents_fixed`).
+    fixed: bool,
     /// The outputs its connections read, then its active states' derivatives.
     unknowns: Vec<Port>,
     /// Its first partial in `Chain::partials`.
@@ -46,6 +48,8 @@ pub struct Chain {
     /// The terms of the band's rows, all at once (their `to` index the band's storage).
     rows: Range<usize>,
     terms: Vec<Term>,
+    /// The fixed parts' partials are formed (cleared by `renew`).
+    formed: bool,
 }
 
 impl Chain {
@@ -119,7 +123,7 @@ impl Chain {
                     row_terms.push(Term { partial: offset + k * n + outs.len() + r, from, to, len });
                 }
             }
-            plans.push(PartPlan { directions: part.directions(&knowns)?, unknowns, offset });
+            plans.push(PartPlan { directions: part.directions(&knowns)?, fixed: part.tangents_fixed(), unknowns, offset });
             offset += knowns.len() * n;
         }
         let mut terms = Vec::new();
@@ -137,18 +141,25 @@ impl Chain {
         terms.extend(row_terms);
         let mut totals = vec![0.0; total];
         totals[0] = 1.0;
-        let mut chain = Chain { plans, partials: vec![0.0; offset], totals, links: chained, rows, terms };
+        let mut chain = Chain { plans, partials: vec![0.0; offset], totals, links: chained, rows, terms, formed: false };
         // Every known of every part must have a tangent: tried once here, at the parts' start.
         chain.partials(parts).then_some(chain)
     }
 
-    /// Every part's partials at the point the parts are evaluated at.
+    /// Every part's partials at the point the parts are evaluated at (a fixed part's: once).
     fn partials(&mut self, parts: &[Part]) -> bool {
-        let partials = &mut self.partials;
-        self.plans.iter().zip(parts).all(|(plan, part)| {
+        let (partials, formed) = (&mut self.partials, self.formed);
+        self.formed = self.plans.iter().zip(parts).all(|(plan, part)| {
             let size = plan.directions.len() * plan.unknowns.len();
-            part.partials(&plan.directions, &plan.unknowns, &mut partials[plan.offset..plan.offset + size])
-        })
+            (plan.fixed && formed) || part.partials(&plan.directions, &plan.unknowns, &mut partials[plan.offset..plan.offset + size])
+        });
+        self.formed
+    }
+
+    /// The parts changed otherwise than by their states, inputs and time (an event): the fixed
+    /// parts' partials are formed again.
+    pub fn renew(&mut self) {
+        self.formed = false;
     }
 
     /// df/dx into `jac` (cleared, its band the one the chain was made for), the parts

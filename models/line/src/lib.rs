@@ -27,7 +27,7 @@ pub mod stepping;
 #[cfg(feature = "cli")]
 pub mod xml;
 
-use fmi_core::description::ModelDescription;
+use fmi_core::description::{Causality, ModelDescription};
 use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
 use interface::{Binding, Interface};
 use network::Network;
@@ -160,6 +160,15 @@ impl Line {
     /// After initialization every change (time, states, an input) is
     /// evaluated at once, so that outputs and derivatives read later are
     /// those of the line as it now is.
+    /// The line's variable `vr` of a part was set: other than an input (a parameter, which FMI
+    /// allows only before the network exists), it changes more than the states and inputs do.
+    fn part_set(&mut self, vr: u32) {
+        let input = self.shared.description.variable(vr).is_some_and(|v| v.causality == Causality::Input);
+        if let (false, Some(net)) = (input, self.net.as_mut()) {
+            net.parts_changed();
+        }
+    }
+
     fn settle(&mut self) -> FmiResult {
         match self.net.as_mut() {
             Some(net) => net.evaluate(&mut self.parts, self.time, &self.x, None),
@@ -218,11 +227,12 @@ impl Variables for Line {
 
     fn set_real(&mut self, vr: u32, value: f64) -> FmiResult {
         match self.binding(vr)? {
-            Binding::Part { part, vr } => {
-                self.parts[part].set_real(vr, value)?;
+            Binding::Part { part, vr: part_vr } => {
+                self.parts[part].set_real(part_vr, value)?;
+                self.part_set(vr);
                 // An input moves the outputs that depend on it; a failure shows when they are read.
                 // One that moves no connection (a motor torque) changes only what its part computes when read.
-                if self.net.as_ref().is_none_or(|net| net.input_moves_connections(part, vr)) {
+                if self.net.as_ref().is_none_or(|net| net.input_moves_connections(part, part_vr)) {
                     let _ = self.settle();
                 }
                 Ok(())
@@ -244,7 +254,11 @@ impl Variables for Line {
 
     fn set_integer(&mut self, vr: u32, value: i32) -> FmiResult {
         match self.binding(vr)? {
-            Binding::Part { part, vr } => self.parts[part].set_integer(vr, value),
+            Binding::Part { part, vr: part_vr } => {
+                self.parts[part].set_integer(part_vr, value)?;
+                self.part_set(vr);
+                Ok(())
+            }
             _ => Err(fmi_core::model::unknown_vr(vr)),
         }
     }
@@ -259,7 +273,11 @@ impl Variables for Line {
 
     fn set_boolean(&mut self, vr: u32, value: bool) -> FmiResult {
         match self.binding(vr)? {
-            Binding::Part { part, vr } => self.parts[part].set_boolean(vr, value),
+            Binding::Part { part, vr: part_vr } => {
+                self.parts[part].set_boolean(part_vr, value)?;
+                self.part_set(vr);
+                Ok(())
+            }
             Binding::StartAtEquilibrium => {
                 self.start_equilibrium = value;
                 Ok(())

@@ -215,6 +215,9 @@ pub fn step(line: &mut Line, h: f64) -> FmiResult {
         Err(e) => {
             if copied {
                 std::mem::swap(&mut line.parts, &mut line.backup);
+                if let Some(net) = line.net.as_mut() {
+                    net.parts_changed();
+                }
             }
             for &(part, vr, base, _) in &line.ramps {
                 let _ = line.parts[part].set_real(vr, base);

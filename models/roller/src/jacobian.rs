@@ -35,6 +35,14 @@ fn strain_leaving_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
 }
 
 impl Roller {
+    /// Whether the tangents along omega, the carriage's y and y' and every input are the same at
+    /// every state, input and time, for as long as the parameters and the roll stay: [R1], [R2]
+    /// and [R4] are then linear with coefficients made of parameters. So for a roller that winds
+    /// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on).
+    pub fn tangents_fixed(&self) -> bool {
+        !self.params.winding() && self.params.inlets <= 1
+    }
+
     /// d(everything)/d(direction) now.
     #[inline]
     pub fn tangents(&self, d: &Direction) -> Tangents {

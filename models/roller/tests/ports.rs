@@ -389,3 +389,55 @@ fn bad_ports_and_masses_are_refused_naming_the_variable() {
     assert_eq!(fmu.set("web_a3.eps", -1.0), ERROR);
     assert!(fmu.messages().last().unwrap().contains("web_a3.eps = -1"), "{:?}", fmu.messages());
 }
+
+/// `tangents_fixed`: where a roller says so (an idler, a slitter, a speed drive, a dancer), its
+/// tangents along omega, y, y' and every input are the same (to the value: a zero may change
+/// sign) at two points with different states, inputs and times; a winder and a nip merging three
+/// webs say not, and theirs differ.
+#[test]
+fn fixed_tangents_are_the_same_at_every_state_input_and_time() {
+    use roller::description::Real;
+    let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
+    #[rustfmt::skip]
+    let rollers: [(&[(&str, f64)], Option<&str>, bool); 6] = [
+        (&[], None, true),
+        (&[("b", 0.3), ("outlets", 2.0)], None, true),
+        (&[], Some(speed_drive), true),
+        (&[("roll", 2.0), ("wound.thickness", 1e-3), ("wound.density", 1000.0)], None, false),
+        (&[("inlets", 3.0), ("web_a.m", 0.2), ("web_a2.m", 0.05), ("web_a3.m", 0.7)], None, false),
+        (&[("carriage", 1.0)], None, true),
+    ];
+    #[rustfmt::skip]
+    let points: [&[(&str, f64)]; 2] = [
+        &[("web_a.F", 300.0), ("web_a2.F", 250.0), ("web_a3.F", 120.0), ("web_b.F", 150.0), ("web_b2.F", 210.0),
+          ("web_a.eps", 1.1e-3), ("web_a2.eps", 4.2e-3), ("web_a3.eps", -2e-4), ("tau_m", 1.5), ("F_load", 1e3)],
+        &[("web_a.F", 900.0), ("web_a2.F", 20.0), ("web_a3.F", 610.0), ("web_b.F", 40.0), ("web_b2.F", 5.0),
+          ("web_a.eps", 3e-3), ("web_a2.eps", 1e-4), ("web_a3.eps", 2e-2), ("tau_m", -4.0), ("F_load", 2e2)],
+    ];
+    let knowns: Vec<Real> = DESCRIPTION
+        .variables
+        .iter()
+        .filter(|v| v.kind == Kind::Real && (v.causality == Causality::Input || ["omega", "y", "y_dot"].contains(&&*v.name)))
+        .filter_map(|v| Real::from_vr(v.vr))
+        .collect();
+    for (settings, profile, fixed) in rollers {
+        let mut m = Roller::at_start_values();
+        for &(name, x) in settings {
+            set(&mut m, name, x);
+        }
+        if let Some(path) = profile {
+            m.set_string(DESCRIPTION.variable_by_name("profile").unwrap().vr, path).unwrap();
+        }
+        m.initialize(&Experiment::default(), &Default::default()).unwrap();
+        let mut tangents = Vec::new();
+        for (inputs, h) in points.iter().zip([0.05, 0.4]) {
+            for &(name, x) in inputs.iter() {
+                set(&mut m, name, x);
+            }
+            m.do_step(h).unwrap();
+            tangents.push(knowns.iter().map(|&k| m.tangents(&Roller::direction(k).unwrap())).collect::<Vec<_>>());
+        }
+        assert_eq!(m.tangents_fixed(), fixed, "{settings:?}");
+        assert_eq!(tangents[0] == tangents[1], fixed, "{settings:?}: tangents {:?} and {:?}", tangents[0], tangents[1]);
+    }
+}
