@@ -157,9 +157,6 @@ impl Line {
         self.integrator.as_ref()
     }
 
-    /// After initialization every change (time, states, an input) is
-    /// evaluated at once, so that outputs and derivatives read later are
-    /// those of the line as it now is.
     /// The line's variable `vr` of a part was set: other than an input (a parameter, which FMI
     /// allows only before the network exists), it changes more than the states and inputs do.
     fn part_set(&mut self, vr: u32) {
@@ -169,6 +166,9 @@ impl Line {
         }
     }
 
+    /// After initialization every change (time, states, an input) is
+    /// evaluated at once, so that outputs and derivatives read later are
+    /// those of the line as it now is.
     fn settle(&mut self) -> FmiResult {
         match self.net.as_mut() {
             Some(net) => net.evaluate(&mut self.parts, self.time, &self.x, None),
