@@ -95,8 +95,6 @@ impl Band {
     }
 }
 
-/// The LU factors of a banded matrix (the band widened by kl above for the
-/// row exchanges) and the pivot rows.
 /// Calls `$f(kl, ku)` with kl and ku as constants for the bands lines have (a chain of
 /// parts: a few diagonals), so that the compiler unrolls the rows' short loops; any other
 /// band runs the same code with them as variables.
@@ -115,6 +113,8 @@ macro_rules! small_bands {
     };
 }
 
+/// The LU factors of a banded matrix (the band widened by kl above for the
+/// row exchanges) and the pivot rows.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BandLu {
     n: usize,
@@ -251,6 +251,7 @@ impl BandLu {
             }
             return;
         }
+        // Wider bands read the unknowns from b.
         for (k, (row, inverse)) in self.m.chunks_exact(w).zip(&self.inverse).enumerate().rev() {
             // U's row k: columns k ..= k + kl + ku. The next unknown, solved just before, is
             // added last: the sum over the farther ones does not wait for it (a solve is a chain
