@@ -198,11 +198,15 @@ rust_web_setup() {
     export CROSS_CARGO="$dir/bin/cargo" CROSS_RUSTC="$dir/bin/rustc"
 }
 
+# MinGW-w64 first: building std for the Windows target (rust_web_target_std) calls its dlltool.
+mingw_setup() {
+    command -v x86_64-w64-mingw32-gcc >/dev/null && command -v x86_64-w64-mingw32-dlltool >/dev/null && return 0
+    say "installing the MinGW-w64 linker and dlltool of the Windows binary (apt, once)"
+    apt_install "$MINGW_PACKAGE" || { say "apt-get install $MINGW_PACKAGE failed (its message is above); check that Debian's mirrors are reachable, then run again"; return 1; }
+}
+
 if [ "${CROSS_TOOLCHAIN_FUNCTIONS_ONLY:-}" != 1 ]; then
+    mingw_setup || return 1
     rust_web_setup || return 1
-    if ! command -v x86_64-w64-mingw32-gcc >/dev/null; then
-        say "installing the MinGW-w64 linker of the Windows binary (apt, once)"
-        apt_install "$MINGW_PACKAGE" || return 1
-    fi
     export CARGO_TARGET_X86_64_PC_WINDOWS_GNU_LINKER=x86_64-w64-mingw32-gcc
 fi
