@@ -14,7 +14,7 @@ run must be refused, and the data of the case's checks. tests/hard_cases.rs
 (the model core) and tests/python/test_hard_cases.py (the FMU through FMPy)
 replay it; pytest also checks that it equals a fresh computation.
 
-The reference is written from the physics (shared/docs/physics.md), not from
+The reference is written from the physics (docs/physics.md), not from
 the model's code:
 
 * held inputs: the closed form of the linear balance dx/dt = q - lambda*x over

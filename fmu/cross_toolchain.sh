@@ -19,7 +19,8 @@
 # use, every shared library of cargo and rustc must resolve (ldd), or the run
 # stops with one line naming the library and the package that ships it.
 #
-# Exports CROSS_CARGO and CROSS_RUSTC and the Windows target's linker.
+# Order: MinGW-w64 first (building std for Windows calls its dlltool), then
+# rustc-web. Exports CROSS_CARGO and CROSS_RUSTC and the Windows target's linker.
 # APT_OPTIONS (e.g. "-o Dir::State::Lists=DIR") points apt at another state:
 # the tests resolve against a partial one (tests/setup/test_toolchain.py).
 
@@ -159,7 +160,8 @@ rust_web_target_std() { # DIR
     # -Zbuild-std is unstable: RUSTC_BOOTSTRAP=1 lets this stable cargo take it.
     (cd "$work" && RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Cembed-bitcode=yes" "$dir/bin/cargo" build --quiet --release --lib \
         -Zbuild-std=std,panic_unwind,panic_abort,test $(printf -- '--target %s ' "${missing[@]}")) || {
-        say "building std for ${missing[*]} with rustc-web failed (its message is above); remove $dir, then run again"
+        # Nothing is recorded for a failed build: the next run builds std again.
+        say "building std for ${missing[*]} with rustc-web failed (its message is above); fix what it names, then run again"
         return 1
     }
     for target in "${missing[@]}"; do
@@ -205,7 +207,7 @@ mingw_setup() {
     apt_install "$MINGW_PACKAGE" || { say "apt-get install $MINGW_PACKAGE failed (its message is above); check that Debian's mirrors are reachable, then run again"; return 1; }
 }
 
-if [ "${CROSS_TOOLCHAIN_FUNCTIONS_ONLY:-}" != 1 ]; then
+if [ "${SETUP_FUNCTIONS_ONLY:-}" != 1 ]; then
     mingw_setup || return 1
     rust_web_setup || return 1
     export CARGO_TARGET_X86_64_PC_WINDOWS_GNU_LINKER=x86_64-w64-mingw32-gcc

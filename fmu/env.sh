@@ -1,10 +1,13 @@
 # Sourced by fmu/main.sh, tests/run.sh and the other scripts: makes sure the
 # tools of the main job are there (tests/tools.sh adds the tests' own).
 # Creates .venv (the packages of fmu/requirements.txt, cached, and the
-# webline runner) on first use, then the build toolchain (fmu/toolchain.sh). Every step that fails says
-# which step, why, and what to do, in one line, and stops the run.
+# webline runner) on first use, then the build toolchain (fmu/toolchain.sh).
+# Every step installs what it needs before it first uses it; one that fails
+# says which step, why, and what to do, in one line, and stops the run.
+# With SETUP_FUNCTIONS_ONLY=1 it defines its functions and does nothing else
+# (fmu/tests/test_setup.py runs the steps one by one).
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-VENV="$ROOT/.venv"
+VENV="${VENV:-$ROOT/.venv}"
 PY="$VENV/bin/python"
 
 # One line naming the failed step and the way out; stops the calling script.
@@ -31,6 +34,8 @@ apt_lists_update() {
 apt_can_install() {
     [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null
 }
+# The same names go to apt (as root) and into the message (otherwise), so the
+# package the message names is the one the set-up installs.
 apt_install() { # PACKAGE...
     if ! apt_can_install; then
         echo "env.sh: please install the Debian packages $*, then run again" >&2
@@ -46,15 +51,28 @@ apt_install_satisfy() { # "DEPENDS, FIELD"
     apt_lists_update && apt_quiet satisfy -y "$1"
 }
 
-command -v cargo >/dev/null || setup_failed env.sh "finding cargo" "the Rust toolchain is not on PATH" \
-    "Install it with rustup (https://rustup.rs), then run again."
-command -v gcc >/dev/null || apt_install gcc libc6-dev \
-    || setup_failed env.sh "installing gcc" "apt-get could not install gcc and libc6-dev" "Install them, then run again."
+# The C compiler and linker cargo links with, and the certificates pip and cargo
+# reach their registries with: installed first, as everything after uses them.
+BASE_PACKAGES=(gcc libc6-dev ca-certificates)
+base_setup() {
+    command -v gcc >/dev/null && [ -f /usr/include/stdio.h ] && [ -s /etc/ssl/certs/ca-certificates.crt ] && return 0
+    echo "env.sh: installing ${BASE_PACKAGES[*]} (apt, once)"
+    apt_install "${BASE_PACKAGES[@]}" \
+        || setup_failed env.sh "installing ${BASE_PACKAGES[*]}" "apt-get could not install them (its message is above)" \
+            "Install them, then run again."
+}
 
-# The tools cache, outside the work tree: a fresh clone on the same machine reuses it.
-TOOLS="${CONVERTING_SPAN_TOOLS:-${XDG_CACHE_HOME:-$HOME/.cache}/converting-span-tools}"
-export CONVERTING_SPAN_TOOLS="$TOOLS"
-mkdir -p "$TOOLS"
+# The clone's .venv, made with Debian's python3-venv where python3 lacks venv.
+VENV_PACKAGE=python3-venv
+venv_setup() {
+    [ -x "$PY" ] && return 0
+    echo "env.sh: creating $VENV"
+    python3 -m venv "$VENV" >/dev/null 2>&1 && return 0
+    rm -rf "$VENV"
+    { apt_install "$VENV_PACKAGE" && python3 -m venv "$VENV"; } \
+        || { rm -rf "$VENV"; setup_failed env.sh "creating $VENV" "python3 -m venv does not work here" \
+            "Install Debian's $VENV_PACKAGE, then run again."; }
+}
 
 # Python packages are installed once per requirements file into the tools
 # cache (again when the file changes); the clone's own .venv sees them
@@ -76,23 +94,33 @@ python_packages() { # NAME FILE
     pth="$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')/converting_span_$1.pth"
     [ "$(cat "$pth" 2>/dev/null)" = "$site" ] || echo "$site" > "$pth"
 }
-if [ ! -x "$PY" ]; then
-    echo "env.sh: creating $VENV"
-    python3 -m venv "$VENV" 2>/dev/null || { apt_install python3-venv && python3 -m venv "$VENV"; } \
-        || setup_failed env.sh "creating $VENV" "python3 -m venv does not work here" \
-            "Install Debian's python3-venv, then run again."
-fi
-python_packages main "$ROOT/fmu/requirements.txt"
+
 # The webline runner (webline/) and its `webline` command, installed editable
 # (its dependencies are the packages above); again when the installed one is
 # not this folder's (e.g. after a move).
-if [ "$("$PY" -c 'import webline, os; print(os.path.dirname(os.path.dirname(webline.__file__)))' 2>/dev/null)" != "$ROOT/webline/src" ] \
-    || [ ! -x "$VENV/bin/webline" ]; then
-    echo "env.sh: installing the webline runner into $VENV (pip install -e webline)"
-    "$PY" -m pip install --quiet --disable-pip-version-check --no-deps -e "$ROOT/webline" \
-        || setup_failed env.sh "pip install -e webline" "pip could not install the webline runner (its message is above)" \
-            "Check that PyPI is reachable, then run again."
-fi
+webline_setup() {
+    if [ "$("$PY" -c 'import webline, os; print(os.path.dirname(os.path.dirname(webline.__file__)))' 2>/dev/null)" != "$ROOT/webline/src" ] \
+        || [ ! -x "$VENV/bin/webline" ]; then
+        echo "env.sh: installing the webline runner into $VENV (pip install -e webline)"
+        "$PY" -m pip install --quiet --disable-pip-version-check --no-deps -e "$ROOT/webline" \
+            || setup_failed env.sh "pip install -e webline" "pip could not install the webline runner (its message is above)" \
+                "Check that PyPI is reachable, then run again."
+    fi
+}
+
+# The tools cache, outside the work tree: a fresh clone on the same machine reuses it.
+TOOLS="${CONVERTING_SPAN_TOOLS:-${XDG_CACHE_HOME:-$HOME/.cache}/converting-span-tools}"
+export CONVERTING_SPAN_TOOLS="$TOOLS"
+
+[ "${SETUP_FUNCTIONS_ONLY:-}" = 1 ] && return 0
+
+command -v cargo >/dev/null || setup_failed env.sh "finding cargo" "the Rust toolchain is not on PATH" \
+    "Install it with rustup (https://rustup.rs), then run again."
+base_setup
+mkdir -p "$TOOLS"
+venv_setup
+python_packages main "$ROOT/fmu/requirements.txt"
+webline_setup
 export MPLBACKEND=Agg
 # zig, cargo-zigbuild and the cross compiler for the FMU's binaries (cached; see the file).
 source "$ROOT/fmu/toolchain.sh"

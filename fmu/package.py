@@ -201,8 +201,17 @@ def build(platforms):
     # interleaved, so that the two running builds rarely share a target folder
     jobs = [job for pair in zip(models, lines) for job in pair]
     with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
-        for done in [pool.submit(build_crates, *job) for job in jobs]:
+        waiting = [pool.submit(build_crates, *job) for job in jobs] + [pool.submit(build_export_tool)]
+        for done in waiting:
             done.result()  # a failed build's StepFailed
+
+
+def build_export_tool():
+    """The host's line-description, which `webline export --fmu` runs (webline/src/webline/linefmu.py
+    builds it on first use too): built with the FMUs, so that the first export takes seconds."""
+    run("building the Line FMU's export tool (line-description)",
+        ["cargo", "build", "--release", "--quiet", *LINE_MANIFEST, "--features", "cli", "--bin", "line-description",
+         "--target-dir", str(ROOT / "target" / "line")])
 
 
 def build_crates(platform, selection, what, target_dir):

@@ -156,3 +156,213 @@ def test_the_cached_compiler_has_std_for_each_cross_target(target, tmp_path):
     # The wrappers find their folder from their own path: a copied or moved cache keeps working.
     for tool in ("cargo", "rustc"):
         assert str(tools) not in (folder / "bin" / tool).read_text()
+
+
+# The cross toolchain's whole path (resolve, download, unpack, Depends, std for each target) with a
+# fake apt and a fake rustc-web (fake_apt.py, fake_cargo.sh) on a PATH without MinGW: what a clean
+# machine meets, in seconds and without touching this one.
+HERE = Path(__file__).resolve().parent
+
+
+FAKED = ("apt-get", "apt-cache", "dpkg-query")
+
+
+class Machine:
+    """A clean machine for the cross toolchain: its PATH, its apt (a log of calls, failures to
+    order), an empty tools cache."""
+
+    def __init__(self, tmp_path):
+        self.apt = tmp_path / "apt"
+        self.bin = self.apt / "bin"
+        self.bin.mkdir(parents=True)
+        self.tools = tmp_path / "tools"
+        for folder in ("/usr/sbin", "/usr/bin"):
+            for tool in Path(folder).iterdir():
+                name = tool.name
+                if name.startswith("x86_64-w64-mingw32-") or name in FAKED or (self.bin / name).exists():
+                    continue
+                (self.bin / name).symlink_to(tool)
+        for name in FAKED:
+            (self.bin / name).symlink_to(HERE / "fake_apt.py")
+
+    def fail(self, *what):
+        (self.apt / "fail").write_text("\n".join(what) + "\n")
+
+    def calls(self):
+        return (self.apt / "calls").read_text().splitlines() if (self.apt / "calls").exists() else []
+
+    def cross_toolchain(self):
+        """fmu/cross_toolchain.sh as env.sh sources it, on this machine."""
+        return self.step('unset SETUP_FUNCTIONS_ONLY && source fmu/cross_toolchain.sh && echo "CROSS_CARGO=$CROSS_CARGO"')
+
+    def step(self, script, **env):
+        """`script` after the set-up's functions (env.sh, toolchain.sh, tools.sh) are defined."""
+        env = {"PATH": str(self.bin), "HOME": str(self.apt), "FAKE_APT": str(self.apt), "CONVERTING_SPAN_TOOLS": str(self.tools), **env}
+        functions = ("export SETUP_FUNCTIONS_ONLY=1; source fmu/env.sh && source fmu/toolchain.sh "
+                     "&& source fmu/cross_toolchain.sh && source tests/tools.sh")
+        return subprocess.run(["bash", "-c", f"{functions}\n{script}"], cwd=ROOT, capture_output=True, text=True, env=env)
+
+
+needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="the set-up installs with apt only as root")
+
+
+@needs_root
+def test_mingw_is_installed_before_std_is_built_for_windows(tmp_path):
+    """The reported first run: std for x86_64-pc-windows-gnu was built before MinGW-w64, whose
+    dlltool it calls, was installed. Fails if the install moves below the build again."""
+    machine = Machine(tmp_path)
+    out = machine.cross_toolchain()
+    assert out.returncode == 0, out.stderr
+    calls = machine.calls()
+    install = next(i for i, c in enumerate(calls) if c.startswith("apt-get") and "install" in c and "gcc-mingw-w64-x86-64" in c)
+    build = next(i for i, c in enumerate(calls) if c.startswith("cargo") and "build" in c and "x86_64-pc-windows-gnu" in c)
+    assert install < build, calls
+    tools_rust = machine.tools / "rust-web-9.9.9+fake1"
+    for target in ("x86_64-pc-windows-gnu", "aarch64-unknown-linux-gnu"):
+        assert list((tools_rust / "usr/lib/rustlib" / target / "lib").glob(".std-recipe-*")), target
+    assert f"CROSS_CARGO={tools_rust}/bin/cargo" in out.stdout
+
+
+def run_twice(machine, failure, message):
+    """The set-up fails on `failure` with one line that contains `message` and says to run again;
+    the second run, with the cause gone, passes."""
+    machine.fail(*failure)
+    first = machine.cross_toolchain()
+    assert first.returncode != 0
+    said = [line for line in first.stderr.splitlines() if line.startswith("cross_toolchain.sh:")]
+    assert said and message in said[-1] and said[-1].endswith("then run again"), first.stderr
+    (machine.apt / "fail").unlink(missing_ok=True)
+    second = machine.cross_toolchain()
+    assert second.returncode == 0, second.stderr
+    return said[-1]
+
+
+@needs_root
+@pytest.mark.parametrize("failure, message, mingw", [
+    (["update"], "apt-get install gcc-mingw-w64-x86-64 failed", False),  # the lists are updated before the first install
+    (["update"], "could not update the apt lists", True),
+    (["download"], "apt-get download of rustc-web", False),
+    (["satisfy"], "apt-get satisfy", False),
+    (["install gcc-mingw-w64-x86-64"], "apt-get install gcc-mingw-w64-x86-64 failed", False),
+    (["candidate"], "apt offers no rustc-web", False),
+])
+def test_each_apt_failure_says_run_again_and_the_next_run_passes(tmp_path, failure, message, mingw):
+    machine = Machine(tmp_path)
+    if mingw:
+        machine.fail()
+        subprocess.run([machine.bin / "apt-get", "install", "-y", "gcc-mingw-w64-x86-64"], env={"FAKE_APT": str(machine.apt)}, check=True)
+    if failure == ["satisfy"]:
+        # Depends that apt would have to install: the set-up asks it to.
+        (machine.apt / "inst").touch()
+    run_twice(machine, failure, message)
+
+
+@needs_root
+def test_a_failed_std_build_says_run_again_and_the_next_run_builds_it(tmp_path):
+    machine = Machine(tmp_path)
+    (machine.apt / "fail-std-once").touch()
+    first = machine.cross_toolchain()
+    assert first.returncode != 0
+    last = first.stderr.strip().splitlines()[-1]
+    assert "building std" in last and last.endswith("then run again") and "remove" not in last, last
+    second = machine.cross_toolchain()
+    assert second.returncode == 0, second.stderr
+
+
+@needs_root
+def test_a_damaged_compiler_folder_is_named_and_removing_it_mends_it(tmp_path):
+    machine = Machine(tmp_path)
+    assert machine.cross_toolchain().returncode == 0
+    folder = machine.tools / "rust-web-9.9.9+fake1"
+    (folder / "usr/bin/rustc").unlink()
+    broken = machine.cross_toolchain()
+    last = broken.stderr.strip().splitlines()[-1]
+    assert broken.returncode != 0 and last == f"cross_toolchain.sh: {folder} lacks cargo or rustc: remove it, then run again", last
+    shutil.rmtree(folder)
+    assert machine.cross_toolchain().returncode == 0
+
+
+# The other steps' advice, each followed: pip and cargo cut off from their registries by a
+# proxy nobody listens on, apt by the fake; then the same step again as it is.
+OFFLINE_PIP = {"PIP_INDEX_URL": "http://127.0.0.1:9/simple", "PIP_FIND_LINKS": "", "PIP_RETRIES": "0", "PIP_TIMEOUT": "2"}
+OFFLINE_CARGO = {"CARGO_HTTP_PROXY": "http://127.0.0.1:9", "CARGO_NET_RETRY": "0", "CARGO_HTTP_TIMEOUT": "2"}
+
+
+def online():
+    """This machine's own settings for the registries (pip's and cargo's), for the run that follows the advice."""
+    return {k: v for k, v in os.environ.items() if k.startswith(("PIP_", "CARGO_", "RUSTUP_", "SSL_", "HTTP", "http"))}
+
+
+def last_line(out):
+    return out.stderr.strip().splitlines()[-1] if out.stderr.strip() else ""
+
+
+@needs_root
+def test_pip_unreachable_says_check_pypi_and_the_next_run_installs(tmp_path):
+    """python_packages (fmu/requirements.txt, tests/requirements.txt): a failed install leaves no
+    half-made cache that the next run takes for complete."""
+    machine = Machine(tmp_path)
+    requirements = tmp_path / "requirements.txt"
+    requirements.write_text("six==1.16.0\n")
+    venv = tmp_path / "venv"
+    subprocess.run(["python3", "-m", "venv", "--without-pip", venv], check=True)
+    step = f'python_packages probe "{requirements}"'
+    first = machine.step(step, VENV=str(venv), **OFFLINE_PIP)
+    assert first.returncode == 1
+    assert last_line(first).startswith("env.sh: pip install -r ") and last_line(first).endswith("Check that PyPI is reachable, then run again.")
+    second = machine.step(step, VENV=str(venv), **online())
+    assert second.returncode == 0, second.stderr
+    assert subprocess.run([venv / "bin" / "python", "-c", "import six"]).returncode == 0
+
+
+@needs_root
+def test_zig_unreachable_says_check_pypi_and_the_next_run_installs(tmp_path):
+    machine = Machine(tmp_path)
+    first = machine.step("zig_setup", **OFFLINE_PIP)
+    assert first.returncode == 1 and last_line(first).startswith("toolchain.sh: installing zig failed"), first.stderr
+    assert last_line(first).endswith("Check that PyPI is reachable, then run again.")
+    second = machine.step('zig_setup && "$TOOLS/bin/zig" version', **online())
+    assert second.returncode == 0 and second.stdout.strip().endswith("0.15.2"), second.stderr
+
+
+@needs_root
+@pytest.mark.parametrize("step, binary, script", [("zigbuild_setup", "cargo-zigbuild", "toolchain.sh"),
+                                                  ("fmi_sim_setup", "fmi-sim", "tools.sh")])
+def test_crates_io_unreachable_says_check_it_and_leaves_nothing_taken_for_installed(tmp_path, step, binary, script):
+    """`cargo install` writes its binary only when the build is done: the next run installs
+    again (that run is a full build, which tests/clean_machine.sh's first run makes)."""
+    machine = Machine(tmp_path)
+    first = machine.step(step, **{k: v for k, v in online().items() if not k.startswith("CARGO_HTTP")}, **OFFLINE_CARGO)
+    assert first.returncode == 1, first.stderr
+    assert last_line(first).startswith(f"{script}: installing {binary} failed") and last_line(first).endswith(
+        "Check that crates.io is reachable, then run again."), first.stderr
+    assert not (machine.tools / "bin" / binary).exists()
+
+
+@needs_root
+def test_apt_unreachable_for_the_tests_packages_says_run_again_and_the_next_run_installs(tmp_path):
+    machine = Machine(tmp_path)
+    machine.fail("update")
+    first = machine.step("test_packages_setup")
+    assert first.returncode == 1 and last_line(first).startswith("tools.sh: apt-get install wine64"), first.stderr
+    assert last_line(first).endswith("then run again.")
+    machine.fail()
+    assert machine.step("test_packages_setup").returncode == 0
+    assert machine.step("installed \"${TEST_PACKAGES[@]}\"").returncode == 0
+
+
+def test_not_root_names_the_packages_the_root_run_installs(tmp_path):
+    """Without root the set-up cannot install: its message names exactly what it installs as root."""
+    machine = Machine(tmp_path)
+    (machine.bin / "id").unlink()
+    (machine.bin / "id").write_text("#!/bin/sh\necho 1000\n")
+    (machine.bin / "id").chmod(0o755)
+    (machine.bin / "gcc").unlink(missing_ok=True)
+    out = machine.step("base_setup")
+    assert out.returncode == 1
+    named = "env.sh: please install the Debian packages gcc libc6-dev ca-certificates, then run again"
+    assert named in out.stderr.splitlines(), out.stderr
+    listed = machine.step('echo "${BASE_PACKAGES[*]}|$VENV_PACKAGE|$MINGW_PACKAGE|${TEST_PACKAGES[*]}"')
+    base, venv, mingw, tests = listed.stdout.strip().split("|")
+    assert base == "gcc libc6-dev ca-certificates" and venv == "python3-venv" and mingw == "gcc-mingw-w64-x86-64"
+    assert tests.split()[0] == "wine64"

@@ -84,3 +84,13 @@ def test_a_readme_block_runs_without_a_warning(language, text, line):
         output = run.stdout + run.stderr
         assert run.returncode == 0, f"README line {line}: {command}\n{output[-3000:]}"
         assert not problems(output), f"README line {line}: {command} prints:\n" + "\n".join(problems(output))
+
+
+def test_the_readme_states_the_prerequisites_the_clean_machine_check_installs():
+    """tests/clean_machine.sh installs on a clean Debian 12 root exactly the Debian packages the
+    README names as prerequisites, and nothing else: what it passes with, the README promises."""
+    script = (ROOT / "tests" / "clean_machine.sh").read_text()
+    installed = re.search(r"^PREREQUISITES=\(([^)]*)\)", script, re.M).group(1).split()
+    paragraph = re.search(r"\*\*Prerequisites:\*\*(.*?)(?:\n\n|Everything else)", README.read_text(encoding="utf-8"), re.S).group(1)
+    named = re.findall(r"`([a-z0-9.+-]+)`", paragraph)
+    assert sorted(named) == sorted(installed), (named, installed)
