@@ -83,7 +83,8 @@ python_packages() { # NAME FILE
     base="$TOOLS/python/$1-$want"
     if ! [ -f "$base/.complete" ]; then
         echo "env.sh: installing the Python packages of ${2#"$ROOT"/} into $base (once)"
-        rm -rf "$TOOLS/python/$1-"*
+        # Only this file's own folder: another clone of another commit may use another's.
+        rm -rf "$base"
         { python3 -m venv "$base" && "$base/bin/python" -m pip install --quiet --disable-pip-version-check -r "$2"; } \
             || setup_failed env.sh "pip install -r ${2#"$ROOT"/}" "pip could not install a package (its message is above)" \
                 "Check that PyPI is reachable, then run again."
