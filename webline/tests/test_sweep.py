@@ -1,7 +1,8 @@
 """Studies on Dask: designs (grids, Latin hypercube samples), the Line FMU engine against
 `webline run --engine fmpy-line` point by point, one instance reset between points against a fresh
-one, failed points as rows, the series file, the plots, the parts and the reference engines, and an
-existing scheduler by its address. The cluster of separate processes is in test_cluster.py."""
+one, failed points as rows, the series file, the plots, the parts and the reference engines. A
+scheduler and workers as separate processes, the same table on one worker and on two, and a lost
+worker: test_cluster.py."""
 
 import numpy as np
 import pytest
@@ -130,7 +131,7 @@ def test_a_run_after_reset_equals_a_fresh_instance_bit_for_bit(fmus):
         fresh.close()
 
 
-def test_a_study_through_the_line_fmu_writes_table_series_and_plots(fmus, tmp_path):
+def test_a_study_through_the_line_fmu_writes_table_series_and_plots(fmus, client, tmp_path):
     """`webline sweep` as the issue's example, small: the table, the series that pandas and polars
     read (one row per point and time, one column per signal), both plots; a point that fails is a
     row that says why, and the study goes on."""
@@ -139,7 +140,8 @@ def test_a_study_through_the_line_fmu_writes_table_series_and_plots(fmus, tmp_pa
 
     out, series = tmp_path / "study.csv", tmp_path / "study.parquet"
     args = ["sweep", str(SPLICE), "--grid", "line.second.L=1.6 m,-1 m", "--n", "3", "--seed", "7",
-            "--out", str(out), "--series", str(series), "--plot", "second.T_max", "--fmu-dir", str(fmus)]
+            "--out", str(out), "--series", str(series), "--plot", "second.T_max", "--fmu-dir", str(fmus),
+            "--scheduler", client.scheduler.address]
     for s in SAMPLES:
         args += ["--sample", s]
     assert main(args) == 0
@@ -155,17 +157,6 @@ def test_a_study_through_the_line_fmu_writes_table_series_and_plots(fmus, tmp_pa
     # The series is the point's run: its largest tension is the table's.
     assert frame[frame["point"] == 1]["second.T [N]"].max() == table["second.T_max [N]"][1]
     assert (tmp_path / "study_envelope.png").stat().st_size > 0 and (tmp_path / "study_scatter.png").stat().st_size > 0
-
-
-def test_the_same_design_gives_the_same_table_on_one_or_two_workers(fmus, client, tmp_path):
-    points = design([], [parse_sample(s) for s in SAMPLES], 6, 3)
-    two = run_sweep(SPLICE, points, client=client, fmu_dir=fmus)
-    one = run_sweep(SPLICE, points, workers=1, fmu_dir=fmus)
-    assert two.info["workers"] == 2 and one.info["workers"] == 1
-    two.write(tmp_path / "two.csv")
-    one.write(tmp_path / "one.csv")
-    assert (tmp_path / "two.csv").read_bytes() == (tmp_path / "one.csv").read_bytes()
-    assert all(r["status"] == "ok" for r in two.rows)
 
 
 def test_the_parts_engine_runs_the_grid_and_matches_single_runs(fmus, client, tmp_path):
@@ -197,16 +188,6 @@ def test_the_reference_engine_and_the_line_fmu_agree(fmus, client):
     assert [r["status"] for r in ref.rows + line.rows] == ["ok"] * 4
     for a, b in zip(ref.rows, line.rows):
         assert abs(a["to_rewind.T_max [N]"] - b["to_rewind.T_max [N]"]) <= 1e-6 * b["to_rewind.T_max [N]"]
-
-
-def test_an_existing_scheduler_by_its_address(fmus):
-    from dask.distributed import LocalCluster
-
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
-        table = run_sweep(SCENE, design(parse_grid(["stop_time=0.2 s", "line.to_rewind.L=1 m,2 m"])),
-                          scheduler=cluster.scheduler_address, fmu_dir=fmus)
-        assert cluster.scheduler_address in table.info["cluster"]
-        assert [r["status"] for r in table.rows] == ["ok", "ok"]
 
 
 def test_bad_keys_fail_before_any_task(fmus):

@@ -9,7 +9,7 @@ the same bit for bit however it was run.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -23,7 +23,6 @@ class Outcome:
     data: np.ndarray | None = None  # one column per recorded signal, one row per time
     seconds: float = 0.0  # the whole task, on its worker
     simulation: float = 0.0  # of which the run itself
-    timing: dict = field(default_factory=dict)
 
 
 def failed(why: str, seconds: float = 0.0) -> Outcome:

@@ -151,7 +151,8 @@ class Table:
         info = self.info
         wall = info.get("wall_time", 0.0)
         rate = len(self.rows) / wall / max(info.get("workers", 1), 1) if wall else 0.0
-        exports = f", {info['structures']} exports" if "structures" in info else ""
+        n = info.get("structures")
+        exports = f", {n} export{'s' if n != 1 else ''}" if n is not None else ""
         lines.append(f"{len(self.rows)} points ({len(self.failed())} failed) through {WHAT.get(info.get('engine'), '?')}"
                      f"{exports} on {info.get('cluster', '?')} in {wall:.1f} s: {rate:.3g} points/s per worker")
         for r in self.failed()[:3]:
