@@ -26,6 +26,8 @@ class Outcome:
 
 
 def failed(why: str, seconds: float = 0.0) -> Outcome:
+    """A failed point's row: why, on one line (the FMU's messages after FMPy's)."""
+    why = "; ".join(line.strip() for line in str(why).splitlines() if line.strip())
     return Outcome(row={"status": f"failed: {why}"}, seconds=seconds)
 
 
