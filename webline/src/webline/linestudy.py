@@ -163,10 +163,11 @@ class _Ready:
                 raise RuntimeError(f"{e}" + "".join(f"\n  {m}" for _, m in messages[-3:])) from e
 
     def run(self, task: LineTask):
-        """The point's outputs (FMPy's structured array) and the FMU's messages."""
+        """The point's outputs (FMPy's structured array), the FMU's messages, the seconds they took."""
         from fmpy import simulate_fmu
 
         with fmpy_log.collecting_proxied() as messages:
+            t0 = clock.perf_counter()
             self.instance.reset()
             try:
                 out = simulate_fmu(self.folder, model_description=self.description, fmu_instance=self.instance,
@@ -174,7 +175,8 @@ class _Ready:
                                    output_interval=task.step, output=task.outputs, start_values=task.parameters)
             except Exception as e:  # FMPy names the call; the FMU's log says why
                 raise RuntimeError(f"{e}" + "".join(f"\n  {m}" for _, m in messages[-3:])) from e
-        return out, messages
+            seconds = clock.perf_counter() - t0
+        return out, messages, seconds
 
     def close(self):
         try:
@@ -223,14 +225,17 @@ def worker_fmus() -> LineFmus:
     return get_worker().plugins[PLUGIN].fmus
 
 
+def run_points(fmu: bytes, tasks: list, fmus: LineFmus | None = None) -> list:
+    """Several points of one structure, one after the other (a Dask task)."""
+    return [run_point(fmu, task, fmus) for task in tasks]
+
+
 def run_point(fmu: bytes, task: LineTask, fmus: LineFmus | None = None) -> Outcome:
     """One point through the Line FMU (a Dask task; `fmus`: the worker's, by default)."""
-    start = clock.perf_counter()
+    started = clock.time()
     try:
         fmus = fmus or worker_fmus()
-        t0 = clock.perf_counter()
-        out, messages = fmus.run(task.digest, fmu, task)
-        simulation = clock.perf_counter() - t0
+        out, messages, simulation = fmus.run(task.digest, fmu, task)
         row = metrics(task.parts, lambda name: out[name])
         warned = [m for status, m in messages if status >= WARNING]
         row["status"] = f"warning: {warned[-1]}" if warned else "ok"
@@ -242,5 +247,5 @@ def run_point(fmu: bytes, task: LineTask, fmus: LineFmus | None = None) -> Outco
             outcome.data = np.column_stack([out[name].astype(float) for name in task.outputs[: task.recorded]])
     except Exception as e:  # a point that fails is a row that says why
         outcome = failed(str(e))
-    outcome.seconds = clock.perf_counter() - start
+    outcome.started, outcome.ended = started, clock.time()
     return outcome

@@ -21,14 +21,15 @@ class Outcome:
     row: dict  # the metrics and "status"
     time: np.ndarray | None = None  # the communication points of the recorded signals
     data: np.ndarray | None = None  # one column per recorded signal, one row per time
-    seconds: float = 0.0  # the whole task, on its worker
-    simulation: float = 0.0  # of which the run itself
+    simulation: float = 0.0  # seconds of the run itself (the Line FMU: fmi2Reset and simulate_fmu)
+    started: float = 0.0  # when its task began and ended on its worker (time.time(): one clock per machine)
+    ended: float = 0.0
 
 
-def failed(why: str, seconds: float = 0.0) -> Outcome:
+def failed(why: str) -> Outcome:
     """A failed point's row: why, on one line (the FMU's messages after FMPy's)."""
     why = "; ".join(line.strip() for line in str(why).splitlines() if line.strip())
-    return Outcome(row={"status": f"failed: {why}"}, seconds=seconds)
+    return Outcome(row={"status": f"failed: {why}"})
 
 
 def metric_record(scene: Scene) -> list:

@@ -84,7 +84,7 @@ def run_scene_point(scene_text: str, source: str, overrides: dict, files: dict, 
     from .reference import reference
     from .scene import parse_scene
 
-    start = clock.perf_counter()
+    started = clock.time()
     try:
         data = json.loads(scene_text)
         for k, v in overrides.items():
@@ -107,7 +107,7 @@ def run_scene_point(scene_text: str, source: str, overrides: dict, files: dict, 
             outcome.time, outcome.data = result.time, result.data[:, :recorded]
     except Exception as e:  # a point that fails is a row that says why
         outcome = failed(str(e))
-    outcome.seconds = clock.perf_counter() - start
+    outcome.started, outcome.ended = started, clock.time()
     return outcome
 
 
@@ -224,8 +224,7 @@ def run_sweep(scene_path, design, engine="line", scheduler=None, workers=2, step
         band = Envelope(columns)
 
     rows = [None] * len(design.points)
-    seconds = [0.0] * len(design.points)
-    simulation = [0.0] * len(design.points)
+    tasks = [None] * len(design.points)  # (started, ended, seconds of the run itself) on its worker
     bar = None
     if progress:
         from tqdm import tqdm
@@ -234,7 +233,7 @@ def run_sweep(scene_path, design, engine="line", scheduler=None, workers=2, step
 
     def arrived(i: int, outcome: Outcome):
         rows[i] = {"point": i, **design.values[i], **outcome.row}
-        seconds[i], simulation[i] = outcome.seconds, outcome.simulation
+        tasks[i] = (outcome.started, outcome.ended, outcome.simulation)
         if writer is not None:
             writer.add(i, outcome)
         if band is not None:
@@ -247,15 +246,15 @@ def run_sweep(scene_path, design, engine="line", scheduler=None, workers=2, step
     info = {"engine": engine, "seed": design.seed}
     try:
         with dask_client(scheduler, workers, client) as (client, where):
-            start = clock.perf_counter()  # the cluster is up: from here on the study itself
+            info["started"] = clock.time()  # the cluster is up: from here on the study itself
             info.update(cluster=where, **_run(client, scene_path, design, engine, step, fmu_dir, keep, arrived))
-            info["wall_time"] = clock.perf_counter() - start
+            info["wall_time"] = clock.time() - info["started"]
     finally:
         if bar is not None:
             bar.close()
         if writer is not None:
             writer.close()
-    info.update(seconds=seconds, simulation=simulation)
+    info["tasks"] = tasks
     if band is not None:
         info["envelope"] = band
     return Table(keys=list(design.keys), rows=rows, info=info)
@@ -283,11 +282,19 @@ def _run(client, scene_path, design, engine, step, fmu_dir, keep, arrived) -> di
     from dask.distributed import as_completed
 
     info = {"workers": len(client.scheduler_info().get("workers", {}))}
-    futures = {}  # future -> point
+    futures = {}  # future -> its points
     if engine == "line":
         client.register_plugin(linestudy.LineFmusPlugin())
         planner = linestudy.Planner(scene_path, fmu_dir, step, series=keep)
         scattered = {}  # structure -> its FMU's bytes, on every worker
+        chunk = chunk_size(len(design.points), info["workers"])
+        waiting = {}  # structure -> [(point, task)] not yet submitted
+
+        def submit(index):
+            items = waiting.pop(index)
+            fut = client.submit(linestudy.run_points, scattered[index], [t for _, t in items], pure=False)
+            futures[fut] = [i for i, _ in items]
+
         planned = clock.perf_counter()
         for i, point in enumerate(design.points):
             try:
@@ -297,18 +304,34 @@ def _run(client, scene_path, design, engine, step, fmu_dir, keep, arrived) -> di
                 continue
             if s.index not in scattered:
                 scattered[s.index] = client.scatter(s.fmu, broadcast=True)
-            futures[client.submit(linestudy.run_point, scattered[s.index], task, pure=False)] = i
-        info.update(structures=len(planner.structures), planning=clock.perf_counter() - planned)
+            waiting.setdefault(s.index, []).append((i, task))
+            if len(waiting[s.index]) == chunk:
+                submit(s.index)
+        for index in list(waiting):
+            submit(index)
+        info.update(structures=len(planner.structures), planning=clock.perf_counter() - planned, chunk=chunk)
     else:
         text = Path(scene_path).read_text(encoding="utf-8")
         files = client.scatter({n: (Path(fmu_dir) / n).read_bytes() for n in (SPAN_FMU, ROLLER_FMU)}, broadcast=True)
         for i, point in enumerate(design.points):
-            futures[client.submit(run_scene_point, text, str(scene_path), point, files, engine, step, keep, pure=False)] = i
+            futures[client.submit(run_scene_point, text, str(scene_path), point, files, engine, step, keep, pure=False)] = [i]
     for fut in as_completed(list(futures)):
+        points = futures[fut]
         try:
-            outcome = fut.result()
-        except Exception as e:  # the task itself was lost (a worker died too often): the row says so
-            outcome = failed(f"{type(e).__name__}: {e}")
-        arrived(futures[fut], outcome)
+            outcomes = fut.result()
+        except Exception as e:  # the task itself was lost (a worker died too often): the rows say so
+            outcomes = [failed(f"{type(e).__name__}: {e}")] * len(points)
+        for i, outcome in zip(points, outcomes if isinstance(outcomes, list) else [outcomes]):
+            arrived(i, outcome)
         fut.release()
     return info
+
+
+# Points of the Line FMU take tens of milliseconds, of the order of what Dask spends handing a task
+# over: a task runs several, so that this is paid once for them (bench/studies.py), yet each worker
+# still gets some eight tasks to balance the load and a lost task costs few points.
+TASKS_PER_WORKER, MOST_POINTS_PER_TASK = 8, 16
+
+
+def chunk_size(points: int, workers: int) -> int:
+    return max(1, min(MOST_POINTS_PER_TASK, points // (max(workers, 1) * TASKS_PER_WORKER)))
