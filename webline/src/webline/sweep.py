@@ -4,14 +4,16 @@
         --sample "line.first.L=normal(1.5 m, 0.05 m)" --n 1000 --seed 7 --series out/splice.parquet --plot
 
 A key names a value of the scene by its path (components of the line by their name, list entries
-by their index); the points are a grid, random samples or both (`sampling`). Every point is one
-run, as one Dask task: on a local cluster (worker processes on this machine) by default, or on a
-running Dask scheduler given by its address. Engines:
+by their index); the points are a grid, random samples or both (`sampling`). Points run as Dask
+tasks: on a local cluster (worker processes on this machine) by default, or on a running Dask
+scheduler given by its address. Engines:
 
 - `line` (default): the scene as one Line FMU (`linestudy`): exported once per structure, its
-  bytes scattered once to every worker, one instance per worker reset for every point;
-- `parts`: the co-simulation of the line's span and Roller FMUs (whose bytes travel likewise);
-- `reference`: the monolithic SciPy reference.
+  bytes scattered once to every worker, one instance per worker reset for every point, a few
+  points per task (`chunk_size`);
+- `parts`: the co-simulation of the line's span and Roller FMUs (whose bytes travel likewise),
+  a point per task;
+- `reference`: the monolithic SciPy reference, a point per task.
 
 The result is a table, one row per point in the order of the design: the point's values, each
 span's minimum, maximum and end tension, each roller's end speed, and its status (a point that
@@ -207,7 +209,7 @@ class SeriesWriter:
 
 def run_sweep(scene_path, design, engine="line", scheduler=None, workers=2, step=None, fmu_dir=DEFAULT_FMU_DIR,
               progress=False, client=None, series=None, envelope=False, on_row=None) -> Table:
-    """Runs every point of `design` (sampling.Design) as a Dask task and collects the table.
+    """Runs every point of `design` (sampling.Design) as Dask tasks and collects the table.
     `scheduler`: address of a running scheduler; default: a local cluster of `workers` processes
     (closed at the end); `client`: an existing Client. `series`: a Parquet file for the recorded
     signals; `envelope`: keep each recorded tension's band over the points (table.info["envelope"]);
