@@ -37,6 +37,7 @@ import time as clock
 from pathlib import Path
 
 import numpy as np
+from measured import publish  # bench/, the script's folder
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "webline" / "src"))
@@ -50,7 +51,6 @@ from webline.sweep import run_sweep  # noqa: E402
 OUT = ROOT / "out"
 SCENE = ROOT / "webline" / "scenes" / "splice.json"
 DOC = ROOT / "docs" / "studies.md"
-BEGIN, END = "<!-- MEASURED (bench/studies.py) -->", "<!-- /MEASURED -->"
 SAMPLES = ["line.idler.J=uniform(0.01 kg.m2, 0.05 kg.m2)", "line.first.L=normal(1.5 m, 0.05 m)"]
 
 
@@ -156,11 +156,7 @@ def main():
     text = "\n".join(lines)
     print(text)
     if not args.quick:
-        doc = args.out.read_text()
-        head, rest = doc.split(BEGIN, 1)
-        _, tail = rest.split(END, 1)
-        args.out.write_text(f"{head}{BEGIN}\n\n{text}\n{END}{tail}")
-        print(f"written: {args.out}")
+        publish(args.out, "bench/studies.py", text)
 
 
 if __name__ == "__main__":
