@@ -152,15 +152,19 @@ class _Ready:
         from fmpy.simulation import instantiate_fmu
 
         self.folder = tempfile.mkdtemp(prefix="webline-line-")
-        with zipfile.ZipFile(io.BytesIO(fmu)) as z:
-            z.extractall(self.folder)
-        self.description = read_model_description(self.folder)
-        # FMPy's default callbacks: the messages go through its proxy, which each run points at its own collector.
-        with fmpy_log.collecting_proxied() as messages:
-            try:
-                self.instance = instantiate_fmu(self.folder, self.description, "CoSimulation")
-            except Exception as e:
-                raise RuntimeError(f"{e}" + "".join(f"\n  {m}" for _, m in messages[-3:])) from e
+        try:
+            with zipfile.ZipFile(io.BytesIO(fmu)) as z:
+                z.extractall(self.folder)
+            self.description = read_model_description(self.folder)
+            # FMPy's default callbacks: the messages go through its proxy, which each run points at its own collector.
+            with fmpy_log.collecting_proxied() as messages:
+                try:
+                    self.instance = instantiate_fmu(self.folder, self.description, "CoSimulation")
+                except Exception as e:
+                    raise RuntimeError(f"{e}" + "".join(f"\n  {m}" for _, m in messages[-3:])) from e
+        except BaseException:
+            shutil.rmtree(self.folder, ignore_errors=True)
+            raise
 
     def run(self, task: LineTask):
         """The point's outputs (FMPy's structured array), the FMU's messages, the seconds they took."""
@@ -208,9 +212,12 @@ class LineFmus:
 
 
 class LineFmusPlugin(WorkerPlugin):
-    """Gives each worker its LineFmus, closed (instances freed, folders removed) when the worker closes."""
+    """Gives each worker its LineFmus, closed (instances freed, folders removed) when the worker closes.
+    Registered again by a later study, it stays: the workers keep the FMUs they have (and no running
+    point loses its instance)."""
 
     name = PLUGIN
+    idempotent = True
 
     def setup(self, worker):
         self.fmus = LineFmus()
