@@ -37,6 +37,7 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+from measured import publish  # bench/, the script's folder
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "webline" / "src"))
@@ -49,7 +50,6 @@ from webline.scene import load_scene, parse_scene  # noqa: E402
 
 OUT = ROOT / "out"
 DOC = ROOT / "docs" / "line-fmu.md"
-BEGIN, END = "<!-- MEASURED (bench/line_fmu.py) -->", "<!-- /MEASURED -->"
 
 
 def long_line(spans: int, stop: float = 2.0) -> str:
@@ -213,11 +213,7 @@ def main():
     text = "\n".join(lines)
     print(text)
     if not quick:
-        doc = args.out.read_text()
-        head, rest = doc.split(BEGIN, 1)
-        _, tail = rest.split(END, 1)
-        args.out.write_text(f"{head}{BEGIN}\n\n{text}\n{END}{tail}")
-        print(f"written: {args.out}")
+        publish(args.out, "bench/line_fmu.py", text)
 
 
 if __name__ == "__main__":

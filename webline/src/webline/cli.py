@@ -298,16 +298,42 @@ def cmd_convergence(args):
 
 
 def cmd_sweep(args):
-    from .sweep import parse_grid, run_sweep
+    import secrets
 
-    grid = parse_grid(args.grid)
-    table = run_sweep(args.scene, grid, scheduler=args.scheduler, workers=args.workers, step=args.step,
-                      fmu_dir=args.fmu_dir, progress=sys.stderr.isatty())
+    from .sampling import DesignError, design, parse_grid, parse_sample
+    from .sweep import run_sweep
+
+    seed = args.seed
+    if args.sample and seed is None:  # a study that can be repeated: say which seed it drew
+        seed = secrets.randbelow(2**32)
+        print(f"seed {seed} (give --seed {seed} to draw the same points)")
+    try:
+        points = design(parse_grid(args.grid or []), [parse_sample(s) for s in args.sample or []], args.n, seed)
+    except DesignError as e:
+        raise SceneError(str(e)) from None
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
+    if args.series:
+        Path(args.series).parent.mkdir(parents=True, exist_ok=True)
+    table = run_sweep(args.scene, points, engine=args.engine, scheduler=args.scheduler, workers=args.workers,
+                      step=args.step, fmu_dir=args.fmu_dir, progress=sys.stderr.isatty(), series=args.series,
+                      envelope=args.plot is not None)
     table.write(out)
     print(table.format())
-    print(f"wrote {out}")
+    written = [str(out)] + ([str(args.series)] if args.series else [])
+    if args.plot is not None:
+        from .sweepplot import output_column, plot_envelope, plot_scatter
+
+        title = Path(args.scene).stem
+        band = table.info["envelope"]
+        if band.points:
+            written.append(str(plot_envelope(band, out.with_name(f"{out.stem}_envelope.png"), title)))
+        try:
+            column = output_column(table, args.plot)
+        except ValueError as e:
+            raise SceneError(str(e)) from None
+        written.append(str(plot_scatter(table, column, out.with_name(f"{out.stem}_scatter.png"), title)))
+    print("wrote " + ", ".join(written))
     return 0
 
 
@@ -365,15 +391,27 @@ def main(argv=None):
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.set_defaults(func=cmd_convergence)
 
-    p = sub.add_parser("sweep", help="run a scene over a grid of parameters on Dask")
+    p = sub.add_parser("sweep", help="run a scene over a grid or random samples of its values, on Dask")
     p.add_argument("scene")
-    p.add_argument("--grid", action="append", required=True, metavar="KEY=V1,V2,...",
+    p.add_argument("--grid", action="append", metavar="KEY=V1,V2,...",
                    help='a scene value and its values, e.g. "line.film.L=1 m,2 m" (repeat for more dimensions)')
+    p.add_argument("--sample", action="append", metavar="KEY=DISTRIBUTION",
+                   help='a scene value drawn from uniform(LOW, HIGH) or normal(MEAN, SD), e.g. '
+                        '"line.idler.J=uniform(0.01 kg.m2, 0.05 kg.m2)" (a Latin hypercube over all of them)')
+    p.add_argument("--n", type=int, help="with --sample: how many points to draw")
+    p.add_argument("--seed", type=int, help="with --sample: the seed (the same seed, the same points)")
+    p.add_argument("--engine", default="line", choices=("line", "fmpy-line", "parts", "reference"),
+                   help="line (default): the scene as one Line FMU, exported once per structure; parts: the "
+                        "co-simulation of its FMUs; reference: the monolithic SciPy reference")
     p.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
     p.add_argument("--workers", type=int, default=2, help="workers of the local cluster")
     p.add_argument("--step", type=time_arg)
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
-    p.add_argument("--out", default=str(OUT / "sweep.csv"))
+    p.add_argument("--out", default=str(OUT / "sweep.csv"), help="the table (default: out/sweep.csv)")
+    p.add_argument("--series", metavar="FILE.parquet", help="also every point's recorded signals, in one Parquet file")
+    p.add_argument("--plot", nargs="?", const="", metavar="OUTPUT",
+                   help="PNGs next to the table: each recorded tension's band over the points, and OUTPUT "
+                        "(a column of the table, default the first span's T_max) against each swept key")
     p.set_defaults(func=cmd_sweep)
 
     args = parser.parse_args(argv)

@@ -16,17 +16,21 @@ from ctypes import byref
 _printer = None  # (thunk, callbacks): created once, never freed
 
 
+def _point_proxy_at(thunk, callbacks):
+    # addLoggerProxy remembers callbacks.logger and replaces it by the proxy: hand it the thunk each time.
+    from fmpy.logging import addLoggerProxy
+
+    callbacks.logger = thunk
+    addLoggerProxy(byref(callbacks))
+
+
 def _point_proxy_at_printer():
     global _printer
     from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
-    from fmpy.logging import addLoggerProxy
 
     if _printer is None:
         _printer = (fmi2CallbackLoggerTYPE(printLogMessage), fmi2CallbackFunctions())
-    thunk, callbacks = _printer
-    # addLoggerProxy remembers callbacks.logger and replaces it by the proxy: hand it the printer each time.
-    callbacks.logger = thunk
-    addLoggerProxy(byref(callbacks))
+    _point_proxy_at(*_printer)
 
 
 @contextmanager
@@ -41,5 +45,25 @@ def collecting():
 
     try:
         yield messages, logger
+    finally:
+        _point_proxy_at_printer()
+
+
+@contextmanager
+def collecting_proxied():
+    """For an instance made with FMPy's default callbacks (its messages go through the proxy), one
+    kept across runs: `with collecting_proxied() as messages:` appends (status, text) of each message
+    logged in the block, then points the proxy back at FMPy's printer."""
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+
+    messages: list[tuple[int, str]] = []
+
+    def logger(component, instance, status, category, message):
+        messages.append((int(status), message.decode(errors="replace") if isinstance(message, bytes) else str(message)))
+
+    thunk, callbacks = fmi2CallbackLoggerTYPE(logger), fmi2CallbackFunctions()  # alive for the block
+    _point_proxy_at(thunk, callbacks)
+    try:
+        yield messages
     finally:
         _point_proxy_at_printer()

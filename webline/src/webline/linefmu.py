@@ -39,10 +39,12 @@ class LineFmuError(RuntimeError):
     """The Line FMU cannot be written or run; the message says why."""
 
 
-def line_spec(scene: Scene, fmu_dir=None, start: str | None = None) -> dict:
+def line_spec(scene: Scene, fmu_dir=None, start: str | None = None, settle=True) -> dict:
     """The line.json of a scene: its parts in line order with their start
-    values and profiles, the connections, the experiment, how it starts."""
-    system = compile_scene(scene, fmu_dir)
+    values and profiles, the connections, the experiment, how it starts.
+    `settle=False` leaves out the connected inputs' start values (which the
+    FMU settles itself when it initializes), without running the parts' FMUs."""
+    system = compile_scene(scene, fmu_dir, settle=settle)
     components = {c.name: c for c in system.components}
     parts = []
     for c in scene.parts:
@@ -135,6 +137,12 @@ def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None
     return out
 
 
+def run_start(scene: Scene) -> str:
+    """How a run of the scene as one Line FMU starts (`run`, and the sweeps through it): as every
+    engine starts the scene, from its "start", else from its start values."""
+    return scene.start or "given"
+
+
 def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=False, workdir=None):
     """The scene as one Line FMU in FMPy (Co-Simulation at the step, or Model
     Exchange with FMPy's CVode and output at the step): a Result with the
@@ -150,7 +158,7 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
 
     h = step or scene.step
     with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
-        path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=scene.start or "given")
+        path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=run_start(scene))
         outputs = [f"{c}.{OUTPUTS[q]}" for c, q in scene.record]
         t0 = clock.perf_counter()
         with fmpy_log.collecting() as (messages, logger):
