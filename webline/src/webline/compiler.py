@@ -62,19 +62,6 @@ def web_values(side: str, web, web_library=None, clear_record=False) -> dict:
     return values
 
 
-def equilibrium_strain(scene: Scene, span: Span, eps_in: float) -> float:
-    """The strain of a span at rest between its rollers' start speeds:
-    (1 + eps) = (v_b / v_a) * (1 + eps_a), or eps_a when v_a = 0."""
-    va = scene.initial_speed(scene.upstream(span))
-    vb = scene.initial_speed(scene.downstream(span))
-    return eps_in if va == 0 else (vb - va + vb * eps_in) / va
-
-
-def _start_strain(node, t=0.0):
-    """The strain a source or unwinder gives the web it feeds."""
-    return node.strain.value(t)
-
-
 def _roller(scene: Scene, node, fmu: Path) -> Component:
     start = {}
     profile = {}
@@ -116,7 +103,7 @@ def _dancer_of(scene: Scene, span: Span):
     return up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
 
 
-def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict, effects: tuple) -> Component:
+def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effects: tuple) -> Component:
     dancer = _dancer_of(scene, span)
     lib = scene.web_library
     start = {
@@ -128,7 +115,6 @@ def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict, eff
         # (FMPy's first inputs are all 0.0): every engine starts the same.
         "startAtEquilibrium": False,
     }
-    eps = span.eps_start if span.eps_start is not None else equilibrium_strain(scene, span, eps_in)
     start["eps_start"] = float(eps)
     if span.solver != "auto":  # an Enumeration: left at its default unless asked (libcosim ignores them)
         start["solver"] = solvers[span.solver]
@@ -232,25 +218,13 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
         if _ports(scene, n, "web_b", outs) > 1:
             comp.start["outlets"] = len(outs)
         rollers.append(comp)
-    # Strains a span starts at when its scene gives none: with side paths the reference's own start
-    # (the same rule, with the merged strain [M2] after a nip), so that every engine starts alike.
-    given = None
-    if scene.branches:
-        from .reference import LineODE
+    # The strains the spans start at when the scene gives none: the reference's own given start
+    # (scene.start_strain, the merged strain [M2] after a nip), so that every engine starts alike.
+    from .reference import LineODE
 
-        ode = LineODE(scene)
-        z = ode.given_state()
-        given = {sp.name: float(z[ode.i_eps[sp.name]]) for sp in scene.spans}
-    spans = []
-    eps_in = _start_strain(scene.line[0])
-    for sp in scene.spans:
-        if given is not None:
-            eps_in = given[sp.name]  # used only when the span has no eps_start: then it is its start
-        comp = _span(scene, sp, eps_in, span_fmu, solvers, effects)
-        if given is not None and sp.eps_start is None:
-            comp.start["eps_start"] = given[sp.name]
-        eps_in = comp.start["eps_start"]
-        spans.append(comp)
+    ode = LineODE(scene)
+    z = ode.given_state()
+    spans = [_span(scene, sp, float(z[ode.i_eps[sp.name]]), span_fmu, solvers, effects) for sp in scene.spans]
     for comp in rollers + spans:
         comp.start.update(equilibrium.get(comp.name, {}))
 

@@ -39,7 +39,7 @@ from scipy.optimize import root
 import warnings
 
 from .result import Result
-from .scene import Dancer, Prescribed, Roller, Scene, Span
+from .scene import Dancer, Prescribed, Roller, Scene, Span, start_strain
 
 RTOL = 1e-10
 
@@ -216,12 +216,10 @@ class LineODE:
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
             if sp.eps_start is not None:
                 eps = sp.eps_start
-            else:
-                # equilibrium of the initial inputs: (1+eps) = (v_b/v_a)(1+eps_a), eps_a if v_a = 0
+            else:  # at rest between its ends' start speeds (or refused, naming why)
                 up, down = self.up[sp.name], self.down[sp.name]
-                va, vb = s.initial_speed(up), s.initial_speed(down)
-                eps_a = self.entry(up, 0.0, z) - 1.0
-                eps = eps_a if va == 0 else (vb - va + vb * eps_a) / va
+                eps_a = float(self.entry(up, 0.0, z)) - 1.0
+                eps = start_strain(sp, up, down, s.initial_speed(up), s.initial_speed(down), eps_a)
             z[self.i_eps[sp.name]] = eps
         return z
 

@@ -311,6 +311,32 @@ class Scene:
         return [f"{c}.{q} [{QUANTITIES[self.component(c).type][q]}]" for c, q in self.record]
 
 
+def start_strain(span: Span, up, down, va: float, vb: float, eps_a: float) -> float:
+    """The strain a span without T_start or eps_start starts at: at rest between its ends' start speeds,
+    (1 + eps) = (v_b / v_a) * (1 + eps_a), or eps_a when v_a = 0. Ends that run apart in opposite
+    directions, a far end at rest under a moving one, or a strain outside (-1, 10] give no such strain:
+    a SceneError names the part that causes it, with its position, before any arithmetic sees it."""
+    if va == 0:
+        return eps_a
+    ends = f"span {span.name!r} between {up.type} {up.name!r} ({va:g} m/s) and {down.type} {down.name!r} ({vb:g} m/s)"
+    way_out = f"give span {span.name!r} a T_start or eps_start, or start its ends at speeds of one sign"
+    if vb == 0:
+        raise SceneError(f"{down.where}: {down.type} {down.name!r} stands still at the start while {up.type} {up.name!r} "
+                         f"feeds span {span.name!r} at {va:g} m/s: the span would start with no web in it (strain -1); {way_out}")
+    if vb / va < 0:
+        culprit, other = (up, down) if va < 0 else (down, up)
+        raise SceneError(f"{culprit.where}: {culprit.type} {culprit.name!r} runs backwards at the start "
+                         f"({va if culprit is up else vb:g} m/s) while {other.type} {other.name!r} at the other end of span "
+                         f"{span.name!r} runs forwards: no strain carries the web between them, so the span has no start "
+                         f"strain; {way_out}")
+    eps = (vb - va + vb * eps_a) / va
+    lo, hi = STRAIN_RANGE
+    if not lo < eps <= hi:
+        raise SceneError(f"{span.where}: {ends} would start at a strain of {eps:.4g} (the arriving web's {eps_a:.4g} "
+                         f"stretched by the speeds' ratio), outside ({lo:g}, {hi:g}]; {way_out}")
+    return eps
+
+
 def _single(spans, node, what):
     if len(spans) > 1:
         raise ValueError(f"{node.type} {node.name!r} {what}: it has {len(spans)} spans on that side")
@@ -513,7 +539,48 @@ def _strain_at(web: Web, tension: float) -> float:
     return brentq(lambda e: float(web.curve.sigma(e)) - stress, lo, hi, xtol=1e-16, rtol=4 * np.finfo(float).eps)
 
 
+class _Webs(dict):
+    """The scene's webs, read in any order: a laminate or a lane may name a web defined after it.
+    A web is read when first named (`ref`); one that leads back to itself is refused with the chain."""
+
+    def __init__(self, r: _Reader, nodes: Obj, web_library):
+        super().__init__()
+        self.r, self.nodes, self.library = r, nodes, web_library
+        self.reading = []  # the webs being read, outermost first
+
+    def ref(self, node: Node, what: str) -> Web:
+        name = self.r.string(node, what)
+        if name in self:
+            return self[name]
+        if name not in self.nodes:
+            raise self.r.err(node, f"{what}: no web {name!r} in \"webs\" (defined: {', '.join(self.nodes.keys()) or 'none'})")
+        if name in self.reading:
+            chain = " -> ".join(self.reading[self.reading.index(name):] + [name])
+            raise self.r.err(node, f"{what}: web {name!r} is made of itself ({chain}): a laminate's layers and a "
+                                   "lane's web must be other webs")
+        self.reading.append(name)
+        try:
+            web = _web(self.r, name, self.nodes[name], self.library, self)
+        finally:
+            self.reading.pop()
+        self[name] = web
+        return web
+
+    def read_all(self) -> dict:
+        """Every web, in the file's order."""
+        for name, node in self.nodes.items.items():
+            if name not in self:
+                self.reading.append(name)
+                try:
+                    self[name] = _web(self.r, name, node, self.library, self)
+                finally:
+                    self.reading.pop()
+        return {name: self[name] for name in self.nodes.keys()}
+
+
 def _web_ref(r: _Reader, webs: dict, node: Node, what: str) -> Web:
+    if isinstance(webs, _Webs):
+        return webs.ref(node, what)
     name = r.string(node, what)
     if name not in webs:
         raise r.err(node, f"{what}: no web {name!r} in \"webs\" (defined: {', '.join(webs) or 'none'})")
@@ -617,7 +684,7 @@ def _roller(r, o_node, name, kind) -> Roller:
         if "v_start" in o:
             c.v_start = r.quantity(o["v_start"], units.SPEED, f"{what}: v_start")
     if kind == "unwinder":
-        c.strain = r.profile(o["strain"], units.DIMENSIONLESS, f"{what}: strain")
+        c.strain = _strain_profile(r, o["strain"], what)
     c.wrap = _wrap(r, o, what)
     if "merge" in o and "split" in o:
         raise r.err(r.key_pos(o["split"]), f"{what} carries both merge and split: laminate at one roller, slit at another")
@@ -626,6 +693,20 @@ def _roller(r, o_node, name, kind) -> Roller:
             raise r.err(r.key_pos(o["trim"]), f"{what}: trim goes with split (the width a slitter cuts off)")
         c.trim = r.quantity(o["trim"], units.LENGTH, f"{what}: trim", nonnegative=True)
     return c
+
+
+# A strain the span FMU accepts: (-1, 10] (its eps_start and web_a.eps).
+STRAIN_RANGE = (-1.0, 10.0)
+
+
+def _strain_profile(r, node, what) -> Profile:
+    """The strain of the web a source or unwinder feeds: a profile inside STRAIN_RANGE."""
+    p = r.profile(node, units.DIMENSIONLESS, f"{what}: strain")
+    lo, hi = STRAIN_RANGE
+    bad = next((x for _, x in p.knots if not lo < x <= hi), None)
+    if bad is not None:
+        raise r.err(node, f"{what}: strain {bad:g} is outside ({lo:g}, {hi:g}]: a strain of -1 or less is no web")
+    return p
 
 
 def _wrap(r, o, what):
@@ -644,8 +725,12 @@ def _prescribed(r, o_node, name, kind) -> Prescribed:
     o = r.keys(o_node, what, required=required, optional=("description", "wrap"))
     c = Prescribed(name=name, type=kind, where=f"{r.source}:{o_node.line}:{o_node.col}")
     c.speed = r.profile(o["speed"], units.SPEED, f"{what}: speed")
+    backwards = next(((t, v) for t, v in c.speed.knots if v < 0), None)
+    if kind == "source" and backwards is not None:
+        raise r.err(o["speed"], f"{what}: speed {backwards[1]:g} m/s at t = {backwards[0]:g} s: a source feeds web into the line, "
+                                "so its speed must be >= 0 (web pulled back into a source would carry no defined strain)")
     if kind == "source":
-        c.strain = r.profile(o["strain"], units.DIMENSIONLESS, f"{what}: strain")
+        c.strain = _strain_profile(r, o["strain"], what)
     c.wrap = _wrap(r, o, what)
     return c
 
@@ -741,10 +826,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     web_library = None
     if "web_library" in o:
         web_library = str((Path(base_dir or ".") / r.string(o["web_library"], "web_library")).resolve())
-    webs_obj = r.obj(o["webs"], "webs")
-    webs = {}
-    for k, v in webs_obj.items.items():
-        webs[k] = _web(r, k, v, web_library, webs)
+    webs = _Webs(r, r.obj(o["webs"], "webs"), web_library).read_all()
     if not webs:
         raise r.err(o["webs"], "webs must define at least one web")
 
