@@ -62,7 +62,7 @@ def web_values(side: str, web, web_library=None, clear_record=False) -> dict:
     return values
 
 
-def _roller(scene: Scene, node, fmu: Path) -> Component:
+def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     start = {}
     profile = {}
     speed = scene.speed_profile(node)
@@ -84,14 +84,18 @@ def _roller(scene: Scene, node, fmu: Path) -> Component:
         else:
             profile["strain"] = table(strain)
     if isinstance(node, Dancer):
+        # The Roller starts its carriage at carriage.y_start, its spring's rest position. One that starts
+        # elsewhere (its steady position) takes that as the rest position and the load less the spring's
+        # force there: the same force, load - k*(y - y_start), at every y.
+        y0 = positions.get(node.name, node.y_start)
         start.update({
             "carriage": True,
             "carriage.m": float(node.mass),
             "carriage.d": float(node.damping),
             "carriage.k": float(node.stiffness),
-            "carriage.y_start": float(node.y_start),
+            "carriage.y_start": float(y0),
         })
-        profile["load"] = table(node.load)
+        profile["load"] = table(node.load.shifted(-node.stiffness * (y0 - node.y_start)))
     sets = [{"time": float(e.time), **{k: float(v) for k, v in e.changes.items()}} for e in scene.events if e.component == node.name]
     if sets:
         profile["set"] = sets
@@ -103,11 +107,12 @@ def _dancer_of(scene: Scene, span: Span):
     return up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
 
 
-def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effects: tuple) -> Component:
+def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effects: tuple, positions: dict) -> Component:
     dancer = _dancer_of(scene, span)
+    y0 = positions.get(dancer.name, dancer.y_start) if dancer is not None else None  # the carriage's start
     lib = scene.web_library
     start = {
-        "L": float(span.length if span.length is not None else dancer.y_start),
+        "L": float(span.length if span.length is not None else y0),
         **web_values("wp1", span.wp1, lib),
         **web_values("wp2", span.wp2, lib),
         **{e: e in span.effects for e in effects},
@@ -128,9 +133,9 @@ def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effect
         # The x of the moving end is a constant too, so not connected: an engine
         # that starts its inputs at 0 (FMPy) then sees the right geometry.
         if scene.downstream(span) is dancer:
-            start.update({"frame_a.x": 0.0, "frame_a.y": float(dancer.y_start), "frame_b.x": 0.0})
+            start.update({"frame_a.x": 0.0, "frame_a.y": float(y0), "frame_b.x": 0.0})
         else:
-            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(dancer.y_start),
+            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(y0),
                           "frame_a.x": 2.0 * float(dancer.R)})
     sets = []
     webs = {"wp1": span.wp1, "wp2": span.wp2}
@@ -157,13 +162,12 @@ def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
     return ROLLER_VARIABLES[quantity]
 
 
-def equilibrium_starts(scene: Scene) -> dict:
-    """With `"start": "equilibrium"`: each span's strain and each roller's
-    speed in the line's steady state (from the monolithic reference's
-    equations, solved once), as the parts' start values. A dancer keeps its
-    y_start (its spring's rest position is the same parameter)."""
+def equilibrium_starts(scene: Scene) -> tuple[dict, dict]:
+    """With `"start": "equilibrium"`: each span's strain and each roller's speed in the line's steady
+    state (from the monolithic reference's equations, solved and checked once: a line without one is
+    refused), as the parts' start values; and each dancer's steady position. ({}, {}) otherwise."""
     if scene.start != "equilibrium":
-        return {}
+        return {}, {}
     from .reference import LineODE
 
     ode = LineODE(scene)
@@ -171,7 +175,7 @@ def equilibrium_starts(scene: Scene) -> dict:
     starts = {sp.name: {"eps_start": float(z[ode.i_eps[sp.name]])} for sp in scene.spans}
     for m in ode.movers:
         starts[m.name] = {"v_start": float(m.R * z[ode.i_omega[m.name]])}
-    return starts
+    return starts, {d.name: float(z[ode.i_y[d.name]]) for d in ode.dancers}
 
 
 def port(side: str, k: int) -> str:
@@ -189,11 +193,13 @@ def _ports(scene: Scene, node, side: str, spans: list) -> int:
     return len(spans)
 
 
-def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
+def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibrium=True) -> System:
     """The System of a scene: a Roller per node (in the order the web flows), then a span per
     span (the same order, side paths included), their profiles, connections and the recorded
     variables. `settle`: connected inputs start at the initial outputs that feed them, read
-    from the FMUs themselves (`master.settle_start_values`).
+    from the FMUs themselves (`master.settle_start_values`). `carriages_at_equilibrium`: with
+    `"start": "equilibrium"`, a dancer's carriage starts at its steady position (`_roller`); the Line
+    FMU, which solves its own steady state from the scene's parameters, takes them as they are.
 
     A nip where webs merge is a Roller with `inlets` = the number of webs arriving: the main
     line's span at web_a, each side path's last span at web_a2..4, their masses per unstretched
@@ -206,11 +212,13 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
     d = Path(fmu_dir or DEFAULT_FMU_DIR)
     span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
     solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}
-    equilibrium = equilibrium_starts(scene)
+    equilibrium, positions = equilibrium_starts(scene)
+    if not carriages_at_equilibrium:
+        positions = {}
     effects = span_effects(d)
     rollers = []
     for n in scene.nodes:
-        comp = _roller(scene, n, roller_fmu)
+        comp = _roller(scene, n, roller_fmu, positions)
         ins, outs = scene.spans_in(n), scene.spans_out(n)
         if _ports(scene, n, "web_a", ins) > 1:
             comp.start["inlets"] = len(ins)
@@ -224,7 +232,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
 
     ode = LineODE(scene)
     z = ode.given_state()
-    spans = [_span(scene, sp, float(z[ode.i_eps[sp.name]]), span_fmu, solvers, effects) for sp in scene.spans]
+    spans = [_span(scene, sp, float(z[ode.i_eps[sp.name]]), span_fmu, solvers, effects, positions) for sp in scene.spans]
     for comp in rollers + spans:
         comp.start.update(equilibrium.get(comp.name, {}))
 

@@ -42,7 +42,7 @@ class LineFmuError(RuntimeError):
 def line_spec(scene: Scene, fmu_dir=None, start: str | None = None) -> dict:
     """The line.json of a scene: its parts in line order with their start
     values and profiles, the connections, the experiment, how it starts."""
-    system = compile_scene(scene, fmu_dir)
+    system = compile_scene(scene, fmu_dir, carriages_at_equilibrium=False)
     components = {c.name: c for c in system.components}
     parts = []
     for c in scene.parts:

@@ -192,10 +192,9 @@ class Scene:
     events: list
     record: list  # [(component name, quantity)]
     web_library: str | None = None  # absolute path of the scene's own web records
-    # "equilibrium": the line starts in its steady state for the drives at t = 0
-    # (reference, webline run, Line FMU); "given": from the start values; None: not said
-    # (the parts' start values; the Line FMU's default is equilibrium).
-    start: str | None = None
+    # "equilibrium" (the default): every engine starts the line in its steady state for the drives
+    # at t = 0; "given": from the parts' start values.
+    start: str = "equilibrium"
     branches: list = field(default_factory=list)  # merges and splits (Branch), in line order
 
     @property
@@ -817,7 +816,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     if step > stop:
         raise r.err(o["step"], f"step {step} s is longer than stop_time {stop} s")
 
-    start = None
+    start = "equilibrium"  # every engine starts alike, as the Line FMU does (docs/scenes.md)
     if "start" in o:
         start = r.string(o["start"], "start")
         if start not in ("equilibrium", "given"):
