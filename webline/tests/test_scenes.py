@@ -141,7 +141,7 @@ def test_runner_writes_csv_png_and_a_summary(fmus, tmp_path):
     scene.write_text(BASE)
     cmd = [sys.executable, "-m", "webline", "run", str(scene), "--out", str(tmp_path), "--no-progress"]
     p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=True)
-    assert "small: co-simulation (gauss-seidel, extrapolate), step 1 ms, 200 steps" in p.stdout
+    assert "small: engine line: Line FMU in FMPy, Co-Simulation, step 1 ms, 200 steps" in p.stdout
     assert re.search(r"^\s+a\s+[\d.]+", p.stdout, re.M), p.stdout
     header = (tmp_path / "small.csv").read_text().splitlines()[0]
     assert header == "time [s],a.T [N],b.T [N],in.v [m/s],idler.v [m/s],out.v [m/s]"

@@ -26,6 +26,7 @@ from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile, span_effects
 from .master import Master, Options, settle_start_values
 from .profiles import Profile
 from .result import Result
+from .names import ROLLER_VARIABLES, SPAN_VARIABLES
 from .scene import Dancer, Scene, SceneError, Span
 from .system import Component, Connection, System
 
@@ -36,11 +37,6 @@ PRESCRIBED_R = 0.1  # m
 ROLL = {"unwinder": 1, "winder": 2}  # the Roller's Integer `roll`; 0 otherwise
 MAX_PORTS = 4  # the Roller's inlets web_a..web_a4 and outlets web_b..web_b4
 WEB_FIELDS = ("E", "thickness", "width", "density", "d_r")
-
-# A scene's recorded quantity -> the FMU variable that holds it.
-SPAN_VARIABLES = {"T": "summary_Tension", "eps": "summary_Strain", "L": "summary_Length", "F_a": "web_a.F", "F_b": "web_b.F"}
-ROLLER_VARIABLES = {"omega": "omega", "tau": "tau", "y": "y", "y_dot": "y_dot", "eps": "web_b.eps"}
-
 
 def table(profile: Profile):
     """A scene profile as a profile-JSON table [[t, value], ...]."""
@@ -162,20 +158,25 @@ def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
     return ROLLER_VARIABLES[quantity]
 
 
-def equilibrium_starts(scene: Scene) -> tuple[dict, dict]:
+def equilibrium_starts(scene: Scene, at: float = 0.0) -> tuple[dict, dict]:
     """With `"start": "equilibrium"`: each span's strain and each roller's speed in the line's steady
     state (from the monolithic reference's equations, solved and checked once: a line without one is
-    refused), as the parts' start values; and each dancer's steady position. ({}, {}) otherwise."""
-    if scene.start != "equilibrium":
+    refused), as the parts' start values; and each dancer's steady position. ({}, {}) otherwise.
+    `at` > 0: the line's operating point at that time instead (`LineODE.operating_state`)."""
+    if scene.start != "equilibrium" and at == 0.0:
         return {}, {}
     from .reference import LineODE
 
     ode = LineODE(scene)
-    z = ode.initial_state()
+    z = ode.operating_state(at)
     starts = {sp.name: {"eps_start": float(z[ode.i_eps[sp.name]])} for sp in scene.spans}
     for m in ode.movers:
         starts[m.name] = {"v_start": float(m.R * z[ode.i_omega[m.name]])}
     return starts, {d.name: float(z[ode.i_y[d.name]]) for d in ode.dancers}
+
+
+class TooManyWebs(SceneError):
+    """More webs at a roller than the Roller FMU has ports: no engine of FMUs runs the scene (the reference does)."""
 
 
 def port(side: str, k: int) -> str:
@@ -188,18 +189,19 @@ def _ports(scene: Scene, node, side: str, spans: list) -> int:
     if len(spans) > MAX_PORTS:
         what = "merges" if side == "web_a" else "splits the web into"
         webs = "webs" if side == "web_a" else "lanes"
-        raise SceneError(f"{scene.path}: {node.type} {node.name!r} {what} {len(spans)} {webs} ({', '.join(sp.name for sp in spans)}); "
+        raise TooManyWebs(f"{scene.path}: {node.type} {node.name!r} {what} {len(spans)} {webs} ({', '.join(sp.name for sp in spans)}); "
                          f"the Roller FMU has at most {MAX_PORTS} {'inlets' if side == 'web_a' else 'outlets'}")
     return len(spans)
 
 
-def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibrium=True) -> System:
+def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibrium=True, at=0.0) -> System:
     """The System of a scene: a Roller per node (in the order the web flows), then a span per
     span (the same order, side paths included), their profiles, connections and the recorded
     variables. `settle`: connected inputs start at the initial outputs that feed them, read
     from the FMUs themselves (`master.settle_start_values`). `carriages_at_equilibrium`: with
     `"start": "equilibrium"`, a dancer's carriage starts at its steady position (`_roller`); the Line
     FMU, which solves its own steady state from the scene's parameters, takes them as they are.
+    `at`: the System from the line's operating point at that time (a linearization's, `stability`).
 
     A nip where webs merge is a Roller with `inlets` = the number of webs arriving: the main
     line's span at web_a, each side path's last span at web_a2..4, their masses per unstretched
@@ -212,7 +214,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
     d = Path(fmu_dir or DEFAULT_FMU_DIR)
     span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
     solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}
-    equilibrium, positions = equilibrium_starts(scene)
+    equilibrium, positions = equilibrium_starts(scene, at)
     if not carriages_at_equilibrium:
         positions = {}
     effects = span_effects(d)
@@ -268,7 +270,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
         name=scene.name,
         components=rollers + spans,
         connections=connections,
-        start_time=0.0,
+        start_time=float(at),
         stop_time=float(scene.stop_time),
         step=float(scene.step),
         record=[(c, _record_variable(scene, c, q)) for c, q in scene.record],

@@ -192,6 +192,20 @@ class LineODE:
         z = self.given_state()
         return self.equilibrium(z) if self.s.start == "equilibrium" else z
 
+    def operating_state(self, t):
+        """The line at time t as a linearization needs it: its steady state for the drives then
+        (given start values where the scene starts given or none exists), at t = 0 its start."""
+        if t == 0.0:
+            return self.initial_state()
+        z = self.given_state(t)
+        if self.s.start == "equilibrium":
+            try:
+                self.segment = (t, self.s.stop_time)
+                z = self.equilibrium(z, t)
+            except EquilibriumError:
+                pass
+        return z
+
     def equilibrium(self, z0, t=0.0):
         """The state where every rate vanishes, from z0 (SciPy's root, 'hybr'), checked before it is
         returned (`STEADY`). A dancer without a spring is steady at any position: its position is held
@@ -257,11 +271,12 @@ class LineODE:
             names[i], names[i + 1] = f"dancer {k!r}'s position", f"dancer {k!r}'s carriage speed"
         return names
 
-    def given_state(self):
+    def given_state(self, t=0.0):
+        """The scene's start values (at a later time t: the speeds then, each span at rest between them)."""
         s = self.s
         z = np.zeros(self.n)
         for node in self.movers:
-            z[self.i_omega[node.name]] = s.initial_speed(node) / node.R
+            z[self.i_omega[node.name]] = s.initial_speed(node, t) / node.R
         for d in self.dancers:
             z[self.i_y[d.name]] = d.y_start
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
@@ -269,8 +284,8 @@ class LineODE:
                 eps = sp.eps_start
             else:  # at rest between its ends' start speeds (or refused, naming why)
                 up, down = self.up[sp.name], self.down[sp.name]
-                eps_a = float(self.entry(up, 0.0, z)) - 1.0
-                eps = start_strain(sp, up, down, s.initial_speed(up), s.initial_speed(down), eps_a)
+                eps_a = float(self.entry(up, t, z)) - 1.0
+                eps = start_strain(sp, up, down, s.initial_speed(up, t), s.initial_speed(down, t), eps_a)
             z[self.i_eps[sp.name]] = eps
         return z
 

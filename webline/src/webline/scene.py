@@ -272,19 +272,30 @@ class Scene:
             return node.drive.profile
         return None
 
-    def initial_speed(self, node):
-        """Surface speed at the start: prescribed, v_start, or the default
-        (the initial speed of the first speed-driven component, else 0)."""
+    def initial_speed(self, node, t=0.0):
+        """Surface speed at the start: prescribed, v_start, or the default (the initial speed
+        of the first speed-driven component, else 0). At a later time t (an operating point
+        of the run): prescribed, else the first speed-driven component's, else as at the start."""
         profile = self.speed_profile(node)
         if profile is not None:
-            return profile.value(0.0)
-        if node.v_start is not None:
+            return profile.value(t)
+        if node.v_start is not None and t == 0.0:
             return node.v_start
         for other in self.nodes:
             p = self.speed_profile(other)
             if p is not None:
-                return p.value(0.0)
-        return 0.0
+                return p.value(t)
+        return node.v_start or 0.0
+
+    def speed_times(self):
+        """The operating points that span the run's speed range: the start, and the first times in
+        [0, stop) the prescribed speeds are at their slowest and at their fastest (summed over the
+        speed-driven parts; a piecewise linear profile reaches its extremes at its knots)."""
+        profiles = [self.speed_profile(c) for c in self.nodes if self.speed_profile(c) is not None]
+        knots = sorted({0.0} | {t for p in profiles for t in p.breakpoints() if 0.0 < t < self.stop_time})
+        total = [sum(abs(p.value(t)) for p in profiles) for t in knots]
+        picked = [0.0, knots[total.index(min(total))], knots[total.index(max(total))]]
+        return sorted(set(picked))
 
     def torque_profile(self, node):
         """The motor torque of a Roller-FMU node as a profile (N m)."""
