@@ -50,7 +50,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
             warnings.append(f"the Line FMU cannot run this scene ({e}): the monolithic reference ran it")
             engine = "reference"
         else:
-            warnings += [f"the Line FMU: {m}" for m in result.info.get("messages", []) if "warning" in m.lower()]
+            warnings += [f"the Line FMU: {m}" for m in result.info["messages"].warnings]
     if engine == "reference":
         from .master import scene_grid
         from .reference import reference
