@@ -18,6 +18,7 @@ from webline.reference import EquilibriumError, reference
 from webline.scene import SceneError, load_scene, parse_scene
 
 from .conftest import ROOT, SCENES
+from .test_scenes import BASE
 
 CASES = ROOT / "webline" / "tests" / "cases"
 # The Line FMU against the reference: 1e-7 of each signal's scale (the issue's bound; docs/line-fmu.md
@@ -87,18 +88,10 @@ def test_no_shipped_scene_trips_the_growth_detector_at_its_own_step(fmus):
     assert run.time[-1] == pytest.approx(1.5)
 
 
-SMALL = """{
-  "name": "small", "stop_time": "0.05 s", "step": "1 ms",
-  "webs": {"PET": {"E": "4.5 GPa", "thickness": "50 um", "width": "1 m", "density": "1390 kg/m3"}},
-  "line": [
-    {"type": "source", "name": "in", "speed": "5 m/s", "strain": 0.001},
-    {"type": "span", "name": "a", "L": "2 m", "web": "PET"},
-    {"type": "roller", "name": "idler", "J": "2 kg.m2", "R": "0.1 m"},
-    {"type": "span", "name": "b", "L": "2 m", "web": "PET"},
-    {"type": "sink", "name": "out", "speed": {"step": {"time": "0.02 s", "from": "5 m/s", "to": "5.005 m/s"}}}
-  ],
-  "record": ["a.T", "a.eps", "a.L", "a.F_a", "b.F_b", "in.v", "in.eps", "idler.v", "idler.omega", "idler.tau", "out.v"]
-}"""
+# test_scenes' small line, shorter, recording a quantity of every kind a span, a source, a roller and a sink offer.
+SMALL = BASE.replace('"stop_time": "0.2 s"', '"stop_time": "0.05 s"').replace('"time": "0.1 s"', '"time": "0.02 s"').replace(
+    '"line": [', '"record": ["a.T", "a.eps", "a.L", "a.F_a", "b.F_b", "in.v", "in.eps", "idler.v", "idler.omega", "idler.tau", '
+    '"out.v"],\n  "line": [')
 
 
 def test_every_engine_names_its_csv_columns_as_the_scene_does(fmus, tmp_path):
