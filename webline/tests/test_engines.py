@@ -112,6 +112,11 @@ def test_every_engine_names_its_csv_columns_as_the_scene_does(fmus, tmp_path):
         assert (tmp_path / f"{engine}.csv").read_text().splitlines()[0] == "time [s]," + ",".join(want)
     archive = write_ssp(compile_scene(scene, fmus), tmp_path / "small.ssp")
     assert engines.run_archive(archive).columns == want
+    # An archive runs as parts, checked as a scene is (at its start: an archive has no profiles to read speeds from).
+    from webline.stability import UnstableStep
+
+    with pytest.raises(UnstableStep, match="small: a step of 25 ms is above the largest stable step"):
+        engines.run_archive(archive, step=0.025)
     # The old name of the Line FMU's engine still works.
     assert engines.engine_name("fmpy-line") == "line"
 
