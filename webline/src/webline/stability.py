@@ -407,6 +407,10 @@ def refuse_unstable(lines, name: str, step: float, algorithm: str, coupling: str
     """The coupling's limit over the operating points (`coupling_limits`); UnstableStep, in one line, when
     `step` is above it."""
     (lim,) = coupling_limits(lines, ((algorithm, coupling),), kind_of)
+    if lim.limit == 0.0:
+        raise UnstableStep(f"{name}: no step is stable with webline's {algorithm}/{coupling} coupling for this line "
+                           f"(the mode of {lim.part} grows at every step): use another --algorithm or --coupling, or "
+                           "--engine line (exact at any step); --force runs it anyway")
     if step > lim.limit:
         where = "" if lim.time == 0.0 else f" at t = {lim.time:g} s"
         raise UnstableStep(f"{name}: a step of {_ms(step)} is above the largest stable step of webline's {algorithm}/"
