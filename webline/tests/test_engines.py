@@ -42,7 +42,7 @@ def webline(*args):
 def test_run_takes_the_line_fmu_by_default_and_matches_the_reference(fmus, tmp_path):
     """`webline run` with no options: the Line FMU, named in the summary; every signal within EXACT of the
     reference. The parts at the scene's own 1 ms ended this scene at 1,397 N where the truth is 762 N."""
-    path = scene_file(tmp_path, "laminator_unequal_sources", stop_time="1 s")
+    path = scene_file(tmp_path, "laminator_unequal_sources", stop_time="0.5 s")
     run = webline("run", path, "--out", tmp_path, "--no-plot")
     assert run.returncode == 0, run.stderr
     assert run.stdout.startswith("laminator_unequal_sources: engine line: Line FMU in FMPy"), run.stdout
@@ -71,7 +71,7 @@ def test_the_parts_refuse_a_step_above_their_coupling_limit(fmus, tmp_path):
 def test_a_forced_run_at_twice_the_limit_is_stopped_by_the_growth_detector(fmus, tmp_path):
     """--force at 2 x 0.912 ms (the map's radius 1.037 per step): the oscillation of the laminate's tension
     grows, and the master stops the run (at 0.22 s) with the span's name and a non-zero exit."""
-    path = scene_file(tmp_path, "laminator_unequal_sources", stop_time="1 s")
+    path = scene_file(tmp_path, "laminator_unequal_sources", stop_time="0.5 s")
     run = webline("run", path, "--engine", "parts", "--step", "1.824ms", "--force", "--out", tmp_path, "--no-plot")
     assert run.returncode == 2, run.stdout
     assert "the tension of span 'lam1' oscillates ever more at t = 0.2" in run.stderr, run.stderr
