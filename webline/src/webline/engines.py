@@ -28,6 +28,7 @@ from .result import Result
 from .ssp import SSD, SspError, _variables
 from .system import System
 
+
 def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None = None, force: bool = False,
               **options) -> Result:
     """A scene run by an engine (None: `line`, or `reference` where the Line FMU cannot run it), its

@@ -23,7 +23,8 @@ other engines do; `fmpy` adds the step to the time as FMPy's simulate_ssp does.
 Before a step the master saves every FMU's state (`rollback`); if an FMU
 discards the step (fmi2Discard), all are rolled back and the step is retried
 as two half steps. `zero_start` reproduces FMPy's simulate_ssp: every
-connected input is 0.0 on the first step.
+connected input is 0.0 on the first step. A tension that oscillates ever more
+stops the run (`Growth`): the coupling is unstable at the step.
 """
 
 from __future__ import annotations
