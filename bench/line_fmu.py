@@ -202,7 +202,7 @@ def main():
         for engine, (wall, err) in runs.items():
             lines.append(f"| {scene.name} | SSP of {len(scene.line)} parts | {step * 1e3:g} ms | {engine} | {wall:.2f} | | {err:.1e} |")
         for h in (1e-3, 1e-2):
-            fmu = linefmu.export(scene, tmp / f"{scene.name}-{h}.fmu", OUT, start=scene.start or "given")
+            fmu = linefmu.export(scene, tmp / f"{scene.name}-{h}.fmu", OUT, start=linefmu.run_start(scene))
             a = linefmu.run(scene, OUT, step=h)
             b = line_in_libcosim(fmu, scene, h)
             for engine, r in (("FMPy", a), ("libcosim", b)):

@@ -9,4 +9,4 @@ cd "$ROOT"
 python3 fmu/package.py
 "$PY" fmu/compat.py out
 "$PY" fmu/demo.py out/ConvertingSpan.fmu --out out
-"$VENV/bin/webline" run webline/scenes/lamination.json --out out
+"$VENV/bin/webline" run webline/scenes/lamination.json --out out  # as one Line FMU: webline run's default engine

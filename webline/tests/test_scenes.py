@@ -141,7 +141,7 @@ def test_runner_writes_csv_png_and_a_summary(fmus, tmp_path):
     scene.write_text(BASE)
     cmd = [sys.executable, "-m", "webline", "run", str(scene), "--out", str(tmp_path), "--no-progress"]
     p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=True)
-    assert "small: co-simulation (gauss-seidel, extrapolate), step 1 ms, 200 steps" in p.stdout
+    assert "small: engine line: Line FMU in FMPy, Co-Simulation, step 1 ms, 200 steps" in p.stdout
     assert re.search(r"^\s+a\s+[\d.]+", p.stdout, re.M), p.stdout
     header = (tmp_path / "small.csv").read_text().splitlines()[0]
     assert header == "time [s],a.T [N],b.T [N],in.v [m/s],idler.v [m/s],out.v [m/s]"
@@ -201,3 +201,77 @@ def test_events_change_parameters_inside_the_fmus(fmus):
     i = int(np.argmin(np.abs(r.time - 1.0)))
     assert abs(v[i + 1] - v[i]) < 1e-3
     assert r.column("unwind.omega")[i + 1] == pytest.approx(v[i + 1] / 0.3, rel=1e-9)
+
+
+CASES = ROOT / "webline" / "tests" / "cases"
+
+
+def test_webs_may_name_webs_defined_later():
+    """A laminate defined before its layers (laminate_defined_first.json: PET/Al/paper, paper last)
+    reads as the same web as with its layers first; the file's order of the webs is kept."""
+    path = CASES / "laminate_defined_first.json"
+    later = load_scene(path)
+    assert list(later.webs) == ["PET", "Al", "PETAl", "paper"]
+    assert later.webs["PETAl"].layers == ("PET", "Al", "paper")
+    import json
+
+    data = json.loads(path.read_text())
+    data["webs"] = {k: data["webs"][k] for k in ("PET", "Al", "paper", "PETAl")}
+    first = parse_scene(json.dumps(data, indent=1), "layers_first.json")
+    assert later.webs["PETAl"] == first.webs["PETAl"]
+
+
+@pytest.mark.parametrize("webs,words", [
+    # a missing web names every web that is defined, later ones too
+    ('"L1": {"laminate": ["PET", "PE"]}, "PET2": {"slit": "PET", "width": "0.5 m"}',
+     ["web 'L1': laminate layer: no web 'PE'", "defined: PET, L1, PET2"]),
+    # a web made of itself, directly or through another
+    ('"L1": {"laminate": ["PET", "L1"]}', ["web 'L1' is made of itself (L1 -> L1)"]),
+    ('"L1": {"laminate": ["PET", "L2"]}, "L2": {"slit": "L1", "width": "0.5 m"}', ["(L1 -> L2 -> L1)"]),
+])
+def test_a_missing_or_self_referring_web_names_the_problem(webs, words):
+    text = BASE.replace('"density": "1390 kg/m3"}}', f'"density": "1390 kg/m3"}}, {webs}}}', 1)
+    msg = _error(text)
+    assert msg.startswith("base.json:5:"), msg
+    for w in words:
+        assert w in msg, msg
+
+
+def test_a_backward_source_is_refused_by_name_before_any_arithmetic():
+    """A side source running backwards (the laminator's foil at -5 m/s) is refused at its speed's position;
+    before, NumPy's divide-by-zero warnings came first, then an `eps_start = -2.0003 outside range`."""
+    import warnings
+
+    text = (CASES / "laminator_unequal_sources.json").read_text()
+    assert '"speed": "5.001 m/s"' in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning on the way
+        with pytest.raises(SceneError) as e:
+            parse_scene(text.replace('"speed": "5.001 m/s"', '"speed": "-5 m/s"'), "backward.json")
+    msg = str(e.value)
+    assert msg.startswith("backward.json:52:16: source 'src_foil': speed -5 m/s at t = 0 s"), msg
+    assert "must be >= 0" in msg
+
+
+@pytest.mark.parametrize("old,new,words", [
+    # a sink at rest under a moving source: the span would hold no web
+    ('"sink", "name": "out", "speed": {"step": {"time": "0.1 s", "from": "5 m/s"', '"sink", "name": "out", "speed": {"step": {"time": "0.1 s", "from": "0 m/s"',
+     ["base.json:11:5: sink 'out' stands still at the start", "span 'b'", "T_start or eps_start"]),
+    # a sink running backwards against the line
+    ('"sink", "name": "out", "speed": {"step": {"time": "0.1 s", "from": "5 m/s"', '"sink", "name": "out", "speed": {"step": {"time": "0.1 s", "from": "-5 m/s"',
+     ["base.json:11:5: sink 'out' runs backwards at the start (-5 m/s)", "span 'b'"]),
+    # a strain the span cannot hold: 50 times faster at its far end (the idler starts at the source's speed)
+    ('"speed": "5 m/s", "strain"', '"speed": "0.1 m/s", "strain"',
+     ["base.json:10:5: span 'b' between roller 'idler' (0.1 m/s) and sink 'out' (5 m/s) would start at a strain of 49.05",
+      "outside (-1, 10]"]),
+    # a source feeding web at a strain of -1
+    ('"strain": 0.001', '"strain": -1', ["base.json:7:66: source 'in': strain -1 is outside (-1, 10]"]),
+])
+def test_an_impossible_start_strain_is_refused_by_name(old, new, words):
+    from webline.reference import LineODE
+
+    assert old in BASE
+    with pytest.raises(SceneError) as e:
+        LineODE(parse_scene(BASE.replace(old, new, 1), "base.json")).given_state()
+    for w in words:
+        assert w in str(e.value), str(e.value)

@@ -8,8 +8,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import linefmu
 from .compiler import run_scene
 from .master import scene_grid
+from .names import engine_name
 from .reference import reference
 from .result import Result
 
@@ -60,22 +62,27 @@ class Row:
     failed: str = ""
 
 
-def convergence(scene, steps, ref: Result | None = None, **options):
-    """Runs the scene at each communication step and measures it against one
-    reference sampled on the union of the grids. Returns (rows, reference)."""
+def convergence(scene, steps, ref: Result | None = None, engine="parts", fmu_dir=None, **options):
+    """Runs the scene at each communication step (`engine` parts or line; `options`: the parts' master's)
+    and measures it against one reference sampled on the union of the grids. Every step runs, one above
+    the parts' stable step too: the table studies where the coupling diverges (its row says so).
+    Returns (rows, reference)."""
+    engine = engine_name(engine)
+    if engine not in ("parts", "line"):
+        raise ValueError(f"convergence measures the parts or the Line FMU, not the {engine} engine")
     steps = sorted(steps, reverse=True)
     if ref is None:
         ref = reference(scene, times=union_grid(scene, steps))
     rows = []
     for h in steps:
         try:
-            r = run_scene(scene, step=h, **options)
+            r = run_scene(scene, fmu_dir=fmu_dir, step=h, **options) if engine == "parts" else linefmu.run(scene, fmu_dir, h)
         except Exception as e:  # an unstable coupling fails; its row records that
-            rows.append(Row(h, math.inf, math.inf, math.nan, 0, 0, failed=str(e).split(":")[0][:80]))
+            rows.append(Row(h, math.inf, math.inf, math.nan, 0, 0, failed=str(e)[:160]))
             continue
         errs = errors(r, ref)
         speed = [e for k, e in errs.items() if k.endswith(".v")]
-        rows.append(Row(h, tension_error(errs), max(speed) if speed else 0.0, r.info["wall_time"], r.info["steps"], r.info["rollbacks"]))
+        rows.append(Row(h, tension_error(errs), max(speed) if speed else 0.0, r.info["wall_time"], r.info["steps"], r.info.get("rollbacks", 0)))
     return rows, ref
 
 

@@ -1,11 +1,12 @@
 """The `webline` command.
 
-    webline run SCENE.json|LINE.ssp [--engine webline|libcosim|fmpy|fmpy-line|reference] [--step 1ms] [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
+    webline run SCENE.json|LINE.ssp [--engine line|reference|parts|libcosim|fmpy] [--step 1ms] [--force]
+                                    [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
     webline export SCENE.json -o LINE.ssp
     webline export SCENE.json --fmu [-o Line.fmu] [--fmi3]
     webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
     webline reference SCENE.json
-    webline convergence SCENE.json [--steps 2ms,1ms,0.5ms]
+    webline convergence SCENE.json [--engine parts|line] [--steps 2ms,1ms,0.5ms]
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
 """
 
@@ -20,11 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from . import units
+from .names import ARCHIVE_ENGINES, ENGINES, engine_name
 from .fmus import DEFAULT_FMU_DIR, FmuError
-from .compiler import run_scene
+from .linear import StabilityError
 from .master import ALGORITHMS, COUPLINGS, CoSimulationError, scene_grid
 from .result import Result
-from .engines import ENGINES
 from .scene import Dancer, SceneError, Span, load_scene
 from .ssp import SspError
 from .linefmu import LineFmuError
@@ -45,33 +46,48 @@ def time_arg(text: str) -> float:
     raise argparse.ArgumentTypeError(f"{text!r} is not a time (e.g. 1ms, 0.5 ms, 0.001)")
 
 
+def engine_arg(text: str) -> str:
+    try:
+        return engine_name(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def add_master_options(p):
+    """The parts' master options; None where not given, so that another engine can refuse them."""
     p.add_argument("--step", type=time_arg, help="communication step (default: the scene's)")
-    p.add_argument("--algorithm", choices=ALGORITHMS, default="gauss-seidel")
-    p.add_argument("--coupling", choices=COUPLINGS, default="extrapolate",
-                   help="extrapolate: input extrapolation, input derivatives for the spans (default); hold: zero-order hold")
+    p.add_argument("--algorithm", choices=ALGORITHMS, help="parts: the master's algorithm (default gauss-seidel)")
+    p.add_argument("--coupling", choices=COUPLINGS,
+                   help="parts: extrapolate (the default): input extrapolation, input derivatives for the spans; "
+                        "hold: zero-order hold")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR, help="where ConvertingSpan.fmu and Roller.fmu are (default: out/)")
-    p.add_argument("--no-rollback", action="store_true", help="do not save FMU states; a discarded step is an error")
+    p.add_argument("--no-rollback", action="store_true", help="parts: do not save FMU states; a discarded step is an error")
 
 
-def options_of(args, progress=False) -> dict:
-    return dict(
-        algorithm=args.algorithm,
-        coupling=args.coupling,
-        step=args.step,
-        rollback=not args.no_rollback,
-        fmu_dir=args.fmu_dir,
-        progress=progress,
-    )
+def master_options(args, engine: str, progress=False) -> dict:
+    """The master's options for the parts; for another engine, an error if any was given."""
+    given = [f"--{k.replace('_', '-')}" for k in ("algorithm", "coupling") if getattr(args, k, None)]
+    given += ["--no-rollback"] if getattr(args, "no_rollback", False) else []
+    if engine != "parts":
+        if given:
+            raise SceneError(f"{' and '.join(given)} set webline's co-simulation of the parts (--engine parts), "
+                             f"not the {engine} engine")
+        return {}
+    return dict(algorithm=args.algorithm or ALGORITHMS[0], coupling=args.coupling or COUPLINGS[0],
+                rollback=not getattr(args, "no_rollback", False), progress=progress)
 
 
 def summary(scene, result: Result) -> str:
     info = result.info
     if "instances" in info:
         cost = f"{info['steps']} steps, {info['rollbacks']} rollbacks, {info['instances']} FMU instances"
-    else:  # the monolithic reference
+    elif "rhs_evaluations" in info:  # the monolithic reference
         cost = f"{len(result.time)} points, {info['rhs_evaluations']} right-hand sides"
-    lines = [f"{scene.name}: {info['method']}, step {info['step'] * 1e3:g} ms, {cost}, {info['wall_time']:.2f} s wall time"]
+    else:
+        cost = f"{info['steps']} steps"
+    lines = [f"{scene.name}: engine {info['engine']}: {info['method']}, step {info['step'] * 1e3:g} ms, {cost}, "
+             f"{info['wall_time']:.2f} s wall time"]
+    lines += [f"  warning: {w}" for w in info.get("warnings", [])]
     keys = result.keys()
     spans = [c for c in scene.parts if isinstance(c, Span) and f"{c.name}.T" in keys]
     if spans:
@@ -101,9 +117,10 @@ def summary(scene, result: Result) -> str:
 def system_summary(result: Result) -> str:
     """What a run of an SSP shows: each recorded column's start, range and end."""
     info = result.info
-    lines = [f"{result.scene}: {info['method']}, step {info['step'] * 1e3:g} ms, {info['steps']} steps, "
-             f"{info['wall_time']:.2f} s wall time",
-             f"  {'variable':<28}{'start':>12}{'min':>12}{'max':>12}{'end':>12}"]
+    lines = [f"{result.scene}: engine {info['engine']}: {info['method']}, step {info['step'] * 1e3:g} ms, "
+             f"{info['steps']} steps, {info['wall_time']:.2f} s wall time"]
+    lines += [f"  warning: {w}" for w in info.get("warnings", [])]
+    lines.append(f"  {'variable':<28}{'start':>12}{'min':>12}{'max':>12}{'end':>12}")
     for c in result.columns:
         x = result.column(c)
         lines.append(f"  {c:<28}{x[0]:>12.6g}{x.min():>12.6g}{x.max():>12.6g}{x[-1]:>12.6g}")
@@ -121,7 +138,7 @@ def cmd_export(args):
 
         path = linefmu.export(scene, args.output or Path(args.out) / f"{scene.name}.fmu", args.fmu_dir, fmi3=args.fmi3)
         print(f"{scene.name}: {len(scene.line)} parts as one FMU ({'FMI 3.0' if args.fmi3 else 'FMI 2.0'}, "
-              f"start: {scene.start or 'equilibrium'}); wrote {path}")
+              f"start: {linefmu.run_start(scene)}); wrote {path}")
         return 0
     if args.fmi3:
         raise SceneError("--fmi3 goes with --fmu (an SSP archive carries the FMI 2.0 FMUs)")
@@ -137,68 +154,29 @@ def cmd_export(args):
     return 0
 
 
-def run_other(args, progress):
-    """A run of an SSP archive (or a scene exported to one), by any engine: CSV, PNG and a summary."""
-    import tempfile
-
-    from .engines import run_fmpy, run_libcosim
-    from .master import run_system
-    from .ssp import read_ssp, write_ssp
-    from .compiler import compile_scene
-
-    is_ssp = args.scene.endswith(".ssp")
-    if is_ssp and args.reference:
-        raise SspError(f"{args.scene}: --reference needs a scene (the monolithic reference is computed from it)")
-    with tempfile.TemporaryDirectory(prefix="webline-ssp-") as tmp:
-        tmp = Path(tmp)
-        if is_ssp:
-            scene, archive = None, Path(args.scene)
-        else:
-            from .stability import export_step
-
-            scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-            system = compile_scene(scene, args.fmu_dir)
-            system.step = export_step(system)
-            archive = write_ssp(system, tmp / f"{scene.name}.ssp")
-        system = read_ssp(archive, tmp / "extracted")
-        if args.engine == "libcosim":
-            result = run_libcosim(tmp / "extracted", system, args.step)
-        elif args.engine == "fmpy":
-            result = run_fmpy(archive, system, args.step)
-        else:
-            options = options_of(args, progress=progress)
-            options.pop("fmu_dir", None)  # the archive's FMUs run
-            result = run_system(system, **options)
-    return scene, system.name, result
-
-
 def cmd_run(args):
     progress = sys.stderr.isatty() if args.progress is None else args.progress
-    if args.engine == "fmpy-line":
-        from . import linefmu
+    if args.scene.endswith(".ssp"):
+        from .engines import run_archive
 
-        if args.scene.endswith(".ssp"):
-            raise SspError(f"{args.scene}: the fmpy-line engine runs a scene (.json) as one Line FMU")
-        scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-        result = linefmu.run(scene, args.fmu_dir, args.step)
-        return report_run(args, scene, scene.name, result, system_summary(result))
-    if args.engine == "reference":
-        if args.scene.endswith(".ssp"):
-            raise SspError(f"{args.scene}: the reference engine integrates a scene (.json), not an SSP archive")
-        from .reference import reference
-
-        scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+        engine = args.engine or "parts"
         if args.reference:
-            raise SceneError("--reference compares an engine with the reference; --engine reference is the reference itself")
-        result = reference(scene, times=scene_grid(scene, args.step))
-        result.info["step"] = args.step or scene.step
-        return report_run(args, scene, scene.name, result, None)
-    if args.scene.endswith(".ssp") or args.engine != "webline":
-        scene, name, result = run_other(args, progress)
-        return report_run(args, scene, name, result, system_summary(result))
+            raise SspError(f"{args.scene}: --reference needs a scene (the monolithic reference is computed from it)")
+        if engine not in ARCHIVE_ENGINES:
+            raise SspError(f"{args.scene}: the {engine} engine runs a scene (.json); an SSP archive runs as "
+                           f"{', '.join(ARCHIVE_ENGINES)} (parts by default)")
+        result = run_archive(Path(args.scene), engine, args.step, force=args.force, **master_options(args, engine, progress))
+        return report_run(args, None, result.scene, result, system_summary(result))
+    from .engines import run_scene
+
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-    progress = sys.stderr.isatty() if args.progress is None else args.progress
-    result = run_scene(scene, **options_of(args, progress=progress))
+    engine = args.engine
+    if args.reference and engine == "reference":
+        raise SceneError("--reference compares an engine with the reference; --engine reference is the reference itself")
+    if args.force and engine != "parts":
+        raise SceneError("--force runs the parts' co-simulation above its predicted stable step; it goes with --engine parts")
+    result = run_scene(scene, engine, args.fmu_dir, args.step, force=args.force,
+                       **master_options(args, engine or "line", progress))
     return report_run(args, scene, scene.name, result, None)
 
 
@@ -234,16 +212,20 @@ def report_run(args, scene, name, result, text):
 
 
 def cmd_check(args):
-    """Describe each scene (read strictly), then linearize its line and predict the stable steps."""
-    from .stability import StabilityError, analyse, report
+    """Describe each scene (read strictly), then linearize its line and predict the stable steps: the
+    four couplings' at the start, webline's own and a plain importer's over the run's operating points."""
+    from .stability import PLAIN, StabilityError, analyse, coupling_limits, operating_lines, report
 
     status = 0
     for path in args.scenes:
         if str(path).endswith(".ssp"):
+            from .linearization import linearize
             from .ssp import read_ssp
 
             system = read_ssp(Path(path), Path(tempfile.mkdtemp(prefix="webline-check-")))
             print(f"{path}: {system.name}: {len(system.components)} components, step {system.step * 1e3:g} ms")
+            lines = lambda system=system: [(system.start_time, linearize(system, method=args.method))]  # noqa: E731
+            kind_of = lambda name, system=system: system.component(name).kind  # noqa: E731
         else:
             from .compiler import compile_scene
 
@@ -258,8 +240,12 @@ def cmd_check(args):
             if args.describe_only:
                 continue
             system = compile_scene(scene, args.fmu_dir, settle=False)
+            lines = lambda scene=scene: operating_lines(scene, args.fmu_dir, args.method)  # noqa: E731
+            kind_of = lambda name, scene=scene: scene.component(name).type  # noqa: E731
         try:
-            print(report(system, analyse(system, method=args.method)))
+            points = lines()
+            limits = coupling_limits(points, (("gauss-seidel", "extrapolate"), PLAIN), kind_of)
+            print(report(system, analyse(system, line=points[0][1]), limits))
         except StabilityError as e:
             print(f"  stability: {e}")
             status = 2
@@ -284,9 +270,11 @@ def cmd_convergence(args):
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     steps = [time_arg(s) for s in args.steps.split(",")]
-    rows, _ = convergence(scene, steps, algorithm=args.algorithm, coupling=args.coupling, fmu_dir=args.fmu_dir)
+    options = master_options(args, args.engine)
+    rows, _ = convergence(scene, steps, engine=args.engine, fmu_dir=args.fmu_dir, **options)
     orders = observed_orders(rows)
-    print(f"{scene.name}: co-simulation ({args.algorithm}, {args.coupling}) against the monolithic reference")
+    how = f"co-simulation of the parts ({options['algorithm']}, {options['coupling']})" if options else "the Line FMU"
+    print(f"{scene.name}: {how} against the monolithic reference")
     print(f"  {'step':>10}{'tension error':>15}{'speed error':>13}{'order':>7}{'wall time':>11}")
     for i, r in enumerate(rows):
         order = f"{orders[i - 1]:.2f}" if i > 0 and not math.isnan(orders[i - 1]) else ""
@@ -341,14 +329,17 @@ def main(argv=None):
     parser = argparse.ArgumentParser(prog="webline", description="Co-simulate web lines of ConvertingSpan and Roller FMUs.")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("run", help="co-simulate a scene or an SSP archive: CSV, PNG and a summary")
+    p = sub.add_parser("run", help="run a scene (the Line FMU by default) or an SSP archive: CSV, PNG and a summary")
     p.add_argument("scene", help="a scene (.json) or an SSP archive (.ssp)")
     add_master_options(p)
-    p.add_argument("--engine", choices=ENGINES, default="webline",
-                   help="webline (default; --algorithm and --coupling apply), or libcosim or FMPy on the SSP "
-                        "(Jacobi, held inputs, fixed step; a scene is exported to SSP first), or fmpy-line: "
-                        "the scene as one Line FMU in FMPy (solved monolithically at any --step), or reference: "
-                        "the monolithic SciPy reference alone")
+    p.add_argument("--engine", type=engine_arg, metavar="{" + ",".join(ENGINES) + "}",
+                   help="line (the default for a scene): the scene as one Line FMU in FMPy, exact at any --step (where "
+                        "it cannot run a scene, the monolithic reference does, and the summary says so); reference: the "
+                        "monolithic SciPy reference; parts (the default for an SSP archive): webline's co-simulation of "
+                        "the part FMUs (--algorithm and --coupling apply), refused above its predicted stable step; "
+                        "libcosim or fmpy: the SSP archive in those (Jacobi, held inputs; a scene is exported first)")
+    p.add_argument("--force", action="store_true",
+                   help="parts: run above the predicted stable step anyway (the summary warns)")
     p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
     p.add_argument("--no-plot", action="store_true")
     p.add_argument("--reference", action="store_true", help="also compute the monolithic reference and print the error")
@@ -386,8 +377,10 @@ def main(argv=None):
     p = sub.add_parser("convergence", help="error against the reference as the communication step shrinks")
     p.add_argument("scene")
     p.add_argument("--steps", default="2ms,1ms,0.5ms,0.25ms")
-    p.add_argument("--algorithm", choices=ALGORITHMS, default="gauss-seidel")
-    p.add_argument("--coupling", choices=COUPLINGS, default="extrapolate")
+    p.add_argument("--engine", type=engine_arg, default="parts", metavar="{parts,line}",
+                   help="parts (the default: the coupling's error, every step run, an unstable one reported) or line")
+    p.add_argument("--algorithm", choices=ALGORITHMS, help="parts: default gauss-seidel")
+    p.add_argument("--coupling", choices=COUPLINGS, help="parts: default extrapolate")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.set_defaults(func=cmd_convergence)
 
@@ -417,7 +410,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError, LineFmuError) as e:
+    except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError, LineFmuError, StabilityError) as e:
         print(f"webline: {e}", file=sys.stderr)
         return 2
 

@@ -26,6 +26,7 @@ from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile, span_effects
 from .master import Master, Options, settle_start_values
 from .profiles import Profile
 from .result import Result
+from .names import ROLLER_VARIABLES, SPAN_VARIABLES
 from .scene import Dancer, Scene, SceneError, Span
 from .system import Component, Connection, System
 
@@ -36,11 +37,6 @@ PRESCRIBED_R = 0.1  # m
 ROLL = {"unwinder": 1, "winder": 2}  # the Roller's Integer `roll`; 0 otherwise
 MAX_PORTS = 4  # the Roller's inlets web_a..web_a4 and outlets web_b..web_b4
 WEB_FIELDS = ("E", "thickness", "width", "density", "d_r")
-
-# A scene's recorded quantity -> the FMU variable that holds it.
-SPAN_VARIABLES = {"T": "summary_Tension", "eps": "summary_Strain", "L": "summary_Length", "F_a": "web_a.F", "F_b": "web_b.F"}
-ROLLER_VARIABLES = {"omega": "omega", "tau": "tau", "y": "y", "y_dot": "y_dot", "eps": "web_b.eps"}
-
 
 def table(profile: Profile):
     """A scene profile as a profile-JSON table [[t, value], ...]."""
@@ -62,20 +58,7 @@ def web_values(side: str, web, web_library=None, clear_record=False) -> dict:
     return values
 
 
-def equilibrium_strain(scene: Scene, span: Span, eps_in: float) -> float:
-    """The strain of a span at rest between its rollers' start speeds:
-    (1 + eps) = (v_b / v_a) * (1 + eps_a), or eps_a when v_a = 0."""
-    va = scene.initial_speed(scene.upstream(span))
-    vb = scene.initial_speed(scene.downstream(span))
-    return eps_in if va == 0 else (vb - va + vb * eps_in) / va
-
-
-def _start_strain(node, t=0.0):
-    """The strain a source or unwinder gives the web it feeds."""
-    return node.strain.value(t)
-
-
-def _roller(scene: Scene, node, fmu: Path) -> Component:
+def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     start = {}
     profile = {}
     speed = scene.speed_profile(node)
@@ -97,14 +80,18 @@ def _roller(scene: Scene, node, fmu: Path) -> Component:
         else:
             profile["strain"] = table(strain)
     if isinstance(node, Dancer):
+        # The Roller starts its carriage at carriage.y_start, its spring's rest position. One that starts
+        # elsewhere (its steady position) takes that as the rest position and the load less the spring's
+        # force there: the same force, load - k*(y - y_start), at every y.
+        y0 = positions.get(node.name, node.y_start)
         start.update({
             "carriage": True,
             "carriage.m": float(node.mass),
             "carriage.d": float(node.damping),
             "carriage.k": float(node.stiffness),
-            "carriage.y_start": float(node.y_start),
+            "carriage.y_start": float(y0),
         })
-        profile["load"] = table(node.load)
+        profile["load"] = table(node.load.shifted(-node.stiffness * (y0 - node.y_start)))
     sets = [{"time": float(e.time), **{k: float(v) for k, v in e.changes.items()}} for e in scene.events if e.component == node.name]
     if sets:
         profile["set"] = sets
@@ -116,11 +103,12 @@ def _dancer_of(scene: Scene, span: Span):
     return up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
 
 
-def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict, effects: tuple) -> Component:
+def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effects: tuple, positions: dict) -> Component:
     dancer = _dancer_of(scene, span)
+    y0 = positions.get(dancer.name, dancer.y_start) if dancer is not None else None  # the carriage's start
     lib = scene.web_library
     start = {
-        "L": float(span.length if span.length is not None else dancer.y_start),
+        "L": float(span.length if span.length is not None else y0),
         **web_values("wp1", span.wp1, lib),
         **web_values("wp2", span.wp2, lib),
         **{e: e in span.effects for e in effects},
@@ -128,7 +116,6 @@ def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict, eff
         # (FMPy's first inputs are all 0.0): every engine starts the same.
         "startAtEquilibrium": False,
     }
-    eps = span.eps_start if span.eps_start is not None else equilibrium_strain(scene, span, eps_in)
     start["eps_start"] = float(eps)
     if span.solver != "auto":  # an Enumeration: left at its default unless asked (libcosim ignores them)
         start["solver"] = solvers[span.solver]
@@ -142,9 +129,9 @@ def _span(scene: Scene, span: Span, eps_in: float, fmu: Path, solvers: dict, eff
         # The x of the moving end is a constant too, so not connected: an engine
         # that starts its inputs at 0 (FMPy) then sees the right geometry.
         if scene.downstream(span) is dancer:
-            start.update({"frame_a.x": 0.0, "frame_a.y": float(dancer.y_start), "frame_b.x": 0.0})
+            start.update({"frame_a.x": 0.0, "frame_a.y": float(y0), "frame_b.x": 0.0})
         else:
-            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(dancer.y_start),
+            start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(y0),
                           "frame_a.x": 2.0 * float(dancer.R)})
     sets = []
     webs = {"wp1": span.wp1, "wp2": span.wp2}
@@ -171,21 +158,25 @@ def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
     return ROLLER_VARIABLES[quantity]
 
 
-def equilibrium_starts(scene: Scene) -> dict:
-    """With `"start": "equilibrium"`: each span's strain and each roller's
-    speed in the line's steady state (from the monolithic reference's
-    equations, solved once), as the parts' start values. A dancer keeps its
-    y_start (its spring's rest position is the same parameter)."""
-    if scene.start != "equilibrium":
-        return {}
+def equilibrium_starts(scene: Scene, at: float = 0.0) -> tuple[dict, dict]:
+    """With `"start": "equilibrium"`: each span's strain and each roller's speed in the line's steady
+    state (from the monolithic reference's equations, solved and checked once: a line without one is
+    refused), as the parts' start values; and each dancer's steady position. ({}, {}) otherwise.
+    `at` > 0: the line's operating point at that time instead (`LineODE.operating_state`)."""
+    if scene.start != "equilibrium" and at == 0.0:
+        return {}, {}
     from .reference import LineODE
 
     ode = LineODE(scene)
-    z = ode.initial_state()
+    z = ode.operating_state(at)
     starts = {sp.name: {"eps_start": float(z[ode.i_eps[sp.name]])} for sp in scene.spans}
     for m in ode.movers:
         starts[m.name] = {"v_start": float(m.R * z[ode.i_omega[m.name]])}
-    return starts
+    return starts, {d.name: float(z[ode.i_y[d.name]]) for d in ode.dancers}
+
+
+class TooManyWebs(SceneError):
+    """More webs at a roller than the Roller FMU has ports: no engine of FMUs runs the scene (the reference does)."""
 
 
 def port(side: str, k: int) -> str:
@@ -198,16 +189,19 @@ def _ports(scene: Scene, node, side: str, spans: list) -> int:
     if len(spans) > MAX_PORTS:
         what = "merges" if side == "web_a" else "splits the web into"
         webs = "webs" if side == "web_a" else "lanes"
-        raise SceneError(f"{scene.path}: {node.type} {node.name!r} {what} {len(spans)} {webs} ({', '.join(sp.name for sp in spans)}); "
+        raise TooManyWebs(f"{scene.path}: {node.type} {node.name!r} {what} {len(spans)} {webs} ({', '.join(sp.name for sp in spans)}); "
                          f"the Roller FMU has at most {MAX_PORTS} {'inlets' if side == 'web_a' else 'outlets'}")
     return len(spans)
 
 
-def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
+def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibrium=True, at=0.0) -> System:
     """The System of a scene: a Roller per node (in the order the web flows), then a span per
     span (the same order, side paths included), their profiles, connections and the recorded
     variables. `settle`: connected inputs start at the initial outputs that feed them, read
-    from the FMUs themselves (`master.settle_start_values`).
+    from the FMUs themselves (`master.settle_start_values`). `carriages_at_equilibrium`: with
+    `"start": "equilibrium"`, a dancer's carriage starts at its steady position (`_roller`); the Line
+    FMU, which solves its own steady state from the scene's parameters, takes them as they are.
+    `at`: the System from the line's operating point at that time (a linearization's, `stability`).
 
     A nip where webs merge is a Roller with `inlets` = the number of webs arriving: the main
     line's span at web_a, each side path's last span at web_a2..4, their masses per unstretched
@@ -220,11 +214,13 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
     d = Path(fmu_dir or DEFAULT_FMU_DIR)
     span_fmu, roller_fmu = d / SPAN_FMU, d / ROLLER_FMU
     solvers = FmuFile.load(span_fmu).enumeration("solver") if any(s.solver != "auto" for s in scene.spans) else {}
-    equilibrium = equilibrium_starts(scene)
+    equilibrium, positions = equilibrium_starts(scene, at)
+    if not carriages_at_equilibrium:
+        positions = {}
     effects = span_effects(d)
     rollers = []
     for n in scene.nodes:
-        comp = _roller(scene, n, roller_fmu)
+        comp = _roller(scene, n, roller_fmu, positions)
         ins, outs = scene.spans_in(n), scene.spans_out(n)
         if _ports(scene, n, "web_a", ins) > 1:
             comp.start["inlets"] = len(ins)
@@ -232,25 +228,13 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
         if _ports(scene, n, "web_b", outs) > 1:
             comp.start["outlets"] = len(outs)
         rollers.append(comp)
-    # Strains a span starts at when its scene gives none: with side paths the reference's own start
-    # (the same rule, with the merged strain [M2] after a nip), so that every engine starts alike.
-    given = None
-    if scene.branches:
-        from .reference import LineODE
+    # The strains the spans start at when the scene gives none: the reference's own given start
+    # (scene.start_strain, the merged strain [M2] after a nip), so that every engine starts alike.
+    from .reference import LineODE
 
-        ode = LineODE(scene)
-        z = ode.given_state()
-        given = {sp.name: float(z[ode.i_eps[sp.name]]) for sp in scene.spans}
-    spans = []
-    eps_in = _start_strain(scene.line[0])
-    for sp in scene.spans:
-        if given is not None:
-            eps_in = given[sp.name]  # used only when the span has no eps_start: then it is its start
-        comp = _span(scene, sp, eps_in, span_fmu, solvers, effects)
-        if given is not None and sp.eps_start is None:
-            comp.start["eps_start"] = given[sp.name]
-        eps_in = comp.start["eps_start"]
-        spans.append(comp)
+    ode = LineODE(scene)
+    z = ode.given_state()
+    spans = [_span(scene, sp, float(z[ode.i_eps[sp.name]]), span_fmu, solvers, effects, positions) for sp in scene.spans]
     for comp in rollers + spans:
         comp.start.update(equilibrium.get(comp.name, {}))
 
@@ -286,7 +270,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True) -> System:
         name=scene.name,
         components=rollers + spans,
         connections=connections,
-        start_time=0.0,
+        start_time=float(at),
         stop_time=float(scene.stop_time),
         step=float(scene.step),
         record=[(c, _record_variable(scene, c, q)) for c, q in scene.record],

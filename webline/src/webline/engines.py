@@ -1,39 +1,136 @@
-"""An SSP archive run by other engines: DNV's libcosim (libcosimpy) and FMPy's SSP simulation.
+"""The engines that run a line, by one set of names (`webline run`, `convergence`, `sweep`):
 
-Both couple Jacobi-style with held inputs at a fixed step. Each returns a Result on the communication
-points start + k*h, k = 1..n (the values after each step), columns "component.variable" as recorded.
+- `line`: the scene as one Line FMU in FMPy, exact at any step (the default; `fmpy-line` is its old name);
+  where the Line FMU cannot run a scene, the monolithic reference runs it and the result says so;
+- `reference`: the monolithic SciPy reference (`reference.py`);
+- `parts`: webline's co-simulation of the part FMUs (`master.py`), refused above its coupling's
+  predicted stable step unless forced (`stability.refuse_unstable`); an SSP archive runs as parts;
+- `libcosim`, `fmpy`: an SSP archive (a scene exported to one first) in DNV's libcosim or FMPy's
+  simulate_ssp, both Jacobi with held inputs at a fixed step.
+
+Every engine's Result names its columns as the scene does ("span.T [N]", "roller.v [m/s]"), an SSP
+archive's too (`scene_columns`). `run_libcosim` and `run_fmpy` return the values after each step, on
+the communication points start + k*h, k = 1..n.
 """
 
 from __future__ import annotations
 
+import tempfile
 import time as clock
 from unittest import mock
 from pathlib import Path
 
 import numpy as np
 
+from . import names
+from .names import ARCHIVE_ENGINES, DEFAULT, engine_name
 from .result import Result
 from .ssp import SSD, SspError, _variables
 from .system import System
 
-ENGINES = ("webline", "libcosim", "fmpy", "fmpy-line", "reference")
+
+def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None = None, force: bool = False,
+              **options) -> Result:
+    """A scene run by an engine (None: `line`, or `reference` where the Line FMU cannot run it), its
+    columns as the scene names them. info["engine"] says which ran, info["warnings"] what the user must
+    see. `options`: the parts' master options (algorithm, coupling, rollback, progress)."""
+    engine = engine_name(engine or DEFAULT)
+    warnings = []
+    if engine == "line":
+        from . import linefmu
+        from .compiler import TooManyWebs
+        from .linefmu import LineFmuError
+
+        try:
+            with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
+                path = linefmu.export(scene, Path(tmp) / f"{scene.name}.fmu", fmu_dir)
+                result = linefmu.simulate(scene, path, step)
+        except (LineFmuError, TooManyWebs) as e:
+            if isinstance(e, LineFmuError) and not e.cannot_export:
+                raise
+            warnings.append(f"the Line FMU cannot run this scene ({e}): the monolithic reference ran it")
+            engine = "reference"
+        else:
+            warnings += [f"the Line FMU: {m}" for m in result.info["messages"].warnings]
+    if engine == "reference":
+        from .master import scene_grid
+        from .reference import reference
+
+        result = reference(scene, times=scene_grid(scene, step))
+        result.info["step"] = step or scene.step
+    elif engine == "parts":
+        from .compiler import run_scene as run_parts
+        from .stability import operating_lines
+
+        warnings += check_step(lambda: operating_lines(scene, fmu_dir), scene.name, step or scene.step, force,
+                               lambda name: scene.component(name).type, **options)
+        result = run_parts(scene, fmu_dir=fmu_dir, step=step, **options)
+    elif engine in ("libcosim", "fmpy"):
+        from .compiler import compile_scene
+        from .ssp import write_ssp
+        from .stability import export_step
+
+        with tempfile.TemporaryDirectory(prefix="webline-ssp-") as tmp:
+            system = compile_scene(scene, fmu_dir)
+            system.step = export_step(system)
+            result = run_archive(write_ssp(system, Path(tmp) / f"{scene.name}.ssp"), engine, step, Path(tmp))
+        result.scene = scene.name
+    result.info["engine"] = engine
+    result.info["warnings"] = warnings + result.info.get("warnings", [])
+    return result
+
+
+def check_step(lines, name: str, step: float, force: bool, kind_of, algorithm="gauss-seidel", coupling="extrapolate",
+               **_) -> list[str]:
+    """Before the parts run: their coupling's limit over the run (`lines()`: the line linearized at its
+    operating points), refused above it (stability.UnstableStep); forced, a warning for the summary."""
+    from .stability import refuse_unstable
+
+    if force:
+        return [f"forced: a step of {step * 1e3:g} ms was not checked against the stable step of the {algorithm}/"
+                f"{coupling} coupling; the run may be wrong (`webline check` predicts that step)"]
+    refuse_unstable(lines(), name, step, algorithm, coupling, kind_of)
+    return []
+
+
+def run_archive(archive: Path, engine: str = "parts", step: float | None = None, workdir=None, force=False,
+                **options) -> Result:
+    """An SSP archive run by `parts` (webline's master; `options` are its own; refused above the
+    coupling's stable step at the start unless `force`), `libcosim` or `fmpy`."""
+    from .master import run_system
+    from .ssp import read_ssp
+
+    engine = engine_name(engine)
+    if engine not in ARCHIVE_ENGINES:
+        raise SspError(f"{archive}: the {engine} engine runs a scene (.json), not an SSP archive "
+                       f"(engines for an archive: {', '.join(ARCHIVE_ENGINES)})")
+    with tempfile.TemporaryDirectory(prefix="webline-ssp-") as tmp:
+        folder = Path(workdir or tmp) / "extracted"
+        system = read_ssp(archive, folder)
+        if engine == "libcosim":
+            result = run_libcosim(folder, system, step)
+        elif engine == "fmpy":
+            result = run_fmpy(archive, system, step)
+        else:
+            from .linearization import linearize
+
+            warnings = check_step(lambda: [(system.start_time, linearize(system))], system.name, step or system.step,
+                                  force, lambda name: system.component(name).kind, **options)
+            result = run_system(system, step=step, **options)
+            result.info["warnings"] = warnings
+    result.info["engine"] = engine
+    return result
+
+
+def scene_columns(system: System) -> list[str]:
+    """The recorded variables of a System (an archive's) named as a scene names them (`names.scene_columns`)."""
+    return names.scene_columns(system, {c.name: _variables(Path(c.fmu))[1] for c in system.components})
 
 
 def steps_of(system: System, step: float | None) -> tuple[float, int]:
     h = step or system.step
     n = int(round((system.stop_time - system.start_time) / h))
     return h, n
-
-
-def record_columns(system: System) -> list[str]:
-    """The recorded variables as Result columns, "component.variable [unit]" (as the master names them)."""
-    variables = {c.name: _variables(Path(c.fmu))[1] for c in system.components}
-    out = []
-    for comp, var in system.record:
-        v = variables[comp][var]
-        unit = v.unit or getattr(v.declaredType, "unit", None)
-        out.append(f"{comp}.{var} [{unit or '1'}]")
-    return out
 
 
 def run_libcosim(ssd_dir: Path, system: System, step: float | None = None) -> Result:
@@ -61,7 +158,7 @@ def run_libcosim(ssd_dir: Path, system: System, step: float | None = None) -> Re
         picked = [i for i, (c, _) in enumerate(system.record) if c == comp]
         reads.append((index, [vr[system.record[i][1]] for i in picked]))
         order += picked
-    columns = record_columns(system)
+    columns = scene_columns(system)
     rows = np.empty((n, len(columns)))
     for k in range(n):
         if not execution.step():
@@ -129,7 +226,7 @@ def run_fmpy(archive: Path, system: System, step: float | None = None) -> Result
     if missing:
         raise SspError(f"{archive}: FMPy recorded no {', '.join(missing)} (it records connectors only)")
     data = np.column_stack([out[k].astype(float) for k in keys])
-    return Result(scene=system.name, columns=record_columns(system), time=out["time"] + h, data=data,
+    return Result(scene=system.name, columns=scene_columns(system), time=out["time"] + h, data=data,
                   info={"method": f"FMPy simulate_ssp, fixed step {h * 1e3:g} ms", "step": h, "steps": len(out), "wall_time": wall})
 
 
@@ -182,12 +279,11 @@ def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None
         "webline_fmpy": Master(system, Options.fmpy()).run(),
     }
     ref = reference(scene, times=runs["webline_engine"].time)
-    columns = {f"{c}.{v}": f"{c}.{q}" for (c, q), (_, v) in zip(scene.record, system.record)}
 
-    def versus_reference(result):  # the reference names columns as the scene records them
+    def versus_reference(result):  # every engine names its columns as the scene does
         within = result.time <= ref.time[-1] + 1e-6 * system.step  # FMPy may step once past the stop time
-        renamed = Result(result.scene, [columns[k] for k in result.keys()], result.time[within], result.data[within], result.info)
-        return max(errors(renamed, ref).values())
+        trimmed = Result(result.scene, result.columns, result.time[within], result.data[within], result.info)
+        return max(errors(trimmed, ref).values())
 
     return {
         "scene": scene.name,

@@ -33,15 +33,29 @@ def _point_proxy_at_printer():
     _point_proxy_at(*_printer)
 
 
+class Log(list):
+    """The messages an FMU logged, as text; `warnings`: those it logged as fmi2Warning or worse."""
+
+    def __init__(self):
+        super().__init__()
+        self.warnings: list[str] = []
+
+
+WARNING = 1  # fmi2Status: fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal
+
+
 @contextmanager
 def collecting():
     """`with collecting() as (messages, logger): simulate_fmu(..., logger=logger)`: each message
-    the FMU logs is appended to `messages` as text."""
-    messages: list[str] = []
+    the FMU logs is appended to `messages` (a Log) as text."""
+    messages = Log()
 
-    def logger(*args):
+    def logger(*args):  # (component, instance name, status, category, message)
         message = args[-1]
-        messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
+        text = message.decode(errors="replace") if isinstance(message, bytes) else str(message)
+        messages.append(text)
+        if len(args) >= 5 and args[2] >= WARNING:
+            messages.warnings.append(text)
 
     try:
         yield messages, logger

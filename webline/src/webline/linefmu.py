@@ -36,7 +36,12 @@ OUTPUTS = {"T": "T", "eps": "eps", "L": "length", "F_a": "F_a", "F_b": "F_b",
 
 
 class LineFmuError(RuntimeError):
-    """The Line FMU cannot be written or run; the message says why."""
+    """The Line FMU cannot be written or run; the message says why. `cannot_export`: it could not be
+    written (no Line binaries, a line the description tool refuses), so that another engine may run it."""
+
+    def __init__(self, message, cannot_export=False):
+        super().__init__(message)
+        self.cannot_export = cannot_export
 
 
 def line_spec(scene: Scene, fmu_dir=None, start: str | None = None, settle=True) -> dict:
@@ -44,7 +49,7 @@ def line_spec(scene: Scene, fmu_dir=None, start: str | None = None, settle=True)
     values and profiles, the connections, the experiment, how it starts.
     `settle=False` leaves out the connected inputs' start values (which the
     FMU settles itself when it initializes), without running the parts' FMUs."""
-    system = compile_scene(scene, fmu_dir, settle=settle)
+    system = compile_scene(scene, fmu_dir, settle=settle, carriages_at_equilibrium=False)
     components = {c.name: c for c in system.components}
     parts = []
     for c in scene.parts:
@@ -90,7 +95,8 @@ def description_tool() -> Path:
         env={**__import__("os").environ, "CARGO_TARGET_DIR": str(target)},
     )
     if run.returncode != 0:
-        raise LineFmuError(f"cannot build line-description: {run.stderr.strip().splitlines()[-1] if run.stderr.strip() else run.returncode}")
+        raise LineFmuError(f"cannot build line-description: {run.stderr.strip().splitlines()[-1] if run.stderr.strip() else run.returncode}",
+                           cannot_export=True)
     return exe
 
 
@@ -101,7 +107,7 @@ def descriptions(text: str, out: Path):
         spec_file.write_text(text)
         run = subprocess.run([str(description_tool()), str(spec_file), str(out)], capture_output=True, text=True)
         if run.returncode != 0:
-            raise LineFmuError(run.stderr.strip() or f"line-description failed ({run.returncode})")
+            raise LineFmuError(run.stderr.strip() or f"line-description failed ({run.returncode})", cannot_export=True)
 
 
 def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None) -> Path:
@@ -110,7 +116,8 @@ def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None
     template = fmu_dir / TEMPLATE / ("fmi3" if fmi3 else "fmi2")
     binaries = template / "binaries"
     if not binaries.is_dir() or not any(binaries.iterdir()):
-        raise LineFmuError(f"no Line binaries in {binaries}: build them with `bash fmu/main.sh` (fmu/package.py)")
+        raise LineFmuError(f"no Line binaries in {binaries}: build them with `bash fmu/main.sh` (fmu/package.py)",
+                           cannot_export=True)
     spec = line_spec(scene, fmu_dir, start)
     text = spec_text(spec)
     out = Path(out)
@@ -139,16 +146,21 @@ def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None
 
 def run_start(scene: Scene) -> str:
     """How a run of the scene as one Line FMU starts (`run`, and the sweeps through it): as every
-    engine starts the scene, from its "start", else from its start values."""
-    return scene.start or "given"
+    engine starts the scene, from its "start" (equilibrium unless it says given)."""
+    return scene.start or "equilibrium"
 
 
 def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=False, workdir=None):
-    """The scene as one Line FMU in FMPy (Co-Simulation at the step, or Model
-    Exchange with FMPy's CVode and output at the step): a Result with the
-    scene's recorded columns at the communication points. The line starts as
-    every engine starts the scene (its "start", else its start values), so
-    that the whole and the parts compare."""
+    """The scene as one Line FMU in FMPy (Co-Simulation at the step, or Model Exchange with FMPy's CVode
+    and output at the step): a Result with the scene's recorded columns at the communication points.
+    The line starts as every engine starts the scene (its "start": equilibrium unless it says given)."""
+    with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
+        path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=run_start(scene))
+        return simulate(scene, path, step, model_exchange)
+
+
+def simulate(scene: Scene, path: Path, step: float | None = None, model_exchange=False):
+    """A scene's Line FMU at `path` in FMPy (see `run`); info["messages"] holds what the FMU logged."""
     import time as clock
 
     import numpy as np
@@ -157,17 +169,15 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
     from .result import Result
 
     h = step or scene.step
-    with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
-        path = export(scene, Path(workdir or tmp) / f"{scene.name}.fmu", fmu_dir, start=run_start(scene))
-        outputs = [f"{c}.{OUTPUTS[q]}" for c, q in scene.record]
-        t0 = clock.perf_counter()
-        with fmpy_log.collecting() as (messages, logger):
-            try:
-                out = simulate_fmu(str(path), stop_time=scene.stop_time, step_size=h, output_interval=h, output=outputs,
-                                   fmi_type="ModelExchange" if model_exchange else "CoSimulation", logger=logger)
-            except Exception as e:  # FMPy's FMICallException names the call; the FMU's log says why
-                raise LineFmuError(f"{scene.name}: {e}" + "".join(f"\n  {m}" for m in messages[-3:])) from e
-        wall = clock.perf_counter() - t0
+    outputs = [f"{c}.{OUTPUTS[q]}" for c, q in scene.record]
+    t0 = clock.perf_counter()
+    with fmpy_log.collecting() as (messages, logger):
+        try:
+            out = simulate_fmu(str(path), stop_time=scene.stop_time, step_size=h, output_interval=h, output=outputs,
+                               fmi_type="ModelExchange" if model_exchange else "CoSimulation", logger=logger)
+        except Exception as e:  # FMPy's FMICallException names the call; the FMU's log says why
+            raise LineFmuError(f"{scene.name}: {e}" + "".join(f"\n  {m}" for m in messages[-3:])) from e
+    wall = clock.perf_counter() - t0
     n = int(round(scene.stop_time / h))
     time = out["time"].astype(float)
     # Model Exchange records an event's time twice (before and after it): keep the

@@ -23,7 +23,8 @@ other engines do; `fmpy` adds the step to the time as FMPy's simulate_ssp does.
 Before a step the master saves every FMU's state (`rollback`); if an FMU
 discards the step (fmi2Discard), all are rolled back and the step is retried
 as two half steps. `zero_start` reproduces FMPy's simulate_ssp: every
-connected input is 0.0 on the first step.
+connected input is 0.0 on the first step. A tension that oscillates ever more
+stops the run (`Growth`): the coupling is unstable at the step.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from .fmus import FmuError, FmuFile, Instance
+from .names import scene_columns
 from .result import Result
 from .system import System, profile_text
 
@@ -62,12 +64,13 @@ class Options:
     zero_start: bool = False  # FMPy: every connected input 0.0 on the first step
     tolerance: float | None = 1e-12  # fmi2SetupExperiment's tolerance (None: not defined, as FMPy)
     progress: bool = False
+    watch: bool = True  # stop a run whose tensions oscillate ever more (`Growth`); other engines do not watch
 
     @staticmethod
     def engine(**kwargs) -> "Options":
         """The coupling other engines use (libcosim, FMPy): Jacobi, held inputs,
         a uniform grid, no rollback, no tolerance given."""
-        base = dict(algorithm="jacobi", coupling="hold", rollback=False, grid="uniform", tolerance=None)
+        base = dict(algorithm="jacobi", coupling="hold", rollback=False, grid="uniform", tolerance=None, watch=False)
         base.update(kwargs)
         return Options(**base)
 
@@ -99,6 +102,55 @@ class Signal:
 
     def copy(self):
         return Signal(self.now, self.t_now, self.prev, self.t_prev, self.has_prev)
+
+
+class Growth:
+    """Watches a run for an oscillation its coupling makes grow: the tensions' second difference over three
+    communication points (what a smooth signal keeps near zero, and an oscillation at the step's scale does
+    not), its peak over windows of WINDOW steps. The run stops when that peak, already FLOOR of the
+    tension's scale (its largest magnitude so far, at least 1 N) when first seen, has not fallen in
+    GROWING windows in a row and has grown RATIO times over them: a physical transient (a jump, a snatch,
+    a ring-down) peaks once and decays, and a transient's onset starts below the floor. It sees growth of
+    2.3 % per step and more (RATIO ** (1 / (GROWING * WINDOW)))."""
+
+    WINDOW = 20
+    RATIO = 10.0
+    GROWING = 5
+    FLOOR = 1e-4
+
+    def __init__(self, names):
+        self.names = list(names)
+        n = len(self.names)
+        self.last = np.full((2, n), np.nan)  # the values at the last two points
+        self.scale = np.ones(n)
+        self.peak = np.zeros(n)  # this window's
+        self.peaks = []  # the last GROWING + 1 windows'
+        self.count = 0
+
+    def see(self, t, values):
+        """The tensions at the next communication point; a message when the run must stop, else None."""
+        x = np.asarray(values, dtype=float)
+        self.scale = np.maximum(self.scale, np.abs(x))
+        if not np.isnan(self.last).any():
+            self.peak = np.maximum(self.peak, np.abs(x - 2.0 * self.last[1] + self.last[0]))
+        self.last = np.vstack([self.last[1], x])
+        self.count += 1
+        if self.count % self.WINDOW:
+            return None
+        self.peaks = (self.peaks + [self.peak])[-(self.GROWING + 1):]
+        self.peak = np.zeros_like(self.peak)
+        if len(self.peaks) <= self.GROWING:
+            return None
+        p = np.array(self.peaks)
+        growing = np.all(p[1:] >= p[:-1], axis=0) & (p[0] >= self.FLOOR * self.scale) & (p[-1] >= self.RATIO * p[0])
+        if not growing.any():
+            return None
+        k = int(np.argmax(np.where(growing, p[-1] / self.scale, -1.0)))
+        rate = (p[-1, k] / p[0, k]) ** (1.0 / (self.GROWING * self.WINDOW))
+        return (f"{self.names[k]} oscillates ever more at t = {t:g} s: its step-to-step swing grew {p[-1, k] / p[0, k]:.3g} "
+                f"times in {self.GROWING * self.WINDOW} steps ({rate:.3g} per step) to {p[-1, k]:.3g} N: the coupling is "
+                "unstable at this step (docs/line-coupling.md, 'Stability: the longest step'); take a smaller step, "
+                "or --engine line")
 
 
 def communication_points(start, stop, h, breakpoints=(), mode="aligned"):
@@ -308,11 +360,7 @@ class Master:
         return [self.sig[key].now for key in self.system.record]
 
     def columns(self):
-        out = []
-        for name, var in self.system.record:
-            unit = getattr(self.files[name].variables[var], "unit", None) or getattr(self.files[name].variables[var].declaredType, "unit", None)
-            out.append(f"{name}.{var} [{unit or '1'}]")
-        return out
+        return scene_columns(self.system, {name: f.variables for name, f in self.files.items()})
 
     def run(self) -> Result:
         start = clock.perf_counter()
@@ -329,8 +377,14 @@ class Master:
 
                 bar = tqdm(total=len(steps), unit="step", desc=s.name, leave=False)
             ends = [t for t, _ in steps[1:]] + [steps[-1][0] + steps[-1][1] if self.opt.grid == "fmpy" else s.stop_time]
+            watched = [k for k in self.sig if k[1].endswith(".F") and self.system.component(k[0]).kind == "span"]
+            growth = Growth(f"the tension of span {c!r}" for c, v in watched) if self.opt.watch and watched else None
             for (t, h), t1 in zip(steps, ends):
                 self.step(t, h, t1 in bset)
+                if growth is not None:
+                    stop = growth.see(t1, [self.sig[k].now for k in watched])
+                    if stop:
+                        raise CoSimulationError(f"{s.name}: {stop}")
                 if t1 in bset:  # a kink or jump: extrapolate afresh
                     for sg in self.sig.values():
                         sg.has_prev = False

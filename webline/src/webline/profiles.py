@@ -69,5 +69,8 @@ class Profile:
     def scaled(self, k: float) -> "Profile":
         return Profile(tuple((t, k * v) for t, v in self.knots))
 
+    def shifted(self, c: float) -> "Profile":
+        return Profile(tuple((t, v + c) for t, v in self.knots))
+
     def is_constant(self) -> bool:
         return len({v for _, v in self.knots}) == 1

@@ -36,16 +36,22 @@ import time as clock
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
-import warnings
 
 from .result import Result
-from .scene import Dancer, Prescribed, Roller, Scene, Span
+from .scene import Dancer, Prescribed, Roller, Scene, SceneError, Span, start_strain
 
 RTOL = 1e-10
 
 
-class EquilibriumError(RuntimeError):
-    """The line has no steady state for its drives at the start."""
+class EquilibriumError(SceneError):
+    """The line has no steady state for its drives at the start; the message says why and the way out."""
+
+
+# A steady state is accepted when every rate is below this fraction of how much it changes when every
+# state moves by its own size (the rates' own scale: a dancer's acceleration from forces of 800 N
+# rounds to 1e-14 m/s^2, which no fraction of its speed's size would accept).
+STEADY = 1e-9
+GIVEN = '"start": "given" in the scene starts every part from its given values instead'
 
 
 class LineODE:
@@ -181,47 +187,105 @@ class LineODE:
         return sum(m) / sum(mi / (1.0 + z[self.i_eps[sp.name]]) for mi, sp in zip(m, ins))
 
     def initial_state(self):
-        """The start: the scene's start values, or with `"start": "equilibrium"`
-        the steady state for the drives at t = 0 (scipy's root, 'hybr'; where
-        there is none, a warning and the start values)."""
+        """The start: the scene's start values, or with `"start": "equilibrium"` the steady state for
+        the drives at t = 0 (`equilibrium`); a line that has none is refused (EquilibriumError)."""
         z = self.given_state()
+        return self.equilibrium(z) if self.s.start == "equilibrium" else z
+
+    def operating_state(self, t):
+        """The line at time t as a linearization needs it: its steady state for the drives then
+        (given start values where the scene starts given or none exists), at t = 0 its start."""
+        if t == 0.0:
+            return self.initial_state()
+        z = self.given_state(t)
         if self.s.start == "equilibrium":
             try:
-                z = self.equilibrium(z)
-            except EquilibriumError as e:
-                warnings.warn(f"{self.s.name}: {e}; the line starts from its start values", stacklevel=2)
+                self.segment = (t, self.s.stop_time)
+                z = self.equilibrium(z, t)
+            except EquilibriumError:
+                pass
         return z
 
     def equilibrium(self, z0, t=0.0):
-        """The state where every rate vanishes, from z0."""
-        z = z0
+        """The state where every rate vanishes, from z0 (SciPy's root, 'hybr'), checked before it is
+        returned (`STEADY`). A dancer without a spring is steady at any position: its position is held
+        at its start and its carriage's balance of forces checked on its own, which names what is off."""
+        springless = [d for d in self.dancers if d.stiffness == 0.0]
+        held = [self.i_y[d.name] for d in springless]  # their positions: held
+        balance = [i + 1 for i in held]  # their accelerations: checked afterwards
+        free = np.array([i for i in range(self.n) if i not in held], dtype=int)
+        rows = np.array([i for i in range(self.n) if i not in balance], dtype=int)
+        z = z0.copy()
         # Scaled by the start, then again by the first answer: a strain that starts at 0 is scaled
         # by its tolerance at first, a thousand times below its steady value, and hybr stalls there.
         for _ in range(2):
             scale = np.maximum(np.abs(z), atol_of(self, z0) * 1e6)
-            sol = root(lambda u: self.rhs(t, u * scale), z / scale, method="hybr", options={"xtol": 1e-15})
-            z = sol.x * scale
-        residual = np.max(np.abs(self.rhs(t, z)) / scale) if len(z) else 0.0
-        if not residual < 1e-9:
-            raise EquilibriumError(f"no steady state ({sol.message.strip()}; largest rate {residual:.3g} of the state's size per second)")
+
+            def rates(u, scale=scale):
+                x = z.copy()
+                x[free] = u * scale[free]
+                return self.rhs(t, x)[rows]
+
+            sol = root(rates, z[free] / scale[free], method="hybr", options={"xtol": 1e-15})
+            z[free] = sol.x * scale[free]
+        off = self.unsteadiness(t, z, scale)
+        if len(rows) and not np.max(off[rows]) < STEADY:
+            worst = self.state_names()[rows[np.argmax(off[rows])]]
+            raise EquilibriumError(f"{self.s.path}: the line has no steady state at t = {t:g} s for its drives "
+                                   f"(SciPy's root: {sol.message.strip()} The rate of {worst} stays at "
+                                   f"{np.max(off[rows]):.2g} of its scale); {GIVEN}")
+        for d, i in zip(springless, balance):
+            if not off[i] < STEADY:
+                _, q, _ = self.evaluate(t, z)
+                spans = [(sp.name, q[sp.name]["F_b"]) for sp in self.ins[d.name]] + [
+                    (sp.name, q[sp.name]["F_a"]) for sp in self.outs[d.name]]
+                pull = " + ".join(f"{name} {F:.4g} N" for name, F in spans)
+                raise EquilibriumError(
+                    f"{d.where}: dancer {d.name!r} has no spring, so its carriage is steady only where its load "
+                    f"({self.pv(d.load, t):.4g} N) equals the pull of its spans, which the drives set ({pull} = "
+                    f"{sum(F for _, F in spans):.6g} N at the line's steady speeds): {self.pv(d.load, t) - sum(F for _, F in spans):.3g} N "
+                    f"are left over, the carriage runs away and "
+                    f"the line has no steady state to start from. Give the dancer a \"stiffness\" (its spring takes the "
+                    f"difference), or {GIVEN}")
         return z
 
-    def given_state(self):
+    def unsteadiness(self, t, z, scale):
+        """Each rate at z relative to how much it changes when every state moves by its own size
+        (the sum of |d rate/d state| * scale over the states, by central differences)."""
+        f = self.rhs(t, z)
+        size = np.zeros(self.n)
+        for j in range(self.n):
+            dz = np.zeros(self.n)
+            dz[j] = 1e-6 * scale[j]
+            size += np.abs(self.rhs(t, z + dz) - self.rhs(t, z - dz)) / 2e-6
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(f == 0.0, 0.0, np.abs(f) / size)
+
+    def state_names(self):
+        names = [""] * self.n
+        for k, i in self.i_eps.items():
+            names[i] = f"span {k!r}'s strain"
+        for k, i in self.i_omega.items():
+            names[i] = f"{k!r}'s speed"
+        for k, i in self.i_y.items():
+            names[i], names[i + 1] = f"dancer {k!r}'s position", f"dancer {k!r}'s carriage speed"
+        return names
+
+    def given_state(self, t=0.0):
+        """The scene's start values (at a later time t: the speeds then, each span at rest between them)."""
         s = self.s
         z = np.zeros(self.n)
         for node in self.movers:
-            z[self.i_omega[node.name]] = s.initial_speed(node) / node.R
+            z[self.i_omega[node.name]] = s.initial_speed(node, t) / node.R
         for d in self.dancers:
             z[self.i_y[d.name]] = d.y_start
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
             if sp.eps_start is not None:
                 eps = sp.eps_start
-            else:
-                # equilibrium of the initial inputs: (1+eps) = (v_b/v_a)(1+eps_a), eps_a if v_a = 0
+            else:  # at rest between its ends' start speeds (or refused, naming why)
                 up, down = self.up[sp.name], self.down[sp.name]
-                va, vb = s.initial_speed(up), s.initial_speed(down)
-                eps_a = self.entry(up, 0.0, z) - 1.0
-                eps = eps_a if va == 0 else (vb - va + vb * eps_a) / va
+                eps_a = float(self.entry(up, t, z)) - 1.0
+                eps = start_strain(sp, up, down, s.initial_speed(up, t), s.initial_speed(down, t), eps_a)
             z[self.i_eps[sp.name]] = eps
         return z
 

@@ -192,10 +192,9 @@ class Scene:
     events: list
     record: list  # [(component name, quantity)]
     web_library: str | None = None  # absolute path of the scene's own web records
-    # "equilibrium": the line starts in its steady state for the drives at t = 0
-    # (reference, webline run, Line FMU); "given": from the start values; None: not said
-    # (the parts' start values; the Line FMU's default is equilibrium).
-    start: str | None = None
+    # "equilibrium" (the default): every engine starts the line in its steady state for the drives
+    # at t = 0; "given": from the parts' start values.
+    start: str = "equilibrium"
     branches: list = field(default_factory=list)  # merges and splits (Branch), in line order
 
     @property
@@ -273,19 +272,30 @@ class Scene:
             return node.drive.profile
         return None
 
-    def initial_speed(self, node):
-        """Surface speed at the start: prescribed, v_start, or the default
-        (the initial speed of the first speed-driven component, else 0)."""
+    def initial_speed(self, node, t=0.0):
+        """Surface speed at the start: prescribed, v_start, or the default (the initial speed
+        of the first speed-driven component, else 0). At a later time t (an operating point
+        of the run): prescribed, else the first speed-driven component's, else as at the start."""
         profile = self.speed_profile(node)
         if profile is not None:
-            return profile.value(0.0)
-        if node.v_start is not None:
+            return profile.value(t)
+        if node.v_start is not None and t == 0.0:
             return node.v_start
         for other in self.nodes:
             p = self.speed_profile(other)
             if p is not None:
-                return p.value(0.0)
-        return 0.0
+                return p.value(t)
+        return node.v_start or 0.0
+
+    def speed_times(self):
+        """The operating points that span the run's speed range: the start, and the first times in
+        [0, stop) the prescribed speeds are at their slowest and at their fastest (summed over the
+        speed-driven parts; a piecewise linear profile reaches its extremes at its knots)."""
+        profiles = [self.speed_profile(c) for c in self.nodes if self.speed_profile(c) is not None]
+        knots = sorted({0.0} | {t for p in profiles for t in p.breakpoints() if 0.0 < t < self.stop_time})
+        total = [sum(abs(p.value(t)) for p in profiles) for t in knots]
+        picked = [0.0, knots[total.index(min(total))], knots[total.index(max(total))]]
+        return sorted(set(picked))
 
     def torque_profile(self, node):
         """The motor torque of a Roller-FMU node as a profile (N m)."""
@@ -309,6 +319,32 @@ class Scene:
     def columns(self):
         """The recorded columns: 'name.quantity [unit]'."""
         return [f"{c}.{q} [{QUANTITIES[self.component(c).type][q]}]" for c, q in self.record]
+
+
+def start_strain(span: Span, up, down, va: float, vb: float, eps_a: float) -> float:
+    """The strain a span without T_start or eps_start starts at: at rest between its ends' start speeds,
+    (1 + eps) = (v_b / v_a) * (1 + eps_a), or eps_a when v_a = 0. Ends that run apart in opposite
+    directions, a far end at rest under a moving one, or a strain outside (-1, 10] give no such strain:
+    a SceneError names the part that causes it, with its position, before any arithmetic sees it."""
+    if va == 0:
+        return eps_a
+    ends = f"span {span.name!r} between {up.type} {up.name!r} ({va:g} m/s) and {down.type} {down.name!r} ({vb:g} m/s)"
+    way_out = f"give span {span.name!r} a T_start or eps_start, or start its ends at speeds of one sign"
+    if vb == 0:
+        raise SceneError(f"{down.where}: {down.type} {down.name!r} stands still at the start while {up.type} {up.name!r} "
+                         f"feeds span {span.name!r} at {va:g} m/s: the span would start with no web in it (strain -1); {way_out}")
+    if vb / va < 0:
+        culprit, other = (up, down) if va < 0 else (down, up)
+        raise SceneError(f"{culprit.where}: {culprit.type} {culprit.name!r} runs backwards at the start "
+                         f"({va if culprit is up else vb:g} m/s) while {other.type} {other.name!r} at the other end of span "
+                         f"{span.name!r} runs forwards: no strain carries the web between them, so the span has no start "
+                         f"strain; {way_out}")
+    eps = (vb - va + vb * eps_a) / va
+    lo, hi = STRAIN_RANGE
+    if not lo < eps <= hi:
+        raise SceneError(f"{span.where}: {ends} would start at a strain of {eps:.4g} (the arriving web's {eps_a:.4g} "
+                         f"stretched by the speeds' ratio), outside ({lo:g}, {hi:g}]; {way_out}")
+    return eps
 
 
 def _single(spans, node, what):
@@ -513,7 +549,48 @@ def _strain_at(web: Web, tension: float) -> float:
     return brentq(lambda e: float(web.curve.sigma(e)) - stress, lo, hi, xtol=1e-16, rtol=4 * np.finfo(float).eps)
 
 
+class _Webs(dict):
+    """The scene's webs, read in any order: a laminate or a lane may name a web defined after it.
+    A web is read when first named (`ref`); one that leads back to itself is refused with the chain."""
+
+    def __init__(self, r: _Reader, nodes: Obj, web_library):
+        super().__init__()
+        self.r, self.nodes, self.library = r, nodes, web_library
+        self.reading = []  # the webs being read, outermost first
+
+    def ref(self, node: Node, what: str) -> Web:
+        name = self.r.string(node, what)
+        if name in self:
+            return self[name]
+        if name not in self.nodes:
+            raise self.r.err(node, f"{what}: no web {name!r} in \"webs\" (defined: {', '.join(self.nodes.keys()) or 'none'})")
+        if name in self.reading:
+            chain = " -> ".join(self.reading[self.reading.index(name):] + [name])
+            raise self.r.err(node, f"{what}: web {name!r} is made of itself ({chain}): a laminate's layers and a "
+                                   "lane's web must be other webs")
+        self.reading.append(name)
+        try:
+            web = _web(self.r, name, self.nodes[name], self.library, self)
+        finally:
+            self.reading.pop()
+        self[name] = web
+        return web
+
+    def read_all(self) -> dict:
+        """Every web, in the file's order."""
+        for name, node in self.nodes.items.items():
+            if name not in self:
+                self.reading.append(name)
+                try:
+                    self[name] = _web(self.r, name, node, self.library, self)
+                finally:
+                    self.reading.pop()
+        return {name: self[name] for name in self.nodes.keys()}
+
+
 def _web_ref(r: _Reader, webs: dict, node: Node, what: str) -> Web:
+    if isinstance(webs, _Webs):
+        return webs.ref(node, what)
     name = r.string(node, what)
     if name not in webs:
         raise r.err(node, f"{what}: no web {name!r} in \"webs\" (defined: {', '.join(webs) or 'none'})")
@@ -617,7 +694,7 @@ def _roller(r, o_node, name, kind) -> Roller:
         if "v_start" in o:
             c.v_start = r.quantity(o["v_start"], units.SPEED, f"{what}: v_start")
     if kind == "unwinder":
-        c.strain = r.profile(o["strain"], units.DIMENSIONLESS, f"{what}: strain")
+        c.strain = _strain_profile(r, o["strain"], what)
     c.wrap = _wrap(r, o, what)
     if "merge" in o and "split" in o:
         raise r.err(r.key_pos(o["split"]), f"{what} carries both merge and split: laminate at one roller, slit at another")
@@ -626,6 +703,20 @@ def _roller(r, o_node, name, kind) -> Roller:
             raise r.err(r.key_pos(o["trim"]), f"{what}: trim goes with split (the width a slitter cuts off)")
         c.trim = r.quantity(o["trim"], units.LENGTH, f"{what}: trim", nonnegative=True)
     return c
+
+
+# A strain the span FMU accepts: (-1, 10] (its eps_start and web_a.eps).
+STRAIN_RANGE = (-1.0, 10.0)
+
+
+def _strain_profile(r, node, what) -> Profile:
+    """The strain of the web a source or unwinder feeds: a profile inside STRAIN_RANGE."""
+    p = r.profile(node, units.DIMENSIONLESS, f"{what}: strain")
+    lo, hi = STRAIN_RANGE
+    bad = next((x for _, x in p.knots if not lo < x <= hi), None)
+    if bad is not None:
+        raise r.err(node, f"{what}: strain {bad:g} is outside ({lo:g}, {hi:g}]: a strain of -1 or less is no web")
+    return p
 
 
 def _wrap(r, o, what):
@@ -644,8 +735,12 @@ def _prescribed(r, o_node, name, kind) -> Prescribed:
     o = r.keys(o_node, what, required=required, optional=("description", "wrap"))
     c = Prescribed(name=name, type=kind, where=f"{r.source}:{o_node.line}:{o_node.col}")
     c.speed = r.profile(o["speed"], units.SPEED, f"{what}: speed")
+    backwards = next(((t, v) for t, v in c.speed.knots if v < 0), None)
+    if kind == "source" and backwards is not None:
+        raise r.err(o["speed"], f"{what}: speed {backwards[1]:g} m/s at t = {backwards[0]:g} s: a source feeds web into the line, "
+                                "so its speed must be >= 0 (web pulled back into a source would carry no defined strain)")
     if kind == "source":
-        c.strain = r.profile(o["strain"], units.DIMENSIONLESS, f"{what}: strain")
+        c.strain = _strain_profile(r, o["strain"], what)
     c.wrap = _wrap(r, o, what)
     return c
 
@@ -732,7 +827,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     if step > stop:
         raise r.err(o["step"], f"step {step} s is longer than stop_time {stop} s")
 
-    start = None
+    start = "equilibrium"  # every engine starts alike, as the Line FMU does (docs/scenes.md)
     if "start" in o:
         start = r.string(o["start"], "start")
         if start not in ("equilibrium", "given"):
@@ -741,10 +836,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     web_library = None
     if "web_library" in o:
         web_library = str((Path(base_dir or ".") / r.string(o["web_library"], "web_library")).resolve())
-    webs_obj = r.obj(o["webs"], "webs")
-    webs = {}
-    for k, v in webs_obj.items.items():
-        webs[k] = _web(r, k, v, web_library, webs)
+    webs = _Webs(r, r.obj(o["webs"], "webs"), web_library).read_all()
     if not webs:
         raise r.err(o["webs"], "webs must define at least one web")
 

@@ -273,10 +273,11 @@ def nice_floor(h: float) -> float:
     return 10.0 ** (e - 1) * 5
 
 
-def analyse(system, method: str = "auto", variants=VARIANTS) -> Prediction:
+def analyse(system, method: str = "auto", variants=VARIANTS, line=None) -> Prediction:
+    """The four couplings' limits at the system's start (`line`: the system already linearized)."""
     from .linearization import linearize
 
-    line = linearize(system, method=method)
+    line = line or linearize(system, method=method)
     limits = {v: stable_step(line, *v)[0] for v in variants}
     return Prediction(line, limits, modes(line), hand_estimate(system))
 
@@ -304,7 +305,13 @@ def _ms(h):
     return f"{h * 1e3:.4g} ms"
 
 
-def report(system, prediction: Prediction, n_modes: int = 4) -> str:
+# What `webline check` reports, labelled: webline's own coupling and a plain importer's (stability.PLAIN).
+LABELS = ("webline's coupling ({}, {}; `webline run --engine parts`)", "a plain importer's coupling ({}, {}: libcosim, FMPy)")
+
+
+def report(system, prediction: Prediction, limits=None, n_modes: int = 4) -> str:
+    """The modes, the four couplings' limits at the start, and `limits` ([webline's, a plain importer's]
+    CouplingLimit, over the run's operating points) labelled."""
     p = prediction
     out = [f"  linearized at t = {system.start_time:g} s: "
            + ", ".join(f"{b.name} ({len(b.states)} states, {b.method})" for b in p.line.blocks)]
@@ -321,5 +328,92 @@ def report(system, prediction: Prediction, n_modes: int = 4) -> str:
             ratio = f" (Gauss–Seidel hold predicts {jh / h:.2f} times that)"
         out.append(f"  estimate (physics.md) at {name}: omega_n = sqrt(sum(EA/L)/(J/R^2)) = {w:.4g} rad/s, "
                    f"h ~ 2/omega_n = {_ms(h)}{ratio}")
-    out.append(f"  recommended step: {_ms(p.step())} ({SAFETY:g} of the smallest limit, rounded down)")
+    for label, lim in zip(LABELS, limits or []):
+        out.append(f"  {label.format(lim.algorithm, lim.coupling)}: {lim.describe()}")
+    out.append(f"  the SSP export writes {_ms(p.step())} ({SAFETY:g} of the smallest limit at the start, rounded down)")
     return "\n".join(out)
+
+
+# ---------------------------------------------------------------- a run's own limit, over its speeds
+
+# The importers other than webline couple this way (libcosim, FMPy's simulate_ssp, an SSP export's step).
+PLAIN = ("jacobi", "hold")
+
+
+@dataclass
+class CouplingLimit:
+    """The largest stable step of one coupling over a run's operating points, and where it is set."""
+
+    algorithm: str
+    coupling: str
+    limit: float  # s (inf: none found, 0: none stable)
+    part: str  # the component whose states carry the mode that grows first
+    time: float  # the operating point (time of the run) that sets it
+
+    def step(self) -> float:
+        """The step to use: SAFETY times the limit, rounded down to 1, 2 or 5 times a power of ten."""
+        return nice_floor(SAFETY * self.limit) if 0.0 < self.limit < math.inf else math.nan
+
+    def describe(self) -> str:
+        if self.limit == 0.0:
+            return f"no step is stable (the mode of {self.part} grows at every step)"
+        if not math.isfinite(self.limit):
+            return "no limit found"
+        where = "at the start" if self.time == 0.0 else f"at t = {self.time:g} s"
+        return f"stable up to {_ms(self.limit)}, set by {self.part} {where}; use {_ms(self.step())}"
+
+
+def growing_part(line: Line, h: float, algorithm: str, coupling: str) -> str:
+    """The block whose states and signals carry most of the one-step map's largest mode at h
+    (participation factors |l_k r_k|: the same whatever units the states are in)."""
+    from scipy.linalg import eig
+
+    M = step_map(line, h, algorithm, coupling)
+    lam, vl, vr = eig(M, left=True, right=True)
+    i = int(np.argmax(np.abs(lam)))
+    p = np.abs(np.conj(vl[:, i]) * vr[:, i])
+    ox, ou, oy, _ = line.offsets()
+    share = [p[ox[k]:ox[k + 1]].sum() + p[ou[k]:ou[k + 1]].sum() + p[oy[k]:oy[k + 1]].sum() for k in range(len(line.blocks))]
+    return line.blocks[int(np.argmax(share))].name
+
+
+def operating_lines(scene, fmu_dir=None, method="auto") -> list:
+    """[(t, Line)]: the line linearized at each operating point of its run (`Scene.speed_times`: the
+    start, and where the prescribed speeds are slowest and fastest, the line in its steady state then)."""
+    from .compiler import compile_scene
+    from .linearization import linearize
+
+    return [(t, linearize(compile_scene(scene, fmu_dir, settle=False, at=t), method=method)) for t in scene.speed_times()]
+
+
+def coupling_limits(points, couplings=(("gauss-seidel", "extrapolate"),), kind_of=None) -> list[CouplingLimit]:
+    """Each coupling's largest stable step over the operating points [(t, Line)] (`operating_lines`), the
+    smallest kept with the part that sets it; `kind_of(name)` gives a part's kind for the message."""
+    out = []
+    for algorithm, coupling in couplings:
+        h, t, line = min(((stable_step(line, algorithm, coupling)[0], t, line) for t, line in points), key=lambda x: x[0])
+        probe = h * 1.01 if 0.0 < h < math.inf else 1e-3 / max(fastest_frequency(line), 1e-9)
+        name = growing_part(line, probe, algorithm, coupling) if math.isfinite(h) else ""
+        part = f"{kind_of(name) if kind_of else 'part'} {name!r}" if name else "none"
+        out.append(CouplingLimit(algorithm, coupling, h, part, t))
+    return out
+
+
+class UnstableStep(StabilityError):
+    """A co-simulation asked for at a step above its coupling's predicted limit."""
+
+
+def refuse_unstable(lines, name: str, step: float, algorithm: str, coupling: str, kind_of=None) -> CouplingLimit:
+    """The coupling's limit over the operating points (`coupling_limits`); UnstableStep, in one line, when
+    `step` is above it."""
+    (lim,) = coupling_limits(lines, ((algorithm, coupling),), kind_of)
+    if lim.limit == 0.0:
+        raise UnstableStep(f"{name}: no step is stable with webline's {algorithm}/{coupling} coupling for this line "
+                           f"(the mode of {lim.part} grows at every step): use another --algorithm or --coupling, or "
+                           "--engine line (exact at any step); --force runs it anyway")
+    if step > lim.limit:
+        where = "" if lim.time == 0.0 else f" at t = {lim.time:g} s"
+        raise UnstableStep(f"{name}: a step of {_ms(step)} is above the largest stable step of webline's {algorithm}/"
+                           f"{coupling} coupling for this line, {_ms(lim.limit)} (set by {lim.part}{where}): use --step "
+                           f"{_ms(lim.step()).replace(' ', '')} or less, or --engine line (exact at any step); --force runs it anyway")
+    return lim

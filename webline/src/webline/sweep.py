@@ -34,20 +34,20 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import linestudy
+from . import linestudy, names
 from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU
 from .points import Outcome, failed, layout, metric_record, metrics
 from .scene import SceneError, load_scene, set_path
 
+# The engines a sweep runs a scene with (names.py names every engine).
 ENGINES = ("line", "parts", "reference")
-ALIASES = {"fmpy-line": "line"}
 WHAT = {"line": "the Line FMU", "parts": "the co-simulation of parts", "reference": "the monolithic reference"}
 
 
 def engine_name(name: str) -> str:
-    engine = ALIASES.get(name, name)
+    engine = names.ALIASES.get(name, name)
     if engine not in ENGINES:
-        raise SceneError(f"engine {name!r}: a sweep runs {', '.join(ENGINES)} (or {', '.join(ALIASES)})")
+        raise SceneError(f"engine {name!r}: a sweep runs {', '.join(ENGINES)} (or {', '.join(names.ALIASES)})")
     return engine
 
 
@@ -80,10 +80,9 @@ def _fmu_dir_on_worker(files: dict) -> str:
 
 
 def run_scene_point(scene_text: str, source: str, overrides: dict, files: dict, engine: str, step=None, series=False) -> Outcome:
-    """One point by the parts' co-simulation or the reference (a Dask task)."""
-    from .compiler import run_scene
-    from .master import scene_grid
-    from .reference import reference
+    """One point by the parts' co-simulation or the reference (a Dask task): a step above the
+    parts' stable limit makes the point a failed row that says so, as `webline run` refuses it."""
+    from .engines import run_scene
     from .scene import parse_scene
 
     started = clock.time()
@@ -97,10 +96,7 @@ def run_scene_point(scene_text: str, source: str, overrides: dict, files: dict, 
         recorded = len(scene.record)
         scene.record = metric_record(scene)
         t0 = clock.perf_counter()
-        if engine == "parts":
-            result = run_scene(scene, fmu_dir=fmu_dir, step=step)
-        else:
-            result = reference(scene, times=scene_grid(scene, step))
+        result = run_scene(scene, engine, fmu_dir=fmu_dir, step=step)
         outcome = Outcome(row=metrics(layout(scene), result.column), simulation=clock.perf_counter() - t0)
         if engine == "parts":
             outcome.row.update(steps=result.info["steps"], rollbacks=result.info["rollbacks"])
