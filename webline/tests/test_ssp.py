@@ -318,3 +318,39 @@ def test_export_warns_when_a_part_name_begins_another(fmus, tmp_path, capsys):
     assert main(["export", str(scene), "--fmu-dir", str(fmus), "-o", str(tmp_path / "clash.ssp")]) == 0
     err = capsys.readouterr().err
     assert "part 'foil' begins the name of part 'foil_in'" in err, err
+
+
+def test_no_part_of_an_archive_is_told_it_matches_no_profile(fmus, tmp_path, capfd):
+    """An SSP's Roller FMU carries its components' profiles; a part without a drive (an idler) gets an
+    empty one of its own name, so no instance warns that it "matches none of the profiles" (FMPy showed
+    that for every idler). Each Roller component is initialized under its name, as an importer does,
+    with FMPy's own printer of the FMU's log."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    from webline.compiler import compile_scene
+    from webline.scene import load_scene
+
+    system = compile_scene(load_scene(SCENES / "lamination.json", fmu_dir=fmus), fmus)
+    rollers = [c for c in system.components if c.profile is not None or "Roller" in Path(c.fmu).name]
+    assert any(c.profile is None for c in rollers), "the scene has a part without a drive"
+    archive = write_ssp(system, tmp_path / "lamination.ssp")
+    read_ssp(archive, tmp_path / "x")
+    initialized, plain = 0, [c for c in rollers if c.profile is None]
+    for fmu in sorted((tmp_path / "x" / "resources").glob("Roller*.fmu")):
+        unzipped = extract(str(fmu))
+        md = read_model_description(unzipped)
+        with zipfile.ZipFile(fmu) as z:
+            carried = {Path(n).name for n in z.namelist() if n.startswith("resources/")}
+        for c in [c for c in plain if f"{c.name}.json" in carried]:
+            slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                              instanceName=c.name)
+            slave.instantiate(loggingOn=True)
+            slave.setupExperiment(startTime=0.0)
+            slave.enterInitializationMode()
+            slave.exitInitializationMode()
+            slave.terminate()
+            slave.freeInstance()
+            initialized += 1
+    assert initialized == len(plain), "every Roller component without a drive finds its own file"
+    assert "matches none" not in capfd.readouterr().out

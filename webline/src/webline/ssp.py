@@ -181,6 +181,8 @@ def write_ssp(system: System, path) -> Path:
         for fmu in dict.fromkeys(Path(c.fmu) for c in system.components):
             users = [c for c in system.components if Path(c.fmu) == fmu]
             profiles = {f"{c.name}.json": c.profile for c in users if c.profile is not None}
+            if profiles:  # a part without one gets an empty one, its own: it carries no drive, and knows it
+                profiles.update({f"{c.name}.json": {} for c in users if c.profile is None})
             name = f"resources/{fmu.name}"
             while name in files:
                 name = name[:-4] + "_.fmu"
