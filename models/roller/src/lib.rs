@@ -193,6 +193,12 @@ impl Roller {
         self.table(Key::Strain).map_or_else(|| physics::merged_strain(&self.params, &self.inputs.strain_a), |t| self.read(t, self.time).0)
     }
 
+    /// The load cell's reading for a wrap angle with this cosine (the Line's `NAME.F`).
+    pub fn load_cell(&self, cos_wrap: f64) -> f64 {
+        let (p, u) = (&self.params, &self.inputs);
+        physics::load_cell(u.pull_back(p), u.pull_forward(p), cos_wrap)
+    }
+
     /// The drive's torque at time t, and its rate (a speed drive: 0, see
     /// `drive_torque`). The profile has at most one drive table.
     #[inline]

@@ -196,6 +196,13 @@ pub fn rotation_step(p: &Parameters, roll: &Roll, u: &Inputs, omega: Compensated
     omega.plus((a0 - decay * omega.value()) * decay_integral(decay, h) + a1 * ramp_integral(decay, h))
 }
 
+/// A load cell under the roller's bearings: the resultant of the webs pulling back (`back`, every
+/// arriving web) and forward (`forward`, every leaving one, as parallel webs do) at a wrap
+/// angle with cosine `cos_wrap`, by the law of cosines: sqrt(a^2 + b^2 - 2 a b cos(wrap)).
+pub fn load_cell(back: f64, forward: f64, cos_wrap: f64) -> f64 {
+    (back * back + forward * forward - 2.0 * back * forward * cos_wrap).max(0.0).sqrt()
+}
+
 /// [R3] after a piece in which the surface moved `travel` metres: the new
 /// radius squared (None: the roll ran empty).
 pub fn wound_radius(p: &Parameters, radius: f64, travel: f64) -> Option<f64> {
