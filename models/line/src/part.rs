@@ -177,7 +177,7 @@ impl Part {
                 if fresh {
                     *held = s.forces();
                 }
-                span_force_of(held, var).unwrap_or_else(|| s.real(var))
+                ConvertingSpan::group_real(held, var).unwrap_or_else(|| s.real(var))
             }
             (Part::Roller(r), Port::Roller(var)) => r.real(var),
             _ => unreachable!("a port is resolved from its own part"),
@@ -223,7 +223,7 @@ impl Part {
     /// A span's strain now (the integrator scales its tolerance by it); None for a roller.
     pub fn strain(&self) -> Option<f64> {
         match self {
-            Part::Span(s) => Some(s.outputs().strain),
+            Part::Span(s) => Some(s.forces().strain),
             Part::Roller(_) => None,
         }
     }
@@ -266,11 +266,11 @@ impl Part {
         match (self, directions) {
             (Part::Span(s), Directions::Span(ds)) => {
                 let at = s.linearize();
-                rows(ds, unknowns, out, |d| at.along(d), |t, d, u| if let Port::Span(u) = u { ConvertingSpan::along(t, d, u) } else { None })
+                rows(ds, unknowns, out, |d| at.along(d), |t, u| if let Port::Span(u) = u { ConvertingSpan::along(t, u) } else { None })
             }
             (Part::Roller(r), Directions::Roller(ds)) => {
                 let at = r.linearize();
-                rows(ds, unknowns, out, |d| at.along(d), |t, d, u| if let Port::Roller(u) = u { Roller::along(t, d, u) } else { None })
+                rows(ds, unknowns, out, |d| at.along(d), |t, u| if let Port::Roller(u) = u { Roller::along(t, u) } else { None })
             }
             _ => false,
         }
@@ -279,7 +279,7 @@ impl Part {
     /// Whether the part's partials along the line's knowns stay the same until an event or a
     /// parameter changes it (a roller's `tangents_fixed`); a span's move with its strain.
     pub fn tangents_fixed(&self) -> bool {
-        matches!(self, Part::Roller(r) if r.tangents_fixed())
+        matches!(self, Part::Roller(r) if roller::jacobian::tangents_fixed(&r.params))
     }
 
     /// The part's continuous states the line integrates (indices into its
@@ -320,25 +320,11 @@ impl Part {
     }
 }
 
-/// The span's output `var` from its forces computed once: the same fields as its bindings
-/// (variables.rs); None for a variable that is not among them.
-#[inline]
-fn span_force_of(f: &Forces, var: converting_span::description::Real) -> Option<f64> {
-    use converting_span::description::Real;
-    Some(match var {
-        Real::web_a_F | Real::summary_Tension => f.tension,
-        Real::web_b_F => f.exit_force,
-        Real::web_b_eps | Real::summary_Strain => f.strain,
-        Real::summary_Length => f.length,
-        _ => return None,
-    })
-}
-
 /// Per direction, the tangents (`along`) and from them each unknown's partial (`pick`), a row
 /// of `out` each; false if `pick` knows an unknown not.
-fn rows<D, T>(ds: &[D], unknowns: &[Port], out: &mut [f64], along: impl Fn(&D) -> T, pick: impl Fn(&T, &D, Port) -> Option<f64>) -> bool {
+fn rows<D, T>(ds: &[D], unknowns: &[Port], out: &mut [f64], along: impl Fn(&D) -> T, pick: impl Fn(&T, Port) -> Option<f64>) -> bool {
     ds.iter().zip(out.chunks_exact_mut(unknowns.len().max(1))).all(|(d, row)| {
         let t = along(d);
-        unknowns.iter().zip(row).all(|(&u, o)| pick(&t, d, u).map(|x| *o = x).is_some())
+        unknowns.iter().zip(row).all(|(&u, o)| pick(&t, u).map(|x| *o = x).is_some())
     })
 }
