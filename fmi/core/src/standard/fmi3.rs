@@ -22,32 +22,6 @@ const READABLE: u8 = INIT | STEP | DISCARDED | TERMINATED | ERROR | EVENT | CONT
 const WRITABLE: u8 = INSTANTIATED | INIT | STEP | EVENT | CONTINUOUS;
 const COMPUTED: u8 = INIT | EVENT | CONTINUOUS | TERMINATED | ERROR;
 
-macro_rules! calls {
-    ($($call:ident = $allowed:expr, $interface:ident;)*) => {
-        /// Every fmi3 function that takes an instance.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-        pub enum Call { $($call,)* }
-
-        impl Call {
-            /// The phases in which the standard allows this call.
-            #[inline(always)]
-            const fn allowed(self) -> u8 {
-                match self { $(Call::$call => $allowed,)* }
-            }
-
-            /// The interface the call belongs to.
-            pub const fn interface(self) -> Interface {
-                match self { $(Call::$call => Interface::$interface,)* }
-            }
-
-            /// The C name, for log messages.
-            pub const fn c_name(self) -> &'static str {
-                match self { $(Call::$call => concat!("fmi3", stringify!($call)),)* }
-            }
-        }
-    };
-}
-
 /// Which instances a function serves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Interface {
@@ -61,6 +35,7 @@ pub enum Interface {
 }
 
 calls! {
+    "fmi3";
     SetDebugLogging = ANY, Both;
     FreeInstance = ANY, Both;
     EnterInitializationMode = INSTANTIATED, Both;

@@ -3,6 +3,38 @@
 //! instance checks and reports in the words of the standard it was
 //! instantiated through.
 
+/// A standard's functions that take an instance, each written once with the phases it is
+/// allowed in and the interface it serves (the standard's `Interface`): the enum `Call`, its
+/// masks (`allowed`, `interface`), its C names (`$prefix` and the name) and the list of all.
+macro_rules! calls {
+    ($prefix:literal; $($call:ident = $allowed:expr, $interface:ident;)*) => {
+        /// Every function of the standard that takes an instance.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum Call { $($call,)* }
+
+        impl Call {
+            /// All of them, in the standard's order.
+            pub const ALL: &'static [Call] = &[$(Call::$call,)*];
+
+            /// The phases in which the standard allows this call.
+            #[inline(always)]
+            const fn allowed(self) -> u8 {
+                match self { $(Call::$call => $allowed,)* }
+            }
+
+            /// The interface the call belongs to.
+            pub const fn interface(self) -> Interface {
+                match self { $(Call::$call => Interface::$interface,)* }
+            }
+
+            /// The C name, for log messages.
+            pub const fn c_name(self) -> &'static str {
+                match self { $(Call::$call => concat!($prefix, stringify!($call)),)* }
+            }
+        }
+    };
+}
+
 pub mod fmi2;
 pub mod fmi3;
 pub mod fmi3_types;
