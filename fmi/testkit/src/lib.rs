@@ -64,7 +64,7 @@ pub fn status_name(s: i32) -> &'static str {
 
 /// Declares the functions of a signature list; the bodies are the exports'.
 macro_rules! declare {
-    ($model:ty; $($name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)? => $body:expr;)*) => {
+    ($model:ty; $standard:ident in $module:ident; $($name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)? => $body:expr;)*) => {
         extern "C" {
             $(pub fn $name($($arg: $ty),*) $(-> $ret)?;)*
         }
