@@ -7,7 +7,7 @@
 #                           compiles the C importer for ARM64 and whose sysroot
 #                           QEMU loads; valgrind; libclang-dev (fmi-sim's build)
 #   wine-prefix/            the tests' Wine prefix, with a test-only
-#                           bcryptprimitives.dll (tests/cross/bcryptprimitives.c):
+#                           bcryptprimitives.dll (tests/integration/cross/bcryptprimitives.c):
 #                           Wine 8 lacks ProcessPrng, which Rust's std imports.
 #                           Windows 10 and later have it; the shim never ships.
 #   fmi-sim                 rust-fmi's simulator, from crates.io (into the tools cache)
@@ -31,7 +31,7 @@ export CARGO_TARGET_X86_64_PC_WINDOWS_GNU_RUNNER=/usr/lib/wine/wine64
 export QEMU_LD_PREFIX=/usr/aarch64-linux-gnu
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER=qemu-aarch64-static
 
-SHIM_SOURCE="$ROOT/tests/cross/bcryptprimitives.c"
+SHIM_SOURCE="$ROOT/tests/integration/cross/bcryptprimitives.c"
 SHIM="$WINEPREFIX/drive_c/windows/system32/bcryptprimitives.dll"
 if ! [ -f "$WINEPREFIX/system.reg" ]; then
     echo "tools.sh: creating the Wine prefix $WINEPREFIX"

@@ -33,7 +33,7 @@ EPS = 2.2e-16
 ROUNDING = 1e3 * EPS
 
 # The span's effects as its model description names them: every combination is checked.
-EFFECTS = effects_of(Path(__file__).resolve().parents[2] / "modelDescription.xml")
+EFFECTS = effects_of(Path(__file__).resolve().parents[3] / "modelDescription.xml")
 COMBINATIONS = [dict(zip(EFFECTS, bits)) for bits in itertools.product([False, True], repeat=len(EFFECTS))]
 INPUTS = ("web_a.v", "web_a.eps", "web_b.v", "frame_a.x", "frame_a.y", "frame_b.x", "frame_b.y")
 NOMINAL = {"web_a.v": 1.0, "web_a.eps": 1e-3, "web_b.v": 1.0, "unstretchedLength": 1.0}

@@ -1,5 +1,6 @@
 //! Property-based driver of the fuzz harness: random byte strings from a
-//! seeded generator, one call sequence each (see lib.rs), on all cores.
+//! seeded generator, one call sequence each (see lib.rs), on all cores. The
+//! `main` of every model's fuzz target (`fuzz_sequences`):
 //!
 //!   fuzz_sequences [--fmi3] [--sequences N] [--seed S] [--threads T] [--strict]
 //!   fuzz_sequences [--fmi3] --replay FILE...  (one sequence per file, e.g. AFL crashes)
@@ -10,7 +11,7 @@
 //! reproduced by its file or by `--seed S --only k`. Exits 1 on a violation
 //! (and with --strict also on a finding), printing the call and the rule.
 
-use fmi_fuzz::{run, Api, Finding, Outcome};
+use crate::{run, Api, Finding, Fuzzed, Outcome};
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -90,7 +91,8 @@ impl Totals {
     }
 }
 
-fn main() {
+/// Runs the driver on `model` with the program's arguments; exits with its status.
+pub fn main(model: &Fuzzed) {
     // The FMU catches the panics of its test hook; the default hook would
     // print each one. The harness reports violations itself.
     std::panic::set_hook(Box::new(|_| {}));
@@ -106,7 +108,7 @@ fn main() {
         let mut failed = false;
         for file in &args[i + 1..] {
             let bytes = std::fs::read(file).expect("read the sequence file");
-            match run(api, &bytes) {
+            match run(model, api, &bytes) {
                 Ok(o) => println!("{file}: ok, {} calls, findings {:?}", o.calls, o.findings),
                 Err(v) => {
                     println!("{file}: VIOLATION {}", v.0);
@@ -142,7 +144,7 @@ fn main() {
                 break;
             }
             let bytes = sequence(seed, k);
-            match run(api, &bytes) {
+            match run(model, api, &bytes) {
                 Ok(o) => totals.add(o, k),
                 Err(v) => {
                     std::fs::create_dir_all(&failed_dir).ok();

@@ -2,6 +2,8 @@
 # The other platforms' tests: Windows x64 under Wine, ARM64 Linux under QEMU
 # (tests/run.sh runs this; docs/platforms.md).
 #
+#   bash tests/integration/cross.sh [--full]
+#
 #   1. the Rust tests of each target under its emulator (cargo's
 #      CARGO_TARGET_<TRIPLE>_RUNNER, set by fmu/cross_toolchain.sh): what meets
 #      the platform: the unit tests of the model, the FMI layer and the solvers,
@@ -12,22 +14,22 @@
 #      here) with --full. --full adds the tests of pure arithmetic (the span
 #      and the Roller against exact solutions, the solvers, the hard cases),
 #      whose results step 3 compares bit for bit anyway
-#   2. the fuzz harness tests/fuzz built for each target and model: FUZZ_SEQUENCES each,
+#   2. each model's fuzz target (the harness of fmi/fuzz) built for each target: FUZZ_SEQUENCES each,
 #      and FUZZ3_SEQUENCES through its FMI 3 mode (20,000 and 5,000; --full:
-#      200,000 and 50,000); for the Line (its test line), the same harness built as
-#      fmi-fuzz-line: LINE_FUZZ_SEQUENCES and LINE_FUZZ3_SEQUENCES (300 and 100;
+#      200,000 and 50,000); for the Line (its test line), its fuzz target
+#      line-fuzz: LINE_FUZZ_SEQUENCES and LINE_FUZZ3_SEQUENCES (300 and 100;
 #      only with --full: 20,000 and 5,000; in CI the Line's library runs step 3)
-#   3. tests/cross/test_platforms.py: importer.c on every platform's binary in
+#   3. tests/integration/cross/test_platforms.py: importer.c on every platform's binary in
 #      the packaged FMUs, bit for bit against Linux x86-64; importer3.c's scene
 #      through the FMI 3 FMU likewise
 #
 # Each target's std is in rustc-web's sysroot (fmu/cross_toolchain.sh builds it
-# there once). The tests and the fuzz harness build into target/cross-test
+# there once). The tests and the fuzz targets build into target/cross-test
 # (profile cross-test, with the test hooks: apart from the shipped libraries of
-# target/cross); the Line's harness, of another workspace, into target/cross-test-line.
+# target/cross); the Line's fuzz target, of another workspace, into target/cross-test-line.
 # A summary is printed at the end and written to target/platforms/summary.txt.
 set -euo pipefail
-source "$(dirname "$0")/../fmu/env.sh"
+source "$(dirname "$0")/../../fmu/env.sh"
 source "$ROOT/tests/tools.sh"
 cd "$ROOT"
 export RUST_BACKTRACE=0 # the panic-boundary tests panic on purpose
@@ -48,9 +50,9 @@ cross() { # cargo COMMAND ARGS...: rustc-web's cargo, whose sysroot has each tar
 }
 
 declare -A NAME=([x86_64-pc-windows-gnu]="win64 (Wine)" [aarch64-unknown-linux-gnu]="aarch64-linux (QEMU)")
-# The fuzz harness fuzzes one model per build (tests/fuzz).
+# Each model's fuzz target (fuzz/, models/roller/fuzz): the harness of fmi/fuzz on that model.
 declare -A MODEL_NAME=([span]=ConvertingSpan [roller]=Roller)
-declare -A FUZZ_FEATURES=([span]="" [roller]="--no-default-features --features roller")
+declare -A FUZZ_TARGET=([span]=converting-span-fuzz [roller]=roller-fuzz)
 SPAN_TESTS=(--test span_c_api --test conformance --test panic_boundary --test records)
 ROLLER_TESTS=(--test conformance --test panic_boundary --test profiles --test instance_profiles)
 if [ "$FULL" = 1 ]; then
@@ -78,8 +80,7 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
         echo "== fuzz harness for $target, ${MODEL_NAME[$model]}: $FUZZ_SEQUENCES sequences"
         t0=$SECONDS
         # the tests' target directory: std and the FMU are already built there
-        # shellcheck disable=SC2086
-        cross build --profile cross-test --target-dir target/cross-test --target "$target" -p fmi-fuzz ${FUZZ_FEATURES[$model]} --bin fuzz_sequences
+        cross build --profile cross-test --target-dir target/cross-test --target "$target" -p "${FUZZ_TARGET[$model]}" --bin fuzz_sequences
         exe="target/cross-test/$target/cross-test/fuzz_sequences"
         [ -f "$exe.exe" ] && exe="$exe.exe"
         log="$OUT/fuzz-$model-$target.log"
@@ -96,11 +97,11 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
     [ "$FULL" = 1 ] || continue
     echo "== fuzz harness for $target, the Line: $LINE_FUZZ_SEQUENCES sequences, FMI 3: $LINE_FUZZ3_SEQUENCES"
     t0=$SECONDS
-    # fmi-fuzz-line, a member of the Line's own workspace (in the main one the span's `fmu`
+    # line-fuzz, a member of the Line's own workspace (in the main one the span's `fmu`
     # feature would be unified into the Line), in a target directory of its own: sharing the
     # tests' one, the two workspaces overwrite each other's fmi_core (rustc then finds two).
     cross build --profile cross-test --manifest-path models/line/Cargo.toml --target-dir target/cross-test-line \
-        --target "$target" -p fmi-fuzz-line --bin fuzz_sequences
+        --target "$target" -p line-fuzz --bin fuzz_sequences
     exe="target/cross-test-line/$target/cross-test/fuzz_sequences"
     [ -f "$exe.exe" ] && exe="$exe.exe"
     for api in 2 3; do
@@ -116,7 +117,7 @@ done
 echo "== importer.c on every platform's binary"
 t0=$SECONDS
 [ -n "${CONVERTING_SPAN_PACKAGED:-}" ] || python3 fmu/package.py # tests/run.sh has packaged
-"$PY" -m pytest tests/cross -q -p no:cacheprovider
+"$PY" -m pytest tests/integration/cross -q -p no:cacheprovider
 note "importer.c and importer3.c scenes on win64, aarch64-linux, linux64: passed in $((SECONDS - t0)) s"
 note "cross-platform tests took $((SECONDS - START)) s"
 echo

@@ -1,9 +1,9 @@
 /* dlopen/dlclose cycles of the FMU binary, for valgrind memcheck and
- * AddressSanitizer (tests/hardening.sh runs it under both).
+ * AddressSanitizer (tests/integration/hardening.sh runs it under both).
  *
  *   dlopen_cycles LIBRARY.so GUID CYCLES VR_REFUSED VR_STEPPED OUTPUT_VRS [--panic]
  *
- * (OUTPUT_VRS comma-separated; tests/hardening.sh reads all of these from
+ * (OUTPUT_VRS comma-separated; tests/integration/hardening.sh reads all of these from
  * modelDescription.xml.)
  *
  * Each cycle loads the library, looks up the functions, instantiates two

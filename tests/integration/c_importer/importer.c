@@ -1,11 +1,11 @@
 /*
  * A minimal FMI 2.0 co-simulation importer for ConvertingSpan, written
  * against FMPy's copy of the standard headers, portable: dlopen on Linux,
- * LoadLibrary on Windows. tests/python/test_c_importer.py compiles it with
+ * LoadLibrary on Windows. tests/integration/python/test_c_importer.py compiles it with
  *
  *     gcc -Wall -Werror -I <fmpy>/c-code importer.c -o importer -ldl
  *
- * (tests/python/test_platforms.py also with x86_64-w64-mingw32-gcc and
+ * (tests/integration/cross/test_platforms.py also with x86_64-w64-mingw32-gcc and
  * aarch64-linux-gnu-gcc, run under Wine and QEMU) and runs it as
  *
  *     importer <path of binaries/<platform>/ConvertingSpan.<so|dll>> <GUID> name=vr ...

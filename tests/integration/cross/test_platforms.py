@@ -1,6 +1,6 @@
 """Every platform's binary in the FMUs, run here: Windows x64 under Wine,
 ARM64 Linux under QEMU, x86-64 Linux natively, each driven by the same C
-importer (tests/c_importer/importer.c, compiled for the platform).
+importer (tests/integration/c_importer/importer.c, compiled for the platform).
 
 The Linux x86-64 binary is the reference (test_c_importer.py and the other
 tests check it against exact solutions); every other platform must give the
@@ -13,9 +13,9 @@ cover every solver and effect of the span, every sensor unit, bad inputs,
 the panic boundary (a test-hooks build per platform) and FMU states
 serialized on one platform and deserialized on every other.
 
-    bash tests/cross.sh      (runs this after the Rust tests under Wine and QEMU)
+    bash tests/integration/cross.sh      (runs this after the Rust tests under Wine and QEMU)
 
-Needs the tools of fmu/env.sh (tests/cross.sh sources it): mingw-w64 and
+Needs the tools of fmu/env.sh (tests/integration/cross.sh sources it): mingw-w64 and
 aarch64 gcc, Wine (WINEPREFIX with the test-only ProcessPrng shim) and QEMU.
 """
 
@@ -32,9 +32,9 @@ from pathlib import Path
 import fmpy
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-SOURCE = ROOT / "tests" / "c_importer" / "importer.c"
-SOURCE3 = ROOT / "tests" / "c_importer" / "importer3.c"
+ROOT = Path(__file__).resolve().parents[3]
+SOURCE = ROOT / "tests" / "integration" / "c_importer" / "importer.c"
+SOURCE3 = ROOT / "tests" / "integration" / "c_importer" / "importer3.c"
 HEADERS = Path(fmpy.__file__).resolve().parent / "c-code"
 OUT = ROOT / "out"
 SUMMARY = ROOT / "target" / "platforms" / "summary.txt"
@@ -313,7 +313,7 @@ def bad_scene(variables):
 def test_the_c_importers_scene_is_bit_identical(importers, binaries, descriptions, platform, tmp_path):
     """importer.c's own scene (state save/restore, serialization, illegal
     calls): the same output text, statuses and log messages as Linux x86-64."""
-    sys.path.insert(0, str(ROOT / "tests" / "python"))
+    sys.path.insert(0, str(ROOT / "tests" / "integration" / "python"))
     from test_c_importer import NAMES
 
     guid, variables = descriptions["ConvertingSpan"]
@@ -335,7 +335,7 @@ FMI3_FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-l
 def test_the_fmi3_importers_scene_is_bit_identical(importers3, platform, tmp_path):
     """importer3.c's scene through the FMI 3.0 FMU (importer.c's scene, FMU
     states, refused calls): the same output text and log lines as Linux x86-64."""
-    sys.path.insert(0, str(ROOT / "tests" / "python"))
+    sys.path.insert(0, str(ROOT / "tests" / "integration" / "python"))
     from test_c_importer import NAMES
 
     fmu = OUT / "fmi3" / "ConvertingSpan.fmu"
@@ -439,7 +439,7 @@ def test_an_fmu_state_saved_on_one_platform_continues_on_every_other(importers, 
 
 def panic_libraries():
     """The span's library with the test-only panic hook, per platform (not shipped);
-    the cross builds share tests/cross.sh's target directory and profile."""
+    the cross builds share tests/integration/cross.sh's target directory and profile."""
     libraries = {}
     for p in PLATFORMS:
         if p.target is None:

@@ -2,8 +2,8 @@
 tests/hard_cases/catalogue.json into its schedule and computes what the model
 must produce.
 
-    .venv/bin/python bench/hard_cases_reference.py --write   # rewrites references.json
-    .venv/bin/python bench/hard_cases_reference.py --check   # fails if references.json is stale
+    .venv/bin/python tests/hard_cases/reference.py --write   # rewrites references.json
+    .venv/bin/python tests/hard_cases/reference.py --check   # fails if references.json is stale
 
 tests/hard_cases/references.json holds, per case, the expanded schedule (the
 inputs at t = 0 and every communication step: its size, the inputs set at its
@@ -11,7 +11,7 @@ start, the input derivatives given for it), the reference outputs at t = 0 and
 after each step, and per solver run the tolerance (relative, and an absolute
 floor per quantity), the rk4/euler truncation allowance, the step at which the
 run must be refused, and the data of the case's checks. tests/hard_cases.rs
-(the model core) and tests/python/test_hard_cases.py (the FMU through FMPy)
+(the model core) and tests/integration/python/test_hard_cases.py (the FMU through FMPy)
 replay it; pytest also checks that it equals a fresh computation.
 
 The reference is written from the physics (shared/docs/physics.md), not from
@@ -52,12 +52,12 @@ import mpmath
 import numpy as np
 from mpmath import mpf
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 # The data stay beside the tests that replay them (tests/hard_cases.rs reads them too).
 CATALOGUE = ROOT / "tests" / "hard_cases" / "catalogue.json"
 REFERENCES = ROOT / "tests" / "hard_cases" / "references.json"
 MODEL_DESCRIPTION = ROOT / "modelDescription.xml"
-COMMAND = ".venv/bin/python bench/hard_cases_reference.py --write"
+COMMAND = ".venv/bin/python tests/hard_cases/reference.py --write"
 
 DPS = 40
 EXPLICIT_LIMIT = {"rk4": 2.785, "euler": 2.0}  # stability limits on the negative real axis

@@ -37,7 +37,7 @@
 //! FMI 3.0's states are FMI 2.0's for these calls (Step Mode is "step complete").
 //!
 //! Memory errors are not seen by the oracle: run the harness under
-//! AddressSanitizer or valgrind for those (tests/hardening.sh does both).
+//! AddressSanitizer or valgrind for those (tests/integration/hardening.sh does both).
 //!
 //! A broken rule is a `Violation`. Two kinds of non-finite outputs are
 //! counted as `Finding`s rather than violations because they are known
@@ -46,6 +46,7 @@
 
 #![allow(clippy::missing_safety_doc)]
 
+pub mod driver;
 mod api;
 
 pub use api::Api;
@@ -60,52 +61,24 @@ use std::ptr::null_mut;
 
 type Desc = &'static ModelDescription;
 
-// One model per build: each exports the same C names. The Line is fuzzed by
-// the same source built as crate fmi-fuzz-line in the Line's own workspace
-// (models/line/fuzz, feature `line`): a build of the Line here would unify
-// the span's `fmu` feature (its C API) into the Line's binary.
-/// The model this build fuzzes (features `span`, the default, `roller` or `line`).
-#[cfg(all(feature = "span", not(feature = "roller"), not(feature = "line")))]
-pub type Fuzzed = converting_span::ConvertingSpan;
-#[cfg(all(feature = "roller", not(feature = "line")))]
-pub type Fuzzed = roller::Roller;
-#[cfg(feature = "line")]
-pub type Fuzzed = FuzzedLine;
-
-/// The fuzzed model's resources/ folder, what its FMU ships.
-#[cfg(all(feature = "span", not(feature = "roller"), not(feature = "line")))]
-const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../resources/");
-#[cfg(all(feature = "roller", not(feature = "line")))]
-const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/roller/resources/");
-/// The Line's test line (models/line/resources/README.md); this crate is models/line/fuzz there.
-#[cfg(feature = "line")]
-const RESOURCES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../resources/");
-
-/// The Line as the harness sees it: its interface is not compiled in but
-/// built from line.json at instantiation, so it is read once from the test
-/// line the harness instantiates with.
-#[cfg(feature = "line")]
-pub struct FuzzedLine;
-
-#[cfg(feature = "line")]
-impl Tested for FuzzedLine {
-    fn description() -> &'static ModelDescription {
-        static DESCRIPTION: std::sync::OnceLock<&'static ModelDescription> = std::sync::OnceLock::new();
-        DESCRIPTION.get_or_init(|| description_from_resources::<line::Line>(RESOURCES))
-    }
-    fn resources() -> String {
-        RESOURCES.into()
-    }
-    fn library() -> &'static str {
-        "line"
-    }
-    fn needs_resources() -> bool {
-        true
-    }
+/// The model a fuzz target drives: what the harness needs to know of it. A target binary
+/// links exactly one model (each exports the same C names) and hands it to `run` or
+/// `driver::main` (the span's in fuzz/, the Roller's in models/roller/fuzz, the Line's in
+/// models/line/fuzz).
+#[derive(Clone, Debug)]
+pub struct Fuzzed {
+    pub description: Desc,
+    /// Its resources/ folder, what its FMU ships: a path ending in '/'.
+    pub resources: String,
+    /// It cannot be instantiated without its resources (the Line's interface is in them).
+    pub needs_resources: bool,
 }
 
-fn desc() -> Desc {
-    <Fuzzed as Tested>::description()
+impl Fuzzed {
+    /// The model `M` (its description and whether it needs resources) with the resources folder.
+    pub fn of<M: Tested>(resources: &str) -> Fuzzed {
+        Fuzzed { description: M::description(), resources: resources.to_string(), needs_resources: M::needs_resources() }
+    }
 }
 
 // ---------------------------------------------------------------- input
@@ -223,8 +196,7 @@ fn boolean(src: &mut Source) -> i32 {
 
 /// A value reference: mostly of the wanted kind, sometimes any variable's,
 /// sometimes unknown.
-fn vr(src: &mut Source, want: impl std::ops::Fn(&Variable) -> bool) -> u32 {
-    let d = desc();
+fn vr(d: Desc, src: &mut Source, want: impl std::ops::Fn(&Variable) -> bool) -> u32 {
     match src.pick(8) {
         0 => src.u32(),
         1 => [0, u32::MAX, d.by_vr.len() as u32, 1000][src.pick(4)],
@@ -347,8 +319,8 @@ fn family(v: &Variable) -> Family {
     }
 }
 
-fn var(vr: u32, f: Family) -> Option<&'static Variable> {
-    desc().variable(vr).filter(|v| family(v) == f)
+fn var(d: Desc, vr: u32, f: Family) -> Option<&'static Variable> {
+    d.variable(vr).filter(|v| family(v) == f)
 }
 
 /// What the oracle knows of an FMU state it holds.
@@ -466,6 +438,7 @@ pub struct Outcome {
 }
 
 struct Run {
+    model: Fuzzed,
     api: Api,
     slots: [Option<Slot>; 2],
     /// Pointers of FMU states that were freed (for double frees).
@@ -489,6 +462,11 @@ fn fail<T>(msg: String) -> Result<T, Violation> {
 }
 
 impl Run {
+    /// The fuzzed model's description.
+    fn d(&self) -> Desc {
+        self.model.description
+    }
+
     fn check_status(&mut self, s: i32, allowed: &[i32]) -> Result<(), Violation> {
         self.out.calls += 1;
         if self.trace {
@@ -520,7 +498,7 @@ impl Run {
             return fail(format!("{what}: malformed logger calls {malformed:?}"));
         }
         for l in &lines {
-            if !desc().log_categories.contains(&l.category.as_str()) {
+            if !self.model.description.log_categories.contains(&l.category.as_str()) {
                 return fail(format!("{what}: log line with unknown category {l:?}"));
             }
             // (FMI 3.0's logger is given no instance name.)
@@ -577,9 +555,10 @@ impl Run {
     }
 }
 
-/// Runs one sequence through `api`. `Err` is a broken rule.
-pub fn run(api: Api, bytes: &[u8]) -> Result<Outcome, Violation> {
+/// Runs one sequence on `model` through `api`. `Err` is a broken rule.
+pub fn run(model: &Fuzzed, api: Api, bytes: &[u8]) -> Result<Outcome, Violation> {
     let mut r = Run {
+        model: model.clone(),
         api,
         slots: [None, None],
         dead_states: Vec::new(),
@@ -789,7 +768,7 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     }
     let log = Box::<Log>::default();
     let functions = Box::new(callbacks(&log));
-    let me_offered = desc().model_exchange;
+    let me_offered = r.d().model_exchange;
     let fmu_type = match src.pick(16) {
         0 => [0, 2, -1, i32::MAX][src.pick(4)],
         1..=4 if me_offered => 0,
@@ -802,7 +781,7 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let guid_c = CString::new(match guid_kind {
         0 => "{00000000-0000-0000-0000-000000000000}".to_string(),
         1 => String::new(),
-        _ => guid::<Fuzzed>().to_string(),
+        _ => r.d().guid.to_string(),
     })
     .unwrap();
     let guid_ptr = if guid_kind == 2 && src.chance(128) {
@@ -814,7 +793,7 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let null_functions = src.chance(8);
     let null_name = src.chance(8);
     // What the FMU ships, so records load.
-    let resources = CString::new(format!("file://{RESOURCES}")).unwrap();
+    let resources = CString::new(format!("file://{}", r.model.resources)).unwrap();
     let logging_on = boolean(src);
     let null_resources = src.chance(128);
     let c = unsafe {
@@ -845,7 +824,7 @@ fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     );
     r.out.calls += 1;
     // A model whose interface is in its resources cannot exist without them.
-    let resources_ok = !null_resources || !Fuzzed::needs_resources();
+    let resources_ok = !null_resources || !r.model.needs_resources;
     let should = right_type && guid_ok && !null_functions && resources_ok;
     if c.is_null() == should {
         if !c.is_null() {
@@ -879,21 +858,21 @@ fn op_instantiate3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         unsafe { r.api.free_instance(old.c) };
     }
     let log = Box::<Log>::default();
-    let model_exchange = desc().model_exchange && src.chance(64);
+    let model_exchange = r.d().model_exchange && src.chance(64);
     let token_kind = src.pick(24);
     let name = format!("fuzz{}", src.u8());
     let name_c = CString::new(name.clone()).unwrap();
     let token_c = CString::new(match token_kind {
         0 => "{00000000-0000-0000-0000-000000000000}".to_string(),
         1 => String::new(),
-        _ => guid::<Fuzzed>().to_string(),
+        _ => r.d().guid.to_string(),
     })
     .unwrap();
     let null_token = token_kind >= 2 && src.chance(16);
     let token_ok = token_kind >= 2 && !null_token;
     // What the FMU ships, as a path (FMI 3.0 passes no URI).
-    let resources = CString::new(RESOURCES).unwrap();
-    let required: Vec<u32> = if src.chance(12) { vec![vr(src, |_| true)] } else { Vec::new() };
+    let resources = CString::new(r.model.resources.as_str()).unwrap();
+    let required: Vec<u32> = if src.chance(12) { vec![vr(r.d(), src, |_| true)] } else { Vec::new() };
     let no_logger = src.chance(12);
     let logging_on = src.chance(128);
     let null_name = src.chance(8);
@@ -915,7 +894,7 @@ fn op_instantiate3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         !no_logger
     );
     r.out.calls += 1;
-    let resources_ok = !null_resources || !Fuzzed::needs_resources();
+    let resources_ok = !null_resources || !r.model.needs_resources;
     let should = token_ok && (model_exchange || required.is_empty()) && resources_ok;
     if c.is_null() == should {
         if !c.is_null() {
@@ -1072,10 +1051,10 @@ fn count(api: Api, src: &mut Source, n: usize) -> usize {
 
 /// FMI 3.0's integer function for an Integer-family variable: Int64 for
 /// enumerations, Int32 for the rest; at times the wrong one.
-fn int_type(api: Api, src: &mut Source, vrs: &[u32]) -> Int {
+fn int_type(d: Desc, api: Api, src: &mut Source, vrs: &[u32]) -> Int {
     let enumeration = vrs
         .first()
-        .and_then(|&x| var(x, Family::Integer))
+        .and_then(|&x| var(d, x, Family::Integer))
         .is_some_and(|v| matches!(v.kind, Kind::Enumeration { .. }));
     if enumeration != (api == Api::Fmi3 && src.chance(24)) {
         Int::Int64
@@ -1093,8 +1072,8 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
     let api = r.api;
     let t = target(r, src);
     let n = src.pick(6);
-    let d = desc();
-    let mut vrs: Vec<u32> = (0..n).map(|_| vr(src, |v| family(v) == fam)).collect();
+    let d = r.d();
+    let mut vrs: Vec<u32> = (0..n).map(|_| vr(r.d(), src, |v| family(v) == fam)).collect();
     if api == Api::Fmi3 && fam == Family::Real && n > 0 && src.chance(48) {
         // FMI 3.0's added Float64 variables: time, and the event indicators.
         let k = src.pick(n);
@@ -1104,13 +1083,13 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
         };
     }
     let added = |x: u32| api == Api::Fmi3 && fam == Family::Real && fmi_core::standard::fmi3_types::added(d, x).is_some();
-    let int = int_type(api, src, &vrs);
+    let int = int_type(r.d(), api, src, &vrs);
     let nv = count(api, src, n);
     let null_vr = n > 0 && src.chance(10);
     let null_values = n > 0 && src.chance(10);
     let known = vrs
         .iter()
-        .all(|&x| var(x, fam).is_some_and(|v| fam != Family::Integer || int_fits(api, int, v)) || added(x));
+        .all(|&x| var(r.d(), x, fam).is_some_and(|v| fam != Family::Integer || int_fits(api, int, v)) || added(x));
     let any_indicator = vrs.iter().any(|&x| added(x) && x != fmi_core::standard::fmi3_types::TIME_VR);
     let name = format!(
         "{}({vrs:?}{}{}{})",
@@ -1182,7 +1161,7 @@ fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
                 r.finite(i, reals[k], "an added Float64")?;
                 continue;
             }
-            let v = var(x, fam).expect("known");
+            let v = var(r.d(), x, fam).expect("known");
             match fam {
                 Family::Real => r.finite(i, reals[k], &v.name)?,
                 Family::Boolean if !(ints[k] == 0 || ints[k] == 1) => {
@@ -1220,11 +1199,11 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let mut values = Vec::new();
     let sane = src.chance(150);
     for _ in 0..n {
-        let x = vr(src, |v| {
+        let x = vr(r.d(), src, |v| {
             family(v) == Family::Real
                 && matches!(v.causality, Causality::Input | Causality::Parameter)
         });
-        let value = match var(x, Family::Real) {
+        let value = match var(r.d(), x, Family::Real) {
             Some(v) if sane => sane_real(src, v),
             _ => real(src),
         };
@@ -1245,6 +1224,7 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         values.as_ptr()
     };
     let pairs: Vec<(u32, f64)> = vrs.iter().copied().zip(values.iter().copied()).collect();
+    let d = r.d();
     let res = call_on(
         r,
         t,
@@ -1259,7 +1239,7 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             let ok = nv == n
                 && !null_vr
                 && !null_values
-                && pairs.iter().all(|&(x, value)| match var(x, Family::Real) {
+                && pairs.iter().all(|&(x, value)| match var(d, x, Family::Real) {
                     Some(v) => {
                         settable(v, slot.st)
                             && value.is_finite()
@@ -1290,7 +1270,7 @@ fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violatio
     let mut vrs = Vec::new();
     let mut values: Vec<i64> = Vec::new();
     for _ in 0..n {
-        let x = vr(src, |v| {
+        let x = vr(r.d(), src, |v| {
             family(v) == fam && v.causality == Causality::Parameter
         });
         vrs.push(x);
@@ -1300,10 +1280,10 @@ fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violatio
             // Beyond any Int32 (FMI 3.0 gives enumerations 64 bits).
             [i64::MAX, i64::MIN, 1 << 32, -(1 << 31) - 1][src.pick(4)]
         } else {
-            integer(src, var(x, fam)) as i64
+            integer(src, var(r.d(), x, fam)) as i64
         });
     }
-    let int = int_type(api, src, &vrs);
+    let int = int_type(r.d(), api, src, &vrs);
     let nv = count(api, src, n);
     let null_vr = n > 0 && src.chance(8);
     let null_values = n > 0 && src.chance(8);
@@ -1325,6 +1305,7 @@ fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violatio
         (_, _, Int::Int32) => "fmi3SetInt32",
         _ => "fmi3SetInt64",
     };
+    let d = r.d();
     let res = call_on(
         r,
         t,
@@ -1338,7 +1319,7 @@ fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violatio
             let ok = nv == n
                 && !null_vr
                 && !null_values
-                && pairs.iter().all(|&(x, value)| match var(x, fam) {
+                && pairs.iter().all(|&(x, value)| match var(d, x, fam) {
                     Some(v) => {
                         // What the FMU is given: FMI 2.0's Integer is 32 bits; FMI 3.0's Boolean a byte.
                         let value = match (fam, api, int) {
@@ -1380,7 +1361,7 @@ fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let t = target(r, src);
     let n = src.pick(3);
     let vrs: Vec<u32> = (0..n)
-        .map(|_| vr(src, |v| family(v) == Family::String))
+        .map(|_| vr(r.d(), src, |v| family(v) == Family::String))
         .collect();
     // Record names of the shipped library (a linear web, a curve), none, and an unknown name.
     let texts: Vec<CString> = ["PET-12", "nonwoven-PP-spunbond", "steel-1.0", "", "a string"]
@@ -1402,7 +1383,7 @@ fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let ok_args = nv == n && (n == 0 || (!vr_ptr.is_null() && !value_ptr.is_null()));
     let known = vrs
         .iter()
-        .all(|&x| var(x, Family::String).is_some_and(|v| v.causality != Causality::Output));
+        .all(|&x| var(r.d(), x, Family::String).is_some_and(|v| v.causality != Causality::Output));
     let res = call_on(
         r,
         t,
@@ -1990,7 +1971,7 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 }
             }
             // Every output is finite after a successful step.
-            let reals: Vec<&Variable> = desc()
+            let reals: Vec<&Variable> = r.d()
                 .variables
                 .iter()
                 .filter(|v| family(v) == Family::Real)
@@ -2118,7 +2099,7 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let t = target(r, src);
     let which = src.pick(14);
     let n = src.pick(4);
-    let vrs: Vec<u32> = (0..n).map(|_| vr(src, |_| true)).collect();
+    let vrs: Vec<u32> = (0..n).map(|_| vr(r.d(), src, |_| true)).collect();
     let mut buf = vec![0.0f64; 8];
     // Values for fmi2SetContinuousStates: nasty ones, or near the start.
     for x in buf.iter_mut() {
@@ -2138,13 +2119,14 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         _ => (Fn::ModelExchange, "a Model Exchange function"),
     };
     let n_out = n.min(buf.len());
+    let d = r.d();
     let res = call_on(
         r,
         t,
         f,
         &format!("{name} (#{which}, n = {n}{})", if null { ", NULL array" } else { "" }),
         |slot| {
-            let nx = desc().states.len();
+            let nx = d.states.len();
             let sized = !null || n == 0;
             if f == Fn::GetRealOutputDerivatives {
                 vec![OK, ERROR]
@@ -2249,8 +2231,8 @@ fn op_unsupported3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let t = target(r, src);
     let n = src.pick(4);
     let m = src.pick(4);
-    let unknowns: Vec<u32> = (0..n).map(|_| vr(src, |v| v.causality == Causality::Output)).collect();
-    let knowns: Vec<u32> = (0..m).map(|_| vr(src, |v| v.causality == Causality::Input)).collect();
+    let unknowns: Vec<u32> = (0..n).map(|_| vr(r.d(), src, |v| v.causality == Causality::Output)).collect();
+    let knowns: Vec<u32> = (0..m).map(|_| vr(r.d(), src, |v| v.causality == Causality::Input)).collect();
     let (n_seed, n_sens) = (count(Api::Fmi3, src, m), count(Api::Fmi3, src, n));
     let mut buf = vec![0.0f64; 8];
     for x in buf.iter_mut() {
@@ -2270,7 +2252,7 @@ fn op_unsupported3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         17 => (Fn::Set, "fmi3SetUInt8"),
         _ => (Fn::ModelExchange, "another fmi3 function"),
     };
-    let (nx, nz) = (desc().states.len(), desc().number_of_event_indicators);
+    let (nx, nz) = (r.d().states.len(), r.d().number_of_event_indicators);
     let res = call_on(
         r,
         t,
@@ -2361,7 +2343,7 @@ fn op_input_derivatives(r: &mut Run, src: &mut Source) -> Result<(), Violation> 
     let n = src.pick(4);
     let vrs: Vec<u32> = (0..n)
         .map(|_| {
-            vr(src, |v| {
+            vr(r.d(), src, |v| {
                 v.causality == Causality::Input && family(v) == Family::Real
             })
         })
@@ -2390,11 +2372,11 @@ fn op_input_derivatives(r: &mut Run, src: &mut Source) -> Result<(), Violation> 
     let valid = n == 0
         || (!vr_ptr.is_null() && !order_ptr.is_null() && !value_ptr.is_null())
             && vrs.iter().zip(&orders).zip(&values).all(|((&x, &o), v)| {
-                var(x, Family::Real).is_some_and(|v| v.causality == Causality::Input)
+                var(r.d(), x, Family::Real).is_some_and(|v| v.causality == Causality::Input)
                     && o == 1
                     && v.is_finite()
             });
-    let can = desc().can_interpolate_inputs;
+    let can = r.d().can_interpolate_inputs;
     let res = call_on(
         r,
         t,
@@ -2427,7 +2409,7 @@ fn op_input_derivatives(r: &mut Run, src: &mut Source) -> Result<(), Violation> 
 fn op_debug_logging(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let api = r.api;
     let t = target(r, src);
-    let cats = desc().log_categories;
+    let cats = r.d().log_categories;
     let n = src.pick(4);
     let names: Vec<CString> = (0..n)
         .map(|_| match src.pick(8) {
@@ -2506,8 +2488,8 @@ fn op_arm_panic(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 /// kind of roll): their values in one valid fmi2SetInteger (fmi3SetInt32) in
 /// the instantiated state, so that sequences run through the configurations
 /// they select (several ports, a roll), which random sets rarely reach.
-fn configured_integers() -> Vec<&'static Variable> {
-    desc()
+fn configured_integers(d: Desc) -> Vec<&'static Variable> {
+    d
         .variables
         .iter()
         .filter(|v| v.kind == Kind::Integer && v.causality == Causality::Parameter && v.range.lo.is_finite() && v.range.hi - v.range.lo < 256.0)
@@ -2515,7 +2497,7 @@ fn configured_integers() -> Vec<&'static Variable> {
 }
 
 fn configure(r: &mut Run, i: usize, src: &mut Source) -> Result<(), Violation> {
-    let vars = configured_integers();
+    let vars = configured_integers(r.d());
     if vars.is_empty() {
         return Ok(());
     }
@@ -2540,10 +2522,10 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         let log = Box::<Log>::default();
         let functions = Box::new(callbacks(&log));
         let name = CString::new(format!("fuzz{i}")).unwrap();
-        let g = CString::new(guid::<Fuzzed>()).unwrap();
+        let g = CString::new(r.d().guid.as_ref()).unwrap();
         // No resources where the model can do without (as importers may pass none).
-        let (uri, path) = (CString::new(format!("file://{RESOURCES}")).unwrap(), CString::new(RESOURCES).unwrap());
-        let (uri, path) = if Fuzzed::needs_resources() { (uri.as_ptr(), path.as_ptr()) } else { (std::ptr::null(), std::ptr::null()) };
+        let (uri, path) = (CString::new(format!("file://{}", r.model.resources)).unwrap(), CString::new(r.model.resources.as_str()).unwrap());
+        let (uri, path) = if r.model.needs_resources { (uri.as_ptr(), path.as_ptr()) } else { (std::ptr::null(), std::ptr::null()) };
         let c = unsafe {
             match api {
                 Api::Fmi2 => fmi2Instantiate(name.as_ptr(), 1, g.as_ptr(), uri, &*functions, 0, 0),
@@ -2659,8 +2641,8 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
 /// event indicators that come back with OK must be finite.
 fn me_integration(r: &mut Run, i: usize) -> Result<(), Violation> {
     let (c, api) = (r.slot(i).c, r.api);
-    let nx = desc().states.len();
-    let nz = desc().number_of_event_indicators;
+    let nx = r.d().states.len();
+    let nz = r.d().number_of_event_indicators;
     let mut x = vec![f64::NAN; nx];
     let mut dx = vec![f64::NAN; nx];
     let mut z = vec![f64::NAN; nz];

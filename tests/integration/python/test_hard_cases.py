@@ -2,7 +2,7 @@
 
 Every case is defined once in tests/hard_cases/catalogue.json. Its schedule,
 its reference (mpmath closed forms, SciPy's Radau, the rk4/euler stability
-polynomials: bench/hard_cases_reference.py, written from the physics, not
+polynomials: tests/hard_cases/reference.py, written from the physics, not
 from the FMU's code) and each solver run's tolerance are stored in
 tests/hard_cases/references.json; tests/hard_cases.rs replays the same file
 through the model core. Here:
@@ -27,6 +27,7 @@ through the model core. Here:
 A summary of the worst error per solver ends the run.
 """
 
+import importlib.util
 import json
 import math
 import sys
@@ -40,10 +41,13 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2Discard, fmi2LastSuccessfulTime
 from fmpy.simulation import instantiate_fmu
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "bench"))
-import hard_cases_reference as R  # noqa: E402
-from conftest import simulate_fmu  # noqa: E402  (the FMI 2.0 FMU, then its FMI 3.0 twin: bit-identical)
+from conftest import simulate_fmu  # (the FMI 2.0 FMU, then its FMI 3.0 twin: bit-identical)
+
+ROOT = Path(__file__).resolve().parents[3]
+# The oracle, beside the catalogue and the references it writes.
+_spec = importlib.util.spec_from_file_location("hard_cases_reference", ROOT / "tests" / "hard_cases" / "reference.py")
+R = sys.modules["hard_cases_reference"] = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(R)
 
 STORED = json.loads(R.REFERENCES.read_text())
 CATALOGUE = json.loads(R.CATALOGUE.read_text())

@@ -37,7 +37,7 @@ def _kept_logger(function):
 
 _fmpy_simulation.fmi2CallbackLoggerTYPE = _kept_logger
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 FMU = ROOT / "out" / "ConvertingSpan.fmu"
 
 INPUTS = ("web_a.v", "web_a.eps", "web_b.v")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 README = ROOT / "README.md"
 PROBLEM = re.compile(r"warning|error|traceback|deprecat", re.IGNORECASE)
 # The command that runs the whole test suite, this test among them.

@@ -21,7 +21,7 @@ from fmpy.validation import validate_fmu
 
 from conftest import simulate_fmu  # the FMI 2.0 FMU, then its FMI 3.0 twin: bit-identical
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 ROLLER = ROOT / "out" / "Roller.fmu"
 SPAN = ROOT / "out" / "ConvertingSpan.fmu"
 

@@ -5,7 +5,7 @@ PE tables with objdump -p. (test_portable_so.py: the Linux binaries.) And
 fmu/package.py's --add-binary merges libraries built elsewhere after the same
 export check: tried here with the binaries built here.
 
-    .venv/bin/python -m pytest tests/hardening -q     (after python3 fmu/package.py)
+    .venv/bin/python -m pytest tests/integration/hardening -q     (after python3 fmu/package.py)
 """
 
 import re
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT / "fmu"))
 import package  # noqa: E402
 

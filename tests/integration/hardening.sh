@@ -3,38 +3,39 @@
 # boundary, portable binary. Threads and global state are in the conformance
 # suite (fmi/testkit: its threads and statics modules; cargo test).
 #
-#   bash tests/hardening.sh            CI size (tests/run.sh runs this), a few minutes
-#   bash tests/hardening.sh --full     the long runs: 1,000,000 fuzzed sequences,
+#   bash tests/integration/hardening.sh            CI size (tests/run.sh runs this), a few minutes
+#   bash tests/integration/hardening.sh --full     the long runs: 1,000,000 fuzzed sequences,
 #                                      1,000 dlopen/dlclose cycles under valgrind, ...
-#   bash tests/hardening.sh --afl S    coverage-guided fuzzing with cargo-afl (AFL++)
+#   bash tests/integration/hardening.sh --afl S    coverage-guided fuzzing with cargo-afl (AFL++)
 #                                      for S seconds, then its queue and crashes are
 #                                      replayed through the oracle
 #
 # What runs (sizes: CI / --full):
 #   1. the packaged FMU's .so: glibc <= 2.17, only glibc + libgcc_s, no test hook
-#      (pytest tests/hardening)
+#      (pytest tests/integration/hardening)
 #   2. panic boundary through the C API (cargo test --features test-hooks)
-#   3. fuzz harness tests/fuzz, property-based, --strict, for each model (the span,
-#      the Roller): 50,000 / 1,000,000 sequences; its FMI 3 mode (--fmi3): 5,000 / 1,000,000
+#   3. each model's fuzz target (the harness of fmi/fuzz; the span's in fuzz/, the
+#      Roller's in models/roller/fuzz), property-based, --strict: 50,000 / 1,000,000
+#      sequences; its FMI 3 mode (--fmi3): 5,000 / 1,000,000
 #   4. (--full) the same harness built with AddressSanitizer (LeakSanitizer
 #      included): 200,000 sequences; FMI 3: 100,000 (in CI, valgrind's run of
 #      step 5 and the ASan runs of step 6 watch the memory)
 #   5. the same harness under valgrind memcheck: 200 / 5,000 sequences
-#   6. tests/hardening/dlopen_cycles.c on each shipped .so, with ASan+UBSan:
+#   6. tests/integration/hardening/dlopen_cycles.c on each shipped .so, with ASan+UBSan:
 #      1,000 / 1,000 cycles; under valgrind: 100 / 1,000 cycles; and the C importer
 #      reloading the library under a live instance (ASan+UBSan)
 #   7. (--full) the same with a panic caught in every cycle, on a portable build
 #      with the test-only hook: ASan 1,000, valgrind 200 cycles (in CI, step 2
 #      and the conformance suite cross the panic boundary through the C API)
-#   8. (--full) the C importer of tests/c_importer under valgrind, if present
+#   8. (--full) the C importer of tests/integration/c_importer under valgrind, if present
 #      (reported, not enforced: it is another program)
-#   9. the Line (its test line, models/line/resources): the same harness built as
-#      fmi-fuzz-line in the Line's own workspace, strict: LINE_SEQ / LINE_SEQ3
+#   9. the Line (its test line, models/line/resources): its fuzz target line-fuzz
+#      (models/line/fuzz) in the Line's own workspace, strict: LINE_SEQ / LINE_SEQ3
 #      sequences (CI 3,000 / 1,000; --full 200,000 / 50,000, and 20,000 / 5,000
 #      under ASan, 500 under valgrind, and the Line's panic-boundary tests)
 # A summary is printed at the end and written to target/hardening/summary.txt.
 set -euo pipefail
-source "$(dirname "$0")/../fmu/env.sh"
+source "$(dirname "$0")/../../fmu/env.sh"
 source "$ROOT/tests/tools.sh"
 cd "$ROOT"
 # A panic the FMU catches still goes through Rust's default panic hook, which
@@ -69,15 +70,13 @@ note() { echo "$*" | tee -a "$SUMMARY"; }
 step() { echo; echo "== $*"; }
 START=$SECONDS
 
-# The fuzz harness (tests/fuzz) fuzzes one model per build: the span by default,
-# the Roller with --no-default-features --features roller.
+# Each model's fuzz target: the harness of fmi/fuzz on that model.
 MODELS=(span roller)
-declare -A FEATURES=([span]="" [roller]="--no-default-features --features roller")
+declare -A FUZZ_TARGET=([span]=converting-span-fuzz [roller]=roller-fuzz)
 declare -A NAME=([span]=ConvertingSpan [roller]=Roller)
 fuzz_of() { echo "target/fuzz/fuzz/fuzz_sequences-$1"; }
 build_fuzz() { # MODEL: one target folder for both (their crates are shared), each binary copied aside
-    # shellcheck disable=SC2086
-    cargo build --profile fuzz --quiet -p fmi-fuzz ${FEATURES[$1]} --target-dir target/fuzz
+    cargo build --profile fuzz --quiet -p "${FUZZ_TARGET[$1]}" --target-dir target/fuzz
     cp target/fuzz/fuzz/fuzz_sequences "$(fuzz_of "$1")"
 }
 
@@ -88,7 +87,7 @@ if [ "$MODE" = afl ]; then
     fi
     cargo afl config --build 2>/dev/null || true # "already built" is fine
     step "AFL++ (cargo-afl), $AFL_SECONDS s"
-    cargo afl build --profile fuzz --quiet --features afl -p fmi-fuzz --target-dir target/fuzz-afl
+    cargo afl build --profile fuzz --quiet --features afl -p converting-span-fuzz --target-dir target/fuzz-afl
     build_fuzz span
     FUZZ=$(fuzz_of span)
     mkdir -p "$OUT/afl-seeds"
@@ -125,7 +124,7 @@ fi
 
 step "1. portable binary (packaged FMU)"
 [ -n "${CONVERTING_SPAN_PACKAGED:-}" ] || python3 fmu/package.py # tests/run.sh has packaged
-"$PY" -m pytest tests/hardening -q -s -p no:cacheprovider | tee "$OUT/portable.log"
+"$PY" -m pytest tests/integration/hardening -q -s -p no:cacheprovider | tee "$OUT/portable.log"
 grep "newest symbol version" "$OUT/portable.log" | sed 's/^\.*//' | while read -r line; do
     note "shipped $line (allowed: up to GLIBC_2.17)"
 done
@@ -147,10 +146,9 @@ for model in "${MODELS[@]}"; do
     [ "$MODE" = full ] || continue
     step "4. fuzz harness with AddressSanitizer, ${NAME[$model]}: $SEQ_ASAN sequences"
     # -Zsanitizer needs a nightly flag: RUSTC_BOOTSTRAP=1 lets this stable toolchain take it.
-    # shellcheck disable=SC2086
     RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" \
         cargo build --quiet --target x86_64-unknown-linux-gnu \
-        --profile fuzz -p fmi-fuzz ${FEATURES[$model]} --target-dir "target/fuzz-asan-$model"
+        --profile fuzz -p "${FUZZ_TARGET[$model]}" --target-dir "target/fuzz-asan-$model"
     asan="target/fuzz-asan-$model/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences"
     ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 "$asan" --sequences "$SEQ_ASAN" --seed 7 | tee "$OUT/fuzz-asan-$model.log"
     note "fuzz ${NAME[$model]} under ASan: $(grep '^fuzzed' "$OUT/fuzz-asan-$model.log"), no ASan/LSan report"
@@ -175,12 +173,12 @@ for model in "${MODELS[@]}"; do
 done
 
 HEADERS=$("$PY" -c "import fmpy, pathlib; print(pathlib.Path(fmpy.__file__).parent / 'c-code')")
-C_FLAGS=(-O1 -g -Wall -Wextra -Werror -I "$HEADERS" -I tests/c_importer)
-gcc "${C_FLAGS[@]}" -o "$OUT/dlopen_cycles" tests/hardening/dlopen_cycles.c -ldl -lm
+C_FLAGS=(-O1 -g -Wall -Wextra -Werror -I "$HEADERS" -I tests/integration/c_importer)
+gcc "${C_FLAGS[@]}" -o "$OUT/dlopen_cycles" tests/integration/hardening/dlopen_cycles.c -ldl -lm
 gcc "${C_FLAGS[@]}" -fsanitize=address,undefined -fno-omit-frame-pointer \
-    -o "$OUT/dlopen_cycles_asan" tests/hardening/dlopen_cycles.c -ldl -lm
+    -o "$OUT/dlopen_cycles_asan" tests/integration/hardening/dlopen_cycles.c -ldl -lm
 gcc "${C_FLAGS[@]}" -fsanitize=address,undefined -fno-omit-frame-pointer \
-    -o "$OUT/importer_asan" tests/c_importer/importer.c -ldl -lm
+    -o "$OUT/importer_asan" tests/integration/c_importer/importer.c -ldl -lm
 declare -A MODEL_DIR=([span]=. [roller]=models/roller)
 declare -A PACKAGE=([span]=converting-span [roller]=roller)
 declare -A LIBRARY=([span]=libconverting_span.so [roller]=libroller.so)
@@ -230,11 +228,11 @@ EOF
     note "panic cycles of ${NAME[$model]} under valgrind ($PANIC_VALGRIND cycles): $(valgrind_summary "$OUT/valgrind-panic-$model.log")"
 done
 
-if [ "$MODE" = full ] && [ -f tests/c_importer/importer.c ]; then
-    step "8. the C importer of tests/c_importer under valgrind"
+if [ "$MODE" = full ] && [ -f tests/integration/c_importer/importer.c ]; then
+    step "8. the C importer of tests/integration/c_importer under valgrind"
     SHIPPED="$OUT/ConvertingSpan.so"
     GUID=$("$PY" -c "import xml.etree.ElementTree as ET; print(ET.parse('modelDescription.xml').getroot().get('guid'))")
-    gcc -O1 -g -Wall -I "$HEADERS" -I tests/c_importer tests/c_importer/importer.c -o "$OUT/importer" -ldl
+    gcc -O1 -g -Wall -I "$HEADERS" -I tests/integration/c_importer tests/integration/c_importer/importer.c -o "$OUT/importer" -ldl
     ARGS=$("$PY" - <<'EOF'
 import xml.etree.ElementTree as ET
 root = ET.parse("modelDescription.xml").getroot()
@@ -250,17 +248,17 @@ EOF
     # shellcheck disable=SC2086
     "${VALGRIND[@]}" --log-file="$OUT/valgrind-importer.log" "$OUT/importer" "$SHIPPED" "$GUID" $ARGS \
         > "$OUT/importer.out" || true
-    note "tests/c_importer under valgrind: $(valgrind_summary "$OUT/valgrind-importer.log");" \
+    note "tests/integration/c_importer under valgrind: $(valgrind_summary "$OUT/valgrind-importer.log");" \
         "its own failed checks: $(grep -c '^check,.*,0$' "$OUT/importer.out" || true)"
 fi
 
-# The Line: the harness of tests/fuzz built as fmi-fuzz-line in the Line's own
-# workspace (models/line/fuzz; in this one the span's `fmu` feature, its C API,
-# would be unified into the Line), over the Line's test line.
+# The Line: its fuzz target line-fuzz in the Line's own workspace (models/line/fuzz;
+# in this one the span's `fmu` feature, its C API, would be unified into the Line),
+# over the Line's test line.
 step "9. fuzz harness, strict, the Line (models/line/resources): $LINE_SEQ sequences, FMI 3: $LINE_SEQ3"
 LINE_START=$SECONDS
 line_fuzz() { # PROFILE TARGET-DIR [cargo options...]
-    cargo build --profile "$1" --quiet --manifest-path models/line/Cargo.toml -p fmi-fuzz-line --bin fuzz_sequences \
+    cargo build --profile "$1" --quiet --manifest-path models/line/Cargo.toml -p line-fuzz --bin fuzz_sequences \
         --target-dir "$2" "${@:3}"
 }
 # The tests' profile and folder, where tests/run.sh has built the Line's crates already.

@@ -2,11 +2,11 @@
  * A minimal FMI 3.0 importer for ConvertingSpan, written against FMPy's copy
  * of the FMI 3.0 headers: the scene of importer.c (its row lines must be
  * identical), FMU states, and the state machine and bad inputs of the FMI 3.0
- * layer. tests/python/test_c_importer.py compiles it with
+ * layer. tests/integration/python/test_c_importer.py compiles it with
  *
  *     gcc -Wall -Werror -I <fmpy>/c-code importer3.c -o importer3 -ldl
  *
- * (tests/cross/test_platforms.py also for win64 and aarch64) and runs it as
+ * (tests/integration/cross/test_platforms.py also for win64 and aarch64) and runs it as
  *
  *     importer3 <binaries/x86_64-linux/ConvertingSpan.so> <instantiationToken> name=vr ...
  *

@@ -1,4 +1,4 @@
-"""The FMU's binary driven by a plain C importer (tests/c_importer/importer.c).
+"""The FMU's binary driven by a plain C importer (tests/integration/c_importer/importer.c).
 
 The importer is compiled here with gcc -Wall -Werror against FMPy's copy of
 the FMI 2.0 headers, dlopen()s binaries/linux64/ConvertingSpan.so from the
@@ -210,7 +210,7 @@ def test_state_restore_and_deserialization_continue_identically(run, defaults):
 
 
 # --------------------------------------------------------------------------
-# The FMI 3.0 FMU through tests/c_importer/importer3.c (FMPy's FMI 3.0 headers)
+# The FMI 3.0 FMU through tests/integration/c_importer/importer3.c (FMPy's FMI 3.0 headers)
 
 SOURCE3 = SOURCE.parent / "importer3.c"
 

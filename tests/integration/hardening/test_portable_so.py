@@ -5,7 +5,7 @@ libgcc_s (read with objdump -T and readelf -d, binutils). It exports exactly
 the 44 fmi2 and 75 fmi3 functions and does not contain the test-only hook.
 (test_binaries.py: the Windows DLL.)
 
-    .venv/bin/python -m pytest tests/hardening -q     (after python3 fmu/package.py)
+    .venv/bin/python -m pytest tests/integration/hardening -q     (after python3 fmu/package.py)
 
 Checks out/ConvertingSpan.fmu and out/Roller.fmu (FMU=path checks that one). The parser is checked on a
 fabricated listing and on the plain host build (which needs a newer glibc),
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 sys.path.insert(0, str(ROOT / "fmu"))
 import package  # noqa: E402  (the export check and the lists of the functions)
 FMUS = (
