@@ -323,7 +323,7 @@ impl Model for Line {
         if initialized {
             // The parameters set the network (a roll's radius is a state only while it is wound):
             // out of their ranges, say which, before the structure they break.
-            fmi_core::instance::check_values(self, true)?;
+            fmi_core::instance::states::check_values(self, true)?;
             let net = Network::new(&self.shared.spec, &self.ode.parts).map_err(FmiError::error)?;
             if x.len() != net.len() {
                 return Err(FmiError::error(format!("the state holds {} line states, the line has {}", x.len(), net.len())));

@@ -155,7 +155,7 @@ impl crate::standard::Call for Call {
             return Some(format!("{}: illegal call sequence: {what}, and this is a {this} instance", self.c_name()));
         }
         (self.allowed() & phase.bit() == 0)
-            .then(|| format!("{}: illegal call sequence: not allowed in {}", self.c_name(), state_name(phase)))
+            .then(|| format!("{}: illegal call sequence: not allowed in {}", self.c_name(), Standard::Fmi3.state(phase)))
     }
 
     fn is_allowed_when_poisoned(self) -> bool {
@@ -164,20 +164,6 @@ impl crate::standard::Call for Call {
 
     fn is_reset(self) -> bool {
         self == Call::Reset
-    }
-}
-
-/// FMI 3.0's name of a phase.
-pub fn state_name(phase: Phase) -> &'static str {
-    match phase {
-        Phase::Instantiated => "the state Instantiated",
-        Phase::InitializationMode => "Initialization Mode",
-        Phase::StepComplete => "Step Mode",
-        Phase::StepFailed => "Step Mode after a discarded step",
-        Phase::Terminated => "the state Terminated",
-        Phase::Error => "the error state (after fmi3Error)",
-        Phase::EventMode => "Event Mode",
-        Phase::ContinuousTimeMode => "Continuous-Time Mode",
     }
 }
 

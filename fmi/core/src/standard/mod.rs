@@ -52,10 +52,25 @@ impl Standard {
     pub fn state(self, phase: Phase) -> String {
         match self {
             Standard::Fmi2 => format!("the state \"{}\"", phase.name()),
-            Standard::Fmi3 => fmi3::state_name(phase).to_string(),
+            Standard::Fmi3 => fmi3_state_name(phase).to_string(),
         }
     }
 }
+
+/// FMI 3.0's name of a phase.
+fn fmi3_state_name(phase: Phase) -> &'static str {
+    match phase {
+        Phase::Instantiated => "the state Instantiated",
+        Phase::InitializationMode => "Initialization Mode",
+        Phase::StepComplete => "Step Mode",
+        Phase::StepFailed => "Step Mode after a discarded step",
+        Phase::Terminated => "the state Terminated",
+        Phase::Error => "the error state (after fmi3Error)",
+        Phase::EventMode => "Event Mode",
+        Phase::ContinuousTimeMode => "Continuous-Time Mode",
+    }
+}
+
 
 /// A function of one standard that takes an instance.
 pub trait Call: Copy + PartialEq + std::fmt::Debug + 'static {
