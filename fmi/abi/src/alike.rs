@@ -4,15 +4,14 @@
 //! mask and the messages) and, where an argument is named in a message, the
 //! standard's name of it.
 
-use crate::handle::{enter, Handle};
-use crate::raw::{out_ref, slice, slice_mut};
+use crate::handle::{enter, out_ref, slice, slice_mut, Handle};
 use fmi_core::standard::Call;
 use fmi_core::{FmiError, FmiResult, Model};
 use std::ffi::{c_char, c_int, c_void};
 
 pub unsafe fn set_debug_logging<M: Model, C: Call>(c: *mut c_void, call: C, on: bool, n: usize, categories: *const *const c_char) -> c_int {
     enter::<M, C>(c, call, |h| {
-        let names: Vec<String> = slice(call, categories, n, "categories")?.iter().map(|&n| crate::raw::text(n).unwrap_or_default()).collect();
+        let names: Vec<String> = slice(call, categories, n, "categories")?.iter().map(|&n| crate::handle::text(n).unwrap_or_default()).collect();
         h.instance.set_debug_logging(call.name(), on, &names)
     })
 }
@@ -77,7 +76,7 @@ pub unsafe fn get_nominals<M: Model, C: Call>(c: *mut c_void, call: C, nominals:
 /// The Strings of `vrs` into `out`: their texts stay the handle's until the next call.
 pub fn get_strings<M: Model, C: Call>(h: &mut Handle<M>, call: C, vrs: &[u32], out: &mut [*const c_char]) -> FmiResult {
     let mut texts = Vec::with_capacity(vrs.len());
-    h.instance.get_strings(call.name(), vrs, |s| texts.push(crate::raw::c_text(s)))?;
+    h.instance.get_strings(call.name(), vrs, |s| texts.push(crate::handle::c_text(s)))?;
     h.hand_out_strings(texts, out);
     Ok(())
 }
@@ -87,7 +86,7 @@ pub unsafe fn set_strings<M: Model, C: Call>(h: &mut Handle<M>, call: C, vrs: &[
     let texts = slice(call, values, vrs.len(), what)?
         .iter()
         .enumerate()
-        .map(|(i, &s)| crate::raw::utf8(call, s, what, i))
+        .map(|(i, &s)| crate::handle::utf8(call, s, what, i))
         .collect::<FmiResult<Vec<_>>>()?;
     h.instance.set_strings(call.name(), vrs, &texts)
 }

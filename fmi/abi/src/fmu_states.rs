@@ -4,8 +4,7 @@
 //! (for the state mask and the messages) and `slot`, the standard's name of
 //! the state argument ("FMUstate", "FMUState").
 
-use crate::handle::enter;
-use crate::raw::{out_ref, slice, slice_mut};
+use crate::handle::{enter, out_ref, slice, slice_mut};
 use fmi_core::instance::Instance;
 use fmi_core::snapshot::Snapshot;
 use fmi_core::standard::Call;

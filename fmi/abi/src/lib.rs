@@ -5,7 +5,6 @@
 //! * `handle` — what an instance pointer points to, and the one entry path
 //!   every export goes through: tag and pointer check, `catch_unwind`,
 //!   poisoning, the state machine, a status plus one log line;
-//! * `raw` — the importer's pointers made into slices, references and texts;
 //! * `state_store` — the FMU states an instance has handed out;
 //! * `library` — the library's own reference to itself while instances live;
 //! * `logger` — the importer's logger, for both standards;
@@ -28,7 +27,6 @@ pub mod fmu_states;
 pub mod handle;
 mod library;
 mod logger;
-pub mod raw;
 mod state_store;
 
 pub use fmi_core;

@@ -3,7 +3,7 @@
 
 use crate::fmi2::{fmi2CallbackFunctions, fmi2CallbackLogger, fmi2ComponentEnvironment};
 use crate::fmi3::{fmi3InstanceEnvironment, fmi3LogMessageCallback};
-use crate::raw::c_text;
+use crate::handle::c_text;
 use fmi_core::logging::Log;
 use fmi_core::Status;
 use std::ffi::{c_int, CString};

@@ -120,7 +120,7 @@ impl Line {
             return Err(FmiError::error("the line is not initialized: it has no states yet"));
         }
         let input = match self.shared.bindings.get(known as usize) {
-            Some(&Binding::Part { part, vr }) if state.is_none() => Some((part, vr)),
+            Some(&Binding::Real { part, vr, .. }) if state.is_none() => Some((part, vr)),
             _ => None,
         };
         let value = match (state, input) {
@@ -172,17 +172,17 @@ fn apply_start(part: &mut Part, ps: &spec::PartSpec) -> Result<(), String> {
 impl Variables for Line {
     fn get_real(&self, vr: u32) -> FmiResult<f64> {
         match self.binding(vr)? {
-            Binding::Part { part, vr } => self.ode.parts[part].get_real(vr),
+            Binding::Real { part, port, .. } => Ok(self.ode.parts[part].real(port)),
             Binding::LoadCell { part, cos_wrap } => self.ode.parts[part].load_cell(cos_wrap),
             Binding::Tolerance => Ok(self.tolerance),
-            Binding::StartAtEquilibrium => Err(fmi_core::model::unknown_vr(vr)),
+            Binding::Part { .. } | Binding::StartAtEquilibrium => Err(fmi_core::model::unknown_vr(vr)),
         }
     }
 
     fn set_real(&mut self, vr: u32, value: f64) -> FmiResult {
         match self.binding(vr)? {
-            Binding::Part { part, vr: part_vr } => {
-                self.ode.parts[part].set_real(part_vr, value)?;
+            Binding::Real { part, vr: part_vr, port } => {
+                self.ode.parts[part].write(port, value)?;
                 self.part_set(vr);
                 // An input moves the outputs that depend on it; a failure shows when they are read.
                 // One that moves no connection (a motor torque) changes only what its part computes when read.
@@ -355,7 +355,7 @@ impl Model for Line {
     }
 
     fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult {
-        let Binding::Part { part, vr: part_vr } = self.binding(vr)? else {
+        let Binding::Real { part, vr: part_vr, .. } = self.binding(vr)? else {
             return Err(FmiError::error(format!("value reference {vr} is not an input")));
         };
         let base = self.ode.parts[part].get_real(part_vr)?;

@@ -184,7 +184,17 @@ impl Part {
         }
     }
 
-    /// Sets the part's input `port`.
+    /// The value of the part's Real `port`.
+    #[inline(always)]
+    pub fn real(&self, port: Port) -> f64 {
+        match (self, port) {
+            (Part::Span(s), Port::Span(var)) => s.real(var),
+            (Part::Roller(r), Port::Roller(var)) => r.real(var),
+            _ => unreachable!("a port is resolved from its own part"),
+        }
+    }
+
+    /// Sets the part's input (or parameter) `port`.
     #[inline(always)]
     pub fn write(&mut self, port: Port, value: f64) -> FmiResult {
         match (self, port) {

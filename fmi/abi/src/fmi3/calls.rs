@@ -4,9 +4,8 @@
 
 use super::*;
 use crate::alike;
-use crate::handle::{self, enter, unsupported, Request};
+use crate::handle::{self, enter, out_ref, slice, slice_mut, text, unsupported, Request};
 use crate::logger::Logger;
-use crate::raw::{out_ref, slice, slice_mut, text};
 use fmi_core::standard::fmi3::Call;
 use fmi_core::standard::fmi3_types::{self as types, Added, Type};
 use fmi_core::standard::{Call as _, Standard};
