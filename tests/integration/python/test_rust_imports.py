@@ -13,6 +13,7 @@ The crates are those of every Cargo.toml the repository tracks; each target's
 root (src/lib.rs, src/main.rs, src/bin/*.rs, a [[bin]]'s path) starts a tree.
 """
 
+import importlib.util
 import re
 import subprocess
 import tomllib
@@ -20,6 +21,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[3]
 KEYWORDS = {"crate", "super", "self", "Self"}
+
+# The circle finder of webline's own import test: one for Python's modules and Rust's.
+_spec = importlib.util.spec_from_file_location("webline_imports", ROOT / "webline" / "tests" / "test_imports.py")
+_webline_imports = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_webline_imports)
+cycle = _webline_imports.cycle
 
 
 def strip(text):
@@ -160,32 +167,6 @@ def inline_modules(code):
             i += 1
         blocks.append((m.start(), i, m.group(1)))
     return blocks
-
-
-def cycle(graph):
-    """One circle of the graph as a list of its nodes (the first again at the end), or None."""
-    state, stack = {}, []
-
-    def visit(node):
-        state[node] = "open"
-        stack.append(node)
-        for other in sorted(graph.get(node, ())):
-            if state.get(other) == "open":
-                return stack[stack.index(other):] + [other]
-            if other not in state:
-                found = visit(other)
-                if found:
-                    return found
-        stack.pop()
-        state[node] = "done"
-        return None
-
-    for node in sorted(graph):
-        if node not in state:
-            found = visit(node)
-            if found:
-                return found
-    return None
 
 
 def target_roots(manifest):

@@ -2,24 +2,10 @@
 //! (FMI 2.0 standard: 3.2.3 for Model Exchange, 4.2.4 for Co-Simulation).
 //! One table serves both interfaces.
 
+use super::{ANY, COMPLETE, COMPUTED, CONTINUOUS, ERROR, EVENT, FAILED, INIT, INSTANTIATED, READABLE, TERMINATED, WRITABLE};
 use crate::phase::Phase;
 use crate::standard::Standard;
 
-const INSTANTIATED: u8 = Phase::Instantiated.bit();
-const INIT: u8 = Phase::InitializationMode.bit();
-const COMPLETE: u8 = Phase::StepComplete.bit();
-const FAILED: u8 = Phase::StepFailed.bit();
-const TERMINATED: u8 = Phase::Terminated.bit();
-const ERROR: u8 = Phase::Error.bit();
-const EVENT: u8 = Phase::EventMode.bit();
-const CONTINUOUS: u8 = Phase::ContinuousTimeMode.bit();
-const ANY: u8 = INSTANTIATED | INIT | COMPLETE | FAILED | TERMINATED | ERROR | EVENT | CONTINUOUS;
-/// Where values may be read: after initialization started, for diagnosis also after errors.
-const READABLE: u8 = INIT | COMPLETE | FAILED | TERMINATED | ERROR | EVENT | CONTINUOUS;
-/// Where a set may be called (each variable's own rule is checked by the instance).
-const WRITABLE: u8 = INSTANTIATED | INIT | COMPLETE | EVENT | CONTINUOUS;
-/// Where Model Exchange's computed values (derivatives, event indicators, states) may be read.
-const COMPUTED: u8 = INIT | EVENT | CONTINUOUS | TERMINATED | ERROR;
 /// Where the status functions answer.
 const STATUS: u8 = COMPLETE | FAILED | TERMINATED;
 

@@ -4,23 +4,13 @@
 //! and since the FMU declares no event mode for co-simulation
 //! (`hasEventMode` is false), a co-simulation instance never enters Event Mode.
 
+use super::{ANY, COMPLETE, COMPUTED, CONTINUOUS, ERROR, EVENT, FAILED, INIT, INSTANTIATED, READABLE, TERMINATED, WRITABLE};
 use crate::phase::Phase;
 use crate::standard::Standard;
 
-const INSTANTIATED: u8 = Phase::Instantiated.bit();
-const INIT: u8 = Phase::InitializationMode.bit();
-const STEP: u8 = Phase::StepComplete.bit();
-const DISCARDED: u8 = Phase::StepFailed.bit();
-const TERMINATED: u8 = Phase::Terminated.bit();
-const ERROR: u8 = Phase::Error.bit();
-const EVENT: u8 = Phase::EventMode.bit();
-const CONTINUOUS: u8 = Phase::ContinuousTimeMode.bit();
-const ANY: u8 = INSTANTIATED | INIT | STEP | DISCARDED | TERMINATED | ERROR | EVENT | CONTINUOUS;
-/// Where values may be read: from initialization on, for diagnosis also after errors.
-const READABLE: u8 = INIT | STEP | DISCARDED | TERMINATED | ERROR | EVENT | CONTINUOUS;
-/// Where a set may be called (each variable's own rule is checked by the instance).
-const WRITABLE: u8 = INSTANTIATED | INIT | STEP | EVENT | CONTINUOUS;
-const COMPUTED: u8 = INIT | EVENT | CONTINUOUS | TERMINATED | ERROR;
+/// FMI 3.0's words for two of the phases: Step Mode, and Step Mode after a discarded step.
+const STEP: u8 = COMPLETE;
+const DISCARDED: u8 = FAILED;
 
 /// Which instances a function serves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

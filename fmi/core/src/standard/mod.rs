@@ -41,6 +41,24 @@ pub mod fmi3_types;
 
 use crate::phase::Phase;
 
+// The phases as bits of the masks the standards' lists give their calls (FMI 2.0's words;
+// fmi3.rs names the two it words otherwise).
+const INSTANTIATED: u8 = Phase::Instantiated.bit();
+const INIT: u8 = Phase::InitializationMode.bit();
+const COMPLETE: u8 = Phase::StepComplete.bit();
+const FAILED: u8 = Phase::StepFailed.bit();
+const TERMINATED: u8 = Phase::Terminated.bit();
+const ERROR: u8 = Phase::Error.bit();
+const EVENT: u8 = Phase::EventMode.bit();
+const CONTINUOUS: u8 = Phase::ContinuousTimeMode.bit();
+const ANY: u8 = INSTANTIATED | INIT | COMPLETE | FAILED | TERMINATED | ERROR | EVENT | CONTINUOUS;
+/// Where values may be read: from initialization on, for diagnosis also after errors.
+const READABLE: u8 = INIT | COMPLETE | FAILED | TERMINATED | ERROR | EVENT | CONTINUOUS;
+/// Where a set may be called (each variable's own rule is checked by the instance).
+const WRITABLE: u8 = INSTANTIATED | INIT | COMPLETE | EVENT | CONTINUOUS;
+/// Where Model Exchange's computed values (derivatives, event indicators, states) may be read.
+const COMPUTED: u8 = INIT | EVENT | CONTINUOUS | TERMINATED | ERROR;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Standard {
     Fmi2,
