@@ -97,7 +97,7 @@ def main():
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     harness = OUT / "step_cost"
-    subprocess.run(["gcc", "-O2", "-Wall", "-Werror", f"-I{fmpy_headers()}", f"-I{ROOT / 'tests' / 'c_importer'}", str(ROOT / "bench/step_cost.c"),
+    subprocess.run(["gcc", "-O2", "-Wall", "-Werror", f"-I{fmpy_headers()}", f"-I{ROOT / 'tests' / 'integration' / 'c_importer'}", str(ROOT / "bench/step_cost.c"),
                     "-o", str(harness), "-ldl"], check=True)
     current = build_library(ROOT, ROOT / "target")
     base_tree = baseline_source(args.baseline)

@@ -82,7 +82,7 @@ def harness(folder: Path) -> Path:
 
     exe = folder / "line_cost"
     subprocess.run(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{Path(fmpy.__file__).parent / 'c-code'}",
-                    f"-I{ROOT / 'tests' / 'c_importer'}", str(ROOT / "bench" / "line_cost.c"), "-o", str(exe), "-ldl"], check=True)
+                    f"-I{ROOT / 'tests' / 'integration' / 'c_importer'}", str(ROOT / "bench" / "line_cost.c"), "-o", str(exe), "-ldl"], check=True)
     return exe
 
 

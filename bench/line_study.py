@@ -7,7 +7,7 @@ and the stability limit of a stiff line with and without input derivatives.
                                          [--stiff-steps ...] [--fmu-dir out] [--out out]
 
 Writes OUT/line_study.png (the figure docs/line-coupling.md shows from
-documentation/) and prints the tables. Every run is measured against webline's monolithic reference
+docs/images/) and prints the tables. Every run is measured against webline's monolithic reference
 (webline.accuracy).
 """
 

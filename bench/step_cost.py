@@ -99,7 +99,7 @@ def fmpy_headers():
 
 def harness():
     exe = OUT / "native_cost"
-    sh(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{fmpy_headers()}", f"-I{ROOT / 'tests' / 'c_importer'}", str(ROOT / "bench" / "native_cost.c"), "-o", str(exe), "-ldl"])
+    sh(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{fmpy_headers()}", f"-I{ROOT / 'tests' / 'integration' / 'c_importer'}", str(ROOT / "bench" / "native_cost.c"), "-o", str(exe), "-ldl"])
     return exe
 
 

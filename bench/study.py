@@ -304,7 +304,7 @@ def build():
     bindir = OUT / "bin"
     bindir.mkdir(exist_ok=True)
     inc = f"-I{fmpy_headers()}"
-    loader = f"-I{ROOT / 'tests' / 'c_importer'}"
+    loader = f"-I{ROOT / 'tests' / 'integration' / 'c_importer'}"
     sh(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", inc, loader, str(BENCH / "study_driver.c"), "-o", str(bindir / "study_driver"),
         "-ldl", "-lm", "-lsundials_cvode", "-lsundials_nvecserial", "-lsundials_sunmatrixdense", "-lsundials_sunlinsoldense"])
     sh(["gcc", "-O2", "-Wall", "-Wextra", "-Werror", inc, loader, str(BENCH / "native_cost.c"), "-o", str(bindir / "native_cost"), "-ldl"])

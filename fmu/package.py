@@ -145,6 +145,14 @@ class Model:
         self.resources = crate_dir / "resources"
         self.host_library = self.target_dir(ROOT / "target") / "release" / f"lib{self.crate}.so"
 
+    def shipped_resources(self):
+        """The zip entries of the files in the model's resources/, but its README (which says
+        what the folder holds, for the developers)."""
+        if not self.resources.is_dir():
+            return []
+        return [(f"resources/{f.name}", f.read_bytes()) for f in sorted(self.resources.iterdir())
+                if f.is_file() and f.name != "README.md"]
+
     def target_dir(self, base):
         """Where cargo builds it: the Line in a folder of its own, as its build of the
         span's crate (without the C API) would replace the span's library in a shared one."""
@@ -430,8 +438,7 @@ def write_fmu(out, model, libraries):
     for folder, library in sorted(libraries.items()):
         entries.append((f"binaries/{folder}/{identifier}{SUFFIXES[folder]}", library.read_bytes()))
     entries.append(("documentation/index.html", documentation(root, model.template, model.resources).encode("utf-8")))
-    if model.resources.is_dir():
-        entries += [(f"resources/{f.name}", f.read_bytes()) for f in sorted(model.resources.iterdir()) if f.is_file()]
+    entries += model.shipped_resources()
     write_zip(out, entries)
     return out
 
@@ -457,8 +464,7 @@ def write_fmu3(out, model, libraries):
         entries.append((f"binaries/{FMI3_FOLDERS[folder]}/{identifier}{SUFFIXES[folder]}", library.read_bytes()))
     page = documentation(fmi2_root, model.template, model.resources, fmi3=True)
     entries.append(("documentation/index.html", page.encode("utf-8")))
-    if model.resources.is_dir():
-        entries += [(f"resources/{f.name}", f.read_bytes()) for f in sorted(model.resources.iterdir()) if f.is_file()]
+    entries += model.shipped_resources()
     write_zip(out, entries)
     return out
 

@@ -6,7 +6,7 @@
 
 use crate::description::Effect;
 use crate::parameters::{Inputs, Parameters, Rates};
-use crate::physics::{self, Outputs};
+use crate::physics::{self, Forces, Outputs};
 use crate::sensor::SensorScale;
 use solver::CompensatedSum;
 
@@ -28,11 +28,13 @@ pub struct Direction {
     pub u: Inputs,
 }
 
-/// The derivatives of every output, of dx/dt [2] and of the web mass [10] along a `Direction`.
+/// The derivatives along a `Direction` of everything the span computes, each named as the
+/// span's own (`t.x` for `ConvertingSpan::x()`): every output, dx/dt [2] among its forces, the
+/// state and the web mass [10]. The binding (variables.rs) reads them by the same names.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tangents {
     pub outputs: Outputs,
-    pub unstretched_rate: f64,
+    pub unstretched_length: f64,
     pub web_mass: f64,
 }
 
@@ -181,15 +183,12 @@ impl Linearization<'_> {
         let sensor_on = |value: f64| if p.use_sensor { value } else { 0.0 };
         Tangents {
             outputs: Outputs {
-                length: d_length,
-                strain: d_strain,
-                tension: d_tension,
-                exit_force: d_exit_force,
+                forces: Forces { length: d_length, strain: d_strain, tension: d_tension, exit_force: d_exit_force, unstretched_rate: d_rate },
                 stress: d_tension / web.area(),
                 sensor_speed: sensor_on(d.u.speed_b * self.sensor.speed),
                 sensor_tension: sensor_on(d_tension * self.sensor.force),
             },
-            unstretched_rate: d_rate,
+            unstretched_length: d.x,
             web_mass: web.linear_density() * d.x,
         }
     }
@@ -255,13 +254,13 @@ mod tests {
         };
         let x = CompensatedSum::from_parts(x, 0.0);
         let o = physics::outputs(p, u, x, rates, &SensorScale { speed: 60.0, force: 0.2 });
-        let rate = physics::unstretched_rate(u, o.strain);
-        [o.length, o.strain, o.tension, o.exit_force, o.stress, o.sensor_speed, o.sensor_tension, rate, physics::web_mass(&p.span_web, x.value())]
+        let (f, rate) = (o.forces, physics::unstretched_rate(u, o.forces.strain));
+        [f.length, f.strain, f.tension, f.exit_force, o.stress, o.sensor_speed, o.sensor_tension, rate, physics::web_mass(&p.span_web, x.value())]
     }
 
     fn field(t: &Tangents) -> [f64; 9] {
-        let o = t.outputs;
-        [o.length, o.strain, o.tension, o.exit_force, o.stress, o.sensor_speed, o.sensor_tension, t.unstretched_rate, t.web_mass]
+        let (o, f) = (t.outputs, t.outputs.forces);
+        [f.length, f.strain, f.tension, f.exit_force, o.stress, o.sensor_speed, o.sensor_tension, f.unstretched_rate, t.web_mass]
     }
 
     /// Every effect combination, forward and reverse flow, linear and

@@ -88,8 +88,7 @@ impl ConvertingSpan {
         if of == Jacobian::Initialization {
             d.x = jacobian::initial_state_tangent(&self.params, &self.inputs, &d.u);
         }
-        let t = self.tangents(&d);
-        Self::along(&t, &d, unknown).ok_or_else(|| FmiError::error(format!("{} is not an unknown", unknown.name())))
+        Self::along(&self.tangents(&d), unknown).ok_or_else(|| FmiError::error(format!("{} is not an unknown", unknown.name())))
     }
 
     /// The unit direction of one known: the state or an input (None: neither).
@@ -123,25 +122,6 @@ impl ConvertingSpan {
             sensor: &self.sensor,
         };
         point.linearize()
-    }
-
-    /// d(unknown) from the tangents `t` along `d` (None: not an unknown).
-    #[inline]
-    pub fn along(t: &Tangents, d: &Direction, unknown: Real) -> Option<f64> {
-        // The same outputs as the bindings in variables.rs.
-        Some(match unknown {
-            Real::v => t.outputs.sensor_speed,
-            Real::T => t.outputs.sensor_tension,
-            Real::web_a_F | Real::summary_Tension => t.outputs.tension,
-            Real::web_b_F => t.outputs.exit_force,
-            Real::web_b_eps | Real::summary_Strain => t.outputs.strain,
-            Real::summary_Length => t.outputs.length,
-            Real::summary_Stress => t.outputs.stress,
-            Real::m_web => t.web_mass,
-            Real::unstretchedLength => d.x,
-            Real::der_unstretchedLength => t.unstretched_rate,
-            _ => return None,
-        })
     }
 
     /// The forces and strain at the span's ends and dx/dt, at once (what a line's rollers read).

@@ -8,17 +8,10 @@ use crate::parameters::{Inputs, Parameters, Rates, WebProperties};
 use crate::sensor::SensorScale;
 use solver::{decay_integral, CompensatedSum};
 
-/// Every output of the span at one instant.
+/// Every output of the span at one instant: its forces and what the stress and the sensor add.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outputs {
-    /// L [9], m.
-    pub length: f64,
-    /// eps_b [1].
-    pub strain: f64,
-    /// T [5], N: the force at the entry end a.
-    pub tension: f64,
-    /// F_b [10], N: the force at the exit end b.
-    pub exit_force: f64,
+    pub forces: Forces,
     /// Stress on the unstrained cross-section of wp2 [8], Pa.
     pub stress: f64,
     /// The sensor outputs v and T in the chosen units [7] (0 with the sensor off).
@@ -30,16 +23,13 @@ pub struct Outputs {
 /// rates of the inputs. Effects that are off are not computed at all.
 #[inline(always)]
 pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sensor: &SensorScale) -> Outputs {
-    let Forces { length, strain, tension, exit_force, .. } = forces(p, u, x, rates);
+    let forces = forces(p, u, x, rates);
     let sensor_on = |value: f64| if p.use_sensor { value } else { 0.0 };
     Outputs {
-        length,
-        strain,
-        tension,
-        exit_force,
-        stress: tension / p.span_web.area(),
+        forces,
+        stress: forces.tension / p.span_web.area(),
         sensor_speed: sensor_on(u.speed_b * sensor.speed),
-        sensor_tension: sensor_on(tension * sensor.force),
+        sensor_tension: sensor_on(forces.tension * sensor.force),
     }
 }
 
@@ -47,10 +37,15 @@ pub fn outputs(p: &Parameters, u: &Inputs, x: CompensatedSum, rates: Rates, sens
 /// dx/dt [2], which the damped force needs too: computed once for both.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Forces {
+    /// L [9], m.
     pub length: f64,
+    /// eps_b [1].
     pub strain: f64,
+    /// T [5], N: the force at the entry end a.
     pub tension: f64,
+    /// F_b [10], N: the force at the exit end b.
     pub exit_force: f64,
+    /// dx/dt [2], m/s.
     pub unstretched_rate: f64,
 }
 

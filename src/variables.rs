@@ -1,15 +1,21 @@
 //! Each variable of modelDescription.xml bound to its field, once: get,
-//! set, the FMU state and input derivatives follow from this table (see
-//! `fmi_core::bind_variables!`). Ranges and types come from the XML; equations
-//! for computed variables live in `physics`.
+//! set, the FMU state, input derivatives, the tangents of the outputs
+//! (`along`) and the forces a line's rollers read (`group_real`) follow from
+//! this table (see `fmi_core::bind_variables!`). Ranges and types come from
+//! the XML; equations for computed variables live in `physics`.
 
 use crate::description::{Boolean, BooleanKind, Effect, Integer, Real, Switch, Text, DESCRIPTION};
+use crate::jacobian::Tangents;
+use crate::model::ConvertingSpan;
 use crate::parameters::Inputs;
-use crate::ConvertingSpan;
+use crate::physics::Forces;
 
 fmi_core::bind_variables! {
     model: ConvertingSpan,
     inputs: Inputs,
+    // The forces at the span's ends and dx/dt, computed together (what a line's rollers read).
+    group: (outputs().forces): Forces,
+    tangents: Tangents,
     real {
         L: param(params.span_length),
         wp1_E: param(params.incoming.modulus),
@@ -33,16 +39,16 @@ fmi_core::bind_variables! {
         frame_b_y: input(frame_b[1]),
         v: computed(outputs().sensor_speed),
         T: computed(outputs().sensor_tension),
-        web_a_F: computed(outputs().tension),
-        web_b_F: computed(outputs().exit_force),
-        web_b_eps: computed(outputs().strain),
-        summary_Tension: computed(outputs().tension),
-        summary_Length: computed(outputs().length),
-        summary_Strain: computed(outputs().strain),
+        web_a_F: group(tension),
+        web_b_F: group(exit_force),
+        web_b_eps: group(strain),
+        summary_Tension: group(tension),
+        summary_Length: group(length),
+        summary_Strain: group(strain),
         summary_Stress: computed(outputs().stress),
         unstretchedLength: computed(unstretched_length()),
         m_web: computed(web_mass()),
-        der_unstretchedLength: computed(unstretched_rate()),
+        der_unstretchedLength: group(unstretched_rate),
     }
     integer {
         toUnitV: param(params.speed_unit),

@@ -1,4 +1,4 @@
-//! Product issues the fuzz harness (tests/fuzz) found, each as a small test.
+//! Product issues the fuzz harness (fmi/fuzz) found, each as a small test.
 //! They failed until the product was fixed; now they guard against the
 //! same faults coming back.
 

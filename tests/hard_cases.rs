@@ -2,12 +2,12 @@
 //!
 //! Every case is defined once in tests/hard_cases/catalogue.json; its
 //! schedule, its reference and each solver run's tolerance are computed in one
-//! place, bench/hard_cases_reference.py (mpmath closed forms, SciPy's Radau,
+//! place, tests/hard_cases/reference.py (mpmath closed forms, SciPy's Radau,
 //! the stability polynomials of rk4/euler; independent of the model's code),
 //! and stored in tests/hard_cases/references.json, which this test replays:
 //! the parameters set by name, the inputs at t = 0, then every communication
 //! step (the inputs set at its start, the input derivatives given for it).
-//! tests/python/test_hard_cases.py replays the same file through the packaged
+//! tests/integration/python/test_hard_cases.py replays the same file through the packaged
 //! FMU and checks that it equals a fresh computation.
 //!
 //! At every point: every output finite and the unstretched length > 0; each

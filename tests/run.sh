@@ -2,7 +2,7 @@
 # Every test: Rust tests of the models, the FMI layer and its conformance suite,
 # then the packaged FMUs through a C importer, FMPy, fmi-sim and libcosim, and
 # webline's own tests (pytest), hardening, and the Windows and ARM64 binaries
-# under Wine and QEMU (tests/cross.sh).
+# under Wine and QEMU (tests/integration/cross.sh).
 #
 #   bash tests/run.sh           what CI runs (docs/testing.md: under 15 minutes with the tools cached)
 #   bash tests/run.sh --full    the same with the long runs: hardening's million fuzzed
@@ -26,9 +26,11 @@ stage() { # NAME COMMAND...: runs it and notes how long it took
     "$@"
     TIMES+=("$(printf '%5d s  %s' $((SECONDS - t0)) "$name")")
 }
-# Every package of the workspace but the fuzz harness (tests/hardening.sh builds it with
-# its own profile): the models, the FMI layer and its conformance suite, the generator, the solvers.
-stage "Rust tests" cargo test --profile cross-test --quiet --workspace --exclude fmi-fuzz
+# Every package of the workspace but the fuzz harness and targets (tests/integration/hardening.sh
+# builds them with their own profile): the models, the FMI layer and its conformance suite, the
+# generator, the solvers.
+stage "Rust tests" cargo test --profile cross-test --quiet --workspace \
+    --exclude fmi-fuzz --exclude converting-span-fuzz --exclude roller-fuzz
 # The Line FMU's crate: a workspace of its own, built in a folder of its own (models/line/Cargo.toml).
 stage "Rust tests of the Line" cargo test --profile cross-test --quiet \
     --manifest-path models/line/Cargo.toml --target-dir target/line
@@ -41,16 +43,16 @@ export CONVERTING_SPAN_PACKAGED=1 # hardening.sh and cross.sh need not package a
 BESIDE_LOG=target/hardening-and-platforms.log
 mkdir -p target
 t_beside=$SECONDS
-setsid bash -c 'bash tests/hardening.sh "$@" && bash tests/cross.sh "$@"' beside "${FULL[@]}" > "$BESIDE_LOG" 2>&1 &
+setsid bash -c 'bash tests/integration/hardening.sh "$@" && bash tests/integration/cross.sh "$@"' beside "${FULL[@]}" > "$BESIDE_LOG" 2>&1 &
 BESIDE=$!
 trap 'kill -- -"$BESIDE" 2>/dev/null || true' EXIT
 # --rootdir: webline/pyproject.toml would otherwise become the rootdir (it is among the
-# arguments' folders), and the test ids of tests/python would lose their folder.
+# arguments' folders), and the test ids of tests/integration/python would lose their folder.
 stage "pytest: FMPy, C importer, fmi-sim, libcosim, README, set-up, webline" \
-    "$PY" -m pytest --rootdir "$ROOT" tests/python fmu/tests webline/tests -q
+    "$PY" -m pytest --rootdir "$ROOT" tests/integration/python fmu/tests webline/tests -q
 if ! wait "$BESIDE"; then
     tail -60 "$BESIDE_LOG"
-    echo "tests/run.sh: tests/hardening.sh or tests/cross.sh failed (beside pytest); their whole log: $BESIDE_LOG"
+    echo "tests/run.sh: tests/integration/hardening.sh or cross.sh failed (beside pytest); their whole log: $BESIDE_LOG"
     exit 1
 fi
 trap - EXIT

@@ -64,7 +64,7 @@ fn stiffness(m: &ConvertingSpan) -> f64 {
 fn worst_error(m: &mut ConvertingSpan, segments: &[(Held, f64)], h: f64) -> f64 {
     let l = m.params.span_length;
     let ea = stiffness(m);
-    let mut eps_segment_start = m.outputs().strain;
+    let mut eps_segment_start = m.outputs().forces.strain;
     let mut worst: f64 = 0.0;
     for &(u, duration) in segments {
         set_inputs(m, u);
@@ -109,7 +109,7 @@ fn very_short_fast_span_is_exact_with_huge_steps() {
         m.initialize(&Experiment::default(), &Default::default()).unwrap();
         worst_error(&mut m, &[(u, 2.0f64.max(10.0 * h))], h);
         let steady = exact_strain(5e-3, u, 0.0, f64::INFINITY);
-        assert!((m.outputs().strain - steady).abs() <= 1e-15, "strain must sit at the steady state");
+        assert!((m.outputs().forces.strain - steady).abs() <= 1e-15, "strain must sit at the steady state");
     }
 }
 
@@ -152,7 +152,7 @@ fn millions_of_tiny_steps_do_not_drift() {
         m.do_step(1e-6).unwrap();
     }
     let exact = exact_strain(1.0, u, 1e-3, 1.0);
-    let got = m.outputs().strain;
+    let got = m.outputs().forces.strain;
     assert!((got - exact).abs() <= REL * exact.abs(), "strain {got} vs exact {exact}");
 }
 
@@ -172,7 +172,7 @@ fn reverse_flow_matches_the_linear_balance() {
         m.do_step(0.2).unwrap();
         let x = x0 * (-lambda * 0.2 * k as f64).exp();
         let exact = l / x - 1.0;
-        assert!((m.outputs().strain - exact).abs() <= 1e-12 * exact.abs(), "step {k}");
+        assert!((m.outputs().forces.strain - exact).abs() <= 1e-12 * exact.abs(), "step {k}");
     }
 }
 
@@ -218,19 +218,19 @@ fn slack_web_carries_no_compression_and_re_tensions() {
     let mut went_slack = false;
     for _ in 0..100 {
         m.do_step(0.02).unwrap();
-        let o = m.outputs();
+        let o = m.outputs().forces;
         assert!(o.tension >= 0.0);
         if o.strain < 0.0 {
             went_slack = true;
             assert_eq!(o.tension, 0.0);
         }
     }
-    assert!(went_slack && m.outputs().strain < -8e-3, "the strain itself goes negative");
+    assert!(went_slack && m.outputs().forces.strain < -8e-3, "the strain itself goes negative");
     set_inputs(&mut m, Held { vb: 5.05, ..u });
     for _ in 0..200 {
         m.do_step(0.02).unwrap();
     }
-    let eps = m.outputs().strain;
+    let eps = m.outputs().forces.strain;
     assert!(eps > 0.0 && (m.real(Real::summary_Tension) - stiffness(&m) * eps).abs() <= 1e-12 * stiffness(&m) * eps);
 }
 
@@ -240,11 +240,11 @@ fn start_at_equilibrium_and_at_eps_start() {
     let mut m = span(1.5, u);
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
     let expected = (4.01 / 4.0) * (1.0 + 2e-3) - 1.0;
-    assert!((m.outputs().strain - expected).abs() <= 1e-15);
+    assert!((m.outputs().forces.strain - expected).abs() <= 1e-15);
     // v_a = 0: eps_b = eps_a.
     let mut m = span(1.5, Held { va: 0.0, ..u });
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
-    assert!((m.outputs().strain - 2e-3).abs() <= 1e-18);
+    assert!((m.outputs().forces.strain - 2e-3).abs() <= 1e-18);
     // Opposite signs: no steady state, a clear error that changes nothing.
     let mut m = span(1.5, Held { vb: -1.0, ..u });
     let before = m.clone();
@@ -256,7 +256,7 @@ fn start_at_equilibrium_and_at_eps_start() {
     m.params.start_at_equilibrium = false;
     m.set_real_var(Real::eps_start, 1e-9).unwrap();
     m.initialize(&Experiment::default(), &Default::default()).unwrap();
-    assert!((m.outputs().strain - 1e-9).abs() <= 1e-24);
+    assert!((m.outputs().forces.strain - 1e-9).abs() <= 1e-24);
 }
 
 #[test]

@@ -35,7 +35,7 @@ fn held_error(solver: i32, h: f64, tolerance: f64, substeps: i32) -> f64 {
     for _ in 0..(1.0 / h).round() as usize {
         reference.do_step(h).unwrap();
         m.do_step(h).unwrap();
-        let (a, b) = (reference.outputs().strain, m.outputs().strain);
+        let (a, b) = (reference.outputs().forces.strain, m.outputs().forces.strain);
         worst = worst.max((a - b).abs() / a.abs());
     }
     worst
@@ -113,7 +113,7 @@ fn input_derivatives_are_followed_by_rosenbrock_and_dopri5() {
             assert!((m.real(Real::web_b_v) - (vb0 + slope * t)).abs() < 1e-12, "inputs move along the ramp");
             let x = ramp_reference(l, va / (1.0 + eps_a), vb0, slope, x0, t);
             let exact = l / x - 1.0;
-            worst = worst.max((m.outputs().strain - exact).abs() / exact.abs());
+            worst = worst.max((m.outputs().forces.strain - exact).abs() / exact.abs());
         }
         println!("solver {solver}: ramp, worst relative strain error {worst:.2e}");
         assert!(worst <= global_error_bound(if solver == 1 { 3 } else { solver }, tol), "solver {solver}: {worst}");

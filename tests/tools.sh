@@ -7,7 +7,7 @@
 #                           compiles the C importer for ARM64 and whose sysroot
 #                           QEMU loads; valgrind; libclang-dev (fmi-sim's build)
 #   wine-prefix/            the tests' Wine prefix, with a test-only
-#                           bcryptprimitives.dll (tests/cross/bcryptprimitives.c):
+#                           bcryptprimitives.dll (tests/integration/cross/bcryptprimitives.c):
 #                           Wine 8 lacks ProcessPrng, which Rust's std imports.
 #                           Windows 10 and later have it; the shim never ships.
 #   fmi-sim                 rust-fmi's simulator, from crates.io (into the tools cache)
@@ -28,7 +28,7 @@ test_packages_setup() {
 }
 
 wine_prefix_setup() {
-    local source="$ROOT/tests/cross/bcryptprimitives.c" shim="$WINEPREFIX/drive_c/windows/system32/bcryptprimitives.dll"
+    local source="$ROOT/tests/integration/cross/bcryptprimitives.c" shim="$WINEPREFIX/drive_c/windows/system32/bcryptprimitives.dll"
     if ! [ -f "$WINEPREFIX/system.reg" ]; then
         echo "tools.sh: creating the Wine prefix $WINEPREFIX"
         /usr/lib/wine/wine64 wineboot --init >/dev/null 2>&1

@@ -1,4 +1,4 @@
-"""Web records in the webline runner (tests/python/test_records.py: through FMPy).
+"""Web records in the webline runner (tests/integration/python/test_records.py: through FMPy).
 
 A scene whose webs are records (shipped and the scene's own file) runs in
 webline, bit-identical to the same scene with the numbers written out where

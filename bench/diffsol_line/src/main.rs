@@ -111,8 +111,8 @@ impl Bench {
         let stop = spec["experiment"]["stop_time"].as_f64().unwrap();
         let net = line.network().unwrap();
         let (n, kl, ku) = (net.len(), net.kl, net.ku);
-        let span: Vec<bool> = net.states.iter().map(|s| matches!(line.parts[s.part], Part::Span(_))).collect();
-        let s = line::stepping::scratch(&line, n);
+        let span: Vec<bool> = net.states.iter().map(|s| matches!(line.parts()[s.part], Part::Span(_))).collect();
+        let s = line::stepping::scratch(&line.ode, n);
         let mut nominal = vec![0.0; n];
         line.get_nominals(&mut nominal).unwrap();
         let x0 = line.states().to_vec();
@@ -151,11 +151,11 @@ struct Sys<'a> {
 impl System for Sys<'_> {
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), ()> {
         self.rhs += 1;
-        rhs_at(self.line, t, y, dy).map_err(drop)
+        rhs_at(&mut self.line.ode, t, y, dy).map_err(drop)
     }
     fn jacobian(&mut self, t: f64, y: &[f64], f0: &[f64], jac: &mut Band) -> Result<(), ()> {
         self.jac += 1;
-        jacobian_at(self.line, t, y, Some(f0), jac, true).map_err(drop)
+        jacobian_at(&mut self.line.ode, t, y, Some(f0), jac, true).map_err(drop)
     }
     fn time_dependent(&self) -> bool {
         self.time_dependent
@@ -200,7 +200,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
         rhs_count.set(rhs_count.get() + 1);
         let mut y = ybuf.borrow_mut();
         to_y(u, &mut y);
-        if rhs_at(&mut line.borrow_mut(), t, &y, du).is_err() {
+        if rhs_at(&mut line.borrow_mut().ode, t, &y, du).is_err() {
             du.fill(f64::NAN);
         }
         for i in 0..n {
@@ -214,7 +214,7 @@ fn run(b: &Bench, method: Method, tol: f64, comm: f64) -> Result<Outcome, String
             jac_count.set(jac_count.get() + 1);
             let mut y = ybuf.borrow_mut();
             to_y(u, &mut y);
-            if jacobian_at(&mut line.borrow_mut(), t, &y, None, band, true).is_err() {
+            if jacobian_at(&mut line.borrow_mut().ode, t, &y, None, band, true).is_err() {
                 band.clear();
             }
             *ct = t;

@@ -3,7 +3,9 @@
 //!
 //! * turns the pointer into a reference, refusing NULL and pointers that do
 //!   not carry this standard's tag (an FMI 2.0 instance has another than an
-//!   FMI 3.0 one, so neither API takes the other's),
+//!   FMI 3.0 one, so neither API takes the other's), and the importer's other
+//!   pointers into slices, references and texts (`slice`, `out_ref`, `text`, …)
+//!   whose errors name the call and the argument,
 //! * catches panics, so that none crosses `extern "C"`, and poisons the
 //!   instance that panicked (only the reset and the free are accepted then),
 //! * checks the call against the state machine of its standard,
@@ -12,14 +14,13 @@
 //! `Box::into_raw`/`Box::from_raw` of instances happen here and nowhere else.
 
 use crate::library::LibraryRef;
-use crate::raw::out_ref;
 use crate::state_store::StateStore;
 use fmi_core::instance::Instance;
 use fmi_core::logging::Log;
 use fmi_core::snapshot::Snapshot;
 use fmi_core::standard::{Call, Standard};
 use fmi_core::{FmiError, FmiResult, Model, Resources, Status};
-use std::ffi::{c_int, c_void, CString};
+use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// The tag at the start of every instance: "CONVSPAN" for FMI 2.0, "CONVSPN3" for FMI 3.0.
@@ -207,4 +208,61 @@ fn poisoned(call: impl Call, standard: Standard) -> FmiError {
 /// A call that this FMU does not offer, refused with the reason.
 pub unsafe fn unsupported<M: Model, C: Call>(c: *mut c_void, call: C, why: &str) -> c_int {
     enter::<M, C>(c, call, |_| Err(FmiError::error(format!("{} is not supported: {why}", call.name()))))
+}
+
+// ---- The importer's other pointers
+
+/// `n` elements from the importer; NULL is fine only for `n == 0`.
+#[inline]
+pub unsafe fn slice<'a, T>(call: impl Call, ptr: *const T, n: usize, what: &str) -> FmiResult<&'a [T]> {
+    if n == 0 {
+        Ok(&[])
+    } else if ptr.is_null() {
+        Err(null_argument(call, what))
+    } else {
+        Ok(std::slice::from_raw_parts(ptr, n))
+    }
+}
+
+#[inline]
+pub unsafe fn slice_mut<'a, T>(call: impl Call, ptr: *mut T, n: usize, what: &str) -> FmiResult<&'a mut [T]> {
+    if n == 0 {
+        Ok(&mut [])
+    } else if ptr.is_null() {
+        Err(null_argument(call, what))
+    } else {
+        Ok(std::slice::from_raw_parts_mut(ptr, n))
+    }
+}
+
+#[inline]
+pub fn out_ref<'a, T>(call: impl Call, ptr: *mut T, what: &str) -> FmiResult<&'a mut T> {
+    // SAFETY: the importer passes a valid pointer or NULL, as the standard requires.
+    unsafe { ptr.as_mut() }.ok_or_else(|| null_argument(call, what))
+}
+
+#[cold]
+pub fn null_argument(call: impl Call, what: &str) -> FmiError {
+    FmiError::error(format!("{}: {what} is NULL", call.name()))
+}
+
+/// Element `i` of the String array `what`: `Ok(None)` for NULL, an error for bytes that are not UTF-8.
+pub unsafe fn utf8<'a>(call: impl Call, s: *const c_char, what: &str, i: usize) -> FmiResult<Option<&'a str>> {
+    if s.is_null() {
+        return Ok(None);
+    }
+    CStr::from_ptr(s)
+        .to_str()
+        .map(Some)
+        .map_err(|_| FmiError::error(format!("{}: {what}[{i}] is not UTF-8 text", call.name())))
+}
+
+/// A copy of a C string (lossy UTF-8); `None` for NULL.
+pub unsafe fn text(s: *const c_char) -> Option<String> {
+    (!s.is_null()).then(|| CStr::from_ptr(s).to_string_lossy().into_owned())
+}
+
+/// A C string with any interior NUL dropped.
+pub fn c_text(s: &str) -> CString {
+    CString::new(s.replace('\0', "")).expect("NULs removed")
 }

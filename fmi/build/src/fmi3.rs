@@ -113,8 +113,8 @@ fn document(root: &Node) -> String {
 /// The FMI 3.0 `modelDescription.xml` and `terminalsAndIcons.xml` of the
 /// FMU whose FMI 2.0 model description is `fmi2_xml`.
 pub fn fmi3_files(fmi2_xml: &str) -> Result<(String, String), Vec<String>> {
-    let md = super::parse(fmi2_xml).map_err(|e| vec![e])?;
-    let problems = super::check(&md);
+    let md = crate::description::parse(fmi2_xml).map_err(|e| vec![e])?;
+    let problems = crate::description::check(&md);
     if !problems.is_empty() {
         return Err(problems);
     }

@@ -9,7 +9,16 @@
 //! * `param(path)` — a parameter stored at `self.path`;
 //! * `input(path)` — an input stored at `self.inputs.path`; input
 //!   derivatives land at the same path in a value of the `inputs` type;
-//! * `computed(expr)` — a value computed as `self.expr` (outputs, locals).
+//! * `computed(expr)` — a value computed as `self.expr` (outputs, locals);
+//! * `group(field)` — a field of the group the model computes together
+//!   (`group: (path): Type`, read as `self.path.field`); a caller that holds
+//!   the group reads every variable of it with `group_real`.
+//!
+//! With `tangents: Type` the binding also writes `along`: the tangent of each
+//! computed variable read off the model's tangents, where `t.x` is the
+//! derivative of `self.x()` (the binding's expression without its empty
+//! calls: `outputs().stress` is `t.outputs.stress`). So the tangents mirror
+//! the model's computed values, and no variable is mapped to them by hand.
 //!
 //! The Boolean block may begin with `@effects(path)`: the model's effects
 //! (the generated `Effects` set at `self.path`) are then bound all at once,
@@ -24,12 +33,32 @@
 //! model `Compiled` (its interface is that generated table).
 
 /// Writes the `Variables` impl and the inherent `real`, `integer`,
-/// `boolean` and `input_field` functions of a model from its bindings.
+/// `boolean` and `input_field` functions of a model from its bindings (and
+/// `group_real` and `along` where it has a group and tangents).
 #[macro_export]
 macro_rules! bind_variables {
+    (model: $model:ty, inputs: $inputs:ty, group: $group:tt: $group_ty:ty, tangents: $tangents:ty, $($bindings:tt)*) => {
+        $crate::__bind_variables! { $model; $inputs; $group; [$group_ty]; [$tangents]; $($bindings)* }
+    };
+    (model: $model:ty, inputs: $inputs:ty, tangents: $tangents:ty, $($bindings:tt)*) => {
+        $crate::__bind_variables! { $model; $inputs; (); []; [$tangents]; $($bindings)* }
+    };
+    (model: $model:ty, inputs: $inputs:ty, $($bindings:tt)*) => {
+        $crate::__bind_variables! { $model; $inputs; (); []; []; $($bindings)* }
+    };
+}
+
+/// `bind_variables!` with the group as one token tree (its path, `()` for none), the group's
+/// type and the tangents' as `[]` or `[Type]`.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bind_variables {
     (
-        model: $model:ty,
-        inputs: $inputs:ty,
+        $model:ty;
+        $inputs:ty;
+        $group:tt;
+        $group_ty:tt;
+        $tangents:tt;
         real { $($r:ident: $rk:ident($($rf:tt)+)),* $(,)? }
         integer { $($i:ident: $ik:ident($($if:tt)+)),* $(,)? }
         boolean { $(@effects($($ef:tt)+),)? $($b:ident: $bk:ident($($bf:tt)+)),* $(,)? }
@@ -39,12 +68,12 @@ macro_rules! bind_variables {
             /// The value of a Real variable.
             #[inline(always)]
             pub fn real(&self, var: Real) -> f64 {
-                match var { $(Real::$r => $crate::__bound!(self, $rk, $($rf)+),)* }
+                match var { $(Real::$r => $crate::__bound!(self, $group, $rk, $($rf)+),)* }
             }
 
             /// The value of an Integer or enumeration variable.
             pub fn integer(&self, var: Integer) -> i32 {
-                match var { $(Integer::$i => $crate::IntegerValue::to_i32($crate::__bound!(self, $ik, $($if)+)),)* }
+                match var { $(Integer::$i => $crate::IntegerValue::to_i32($crate::__bound!(self, (), $ik, $($if)+)),)* }
             }
 
             /// Sets a parameter or input; `Err` for computed variables.
@@ -56,7 +85,7 @@ macro_rules! bind_variables {
             pub fn boolean(&self, var: Boolean) -> bool {
                 match var.kind() {
                     BooleanKind::Effect(effect) => $crate::__effects!(get, self, effect; $($($ef)+)?),
-                    BooleanKind::Switch(switch) => match switch { $(Switch::$b => $crate::__bound!(self, $bk, $($bf)+),)* },
+                    BooleanKind::Switch(switch) => match switch { $(Switch::$b => $crate::__bound!(self, (), $bk, $($bf)+),)* },
                 }
             }
 
@@ -67,6 +96,9 @@ macro_rules! bind_variables {
                 match var { $(Real::$r => $crate::__bound_input!(u, $rk, $($rf)+),)* }
             }
         }
+
+        $crate::__bind_group!($model; $group_ty; $($r: $rk($($rf)+)),*);
+        $crate::__bind_tangents!($model; $tangents; $group; $($r: $rk($($rf)+)),*);
 
         impl $crate::Compiled for $model {
             fn compiled() -> &'static $crate::description::ModelDescription {
@@ -113,7 +145,7 @@ macro_rules! bind_variables {
 
             fn get_string(&self, vr: u32) -> $crate::FmiResult<&str> {
                 match Text::from_vr(vr).ok_or_else(|| $crate::model::unknown_vr(vr))? {
-                    $(Text::$s => Ok(&*$crate::__bound!(self, $sk, $($sf)+)),)*
+                    $(Text::$s => Ok(&*$crate::__bound!(self, (), $sk, $($sf)+)),)*
                 }
             }
 
@@ -146,9 +178,68 @@ macro_rules! bind_variables {
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __bound {
-    ($s:tt, param, $($f:tt)+) => { $s.$($f)+ };
-    ($s:tt, input, $($f:tt)+) => { $s.inputs.$($f)+ };
-    ($s:tt, computed, $($f:tt)+) => { $s.$($f)+ };
+    ($s:tt, $g:tt, param, $($f:tt)+) => { $s.$($f)+ };
+    ($s:tt, $g:tt, input, $($f:tt)+) => { $s.inputs.$($f)+ };
+    ($s:tt, $g:tt, computed, $($f:tt)+) => { $s.$($f)+ };
+    ($s:tt, ($($g:tt)+), group, $f:ident) => { $s.$($g)+.$f };
+}
+
+/// `group_real`, where the model has a group: its variables read off a value of the group.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bind_group {
+    ($model:ty; []; $($r:ident: $rk:ident($($rf:tt)+)),*) => {};
+    ($model:ty; [$group_ty:ty]; $($r:ident: $rk:ident($($rf:tt)+)),*) => {
+        impl $model {
+            /// A variable of the group read off `group` (computed once for several); None for
+            /// the variables outside it.
+            #[inline(always)]
+            pub fn group_real(group: &$group_ty, var: Real) -> Option<f64> {
+                match var { $(Real::$r => $crate::__bound_in_group!(group, $rk, $($rf)+),)* }
+            }
+        }
+    };
+}
+
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bound_in_group {
+    ($g:ident, group, $f:ident) => { Some($g.$f) };
+    ($g:ident, $kind:ident, $($f:tt)+) => { None };
+}
+
+/// `along`, where the model has tangents: each computed variable's tangent, `t.x` for `self.x()`.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bind_tangents {
+    ($model:ty; []; $group:tt; $($r:ident: $rk:ident($($rf:tt)+)),*) => {};
+    ($model:ty; [$tangents:ty]; $group:tt; $($r:ident: $rk:ident($($rf:tt)+)),*) => {
+        impl $model {
+            /// The tangent of the computed variable `var` in `t` (None: a parameter or an input).
+            #[inline]
+            pub fn along(t: &$tangents, var: Real) -> Option<f64> {
+                match var { $(Real::$r => $crate::__tangent!(t, $group, $rk, $($rf)+),)* }
+            }
+        }
+    };
+}
+
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __tangent {
+    ($t:ident, $g:tt, param, $($f:tt)+) => { None };
+    ($t:ident, $g:tt, input, $($f:tt)+) => { None };
+    ($t:ident, $g:tt, computed, $($f:tt)+) => { Some($crate::__field_path!([$t .] $($f)+)) };
+    ($t:ident, ($($g:tt)+), group, $f:ident) => { Some($crate::__field_path!([$t .] $($g)+ . $f)) };
+}
+
+/// `t` followed by a path with its empty calls dropped: `[t] outputs().stress` is `t.outputs.stress`.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __field_path {
+    ([$($done:tt)*]) => { $($done)* };
+    ([$($done:tt)*] () $($rest:tt)*) => { $crate::__field_path!([$($done)*] $($rest)*) };
+    ([$($done:tt)*] $next:tt $($rest:tt)*) => { $crate::__field_path!([$($done)* $next] $($rest)*) };
 }
 
 #[doc(hidden)]
@@ -157,6 +248,7 @@ macro_rules! __bound_set {
     ($s:tt, $var:ident, $value:expr, param, $($f:tt)+) => {{ $s.$($f)+ = $value; Ok(()) }};
     ($s:tt, $var:ident, $value:expr, input, $($f:tt)+) => {{ $s.inputs.$($f)+ = $value; Ok(()) }};
     ($s:tt, $var:ident, $value:expr, computed, $($f:tt)+) => { Err($crate::model::not_settable($var.name())) };
+    ($s:tt, $var:ident, $value:expr, group, $($f:tt)+) => { Err($crate::model::not_settable($var.name())) };
 }
 
 #[doc(hidden)]
@@ -173,6 +265,7 @@ macro_rules! __bound_save {
     ($out:ident.$put:ident, $s:tt, param, $conv:path, $($f:tt)+) => { $out.$put($conv($s.$($f)+)) };
     ($out:ident.$put:ident, $s:tt, input, $conv:path, $($f:tt)+) => { $out.$put($conv($s.inputs.$($f)+)) };
     ($out:ident.$put:ident, $s:tt, computed, $conv:path, $($f:tt)+) => { () };
+    ($out:ident.$put:ident, $s:tt, group, $conv:path, $($f:tt)+) => { () };
 }
 
 #[doc(hidden)]
@@ -181,6 +274,7 @@ macro_rules! __bound_load {
     ($s:tt, param, $value:expr, $($f:tt)+) => { $s.$($f)+ = $value };
     ($s:tt, input, $value:expr, $($f:tt)+) => { $s.inputs.$($f)+ = $value };
     ($s:tt, computed, $value:expr, $($f:tt)+) => { () };
+    ($s:tt, group, $value:expr, $($f:tt)+) => { () };
 }
 
 /// The effects' part of a binding: every effect through the `Effects` set

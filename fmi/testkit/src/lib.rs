@@ -64,7 +64,7 @@ pub fn status_name(s: i32) -> &'static str {
 
 /// Declares the functions of a signature list; the bodies are the exports'.
 macro_rules! declare {
-    ($model:ty; $($name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)? => $body:expr;)*) => {
+    ($model:ty; $standard:ident in $module:ident; $($name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)? => $body:expr;)*) => {
         extern "C" {
             $(pub fn $name($($arg: $ty),*) $(-> $ret)?;)*
         }
@@ -385,120 +385,14 @@ pub fn instantiate<M: Tested>(setup: &Setup<M>) -> Result<Fmu<M>, Vec<LogLine>> 
     }
 }
 
-/// Every function that takes an `fmi2Component`, except fmi2FreeInstance,
-/// called with harmless arguments (see `Fmu::call`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Api {
-    SetDebugLogging,
-    SetupExperiment,
-    EnterInitializationMode,
-    ExitInitializationMode,
-    Terminate,
-    Reset,
-    GetReal,
-    GetInteger,
-    GetBoolean,
-    GetString,
-    SetReal,
-    SetInteger,
-    SetBoolean,
-    SetString,
-    GetFMUstate,
-    SetFMUstate,
-    FreeFMUstate,
-    SerializedFMUstateSize,
-    SerializeFMUstate,
-    DeSerializeFMUstate,
-    GetDirectionalDerivative,
-    EnterEventMode,
-    NewDiscreteStates,
-    EnterContinuousTimeMode,
-    CompletedIntegratorStep,
-    SetTime,
-    SetContinuousStates,
-    GetDerivatives,
-    GetEventIndicators,
-    GetContinuousStates,
-    GetNominalsOfContinuousStates,
-    SetRealInputDerivatives,
-    GetRealOutputDerivatives,
-    /// fmi2DoStep(t, h).
-    DoStep(f64, f64),
-    CancelStep,
-    GetStatus,
-    GetRealStatus,
-    GetIntegerStatus,
-    GetBooleanStatus,
-    GetStringStatus,
-}
+/// Every function that takes an `fmi2Component`: the standard's one list of them
+/// (`fmi_core::standard::fmi2::Call`). `Fmu::call` makes each but fmi2FreeInstance (the
+/// `Fmu` frees its instance when dropped) with harmless arguments.
+pub use fmi_core::standard::fmi2::Call as Api;
 
-impl Api {
-    pub const ALL: [Api; 40] = [
-        Api::SetDebugLogging,
-        Api::SetupExperiment,
-        Api::EnterInitializationMode,
-        Api::ExitInitializationMode,
-        Api::Terminate,
-        Api::Reset,
-        Api::GetReal,
-        Api::GetInteger,
-        Api::GetBoolean,
-        Api::GetString,
-        Api::SetReal,
-        Api::SetInteger,
-        Api::SetBoolean,
-        Api::SetString,
-        Api::GetFMUstate,
-        Api::SetFMUstate,
-        Api::FreeFMUstate,
-        Api::SerializedFMUstateSize,
-        Api::SerializeFMUstate,
-        Api::DeSerializeFMUstate,
-        Api::GetDirectionalDerivative,
-        Api::EnterEventMode,
-        Api::NewDiscreteStates,
-        Api::EnterContinuousTimeMode,
-        Api::CompletedIntegratorStep,
-        Api::SetTime,
-        Api::SetContinuousStates,
-        Api::GetDerivatives,
-        Api::GetEventIndicators,
-        Api::GetContinuousStates,
-        Api::GetNominalsOfContinuousStates,
-        Api::SetRealInputDerivatives,
-        Api::GetRealOutputDerivatives,
-        Api::DoStep(0.0, 0.01),
-        Api::CancelStep,
-        Api::GetStatus,
-        Api::GetRealStatus,
-        Api::GetIntegerStatus,
-        Api::GetBooleanStatus,
-        Api::GetStringStatus,
-    ];
-
-    /// The C function's name.
-    pub fn c_name(self) -> String {
-        let debug = format!("{self:?}");
-        let base = debug.split('(').next().unwrap_or_default();
-        format!("fmi2{base}")
-    }
-
-    /// The 10 Model Exchange functions.
-    pub fn is_model_exchange(self) -> bool {
-        matches!(
-            self,
-            Api::EnterEventMode
-                | Api::NewDiscreteStates
-                | Api::EnterContinuousTimeMode
-                | Api::CompletedIntegratorStep
-                | Api::SetTime
-                | Api::SetContinuousStates
-                | Api::GetDerivatives
-                | Api::GetEventIndicators
-                | Api::GetContinuousStates
-                | Api::GetNominalsOfContinuousStates
-        )
-    }
+/// The functions `Fmu::call` makes: every one that takes an instance but fmi2FreeInstance.
+pub fn callable() -> impl Iterator<Item = Api> {
+    Api::ALL.iter().copied().filter(|&api| api != Api::FreeInstance)
 }
 
 /// Calls `api` on the raw component `c` with harmless arguments; `state` is
@@ -587,7 +481,7 @@ unsafe fn raw_call<M: Tested>(c: fmi2Component, api: Api, state: fmi2FMUstate, b
         Api::GetRealOutputDerivatives => {
             fmi2GetRealOutputDerivatives(c, output.as_ptr(), 1, order.as_ptr(), real.as_mut_ptr())
         }
-        Api::DoStep(t, h) => fmi2DoStep(c, t, h, 0),
+        Api::DoStep => fmi2DoStep(c, 0.0, 0.01, 0),
         Api::CancelStep => fmi2CancelStep(c),
         Api::GetStatus => {
             let mut s = 0;
@@ -597,6 +491,7 @@ unsafe fn raw_call<M: Tested>(c: fmi2Component, api: Api, state: fmi2FMUstate, b
         Api::GetIntegerStatus => fmi2GetIntegerStatus(c, DO_STEP_STATUS, int.as_mut_ptr()),
         Api::GetBooleanStatus => fmi2GetBooleanStatus(c, TERMINATED, int.as_mut_ptr()),
         Api::GetStringStatus => fmi2GetStringStatus(c, PENDING_STATUS, strings.as_mut_ptr()),
+        Api::FreeInstance => panic!("fmi2FreeInstance is made by dropping the Fmu, not by Fmu::call"),
     }
 }
 

@@ -10,8 +10,8 @@
 //! Where a connection carries more than a value (a web-mass loop, a length's
 //! rate), the line keeps its difference quotient: no chain is made.
 
-use crate::network::{Link, Port};
 use crate::part::{Directions, Part};
+use crate::port::{Link, Port};
 use solver::band::Band;
 use std::ops::Range;
 
@@ -74,7 +74,7 @@ impl Chain {
         let (kl, width) = (band.lower(), band.lower() + band.upper() + 1);
         for (p, part) in parts.iter().enumerate() {
             let d = part.description();
-            let port = |vr: u32| Port::of(part, vr);
+            let port = |vr: u32| part.port(vr);
             let (mut knowns, mut sources, mut known_vrs) = (Vec::new(), Vec::new(), Vec::new());
             for (k, &i) in active[p].iter().enumerate() {
                 knowns.push(port(d.states[i])?);

@@ -5,9 +5,7 @@
 //! (the steady state of the line at that radius), and so does the speed of a
 //! roller whose speed a table prescribes.
 
-use crate::part::Part;
-use crate::ode::residual_and_jacobian;
-use crate::Line;
+use crate::ode::{residual_and_jacobian, Ode};
 use solver::band::{Band, BandLu};
 
 const MAX_ITERATIONS: usize = 50;
@@ -16,26 +14,19 @@ const STEP_TOLERANCE: f64 = 1e-13;
 
 /// Moves the line's states to its steady state, or says why there is none
 /// (the states are then as they were).
-pub fn solve(line: &mut Line) -> Result<(), String> {
-    let net = line.net.as_ref().expect("initialized");
+pub fn solve(ode: &mut Ode) -> Result<(), String> {
+    let net = ode.net.as_ref().expect("initialized");
     let n = net.len();
     if n == 0 {
         return Ok(());
     }
     let (kl, ku) = (net.kl, net.ku);
-    let frozen: Vec<bool> = net
-        .states
-        .iter()
-        .map(|s| match &line.parts[s.part] {
-            Part::Roller(r) => s.index == 1 || (s.index == 0 && r.speed_prescribed()),
-            Part::Span(_) => false,
-        })
-        .collect();
-    let size: Vec<f64> = (0..n).map(|k| line.scratch.atol[k] / (line.rtol * line.scratch.rtol_scale[k])).collect();
-    let x0 = line.x.clone();
+    let frozen: Vec<bool> = net.states.iter().map(|s| ode.parts[s.part].held_at_steady_state(s.index)).collect();
+    let size: Vec<f64> = (0..n).map(|k| ode.scratch.atol[k] / (ode.rtol * ode.scratch.rtol_scale[k])).collect();
+    let x0 = ode.x.clone();
     // The parts as they are: a failed search leaves them where its last trial took them (a
     // span's frames at a dancer's far position), where the start state may not even evaluate.
-    line.backup.clone_from(&line.parts);
+    ode.backup.clone_from(&ode.parts);
     let mut x = x0.clone();
     let (mut f, mut trial_f) = (vec![0.0; n], vec![0.0; n]);
     let mut jac = Band::zeros(n, kl, ku);
@@ -44,7 +35,7 @@ pub fn solve(line: &mut Line) -> Result<(), String> {
     let norm = |f: &[f64]| f.iter().zip(&size).map(|(r, s)| (r / s).abs()).fold(0.0, f64::max);
     let result = (|| {
         for _ in 0..MAX_ITERATIONS {
-            residual_and_jacobian(line, &x, &mut f, Some(&mut jac)).map_err(|e| e.into_message())?;
+            residual_and_jacobian(ode, &x, &mut f, Some(&mut jac)).map_err(|e| e.into_message())?;
             for i in 0..n {
                 if frozen[i] {
                     f[i] = x[i] - x0[i];
@@ -66,7 +57,7 @@ pub fn solve(line: &mut Line) -> Result<(), String> {
                 for i in 0..n {
                     trial[i] = x[i] + lambda * step[i];
                 }
-                let ok = residual_and_jacobian(line, &trial, &mut trial_f, None).is_ok();
+                let ok = residual_and_jacobian(ode, &trial, &mut trial_f, None).is_ok();
                 if ok {
                     for i in 0..n {
                         if frozen[i] {
@@ -92,12 +83,12 @@ pub fn solve(line: &mut Line) -> Result<(), String> {
     })();
     match result {
         Ok(()) => {
-            line.x = x;
+            ode.x = x;
             Ok(())
         }
         Err(why) => {
-            line.x = x0;
-            std::mem::swap(&mut line.parts, &mut line.backup);
+            ode.x = x0;
+            std::mem::swap(&mut ode.parts, &mut ode.backup);
             Err(why)
         }
     }

@@ -6,6 +6,7 @@
 //! modelDescription.xml the FMU ships: one builder for both.
 
 use crate::part::Part;
+use crate::port::Port;
 use crate::spec::{PartSpec, Role, Spec};
 use fmi_core::description::{
     settable_in, Causality, Dependency, Family, Initial, Kind, ModelDescription, Range, Slot, Start, Variability, Variable,
@@ -15,7 +16,9 @@ use std::borrow::Cow;
 /// What a variable of the line is bound to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Binding {
-    /// Variable `vr` of part `part`.
+    /// Real variable `vr` of part `part`, resolved once to the part's own variable (`port`).
+    Real { part: usize, vr: u32, port: Port },
+    /// Variable `vr` of part `part` of another type.
     Part { part: usize, vr: u32 },
     /// The resultant of the two web forces on a roller's bearings, for a wrap angle with this cosine.
     LoadCell { part: usize, cos_wrap: f64 },
@@ -89,7 +92,11 @@ impl Builder<'_> {
             settable_in: settable_in(causality, variability, initial),
         };
         let vr = v.vr;
-        self.push(row, Binding::Part { part: p, vr })
+        let binding = match part.port(vr) {
+            Some(port) if v.kind == Kind::Real => Binding::Real { part: p, vr, port },
+            _ => Binding::Part { part: p, vr },
+        };
+        self.push(row, binding)
     }
 
     fn own(&mut self, name: String, description: &str, kind: Kind, causality: Causality, start: Start, range: Range, b: Binding) -> u32 {

@@ -20,56 +20,15 @@
 //! vectors copied per part.
 
 use crate::chain::Chain;
-use crate::part::{span_force_of, Part};
-use converting_span::Forces;
+use crate::part::{Forces, Part};
+use crate::port::{Link, LinkKind};
 use crate::spec::Spec;
 use fmi_core::description::{Causality, ModelDescription};
 use fmi_core::{FmiError, FmiResult};
 use std::collections::BTreeSet;
 
-/// A connection, resolved to parts and value references.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Link {
-    pub from: usize,
-    pub output: u32,
-    pub to: usize,
-    pub input: u32,
-    pub kind: LinkKind,
-    /// `output` and `input` as the parts' own variables.
-    pub source: Port,
-    pub target: Port,
-    /// A span's outputs are computed here, all at once: the first link in
-    /// the evaluation order to read them after the last one that moved an
-    /// input of the span (found when the line is built).
-    pub fresh: bool,
-}
-
-/// A variable of a part, resolved from its value reference when the line is built.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Port {
-    Span(converting_span::description::Real),
-    Roller(roller::description::Real),
-}
-
-impl Port {
-    pub fn of(part: &Part, vr: u32) -> Option<Port> {
-        match part {
-            Part::Span(_) => converting_span::description::Real::from_vr(vr).map(Port::Span),
-            Part::Roller(_) => roller::description::Real::from_vr(vr).map(Port::Roller),
-        }
-    }
-}
-
 /// Most states a part has (its Model Exchange state vector).
 const MAX_PART_STATES: usize = 8;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LinkKind {
-    Plain,
-    /// A span's exit force into its exit roller, the span carrying web mass:
-    /// one of the pulls of `groups[group]`, all solved when the `lead` is evaluated.
-    MassLoop { group: usize, lead: bool },
-}
 
 /// One span carrying web mass and pulling a roller: its web_b.F into the
 /// roller's `input`, its web_b.v (`speed`) fed by the roller's `roller_speed`.
@@ -167,7 +126,7 @@ impl Network {
                 return Err(format!("input {}.{} is connected twice", c.to.0, c.to.1));
             }
             let port = |p: usize, vr: u32, name: &str| {
-                Port::of(&parts[p], vr).ok_or_else(|| format!("connection {}.{} -> {}.{}: {name} is no Real", c.from.0, c.from.1, c.to.0, c.to.1))
+                parts[p].port(vr).ok_or_else(|| format!("connection {}.{} -> {}.{}: {name} is no Real", c.from.0, c.from.1, c.to.0, c.to.1))
             };
             let (source, target) = (port(from, output, &c.from.1)?, port(to, input, &c.to.1)?);
             links.push(Link { from, output, to, input, kind: LinkKind::Plain, source, target, fresh: true });
@@ -245,8 +204,7 @@ impl Network {
         for l in &links {
             read[l.from] = true;
         }
-        let rate_ready: Vec<bool> =
-            (0..n_parts).map(|p| plain && read[p] && !moved[p] && matches!(&parts[p], Part::Span(s) if !s.params.effects.variable_length)).collect();
+        let rate_ready: Vec<bool> = (0..n_parts).map(|p| plain && read[p] && !moved[p] && parts[p].rate_with_forces()).collect();
         // States in line order.
         let mut states = Vec::new();
         let mut first_state = Vec::with_capacity(n_parts);
@@ -262,7 +220,7 @@ impl Network {
         }
         let outputs = vec![Forces::default(); n_parts];
         let evaluated_x = vec![0.0; states.len()];
-        let reads_earlier_inputs = parts.iter().any(|p| matches!(p, Part::Span(s) if s.params.effects.variable_length));
+        let reads_earlier_inputs = parts.iter().any(Part::reads_earlier_inputs);
         let mut moving_inputs: Vec<Option<Vec<u32>>> = vec![Some(Vec::new()); n_parts];
         for l in &links {
             let on = parts[l.from].description().output_dependencies.iter().find(|u| u.vr == l.output).and_then(|u| u.on.clone());
@@ -327,22 +285,9 @@ impl Network {
     /// and writes the state derivatives into dx (if given). Afterwards every
     /// part's outputs are those of (t, x).
     pub fn evaluate(&mut self, parts: &mut [Part], t: f64, x: &[f64], dx: Option<&mut [f64]>) -> FmiResult {
-        use fmi_core::Model;
         self.evaluated = None;
-        for (p, part) in parts.iter_mut().enumerate() {
-            let first = self.first_state[p];
-            match part {
-                // A span's one state.
-                Part::Span(s) => {
-                    s.set_time(t);
-                    s.set_continuous_states(&x[first..first + 1])?;
-                }
-                Part::Roller(r) => {
-                    r.set_time(t);
-                    let active = &self.active[p];
-                    r.set_active_states(active, &x[first..first + active.len()])?;
-                }
-            }
+        for ((part, active), &first) in parts.iter_mut().zip(&self.active).zip(&self.first_state) {
+            part.set_point(t, active, &x[first..first + active.len()])?;
         }
         for i in 0..self.rates.len() {
             let r = self.rates[i];
@@ -352,22 +297,8 @@ impl Network {
         for l in &self.links {
             match l.kind {
                 LinkKind::Plain => {
-                    let v = match (&parts[l.from], l.source) {
-                        (Part::Span(s), Port::Span(var)) => {
-                            let o = &mut self.outputs[l.from];
-                            if l.fresh {
-                                *o = s.forces();
-                            }
-                            span_force_of(o, var).unwrap_or_else(|| s.real(var))
-                        }
-                        (Part::Roller(r), Port::Roller(var)) => r.real(var),
-                        _ => unreachable!("a port is resolved from its own part"),
-                    };
-                    match (&mut parts[l.to], l.target) {
-                        (Part::Span(s), Port::Span(var)) => s.set_real_var(var, v)?,
-                        (Part::Roller(r), Port::Roller(var)) => r.set_real_var(var, v)?,
-                        _ => unreachable!("a port is resolved from its own part"),
-                    }
+                    let v = parts[l.from].read(l.source, l.fresh, &mut self.outputs[l.from]);
+                    parts[l.to].write(l.target, v)?;
                 }
                 LinkKind::MassLoop { group, lead } => {
                     if lead {
@@ -415,18 +346,9 @@ impl Network {
     /// `in_evaluation`: right after the connections ran, where a span's dx/dt is the one its
     /// forces computed (`rate_ready`).
     fn derivatives_from(&self, parts: &[Part], dx: &mut [f64], in_evaluation: bool) -> FmiResult {
-        for (p, part) in parts.iter().enumerate() {
-            let first = self.first_state[p];
-            match part {
-                Part::Span(_) if in_evaluation && self.rate_ready[p] => dx[first] = self.outputs[p].unstretched_rate,
-                Part::Span(s) => dx[first] = s.unstretched_rate(),
-                Part::Roller(r) => {
-                    let d = r.derivatives();
-                    for (k, &i) in self.active[p].iter().enumerate() {
-                        dx[first + k] = d[i];
-                    }
-                }
-            }
+        let each = self.active.iter().zip(&self.first_state).zip(self.rate_ready.iter().zip(&self.outputs));
+        for (part, ((active, &first), (&ready, held))) in parts.iter().zip(each) {
+            part.active_derivatives(active, dx, first, (in_evaluation && ready).then_some(held));
         }
         Ok(())
     }

@@ -1,15 +1,92 @@
-//! The line's ODE x' = f(t, x): its right-hand side through the parts' own
-//! equations, and its banded Jacobian, chained from the parts' tangents
-//! (`chain`) or, where the line has no chain, by grouped differences. The integrator
-//! (`stepping`), the steady state (`equilibrium`) and outside solvers
-//! (bench/diffsol_line) all evaluate the line here.
+//! The line's ODE x' = f(t, x) and where it stands (`Ode`): its right-hand side
+//! through the parts' own equations, and its banded Jacobian, chained from
+//! the parts' tangents (`chain`) or, where the line has no chain, by grouped
+//! differences. The integrator (`stepping`), the steady state (`equilibrium`)
+//! and outside solvers (bench/diffsol_line) all evaluate the line here.
 
 use crate::network::Network;
 use crate::part::Part;
-use crate::{Line, Scratch};
 use fmi_core::{FmiError, FmiResult};
 use solver::band::Band;
-use solver::stiff::System;
+use solver::stiff::{Rosenbrock, System};
+
+/// An input an importer moves linearly over a step (fmi2SetRealInputDerivatives):
+/// (part, vr, value at the step's start, rate).
+pub type Ramp = (usize, u32, f64, f64);
+
+/// The line as one ODE and where it stands: its parts, joined by the network once
+/// initialization has built it, the states at a time, and what the integrator keeps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ode {
+    pub parts: Vec<Part>,
+    /// A copy of the parts to undo a failed step (kept, so a step allocates nothing).
+    pub backup: Vec<Part>,
+    /// Built when initialization ends (the parts' effects decide the states).
+    pub net: Option<Network>,
+    /// The line's states (`net.states`), and the time they are at.
+    pub x: Vec<f64>,
+    pub time: f64,
+    /// The integrator's relative tolerance: the line's `tolerance`, or the importer's where smaller.
+    pub rtol: f64,
+    pub ramps: Vec<Ramp>,
+    /// The parts' next event (a profile's breakpoint or set entry, a web change).
+    pub next_event: f64,
+    pub integrator: Option<Rosenbrock>,
+    /// Scratch vectors of the line's size (Jacobians, undo), sized at initialization.
+    pub scratch: Scratch,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scratch {
+    pub x: Vec<f64>,
+    pub f0: Vec<f64>,
+    pub f1: Vec<f64>,
+    pub y: Vec<f64>,
+    pub atol: Vec<f64>,
+    pub rtol_scale: Vec<f64>,
+}
+
+impl Ode {
+    /// The parts at their start values, not yet joined.
+    pub fn new(parts: Vec<Part>, rtol: f64) -> Ode {
+        Ode {
+            backup: parts.clone(),
+            parts,
+            net: None,
+            x: Vec::new(),
+            time: 0.0,
+            rtol,
+            ramps: Vec::new(),
+            next_event: f64::INFINITY,
+            integrator: None,
+            scratch: Scratch::default(),
+        }
+    }
+
+    /// After initialization every change (time, states, an input) is
+    /// evaluated at once, so that outputs and derivatives read later are
+    /// those of the line as it now is.
+    pub fn settle(&mut self) -> FmiResult {
+        match self.net.as_mut() {
+            Some(net) => net.evaluate(&mut self.parts, self.time, &self.x, None),
+            None => Ok(()),
+        }
+    }
+
+    /// The nominal size of the line's state k (its part's nominal; 1 where that is 0 or unknown).
+    #[inline(always)]
+    pub fn nominal(&self, net: &Network, k: usize) -> f64 {
+        let s = net.states[k];
+        let mut buffer = [0.0; 8];
+        let part = &self.parts[s.part];
+        let m = part.state_count();
+        if part.get_nominals(&mut buffer[..m]).is_ok() && buffer[s.index] != 0.0 {
+            buffer[s.index].abs()
+        } else {
+            1.0
+        }
+    }
+}
 
 /// The line as one ODE for the integrator: inputs an importer ramps move
 /// with time; the Jacobian chained from the parts' tangents, else by finite
@@ -18,7 +95,7 @@ use solver::stiff::System;
 pub(crate) struct LineSystem<'a> {
     pub(crate) parts: &'a mut [Part],
     pub(crate) net: &'a mut Network,
-    pub(crate) ramps: &'a [(usize, u32, f64, f64)],
+    pub(crate) ramps: &'a [Ramp],
     pub(crate) t_start: f64,
     pub(crate) time_dependent: bool,
     pub(crate) f0: &'a mut [f64],
@@ -96,7 +173,7 @@ impl System for LineSystem<'_> {
     /// tables with a slope on that piece: with none, df/dt is zero and not formed.
     fn time_dependent(&self) -> bool {
         self.time_dependent
-            && (!self.ramps.is_empty() || self.parts.iter().any(|p| matches!(p, Part::Roller(r) if r.varies_with_time(self.t_jacobian))))
+            && (!self.ramps.is_empty() || self.parts.iter().any(|p| p.varies_with_time(self.t_jacobian)))
     }
 }
 
@@ -109,19 +186,19 @@ fn delta(x: f64) -> f64 {
 
 /// The line's ODE x' = f(t, x) as the integrator sees it (inputs as set,
 /// held), for tools that integrate the line themselves (bench/: other solvers).
-pub fn rhs_at(line: &mut Line, t: f64, x: &[f64], dx: &mut [f64]) -> FmiResult {
-    let Line { parts, net, ramps, scratch, .. } = line;
+pub fn rhs_at(ode: &mut Ode, t: f64, x: &[f64], dx: &mut [f64]) -> FmiResult {
+    let Ode { parts, net, ramps, scratch, .. } = ode;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
     let Scratch { f0, f1, y, .. } = scratch;
     let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0, f1, y, evaluated: false, t_jacobian: t, differences: false };
     sys.eval(t, x, dx)
 }
 
-/// df/dx at (t, x), banded as `line.network()` says (kl, ku); `f0` is f(t, x) if known
+/// df/dx at (t, x), banded as the network says (kl, ku); `f0` is f(t, x) if known
 /// (else one more evaluation). `differences`: by grouped differences even where the line
 /// chains its parts' tangents.
-pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], f0: Option<&[f64]>, jac: &mut Band, differences: bool) -> FmiResult {
-    let Line { parts, net, ramps, scratch, .. } = line;
+pub fn jacobian_at(ode: &mut Ode, t: f64, x: &[f64], f0: Option<&[f64]>, jac: &mut Band, differences: bool) -> FmiResult {
+    let Ode { parts, net, ramps, scratch, .. } = ode;
     let net = net.as_mut().ok_or_else(|| FmiError::error("the line is not initialized"))?;
     let Scratch { f0: own, f1, y, .. } = scratch;
     let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: true, f0: &mut [], f1, y, evaluated: false, t_jacobian: t, differences };
@@ -137,9 +214,9 @@ pub fn jacobian_at(line: &mut Line, t: f64, x: &[f64], f0: Option<&[f64]>, jac: 
 }
 
 /// For `equilibrium`: f(t, x) and its Jacobian through the same evaluation the integrator uses.
-pub fn residual_and_jacobian(line: &mut Line, x: &[f64], f: &mut [f64], jac: Option<&mut Band>) -> FmiResult {
-    let t = line.time;
-    let Line { parts, net, ramps, scratch, .. } = line;
+pub fn residual_and_jacobian(ode: &mut Ode, x: &[f64], f: &mut [f64], jac: Option<&mut Band>) -> FmiResult {
+    let t = ode.time;
+    let Ode { parts, net, ramps, scratch, .. } = ode;
     let net = net.as_mut().expect("initialized");
     let Scratch { f0, f1, y, .. } = scratch;
     let mut sys = LineSystem { parts, net, ramps, t_start: t, time_dependent: false, f0, f1, y, evaluated: false, t_jacobian: t, differences: false };

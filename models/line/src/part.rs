@@ -4,11 +4,15 @@
 //! of the line (to undo a failed step) allocates nothing: the models share
 //! their profiles and records by `Arc`.
 
-use converting_span::{ConvertingSpan, Forces};
+use crate::port::Port;
+use converting_span::ConvertingSpan;
 use fmi_core::description::ModelDescription;
-use fmi_core::{Compiled, EventUpdate, Experiment, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
-use crate::network::Port;
+use fmi_core::{Compiled, EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
 use roller::Roller;
+
+/// What a span computes at once for the rollers at its ends (forces, strain, dx/dt): a line
+/// keeps it per span through an evaluation (`Part::read`).
+pub use converting_span::Forces;
 
 /// A part's unit directions of its knowns, made once (`Part::directions`).
 #[derive(Clone, Debug, PartialEq)]
@@ -52,6 +56,14 @@ impl Part {
 
     pub fn roller() -> Part {
         Part::Roller(Roller::at_start_values())
+    }
+
+    /// Variable `vr` of this part as a `Port`; None if it is no Real of the part.
+    pub fn port(&self, vr: u32) -> Option<Port> {
+        match self {
+            Part::Span(_) => converting_span::description::Real::from_vr(vr).map(Port::Span),
+            Part::Roller(_) => roller::description::Real::from_vr(vr).map(Port::Roller),
+        }
     }
 
     pub fn description(&self) -> &'static ModelDescription {
@@ -140,6 +152,111 @@ impl Part {
         each!(self, m => m.inputs_valid())
     }
 
+    /// Moves the part to time t with its integrated states (`active`, indices into its state
+    /// vector) at `x`; the others stay.
+    #[inline(always)]
+    pub fn set_point(&mut self, t: f64, active: &[usize], x: &[f64]) -> FmiResult {
+        match self {
+            Part::Span(s) => {
+                s.set_time(t);
+                s.set_continuous_states(x)
+            }
+            Part::Roller(r) => {
+                r.set_time(t);
+                r.set_active_states(active, x)
+            }
+        }
+    }
+
+    /// The value of the part's output `port`. A span's comes from its forces, computed into
+    /// `held` where `fresh` (its inputs moved since) and read from there otherwise.
+    #[inline(always)]
+    pub fn read(&self, port: Port, fresh: bool, held: &mut Forces) -> f64 {
+        match (self, port) {
+            (Part::Span(s), Port::Span(var)) => {
+                if fresh {
+                    *held = s.forces();
+                }
+                ConvertingSpan::group_real(held, var).unwrap_or_else(|| s.real(var))
+            }
+            (Part::Roller(r), Port::Roller(var)) => r.real(var),
+            _ => unreachable!("a port is resolved from its own part"),
+        }
+    }
+
+    /// The value of the part's Real `port`.
+    #[inline(always)]
+    pub fn real(&self, port: Port) -> f64 {
+        match (self, port) {
+            (Part::Span(s), Port::Span(var)) => s.real(var),
+            (Part::Roller(r), Port::Roller(var)) => r.real(var),
+            _ => unreachable!("a port is resolved from its own part"),
+        }
+    }
+
+    /// Sets the part's input (or parameter) `port`.
+    #[inline(always)]
+    pub fn write(&mut self, port: Port, value: f64) -> FmiResult {
+        match (self, port) {
+            (Part::Span(s), Port::Span(var)) => s.set_real_var(var, value),
+            (Part::Roller(r), Port::Roller(var)) => r.set_real_var(var, value),
+            _ => unreachable!("a port is resolved from its own part"),
+        }
+    }
+
+    /// The derivatives of the integrated states `active` into `dx` from `first` on, by the
+    /// part's own functions; a span's from the forces `held` where they are its current ones.
+    #[inline(always)]
+    pub fn active_derivatives(&self, active: &[usize], dx: &mut [f64], first: usize, held: Option<&Forces>) {
+        match self {
+            Part::Span(s) => dx[first] = held.map_or_else(|| s.unstretched_rate(), |f| f.unstretched_rate),
+            Part::Roller(r) => {
+                let d = r.derivatives();
+                for (k, &i) in active.iter().enumerate() {
+                    dx[first + k] = d[i];
+                }
+            }
+        }
+    }
+
+    /// A span of fixed length: its forces give its dx/dt too (`Part::active_derivatives`).
+    pub fn rate_with_forces(&self) -> bool {
+        matches!(self, Part::Span(s) if !s.params.effects.variable_length)
+    }
+
+    /// A span of variable length checks its state against the frames the last evaluation gave
+    /// it: an evaluation then depends on the one before.
+    pub fn reads_earlier_inputs(&self) -> bool {
+        matches!(self, Part::Span(s) if s.params.effects.variable_length)
+    }
+
+    /// A span's strain now (the integrator scales its tolerance by it); None for a roller.
+    pub fn strain(&self) -> Option<f64> {
+        match self {
+            Part::Span(s) => Some(s.forces().strain),
+            Part::Roller(_) => None,
+        }
+    }
+
+    /// Whether the equations depend on time at fixed states and inputs at t (a profile's slope).
+    pub fn varies_with_time(&self, t: f64) -> bool {
+        matches!(self, Part::Roller(r) if r.varies_with_time(t))
+    }
+
+    /// State `index` keeps its start value in the steady state: a roll's radius (never steady
+    /// while web winds), a speed a table prescribes.
+    pub fn held_at_steady_state(&self, index: usize) -> bool {
+        matches!(self, Part::Roller(r) if index == 1 || (index == 0 && r.speed_prescribed()))
+    }
+
+    /// A roller's load cell for a wrap angle with this cosine.
+    pub fn load_cell(&self, cos_wrap: f64) -> FmiResult<f64> {
+        match self {
+            Part::Roller(r) => Ok(r.load_cell(cos_wrap)),
+            Part::Span(_) => Err(FmiError::error("a load cell sits on a roller, not on a span")),
+        }
+    }
+
     /// The unit directions of `knowns` (its states and inputs); None if one is neither.
     pub fn directions(&self, knowns: &[Port]) -> Option<Directions> {
         Some(match self {
@@ -159,11 +276,11 @@ impl Part {
         match (self, directions) {
             (Part::Span(s), Directions::Span(ds)) => {
                 let at = s.linearize();
-                rows(ds, unknowns, out, |d| at.along(d), |t, d, u| if let Port::Span(u) = u { ConvertingSpan::along(t, d, u) } else { None })
+                rows(ds, unknowns, out, |d| at.along(d), |t, u| if let Port::Span(u) = u { ConvertingSpan::along(t, u) } else { None })
             }
             (Part::Roller(r), Directions::Roller(ds)) => {
                 let at = r.linearize();
-                rows(ds, unknowns, out, |d| at.along(d), |t, d, u| if let Port::Roller(u) = u { Roller::along(t, d, u) } else { None })
+                rows(ds, unknowns, out, |d| at.along(d), |t, u| if let Port::Roller(u) = u { Roller::along(t, u) } else { None })
             }
             _ => false,
         }
@@ -172,7 +289,7 @@ impl Part {
     /// Whether the part's partials along the line's knowns stay the same until an event or a
     /// parameter changes it (a roller's `tangents_fixed`); a span's move with its strain.
     pub fn tangents_fixed(&self) -> bool {
-        matches!(self, Part::Roller(r) if r.tangents_fixed())
+        matches!(self, Part::Roller(r) if roller::jacobian::tangents_fixed(&r.params))
     }
 
     /// The part's continuous states the line integrates (indices into its
@@ -213,25 +330,11 @@ impl Part {
     }
 }
 
-/// The span's output `var` from its forces computed once: the same fields as its bindings
-/// (variables.rs); None for a variable that is not among them.
-#[inline]
-pub fn span_force_of(f: &Forces, var: converting_span::description::Real) -> Option<f64> {
-    use converting_span::description::Real;
-    Some(match var {
-        Real::web_a_F | Real::summary_Tension => f.tension,
-        Real::web_b_F => f.exit_force,
-        Real::web_b_eps | Real::summary_Strain => f.strain,
-        Real::summary_Length => f.length,
-        _ => return None,
-    })
-}
-
 /// Per direction, the tangents (`along`) and from them each unknown's partial (`pick`), a row
 /// of `out` each; false if `pick` knows an unknown not.
-fn rows<D, T>(ds: &[D], unknowns: &[Port], out: &mut [f64], along: impl Fn(&D) -> T, pick: impl Fn(&T, &D, Port) -> Option<f64>) -> bool {
+fn rows<D, T>(ds: &[D], unknowns: &[Port], out: &mut [f64], along: impl Fn(&D) -> T, pick: impl Fn(&T, Port) -> Option<f64>) -> bool {
     ds.iter().zip(out.chunks_exact_mut(unknowns.len().max(1))).all(|(d, row)| {
         let t = along(d);
-        unknowns.iter().zip(row).all(|(&u, o)| pick(&t, d, u).map(|x| *o = x).is_some())
+        unknowns.iter().zip(row).all(|(&u, o)| pick(&t, u).map(|x| *o = x).is_some())
     })
 }

@@ -7,6 +7,11 @@
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
+/// Where a line's spec sits in the FMU (resources/).
+pub const SPEC_FILE: &str = "line.json";
+/// Where each part's profile sits (resources/), by part name.
+pub const PROFILE_FOLDER: &str = "profiles";
+
 /// The format this binary reads; another is refused with both named.
 pub const FORMAT: &str = "converting-span-line 1";
 

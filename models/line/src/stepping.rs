@@ -6,11 +6,10 @@
 //! communication step. A failed step leaves the line as it was.
 
 use crate::equilibrium;
-use crate::ode::LineSystem;
-use crate::interface::Binding;
 use crate::network::Network;
+use crate::ode::{LineSystem, Ode, Scratch};
 use crate::part::Part;
-use crate::{Line, Scratch};
+use crate::spec::Spec;
 use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Resources};
 use solver::stiff::tableau::{Tableau, RODAS5P};
 use solver::stiff::{Control, Rosenbrock};
@@ -37,45 +36,49 @@ const TINY_STEP: f64 = 1e-100;
 /// integrator held the strain itself, relative to its size.
 pub const STRAIN_FLOOR: f64 = 1e-7;
 
-pub fn scratch(line: &Line, n: usize) -> Scratch {
+pub fn scratch(ode: &Ode, n: usize) -> Scratch {
     let v = || vec![0.0; n];
     let mut scratch = Scratch { x: v(), f0: v(), f1: v(), y: v(), atol: v(), rtol_scale: vec![0.0; n] };
-    tolerances(line, &mut scratch);
+    tolerances(ode, &mut scratch);
     scratch
 }
 
 /// The absolute tolerances and the spans' strain scales for the next step.
-pub fn tolerances(line: &Line, scratch: &mut Scratch) {
-    let Some(net) = &line.net else { return };
-    let mut buffer = [0.0; 8];
+pub fn tolerances(ode: &Ode, scratch: &mut Scratch) {
+    let Some(net) = &ode.net else { return };
     for (k, s) in net.states.iter().enumerate() {
-        let part = &line.parts[s.part];
-        let m = part.state_count();
-        let nominal = if part.get_nominals(&mut buffer[..m]).is_ok() && buffer[s.index] != 0.0 { buffer[s.index].abs() } else { 1.0 };
-        scratch.rtol_scale[k] = match part {
-            Part::Span(span) => scratch.rtol_scale[k].max(span.outputs().strain.abs()).max(STRAIN_FLOOR),
-            Part::Roller(_) => 1.0,
+        scratch.rtol_scale[k] = match ode.parts[s.part].strain() {
+            Some(strain) => scratch.rtol_scale[k].max(strain.abs()).max(STRAIN_FLOOR),
+            None => 1.0,
         };
         // Absolute tolerance: the relative one of a state of its nominal size.
-        scratch.atol[k] = line.rtol * scratch.rtol_scale[k] * nominal;
+        scratch.atol[k] = ode.rtol * scratch.rtol_scale[k] * ode.nominal(net, k);
     }
 }
 
-pub fn initialize(line: &mut Line, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
-    let spec = line.shared.clone();
-    let spec = &spec.spec;
+/// Initializes the parts until they agree through the connections, joins them and, where
+/// `start_equilibrium`, solves the steady state; the warnings to pass on. `tolerance`: the
+/// line's parameter, which the importer's tolerance overrides where it asks for more.
+pub fn initialize(
+    ode: &mut Ode,
+    spec: &Spec,
+    tolerance: f64,
+    start_equilibrium: bool,
+    experiment: &Experiment,
+    resources: &Resources,
+) -> FmiResult<Vec<String>> {
     // The parts are stepped by the line, never by an importer of their own.
     let part_experiment = Experiment { model_exchange: false, ..*experiment };
     let t0 = experiment.start_time;
     // The importer's tolerance counts where it asks for more accuracy than the parameter.
-    line.rtol = experiment.tolerance.filter(|&t| t > 0.0 && t < line.tolerance).unwrap_or(line.tolerance);
+    ode.rtol = experiment.tolerance.filter(|&t| t > 0.0 && t < tolerance).unwrap_or(tolerance);
     let mut warnings = Vec::new();
     let mut net: Option<Network> = None;
     let mut x = Vec::new();
     let mut settled = false;
     for _ in 0..SETTLE_ROUNDS {
         warnings.clear();
-        for (p, part) in line.parts.iter_mut().enumerate() {
+        for (p, part) in ode.parts.iter_mut().enumerate() {
             let ps = &spec.parts[p];
             let own = resources.clone().for_instance(&ps.name);
             let said = part.initialize(&part_experiment, &own).map_err(|e| e.prefixed(&format!("part {}", ps.name)))?;
@@ -84,12 +87,12 @@ pub fn initialize(line: &mut Line, experiment: &Experiment, resources: &Resource
                 warnings.extend(said.into_iter().map(|w| format!("part {}: {w}", ps.name)));
             }
         }
-        let n = net.get_or_insert(Network::new(spec, &line.parts).map_err(FmiError::error)?);
+        let n = net.get_or_insert(Network::new(spec, &ode.parts).map_err(FmiError::error)?);
         x.resize(n.len(), 0.0);
-        n.gather(&line.parts, &mut x)?;
-        let before = connected_inputs(n, &line.parts)?;
-        n.evaluate(&mut line.parts, t0, &x, None).map_err(|e| e.prefixed("the line's start"))?;
-        if connected_inputs(n, &line.parts)? == before {
+        n.gather(&ode.parts, &mut x)?;
+        let before = connected_inputs(n, &ode.parts)?;
+        n.evaluate(&mut ode.parts, t0, &x, None).map_err(|e| e.prefixed("the line's start"))?;
+        if connected_inputs(n, &ode.parts)? == before {
             settled = true;
             break;
         }
@@ -98,19 +101,19 @@ pub fn initialize(line: &mut Line, experiment: &Experiment, resources: &Resource
         return Err(FmiError::error(format!("the parts' start values do not settle through the connections in {SETTLE_ROUNDS} rounds")));
     }
     let net = net.expect("built in the first round");
-    line.x = x;
-    line.time = t0;
-    line.ramps.clear();
-    line.integrator = Some(Rosenbrock::new(METHOD, net.len(), net.kl, net.ku));
-    line.net = Some(net);
-    line.scratch = scratch(line, line.x.len());
-    apply_events(line)?;
-    if line.start_equilibrium {
-        if let Err(why) = equilibrium::solve(line) {
+    ode.x = x;
+    ode.time = t0;
+    ode.ramps.clear();
+    ode.integrator = Some(Rosenbrock::new(METHOD, net.len(), net.kl, net.ku));
+    ode.net = Some(net);
+    ode.scratch = scratch(ode, ode.x.len());
+    apply_events(ode)?;
+    if start_equilibrium {
+        if let Err(why) = equilibrium::solve(ode) {
             warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values"));
         }
     }
-    line.settle()?;
+    ode.settle()?;
     Ok(warnings)
 }
 
@@ -120,33 +123,33 @@ fn connected_inputs(net: &Network, parts: &[Part]) -> FmiResult<Vec<u64>> {
 }
 
 /// Lets every part apply what is due now; the next event of any part.
-fn apply_events(line: &mut Line) -> FmiResult {
-    let net = line.net.as_mut().expect("initialized");
-    net.evaluate(&mut line.parts, line.time, &line.x, None)?;
+fn apply_events(ode: &mut Ode) -> FmiResult {
+    let net = ode.net.as_mut().expect("initialized");
+    net.evaluate(&mut ode.parts, ode.time, &ode.x, None)?;
     let mut next = f64::INFINITY;
     let mut changed = false;
     net.parts_changed();
-    for part in &mut line.parts {
+    for part in &mut ode.parts {
         let update = part.event_update();
         next = next.min(update.next_event_time.unwrap_or(f64::INFINITY));
         changed |= update.states_changed;
     }
     if changed {
-        net.gather(&line.parts, &mut line.x)?;
+        net.gather(&ode.parts, &mut ode.x)?;
     }
     // What an event applies (a new web, a new roll, a table's kink) changes the Jacobian.
-    if let Some(r) = line.integrator.as_mut() {
+    if let Some(r) = ode.integrator.as_mut() {
         r.renew_jacobian();
     }
-    line.next_event = next;
+    ode.next_event = next;
     Ok(())
 }
 
-/// Integrates the line from its time to `end`, no event inside.
-fn integrate(line: &mut Line, end: f64) -> FmiResult {
-    let t = line.time;
-    let time_dependent = !line.ramps.is_empty() || line.shared.spec.parts.iter().any(|p| p.profile.is_some());
-    let Line { parts, net, x, ramps, integrator, scratch, rtol, .. } = line;
+/// Integrates the line from its time to `end`, no event inside; `profiled`: a part follows a profile.
+fn integrate(ode: &mut Ode, end: f64, profiled: bool) -> FmiResult {
+    let t = ode.time;
+    let time_dependent = !ode.ramps.is_empty() || profiled;
+    let Ode { parts, net, x, ramps, integrator, scratch, rtol, .. } = ode;
     let (net, integrator) = (net.as_mut().expect("initialized"), integrator.as_mut().expect("initialized"));
     let Scratch { f0, f1, y, atol, rtol_scale, .. } = scratch;
     // The parts enter a step evaluated where it begins (every change is evaluated at once), unless an
@@ -168,7 +171,7 @@ fn integrate(line: &mut Line, end: f64) -> FmiResult {
         let control = Control { rtol: *rtol, atol, rtol_scale, max_steps: MAX_STEPS, max_step: 0.0 };
         integrator.integrate(&mut sys, t, end, x, &control).map_err(|f| failure(f, t, end))?;
     }
-    line.time = end;
+    ode.time = end;
     Ok(())
 }
 
@@ -193,69 +196,70 @@ fn failure(f: Failure, t: f64, end: f64) -> FmiError {
 /// applies more (a web, a roll, a table's next entry): the parts are copied
 /// before the first. They are copied before the step where an evaluation
 /// failed on them (an input an importer set that they refuse) or where an
-/// evaluation depends on the one before (`Network::reads_earlier_inputs`).
-pub fn step(line: &mut Line, h: f64) -> FmiResult {
-    let t0 = line.time;
-    let next_event = line.next_event;
-    let next_step = line.integrator.as_ref().map_or(0.0, |r| r.next_step);
-    line.scratch.x.copy_from_slice(&line.x);
-    let mut copied = !line.net.as_ref().is_some_and(|n| n.evaluated_at(t0, &line.x) && !n.reads_earlier_inputs);
+/// evaluation depends on the one before (`Network::reads_earlier_inputs`). `profiled`: a part
+/// follows a profile (time moves the equations).
+pub fn step(ode: &mut Ode, h: f64, profiled: bool) -> FmiResult {
+    let t0 = ode.time;
+    let next_event = ode.next_event;
+    let next_step = ode.integrator.as_ref().map_or(0.0, |r| r.next_step);
+    ode.scratch.x.copy_from_slice(&ode.x);
+    let mut copied = !ode.net.as_ref().is_some_and(|n| n.evaluated_at(t0, &ode.x) && !n.reads_earlier_inputs);
     if copied {
-        line.backup.clone_from(&line.parts);
+        ode.backup.clone_from(&ode.parts);
     }
-    match advance(line, t0 + h, &mut copied) {
+    match advance(ode, t0 + h, profiled, &mut copied) {
         Ok(()) => {
             // The ramped inputs end the step where their derivatives took them.
-            for &(part, vr, base, rate) in &line.ramps {
-                line.parts[part].set_real(vr, base + rate * h)?;
+            for &(part, vr, base, rate) in &ode.ramps {
+                ode.parts[part].set_real(vr, base + rate * h)?;
             }
-            line.ramps.clear();
-            line.settle()
+            ode.ramps.clear();
+            ode.settle()
         }
         Err(e) => {
             if copied {
-                std::mem::swap(&mut line.parts, &mut line.backup);
-                if let Some(net) = line.net.as_mut() {
+                std::mem::swap(&mut ode.parts, &mut ode.backup);
+                if let Some(net) = ode.net.as_mut() {
                     net.parts_changed();
                 }
             }
-            for &(part, vr, base, _) in &line.ramps {
-                let _ = line.parts[part].set_real(vr, base);
+            for &(part, vr, base, _) in &ode.ramps {
+                let _ = ode.parts[part].set_real(vr, base);
             }
-            line.x.copy_from_slice(&line.scratch.x);
-            line.time = t0;
-            line.next_event = next_event;
-            if let Some(r) = line.integrator.as_mut() {
+            ode.x.copy_from_slice(&ode.scratch.x);
+            ode.time = t0;
+            ode.next_event = next_event;
+            if let Some(r) = ode.integrator.as_mut() {
                 r.next_step = next_step;
                 // Formed along the failed attempt, perhaps far from the line as it is again.
                 r.renew_jacobian();
             }
-            let _ = line.settle();
+            let _ = ode.settle();
             Err(e)
         }
     }
 }
 
 /// `copied`: the parts were copied to `line.backup` before an event (see `step`).
-fn advance(line: &mut Line, end: f64, copied: &mut bool) -> FmiResult {
-    let mut scratch = std::mem::take(&mut line.scratch);
-    tolerances(line, &mut scratch);
-    line.scratch = scratch;
+fn advance(ode: &mut Ode, end: f64, profiled: bool, copied: &mut bool) -> FmiResult {
+    let mut scratch = std::mem::take(&mut ode.scratch);
+    tolerances(ode, &mut scratch);
+    ode.scratch = scratch;
     // An event within rounding of the end belongs to the next step's start.
     let last = end - profiles_tolerance(end);
     loop {
-        if line.next_event <= line.time + profiles_tolerance(line.time) {
+        if ode.next_event <= ode.time + profiles_tolerance(ode.time) {
             if !*copied {
-                line.backup.clone_from(&line.parts);
+                ode.backup.clone_from(&ode.parts);
                 *copied = true;
             }
-            apply_events(line)?;
+            apply_events(ode)?;
         }
-        let stop = if line.next_event < last { line.next_event } else { end };
-        if stop > line.time {
-            integrate(line, stop)?;
+        let stop = if ode.next_event < last { ode.next_event } else { end };
+        if stop > ode.time {
+            integrate(ode, stop, profiled)?;
         }
-        line.time = stop;
+        ode.time = stop;
         if stop >= end {
             return Ok(());
         }
@@ -268,66 +272,14 @@ fn profiles_tolerance(t: f64) -> f64 {
 }
 
 /// Model Exchange: the parts apply what is due at the time set.
-pub fn event_update(line: &mut Line) -> EventUpdate {
-    let before = line.x.clone();
-    if apply_events(line).is_err() {
+pub fn event_update(ode: &mut Ode) -> EventUpdate {
+    let before = ode.x.clone();
+    if apply_events(ode).is_err() {
         return EventUpdate::default();
     }
-    let _ = line.settle();
+    let _ = ode.settle();
     EventUpdate {
-        next_event_time: line.next_event.is_finite().then_some(line.next_event),
-        states_changed: before != line.x,
-    }
-}
-
-/// d(unknown)/d(known) of the line now, by central differences (step 1e-6
-/// of the known's size: truncation ~1e-12, rounding ~1e-10 relative). Known:
-/// a state or an input of the line; unknown: an output or a derivative.
-/// Before initialization has built the network (an instance that failed
-/// before it ended: the error state), only inputs are known, and the parts
-/// answer at their own values, as fmi2GetReal does then.
-pub fn partial_derivative(line: &Line, unknown: u32, known: u32) -> FmiResult<f64> {
-    let state = line.shared.description.states.iter().position(|&vr| vr == known);
-    if state.is_some() && line.net.is_none() {
-        return Err(FmiError::error("the line is not initialized: it has no states yet"));
-    }
-    let input = match line.shared.bindings.get(known as usize) {
-        Some(&Binding::Part { part, vr }) if state.is_none() => Some((part, vr)),
-        _ => None,
-    };
-    let value = match (state, input) {
-        (Some(k), _) => line.x[k],
-        (None, Some((part, vr))) => line.parts[part].get_real(vr)?,
-        _ => return Err(FmiError::error(format!("value reference {known} is neither a state nor an input of the line"))),
-    };
-    let scale = match (state, &line.net) {
-        (Some(k), Some(net)) => nominal(line, net, k),
-        _ => 1.0,
-    };
-    let d = 1e-6 * value.abs().max(scale);
-    let mut probe = line.clone();
-    let mut at = |x: f64| -> FmiResult<f64> {
-        match (state, input) {
-            (Some(k), _) => probe.x[k] = x,
-            (None, Some((part, vr))) => probe.parts[part].set_real(vr, x)?,
-            _ => unreachable!("checked above"),
-        }
-        probe.settle()?;
-        use fmi_core::Variables;
-        probe.get_real(unknown)
-    };
-    let (hi, lo) = (at(value + d)?, at(value - d)?);
-    Ok((hi - lo) / (2.0 * d))
-}
-
-fn nominal(line: &Line, net: &Network, k: usize) -> f64 {
-    let s = net.states[k];
-    let mut buffer = [0.0; 8];
-    let part = &line.parts[s.part];
-    let m = part.state_count();
-    if part.get_nominals(&mut buffer[..m]).is_ok() && buffer[s.index] != 0.0 {
-        buffer[s.index].abs()
-    } else {
-        1.0
+        next_event_time: ode.next_event.is_finite().then_some(ode.next_event),
+        states_changed: before != ode.x,
     }
 }

@@ -3,7 +3,7 @@
 //! Units are the parts' own definitions, taken from their model descriptions.
 
 use crate::spec::Spec;
-use crate::Line;
+use crate::line::Line;
 use fmi_core::description::{Causality, Initial, Kind, Start, Variability};
 use fmi_core::Model;
 use quick_xml::escape::escape;

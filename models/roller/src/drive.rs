@@ -2,7 +2,7 @@
 //! follows, read from the JSON file `profile` names (crate `profiles`).
 
 use crate::description::{Real, DESCRIPTION};
-use crate::physics::Parameters;
+use crate::parameters::Parameters;
 use fmi_core::{FmiError, FmiResult, Resources};
 use profiles::{Profile, Table, Value};
 use std::sync::Arc;

@@ -3,9 +3,8 @@
 //! (omega, r, y, y') and the inputs. The profile's tables are functions of
 //! time only, so they and their slopes are held.
 
-use crate::drive::{Drive, Key};
-use crate::physics::{self, Inputs, Parameters};
-use crate::Roller;
+use crate::parameters::{Inputs, Parameters};
+use crate::physics::{self, Roll};
 use std::f64::consts::PI;
 
 /// A direction in the knowns: d(omega, r, y, y') and d(inputs).
@@ -15,14 +14,76 @@ pub struct Direction {
     pub u: Inputs,
 }
 
-/// The derivatives of the outputs and of the state derivatives along a `Direction`.
+/// The derivatives along a `Direction` of everything the roller computes, each named as the
+/// roller's own (`t.x` for `Roller::x()`): the outputs, the states and their derivatives.
+/// The binding (variables.rs) reads them by the same names.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Tangents {
-    pub speed: f64,
+    pub surface_speed: f64,
     pub strain_leaving: f64,
-    pub torque: f64,
+    pub drive_torque: f64,
     /// d of (omega, r, y, y')/dt.
     pub derivatives: [f64; 4],
+    pub omega: f64,
+    pub radius: f64,
+    /// The carriage's (y, y').
+    pub carriage: [f64; 2],
+    pub contact_a_x: f64,
+    pub contact_b_x: f64,
+    pub contact_y: f64,
+}
+
+/// Whether the tangents along omega, the carriage's y and y' and every input are the same at
+/// every state, input and time, for as long as the parameters and the roll stay: [R1], [R2]
+/// and [R4] are then linear with coefficients made of parameters. So for a roller that winds
+/// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on).
+pub fn tangents_fixed(p: &Parameters) -> bool {
+    !p.winding() && p.inlets <= 1
+}
+
+/// What the tangents read besides the direction: the roller now, its drive's tables read at
+/// the time now (they are functions of time only, so they and their slopes are held).
+pub struct Point<'a> {
+    pub params: &'a Parameters,
+    pub inputs: &'a Inputs,
+    pub omega: f64,
+    pub roll: Roll,
+    /// The surface speed [R2] (a speed table's where the surface follows one).
+    pub speed: f64,
+    /// The speed table's slope where the surface follows one.
+    pub speed_slope: Option<f64>,
+    /// A tension drive's tension; 0 for the other drives.
+    pub tension: f64,
+    /// The drive's torque (not read where the surface follows a speed table).
+    pub torque: f64,
+    /// The leaving strain follows a table.
+    pub strain_table: bool,
+}
+
+impl<'a> Point<'a> {
+    /// What the tangents along every direction share.
+    #[inline]
+    pub fn linearize(&self) -> Linearization<'a> {
+        let p = self.params;
+        let r = self.roll.radius;
+        let c = if p.winding() { p.roll_sign() * p.wound_thickness / (2.0 * PI) } else { 0.0 };
+        Linearization {
+            params: p,
+            inputs: self.inputs,
+            inertia: self.roll.inertia,
+            speed_table: self.speed_slope.is_some(),
+            omega: self.omega,
+            r,
+            v: self.speed,
+            c,
+            r_rate: c * self.speed / r,
+            slope: self.speed_slope.unwrap_or(0.0),
+            tension: self.tension,
+            web_torque: physics::web_torque(p, r, self.inputs),
+            torque: self.torque,
+            strain_table: self.strain_table,
+        }
+    }
 }
 
 /// d(eps_b) of [R5] along d(inputs): one inlet passes its strain on.
@@ -34,56 +95,11 @@ fn strain_leaving_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
     gradient.iter().zip(&d.strain_a).map(|(g, x)| g * x).sum()
 }
 
-impl Roller {
-    /// Whether the tangents along omega, the carriage's y and y' and every input are the same at
-    /// every state, input and time, for as long as the parameters and the roll stay: [R1], [R2]
-    /// and [R4] are then linear with coefficients made of parameters. So for a roller that winds
-    /// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on).
-    pub fn tangents_fixed(&self) -> bool {
-        !self.params.winding() && self.params.inlets <= 1
-    }
-
-    /// d(everything)/d(direction) now.
-    #[inline]
-    pub fn tangents(&self, d: &Direction) -> Tangents {
-        self.linearize().along(d)
-    }
-
-    /// What the tangents along every direction share: the roller's values now.
-    #[inline]
-    pub fn linearize(&self) -> Linearization<'_> {
-        let p = &self.params;
-        let (omega, r) = (self.omega(), self.radius());
-        let winding = p.winding();
-        let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
-        let v = self.surface_speed();
-        let c = if winding { p.roll_sign() * p.wound_thickness / (2.0 * PI) } else { 0.0 };
-        let r_rate = c * v / r;
-        let (slope, tension) = match speed_table {
-            Some(t) => (t.slope(self.time), 0.0),
-            None if self.drive() == Drive::Tension => (0.0, self.table(Key::Tension).map_or(0.0, |t| t.value(self.time))),
-            None => (0.0, 0.0),
-        };
-        Linearization {
-            roller: self,
-            speed_table: speed_table.is_some(),
-            omega,
-            r,
-            v,
-            c,
-            r_rate,
-            slope,
-            tension,
-            web_torque: physics::web_torque(p, r, &self.inputs),
-            torque: if speed_table.is_some() { 0.0 } else { self.drive_torque() },
-            strain_table: self.table(Key::Strain).is_some(),
-        }
-    }
-}
-
-/// A roller's values the tangents along any direction use (`Roller::linearize`).
+/// A roller's values the tangents along any direction use (`Point::linearize`).
 pub struct Linearization<'a> {
-    roller: &'a Roller,
+    params: &'a Parameters,
+    inputs: &'a Inputs,
+    inertia: f64,
     /// The surface speed follows a speed table.
     speed_table: bool,
     omega: f64,
@@ -104,11 +120,9 @@ impl Linearization<'_> {
     /// d(everything)/d(direction).
     #[inline]
     pub fn along(&self, d: &Direction) -> Tangents {
-        let roller = self.roller;
-        let p = &roller.params;
-        let u = &roller.inputs;
+        let (p, u) = (self.params, self.inputs);
         let [d_omega, d_r, d_y, d_y_dot] = d.state;
-        let (omega, r, j, v, c, r_rate) = (self.omega, self.r, roller.roll.inertia, self.v, self.c, self.r_rate);
+        let (omega, r, j, v, c, r_rate) = (self.omega, self.r, self.inertia, self.v, self.c, self.r_rate);
         let winding = p.winding();
         // [R3]: J(r), and with v = r*omega (or a speed table) r' = s*h_w*v/(2*pi*r).
         let d_j = if winding { 2.0 * PI * p.wound_density * p.wound_width * r.powi(3) * d_r } else { 0.0 };
@@ -140,10 +154,17 @@ impl Linearization<'_> {
             (0.0, 0.0)
         };
         Tangents {
-            speed: if self.speed_table { 0.0 } else { d_v },
+            surface_speed: if self.speed_table { 0.0 } else { d_v },
             strain_leaving: if self.strain_table { 0.0 } else { strain_leaving_tangent(p, u, &d.u) },
-            torque: d_torque,
+            drive_torque: d_torque,
             derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate],
+            omega: d_omega,
+            radius: d_r,
+            carriage: [d_y, d_y_dot],
+            // [R4]: (0, y_start - y) and (2r, y_start - y).
+            contact_a_x: 0.0,
+            contact_b_x: 2.0 * d_r,
+            contact_y: -d_y,
         }
     }
 }

@@ -14,99 +14,9 @@
 //! exactly. [R3] moves r and J after the piece, keeping J*omega (physics
 //! docs: accurate to O(h*v*dt/r^2) per step).
 
+use crate::parameters::{ports, Inputs, Parameters, PORTS};
 use solver::{decay_integral, expm, ramp_integral, CompensatedSum};
 use std::f64::consts::PI;
-
-/// Parameters, SI.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Parameters {
-    pub inertia: f64,
-    pub radius: f64,
-    pub damping: f64,
-    pub speed_start: f64,
-    /// 0 roller, 1 unwinder, 2 winder.
-    pub roll: i32,
-    pub wound_thickness: f64,
-    pub wound_density: f64,
-    pub wound_width: f64,
-    pub carriage: bool,
-    pub carriage_mass: f64,
-    pub carriage_damping: f64,
-    pub carriage_stiffness: f64,
-    pub carriage_start: f64,
-    pub profile: std::sync::Arc<str>,
-    /// Webs arriving (web_a, web_a2, ...) and leaving (web_b, web_b2, ...), 1..=4.
-    pub inlets: i32,
-    pub outlets: i32,
-    /// Mass per unstretched length of each arriving web [R5], kg/m.
-    pub mass_a: [f64; PORTS],
-}
-
-/// The most webs a roller takes in or gives out.
-pub const PORTS: usize = 4;
-
-/// A count of ports as an index bound: 1..=PORTS (a count outside it is
-/// refused when initialization ends; until then it must not panic).
-fn ports(count: i32) -> usize {
-    count.clamp(1, PORTS as i32) as usize
-}
-
-pub const UNWINDER: i32 = 1;
-pub const WINDER: i32 = 2;
-
-impl Parameters {
-    /// The sign of a tension drive's torque and of the radius change: the
-    /// web pulls an unwinder back and a winder forward.
-    pub fn roll_sign(&self) -> f64 {
-        match self.roll {
-            UNWINDER => -1.0,
-            WINDER => 1.0,
-            _ => 0.0,
-        }
-    }
-
-    /// [R3] is on: a roll with web of some thickness on it.
-    pub fn winding(&self) -> bool {
-        self.roll != 0 && self.wound_thickness > 0.0
-    }
-}
-
-/// Inputs, SI, held over a communication step. Port k's (web_a<k>, web_b<k>)
-/// at index k - 1; the ports beyond `inlets` and `outlets` are not read.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Inputs {
-    pub force_a: [f64; PORTS],
-    pub force_b: [f64; PORTS],
-    pub strain_a: [f64; PORTS],
-    pub torque: f64,
-    pub load: f64,
-}
-
-/// The sum of the first `count` ports' tensions: one port is read as it
-/// is (the plain roller, bit for bit), and no loop runs over unused ones.
-#[inline]
-fn pull(forces: &[f64; PORTS], count: i32) -> f64 {
-    match ports(count) {
-        1 => forces[0],
-        2 => forces[0] + forces[1],
-        3 => forces[0] + forces[1] + forces[2],
-        _ => forces[0] + forces[1] + forces[2] + forces[3],
-    }
-}
-
-impl Inputs {
-    /// F_a of [R1] and [R4]: every arriving web's tension.
-    #[inline]
-    pub fn pull_back(&self, p: &Parameters) -> f64 {
-        pull(&self.force_a, p.inlets)
-    }
-
-    /// F_b of [R1] and [R4]: every leaving web's tension.
-    #[inline]
-    pub fn pull_forward(&self, p: &Parameters) -> f64 {
-        pull(&self.force_b, p.outlets)
-    }
-}
 
 /// The strain of the web leaving the nip [R5]: with one inlet the arriving
 /// strain itself; with several, the mean of their strains weighted by
@@ -185,6 +95,26 @@ pub fn web_torque(p: &Parameters, radius: f64, u: &Inputs) -> f64 {
     radius * (u.pull_forward(p) - u.pull_back(p))
 }
 
+/// d(omega)/dt [R1] at the drive torque `torque`, J moving at `inertia_rate` (a roll being
+/// wound: d(J*omega)/dt = J*omega' + J'*omega).
+#[inline]
+pub fn omega_rate(p: &Parameters, roll: &Roll, u: &Inputs, omega: f64, torque: f64, inertia_rate: f64) -> f64 {
+    (web_torque(p, roll.radius, u) + torque - p.damping * omega - inertia_rate * omega) / roll.inertia
+}
+
+/// d(omega)/dt of a surface that follows a speed v(t) with slope v' [R2]: omega = v/r, r moving at r'.
+#[inline]
+pub fn omega_rate_at_speed(slope: f64, speed: f64, radius: f64, radius_rate: f64) -> f64 {
+    slope / radius - speed * radius_rate / (radius * radius)
+}
+
+/// The torque [R1] that makes the surface follow a speed table with slope v' (r and J held):
+/// J*v'/r + b*omega - r*(F_b - F_a).
+#[inline]
+pub fn speed_drive_torque(p: &Parameters, roll: &Roll, u: &Inputs, omega: f64, slope: f64) -> f64 {
+    roll.inertia * slope / roll.radius + p.damping * omega - web_torque(p, roll.radius, u)
+}
+
 /// [R1] with r and J held over a piece of length h: the drive torque is
 /// `tau0 + tau1*s` (s from the piece's start). Exact:
 /// omega(h) = omega + (a0 - (b/J)*omega)*int e^{-(b/J)(h-s)} ds + a1*int s e^{-(b/J)(h-s)} ds.
@@ -194,6 +124,13 @@ pub fn rotation_step(p: &Parameters, roll: &Roll, u: &Inputs, omega: Compensated
     let a0 = (web_torque(p, roll.radius, u) + tau0) / j;
     let a1 = tau1 / j;
     omega.plus((a0 - decay * omega.value()) * decay_integral(decay, h) + a1 * ramp_integral(decay, h))
+}
+
+/// A load cell under the roller's bearings: the resultant of the webs pulling back (`back`, every
+/// arriving web) and forward (`forward`, every leaving one, as parallel webs do) at a wrap
+/// angle with cosine `cos_wrap`, by the law of cosines: sqrt(a^2 + b^2 - 2 a b cos(wrap)).
+pub fn load_cell(back: f64, forward: f64, cos_wrap: f64) -> f64 {
+    (back * back + forward * forward - 2.0 * back * forward * cos_wrap).max(0.0).sqrt()
 }
 
 /// [R3] after a piece in which the surface moved `travel` metres: the new
@@ -222,6 +159,18 @@ pub fn carriage_step(p: &Parameters, state: [f64; 2], g0: f64, g1: f64, h: f64) 
     [y + p.carriage_start, v]
 }
 
+/// Where the webs touch the roller [R4]: web_b's x (web_a's is 0), at the roller's start position.
+#[inline]
+pub fn contact_b_x(radius: f64) -> f64 {
+    2.0 * radius
+}
+
+/// The contact points' height [R4], y up from the roller's start position: y_start - y.
+#[inline]
+pub fn contact_height(p: &Parameters, travel: f64) -> f64 {
+    p.carriage_start - travel
+}
+
 /// The carriage's acceleration [R4] with the total force g.
 pub fn carriage_acceleration(p: &Parameters, state: [f64; 2], g: f64) -> f64 {
     (g - p.carriage_damping * state[1] - p.carriage_stiffness * (state[0] - p.carriage_start)) / p.carriage_mass
@@ -230,6 +179,7 @@ pub fn carriage_acceleration(p: &Parameters, state: [f64; 2], g: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::parameters::{UNWINDER, WINDER};
 
     fn params() -> Parameters {
         Parameters { inertia: 2.0, radius: 0.2, damping: 0.5, carriage_mass: 5.0, ..Parameters::default() }

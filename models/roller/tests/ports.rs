@@ -117,8 +117,9 @@ fn rel(a: f64, b: f64) -> f64 {
 #[test]
 fn the_new_variables_come_after_the_old_ones() {
     let names: Vec<&str> = DESCRIPTION.variables.iter().filter(|v| v.vr > PLAIN_LAST_VR).map(|v| &*v.name).collect();
+    // The ports' variables right after the plain roller's (a variable added later comes after them).
     #[rustfmt::skip]
-    assert_eq!(names, [
+    assert_eq!(names[..24.min(names.len())], [
         "inlets", "outlets", "web_a.m", "web_a2.m", "web_a3.m", "web_a4.m",
         "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps", "web_a4.F", "web_a4.eps", "web_b2.F", "web_b3.F", "web_b4.F",
         "web_a2.v", "web_a3.v", "web_a4.v", "web_b2.v", "web_b2.eps", "web_b3.v", "web_b3.eps", "web_b4.v", "web_b4.eps",
@@ -437,7 +438,7 @@ fn fixed_tangents_are_the_same_at_every_state_input_and_time() {
             m.do_step(h).unwrap();
             tangents.push(knowns.iter().map(|&k| m.tangents(&Roller::direction(k).unwrap())).collect::<Vec<_>>());
         }
-        assert_eq!(m.tangents_fixed(), fixed, "{settings:?}");
+        assert_eq!(roller::jacobian::tangents_fixed(&m.params), fixed, "{settings:?}");
         assert_eq!(tangents[0] == tangents[1], fixed, "{settings:?}: tangents {:?} and {:?}", tangents[0], tangents[1]);
     }
 }

@@ -14,7 +14,7 @@ use fmi_core::phase::Phase;
 use fmi_core::snapshot::{fnv1a, Snapshot};
 use fmi_core::{Compiled, Experiment, Model, Status, Variables};
 use roller::description::{Real, DESCRIPTION};
-use roller::physics::{Inputs, Parameters};
+use roller::parameters::{Inputs, Parameters};
 use roller::Roller;
 
 fn roller(j: f64, r: f64, b: f64, omega0: f64) -> Roller {

@@ -1,14 +1,12 @@
-//! FMI 2.0's C types and logger, the bodies of its 44 functions (`calls`),
-//! and the one list of their C signatures (`exports`, [`export_fmi2!`](crate::export_fmi2)).
+//! FMI 2.0's C types, the bodies of its functions (`calls`; those FMI 3.0's
+//! share are in the crate's `fmu_states` and `alike`), and the one list of its
+//! 44 C signatures (`exports`, [`export_fmi2!`](crate::export_fmi2)).
 
 #[doc(hidden)]
 pub mod calls;
 mod exports;
 
-use crate::raw::c_text;
-use fmi_core::logging::Log;
-use fmi_core::Status;
-use std::ffi::{c_char, c_int, c_void, CString};
+use std::ffi::{c_char, c_int, c_void};
 
 pub type fmi2Component = *mut c_void;
 pub type fmi2ComponentEnvironment = *mut c_void;
@@ -60,34 +58,4 @@ pub struct fmi2EventInfo {
     pub valuesOfContinuousStatesChanged: fmi2Boolean,
     pub nextEventTimeDefined: fmi2Boolean,
     pub nextEventTime: fmi2Real,
-}
-
-/// The importer's logger, copied out of `fmi2CallbackFunctions`.
-pub struct Logger {
-    callback: Option<fmi2CallbackLogger>,
-    environment: fmi2ComponentEnvironment,
-    instance_name: CString,
-}
-
-impl Logger {
-    fn new(functions: &fmi2CallbackFunctions, instance_name: &str) -> Self {
-        Logger {
-            callback: functions.logger,
-            environment: functions.componentEnvironment,
-            instance_name: c_text(instance_name),
-        }
-    }
-}
-
-impl Log for Logger {
-    fn log(&self, status: Status, category: &str, message: &str) {
-        let Some(callback) = self.callback else { return };
-        // Loggers treat the message as a printf format: escape '%'.
-        let message = c_text(&message.replace('%', "%%"));
-        let category = c_text(category);
-        // SAFETY: the importer handed us this callback for the instance's lifetime.
-        unsafe {
-            callback(self.environment, self.instance_name.as_ptr(), status as fmi2Status, category.as_ptr(), message.as_ptr())
-        }
-    }
 }

@@ -1,16 +1,15 @@
-//! The bodies of the FMI 3.0 functions, generic over the model;
+//! The bodies of the functions of the FMI 3.0 C API that are its own, generic
+//! over the model (those FMI 2.0 shares are in `alike` and `fmu_states`);
 //! [`export_fmi3!`](crate::export_fmi3) exports them under their C names.
 
 use super::*;
-use crate::handle::{self, enter, unsupported, Request};
-use crate::raw::{out_ref, slice, slice_mut, text, utf8};
-use fmi_core::instance::Instance;
-use fmi_core::snapshot::Snapshot;
+use crate::alike;
+use crate::handle::{self, enter, out_ref, slice, slice_mut, text, unsupported, Request};
+use crate::logger::Logger;
 use fmi_core::standard::fmi3::Call;
 use fmi_core::standard::fmi3_types::{self as types, Added, Type};
 use fmi_core::standard::{Call as _, Standard};
 use fmi_core::{FmiError, FmiResult, Model, Resources};
-use std::panic::{catch_unwind, AssertUnwindSafe};
 
 pub fn get_version<M: Model>() -> *const c_char {
     c"3.0".as_ptr()
@@ -39,23 +38,9 @@ unsafe fn instantiate<M: Model>(
         resources: Resources::from_path(text(resource_path).as_deref()),
         logging_on: logging_on != 0,
     };
-    let logger = Logger { callback: log_message, environment };
+    let logger = Logger::fmi3(log_message, environment);
     let Some(model) = handle::model_of::<M>(&request, &logger) else { return std::ptr::null_mut() };
     handle::instantiate::<M>(request, Box::new(logger), model)
-}
-
-pub unsafe fn set_debug_logging<M: Model>(
-    c: fmi3Instance,
-    logging_on: fmi3Boolean,
-    n_categories: usize,
-    categories: *const fmi3String,
-) -> fmi3Status {
-    let call = Call::SetDebugLogging;
-    enter::<M, _>(c, call, |h| {
-        let names = slice(call, categories, n_categories, "categories")?;
-        let names: Vec<String> = names.iter().map(|&n| text(n).unwrap_or_default()).collect();
-        h.instance.set_debug_logging(call.name(), logging_on != 0, &names)
-    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -89,14 +74,11 @@ pub unsafe fn instantiate_co_simulation<M: Model>(
     _intermediate_update: Option<fmi3IntermediateUpdateCallback>,
 ) -> fmi3Instance {
     if n_required_intermediate_variables > 0 {
-        let logger = Logger { callback: log_message, environment };
         let first = required_intermediate_variables.as_ref().map_or("NULL".to_string(), |vr| vr.to_string());
-        let _ = catch_unwind(AssertUnwindSafe(|| {
-            logger.log(Status::Error, "logStatusError", &format!(
-                "fmi3InstantiateCoSimulation: {n_required_intermediate_variables} requiredIntermediateVariables \
-                 (the first {first}), but no variable of this FMU has intermediateUpdate"
-            ))
-        }));
+        Logger::fmi3(log_message, environment).refuse(&format!(
+            "fmi3InstantiateCoSimulation: {n_required_intermediate_variables} requiredIntermediateVariables \
+             (the first {first}), but no variable of this FMU has intermediateUpdate"
+        ));
         return std::ptr::null_mut();
     }
     instantiate::<M>(false, instance_name, token, resource_path, logging_on, environment, log_message)
@@ -115,19 +97,9 @@ pub unsafe fn instantiate_scheduled_execution<M: Model>(
     _lock_preemption: Option<fmi3LockPreemptionCallback>,
     _unlock_preemption: Option<fmi3UnlockPreemptionCallback>,
 ) -> fmi3Instance {
-    let logger = Logger { callback: log_message, environment };
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        logger.log(
-            Status::Error,
-            "logStatusError",
-            "fmi3InstantiateScheduledExecution: this FMU offers Model Exchange and Co-Simulation, not Scheduled Execution",
-        )
-    }));
+    Logger::fmi3(log_message, environment)
+        .refuse("fmi3InstantiateScheduledExecution: this FMU offers Model Exchange and Co-Simulation, not Scheduled Execution");
     std::ptr::null_mut()
-}
-
-pub unsafe fn free<M: Model>(c: fmi3Instance) {
-    handle::free::<M>(c, Standard::Fmi3)
 }
 
 pub unsafe fn enter_initialization_mode<M: Model>(
@@ -145,22 +117,6 @@ pub unsafe fn enter_initialization_mode<M: Model>(
         h.instance.setup_experiment(call.name(), tolerance, start_time, stop)?;
         h.instance.enter_initialization_mode()
     })
-}
-
-pub unsafe fn exit_initialization_mode<M: Model>(c: fmi3Instance) -> fmi3Status {
-    enter::<M, _>(c, Call::ExitInitializationMode, |h| h.instance.exit_initialization_mode(Call::ExitInitializationMode.name()))
-}
-
-pub unsafe fn enter_event_mode<M: Model>(c: fmi3Instance) -> fmi3Status {
-    enter::<M, _>(c, Call::EnterEventMode, |h| h.instance.enter_event_mode())
-}
-
-pub unsafe fn terminate<M: Model>(c: fmi3Instance) -> fmi3Status {
-    enter::<M, _>(c, Call::Terminate, |h| h.instance.terminate())
-}
-
-pub unsafe fn reset<M: Model>(c: fmi3Instance) -> fmi3Status {
-    enter::<M, _>(c, Call::Reset, |h| h.instance.reset())
 }
 
 // ---- Getting and setting variables
@@ -345,11 +301,7 @@ pub unsafe fn get_string<M: Model>(
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
         types::check(h.instance.description(), call, vrs, Type::String, true)?;
-        let out = slice_mut(call, values, nvr, "values")?;
-        let mut texts = Vec::with_capacity(vrs.len());
-        h.instance.get_strings(call.name(), vrs, |s| texts.push(c_text(s)))?;
-        h.hand_out_strings(texts, out);
-        Ok(())
+        alike::get_strings(h, call, vrs, slice_mut(call, values, nvr, "values")?)
     })
 }
 
@@ -365,12 +317,7 @@ pub unsafe fn set_string<M: Model>(
         types::check_count(call, nvr, n_values)?;
         let vrs = slice(call, vr, nvr, "valueReferences")?;
         types::check(h.instance.description(), call, vrs, Type::String, false)?;
-        let texts = slice(call, values, nvr, "values")?
-            .iter()
-            .enumerate()
-            .map(|(i, &s)| utf8(call, s, "values", i))
-            .collect::<FmiResult<Vec<_>>>()?;
-        h.instance.set_strings(call.name(), vrs, &texts)
+        alike::set_strings(h, call, vrs, values, "values")
     })
 }
 
@@ -385,75 +332,6 @@ pub unsafe fn no_such_type<M: Model>(c: fmi3Instance, call: Call, nvr: usize, ty
             "{}: this FMU has no {type_name} variables (its types: Float64, Int32, Int64 for enumerations, Boolean, String)",
             call.name()
         )))
-    })
-}
-
-// ---- FMU states (the FMI 2.0 layer's snapshots and their serialized form)
-
-pub unsafe fn get_fmu_state<M: Model>(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-    let call = Call::GetFMUState;
-    enter::<M, _>(c, call, |h| {
-        let snapshot = h.instance.snapshot();
-        h.keep_state(call, state, "FMUState", snapshot)
-    })
-}
-
-pub unsafe fn set_fmu_state<M: Model>(c: fmi3Instance, state: fmi3FMUState) -> fmi3Status {
-    let call = Call::SetFMUState;
-    enter::<M, _>(c, call, |h| {
-        let snapshot = h.own_state(call, state)?.clone();
-        h.instance.restore(call.name(), &snapshot)
-    })
-}
-
-pub unsafe fn free_fmu_state<M: Model>(c: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-    let call = Call::FreeFMUState;
-    enter::<M, _>(c, call, |h| h.free_state(call, state, "FMUState"))
-}
-
-pub unsafe fn serialized_fmu_state_size<M: Model>(c: fmi3Instance, state: fmi3FMUState, size: *mut usize) -> fmi3Status {
-    let call = Call::SerializedFMUStateSize;
-    enter::<M, _>(c, call, |h| {
-        let n = h.own_state(call, state)?.to_bytes().len();
-        *out_ref(call, size, "size")? = n;
-        Ok(())
-    })
-}
-
-pub unsafe fn serialize_fmu_state<M: Model>(
-    c: fmi3Instance,
-    state: fmi3FMUState,
-    serialized: *mut fmi3Byte,
-    size: usize,
-) -> fmi3Status {
-    let call = Call::SerializeFMUState;
-    enter::<M, _>(c, call, |h| {
-        let bytes = h.own_state(call, state)?.to_bytes();
-        if size < bytes.len() {
-            return Err(FmiError::error(format!(
-                "{}: the buffer holds {size} bytes, the state needs {} (ask fmi3SerializedFMUStateSize)",
-                call.name(),
-                bytes.len()
-            )));
-        }
-        slice_mut(call, serialized, bytes.len(), "serializedState")?.copy_from_slice(&bytes);
-        Ok(())
-    })
-}
-
-pub unsafe fn deserialize_fmu_state<M: Model>(
-    c: fmi3Instance,
-    serialized: *const fmi3Byte,
-    size: usize,
-    state: *mut fmi3FMUState,
-) -> fmi3Status {
-    let call = Call::DeserializeFMUState;
-    enter::<M, _>(c, call, |h| {
-        let bytes = slice(call, serialized, size, "serializedState")?;
-        let snapshot = Snapshot::<M>::from_bytes(bytes, h.instance.start_model())
-            .and_then(|s| Instance::<M>::check_snapshot(&s).map(|()| s))
-            .map_err(|why| FmiError::error(format!("{}: rejected: {}", call.name(), why.message)))?;
-        h.keep_state(call, state, "FMUState", snapshot)
     })
 }
 
@@ -492,54 +370,6 @@ pub unsafe fn update_discrete_states<M: Model>(
         *time = update.next_event_time.unwrap_or(0.0);
         Ok(())
     })
-}
-
-pub unsafe fn enter_continuous_time_mode<M: Model>(c: fmi3Instance) -> fmi3Status {
-    enter::<M, _>(c, Call::EnterContinuousTimeMode, |h| h.instance.enter_continuous_time_mode())
-}
-
-pub unsafe fn completed_integrator_step<M: Model>(
-    c: fmi3Instance,
-    _no_set_prior: fmi3Boolean,
-    enter_event_mode: *mut fmi3Boolean,
-    terminate_simulation: *mut fmi3Boolean,
-) -> fmi3Status {
-    let call = Call::CompletedIntegratorStep;
-    enter::<M, _>(c, call, |_| {
-        // No step events: the model never asks for event mode or a stop here.
-        *out_ref(call, enter_event_mode, "enterEventMode")? = 0;
-        *out_ref(call, terminate_simulation, "terminateSimulation")? = 0;
-        Ok(())
-    })
-}
-
-pub unsafe fn set_time<M: Model>(c: fmi3Instance, time: fmi3Float64) -> fmi3Status {
-    enter::<M, _>(c, Call::SetTime, |h| h.instance.set_time(Call::SetTime.name(), time))
-}
-
-pub unsafe fn set_continuous_states<M: Model>(c: fmi3Instance, x: *const fmi3Float64, nx: usize) -> fmi3Status {
-    let call = Call::SetContinuousStates;
-    enter::<M, _>(c, call, |h| h.instance.set_continuous_states(call.name(), slice(call, x, nx, "continuousStates")?))
-}
-
-pub unsafe fn get_continuous_state_derivatives<M: Model>(c: fmi3Instance, dx: *mut fmi3Float64, nx: usize) -> fmi3Status {
-    let call = Call::GetContinuousStateDerivatives;
-    enter::<M, _>(c, call, |h| h.instance.get_derivatives(call.name(), slice_mut(call, dx, nx, "derivatives")?))
-}
-
-pub unsafe fn get_event_indicators<M: Model>(c: fmi3Instance, z: *mut fmi3Float64, ni: usize) -> fmi3Status {
-    let call = Call::GetEventIndicators;
-    enter::<M, _>(c, call, |h| h.instance.get_event_indicators(call.name(), slice_mut(call, z, ni, "eventIndicators")?))
-}
-
-pub unsafe fn get_continuous_states<M: Model>(c: fmi3Instance, x: *mut fmi3Float64, nx: usize) -> fmi3Status {
-    let call = Call::GetContinuousStates;
-    enter::<M, _>(c, call, |h| h.instance.get_continuous_states(call.name(), slice_mut(call, x, nx, "continuousStates")?))
-}
-
-pub unsafe fn get_nominals_of_continuous_states<M: Model>(c: fmi3Instance, nominals: *mut fmi3Float64, nx: usize) -> fmi3Status {
-    let call = Call::GetNominalsOfContinuousStates;
-    enter::<M, _>(c, call, |h| h.instance.get_nominals(call.name(), slice_mut(call, nominals, nx, "nominals")?))
 }
 
 pub unsafe fn get_number_of_event_indicators<M: Model>(c: fmi3Instance, n: *mut usize) -> fmi3Status {
@@ -590,8 +420,7 @@ pub unsafe fn do_step<M: Model>(
     })
 }
 
-/// The FMI 2.0 layer's directional derivatives: the same checks (which
-/// unknowns and knowns each state allows) and the model's partial derivatives.
+/// FMI 2.0's directional derivatives, after FMI 3.0's counts are checked.
 #[allow(clippy::too_many_arguments)]
 pub unsafe fn get_directional_derivative<M: Model>(
     c: fmi3Instance,
@@ -609,11 +438,8 @@ pub unsafe fn get_directional_derivative<M: Model>(
         // Every variable is a scalar: one seed per known, one sensitivity per unknown.
         types::check_count(call, n_knowns, n_seed)?;
         types::check_count(call, n_unknowns, n_sensitivity)?;
-        let unknowns = slice(call, unknowns, n_unknowns, "unknowns")?;
-        let knowns = slice(call, knowns, n_knowns, "knowns")?;
-        let seed = slice(call, seed, n_seed, "seed")?;
-        let out = slice_mut(call, sensitivity, n_sensitivity, "sensitivity")?;
-        h.instance.get_directional_derivative(call.name(), unknowns, knowns, seed, out)
+        let names = ["unknowns", "knowns", "seed", "sensitivity"];
+        alike::directional_derivative(h, call, unknowns, n_unknowns, knowns, n_knowns, seed, sensitivity, names)
     })
 }
 

@@ -1,13 +1,11 @@
-//! FMI 3.0's C types and logger, the bodies of its functions (`calls`), and
-//! the one list of their C signatures (`exports`, [`export_fmi3!`](crate::export_fmi3)).
+//! FMI 3.0's C types, the bodies of its functions (`calls`; those FMI 2.0's
+//! share are in the crate's `fmu_states` and `alike`), and the one list of its
+//! C signatures (`exports`, [`export_fmi3!`](crate::export_fmi3)).
 
 #[doc(hidden)]
 pub mod calls;
 mod exports;
 
-use crate::raw::c_text;
-use fmi_core::logging::Log;
-use fmi_core::Status;
 use std::ffi::{c_char, c_int, c_void};
 
 pub type fmi3Instance = *mut c_void;
@@ -53,19 +51,3 @@ pub type fmi3IntermediateUpdateCallback = unsafe extern "C" fn(
 pub type fmi3ClockUpdateCallback = unsafe extern "C" fn(fmi3InstanceEnvironment);
 pub type fmi3LockPreemptionCallback = unsafe extern "C" fn();
 pub type fmi3UnlockPreemptionCallback = unsafe extern "C" fn();
-
-/// The importer's logger and environment, from the instantiate call.
-pub struct Logger {
-    callback: Option<fmi3LogMessageCallback>,
-    environment: fmi3InstanceEnvironment,
-}
-
-impl Log for Logger {
-    fn log(&self, status: Status, category: &str, message: &str) {
-        let Some(callback) = self.callback else { return };
-        // FMI 3.0's logger is not variadic: the message goes as it is.
-        let (category, message) = (c_text(category), c_text(message));
-        // SAFETY: the importer handed us this callback for the instance's lifetime.
-        unsafe { callback(self.environment, status as fmi3Status, category.as_ptr(), message.as_ptr()) }
-    }
-}

@@ -14,8 +14,8 @@
 
 mod directional;
 mod model_exchange;
-mod states;
-pub use states::check_values;
+/// FMU states; `states::check_values` is public for a model that checks its values itself.
+pub mod states;
 mod values;
 
 use super::description::{Causality, Family, Kind, ModelDescription, Slot, Variability, Variable};

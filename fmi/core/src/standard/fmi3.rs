@@ -4,49 +4,13 @@
 //! and since the FMU declares no event mode for co-simulation
 //! (`hasEventMode` is false), a co-simulation instance never enters Event Mode.
 
+use super::{ANY, COMPLETE, COMPUTED, CONTINUOUS, ERROR, EVENT, FAILED, INIT, INSTANTIATED, READABLE, TERMINATED, WRITABLE};
 use crate::phase::Phase;
 use crate::standard::Standard;
 
-const INSTANTIATED: u8 = Phase::Instantiated.bit();
-const INIT: u8 = Phase::InitializationMode.bit();
-const STEP: u8 = Phase::StepComplete.bit();
-const DISCARDED: u8 = Phase::StepFailed.bit();
-const TERMINATED: u8 = Phase::Terminated.bit();
-const ERROR: u8 = Phase::Error.bit();
-const EVENT: u8 = Phase::EventMode.bit();
-const CONTINUOUS: u8 = Phase::ContinuousTimeMode.bit();
-const ANY: u8 = INSTANTIATED | INIT | STEP | DISCARDED | TERMINATED | ERROR | EVENT | CONTINUOUS;
-/// Where values may be read: from initialization on, for diagnosis also after errors.
-const READABLE: u8 = INIT | STEP | DISCARDED | TERMINATED | ERROR | EVENT | CONTINUOUS;
-/// Where a set may be called (each variable's own rule is checked by the instance).
-const WRITABLE: u8 = INSTANTIATED | INIT | STEP | EVENT | CONTINUOUS;
-const COMPUTED: u8 = INIT | EVENT | CONTINUOUS | TERMINATED | ERROR;
-
-macro_rules! calls {
-    ($($call:ident = $allowed:expr, $interface:ident;)*) => {
-        /// Every fmi3 function that takes an instance.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-        pub enum Call { $($call,)* }
-
-        impl Call {
-            /// The phases in which the standard allows this call.
-            #[inline(always)]
-            const fn allowed(self) -> u8 {
-                match self { $(Call::$call => $allowed,)* }
-            }
-
-            /// The interface the call belongs to.
-            pub const fn interface(self) -> Interface {
-                match self { $(Call::$call => Interface::$interface,)* }
-            }
-
-            /// The C name, for log messages.
-            pub const fn c_name(self) -> &'static str {
-                match self { $(Call::$call => concat!("fmi3", stringify!($call)),)* }
-            }
-        }
-    };
-}
+/// FMI 3.0's words for two of the phases: Step Mode, and Step Mode after a discarded step.
+const STEP: u8 = COMPLETE;
+const DISCARDED: u8 = FAILED;
 
 /// Which instances a function serves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,6 +25,7 @@ pub enum Interface {
 }
 
 calls! {
+    "fmi3";
     SetDebugLogging = ANY, Both;
     FreeInstance = ANY, Both;
     EnterInitializationMode = INSTANTIATED, Both;
@@ -180,7 +145,7 @@ impl crate::standard::Call for Call {
             return Some(format!("{}: illegal call sequence: {what}, and this is a {this} instance", self.c_name()));
         }
         (self.allowed() & phase.bit() == 0)
-            .then(|| format!("{}: illegal call sequence: not allowed in {}", self.c_name(), state_name(phase)))
+            .then(|| format!("{}: illegal call sequence: not allowed in {}", self.c_name(), Standard::Fmi3.state(phase)))
     }
 
     fn is_allowed_when_poisoned(self) -> bool {
@@ -189,20 +154,6 @@ impl crate::standard::Call for Call {
 
     fn is_reset(self) -> bool {
         self == Call::Reset
-    }
-}
-
-/// FMI 3.0's name of a phase.
-pub fn state_name(phase: Phase) -> &'static str {
-    match phase {
-        Phase::Instantiated => "the state Instantiated",
-        Phase::InitializationMode => "Initialization Mode",
-        Phase::StepComplete => "Step Mode",
-        Phase::StepFailed => "Step Mode after a discarded step",
-        Phase::Terminated => "the state Terminated",
-        Phase::Error => "the error state (after fmi3Error)",
-        Phase::EventMode => "Event Mode",
-        Phase::ContinuousTimeMode => "Continuous-Time Mode",
     }
 }
 

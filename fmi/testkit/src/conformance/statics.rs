@@ -1,6 +1,6 @@
 //! No global mutable state in a model's library, which could couple
 //! instances on different threads: checked in its source and in its
-//! compiled library (objdump reads the host's objects only, so tests/cross.sh
+//! compiled library (objdump reads the host's objects only, so tests/integration/cross.sh
 //! skips these), with a control in the test kit's own tests showing that the
 //! binary check does catch a static Atomic, a `static mut` and a thread-local.
 

@@ -1,0 +1,2695 @@
+//! Fuzz harness of the exported C API.
+//!
+//! `run(bytes)` reads a sequence of FMI calls out of `bytes` (each byte
+//! string is one sequence) and makes them through the real `fmi2*` entry
+//! points of the library: random calls in random states with random
+//! arguments — NULL pointers, NaN and infinities, huge, negative and
+//! denormal values, unknown value references, out-of-range enumeration and
+//! Boolean values, FMU states that are foreign, freed or freed twice,
+//! serialized states that are random, mutated, truncated or forged (payload
+//! changed and the checksum recomputed), instantiate/free cycles, and the
+//! test hook that makes a step panic.
+//!
+//! Beside it runs an oracle: an independent model of the FMI 2.0
+//! co-simulation state machine (FMI 2.0, section 4.2.4) and of the argument
+//! rules. After every call it checks
+//!
+//! * the status: a call in a state where the standard does not allow it, or
+//!   with an invalid argument, must answer `fmi2Error` (and the instance is
+//!   then in the error state); a valid call must answer `fmi2OK`; where the
+//!   outcome depends on the model's numbers (ending initialization or a step
+//!   after values were changed) the allowed set is `{OK, Discard, Error}`
+//!   with the state machine following the answer; never `fmi2Fatal`,
+//!   `fmi2Pending` or a value that is no `fmi2Status`;
+//! * that every non-OK status is explained by a log line of that status
+//!   (while its log category is on), and that the logger only ever gets
+//!   well-formed calls with a known category;
+//! * that every Real the FMU returns (outputs, parameters, the last
+//!   successful time) is finite, that `fmi2FreeFMUstate` sets the state to
+//!   NULL, that a serialized state deserializes to one that serializes to
+//!   the same bytes, and that a restored state continues where it was saved.
+//!
+//! `run(Api::Fmi3, bytes)` makes the same calls through the `fmi3*` entry
+//! points (see api.rs) with FMI 3.0's own bad inputs beside: value counts that
+//! differ from the number of value references, NULL out-arguments of
+//! fmi3DoStep, bytes other than 0 and 1 for Booleans, Int64 values beyond the
+//! enumerations, the functions this FMU refuses; the oracle is the same, as
+//! FMI 3.0's states are FMI 2.0's for these calls (Step Mode is "step complete").
+//!
+//! Memory errors are not seen by the oracle: run the harness under
+//! AddressSanitizer or valgrind for those (tests/integration/hardening.sh does both).
+//!
+//! A broken rule is a `Violation`. Two kinds of non-finite outputs are
+//! counted as `Finding`s rather than violations because they are known
+//! product issues (see docs/hardening.md and tests/fuzz_findings.rs):
+//! overflow after extreme but accepted values, and forged FMU states.
+
+#![allow(clippy::missing_safety_doc)]
+
+pub mod driver;
+mod api;
+
+pub use api::Api;
+use api::{Instance, Int};
+use fmi_core::description::{
+    Causality, Initial, Kind, ModelDescription, Variability, Variable,
+};
+use fmi_core::instance::TEST_PANIC_CATEGORY;
+use fmi_testkit::*;
+use std::ffi::CString;
+use std::ptr::null_mut;
+
+type Desc = &'static ModelDescription;
+
+/// The model a fuzz target drives: what the harness needs to know of it. A target binary
+/// links exactly one model (each exports the same C names) and hands it to `run` or
+/// `driver::main` (the span's in fuzz/, the Roller's in models/roller/fuzz, the Line's in
+/// models/line/fuzz).
+#[derive(Clone, Debug)]
+pub struct Fuzzed {
+    pub description: Desc,
+    /// Its resources/ folder, what its FMU ships: a path ending in '/'.
+    pub resources: String,
+    /// It cannot be instantiated without its resources (the Line's interface is in them).
+    pub needs_resources: bool,
+}
+
+impl Fuzzed {
+    /// The model `M` (its description and whether it needs resources) with the resources folder.
+    pub fn of<M: Tested>(resources: &str) -> Fuzzed {
+        Fuzzed { description: M::description(), resources: resources.to_string(), needs_resources: M::needs_resources() }
+    }
+}
+
+// ---------------------------------------------------------------- input
+
+/// The bytes of one sequence, read front to back; zeros once they run out.
+pub struct Source<'a> {
+    bytes: &'a [u8],
+}
+
+impl<'a> Source<'a> {
+    pub fn new(bytes: &'a [u8]) -> Self {
+        Source { bytes }
+    }
+    pub fn is_empty(&self) -> bool {
+        self.bytes.is_empty()
+    }
+    pub fn u8(&mut self) -> u8 {
+        match self.bytes.split_first() {
+            Some((&b, rest)) => {
+                self.bytes = rest;
+                b
+            }
+            None => 0,
+        }
+    }
+    pub fn u32(&mut self) -> u32 {
+        u32::from_le_bytes([self.u8(), self.u8(), self.u8(), self.u8()])
+    }
+    pub fn u64(&mut self) -> u64 {
+        (self.u32() as u64) << 32 | self.u32() as u64
+    }
+    /// One of `n` choices.
+    pub fn pick(&mut self, n: usize) -> usize {
+        self.u8() as usize % n
+    }
+    /// True with probability about k/256.
+    pub fn chance(&mut self, k: u8) -> bool {
+        self.u8() < k
+    }
+}
+
+/// Reals that break things: specials, extremes, denormals, and ordinary ones.
+const NASTY_REALS: [f64; 24] = [
+    f64::NAN,
+    -f64::NAN,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    f64::MAX,
+    f64::MIN,
+    1e308,
+    -1e308,
+    1e200,
+    1e-200,
+    f64::MIN_POSITIVE,
+    5e-324,
+    -5e-324,
+    2.2e-310,
+    0.0,
+    -0.0,
+    1.0,
+    -1.0,
+    -1e-3,
+    1e-3,
+    5.0,
+    -5.0,
+    1e15,
+    0.999_999_999,
+];
+
+const NASTY_INTS: [i32; 10] = [0, 1, 2, 3, 6, 7, -1, i32::MIN, i32::MAX, 100];
+
+fn real(src: &mut Source) -> f64 {
+    match src.pick(4) {
+        0 => f64::from_bits(src.u64()),
+        _ => NASTY_REALS[src.pick(NASTY_REALS.len())],
+    }
+}
+
+/// A value near a variable's start value (or 1), inside its range when it
+/// has one: keeps sequences on the paths where the model really computes.
+fn sane_real(src: &mut Source, v: &Variable) -> f64 {
+    use fmi_core::description::Start;
+    let base = match v.start {
+        Start::Real(x) if x != 0.0 => x,
+        _ => 1e-3,
+    };
+    let x = base * (0.5 + src.u8() as f64 / 170.0);
+    if v.range.contains(x) {
+        x
+    } else {
+        base
+    }
+}
+
+fn integer(src: &mut Source, v: Option<&Variable>) -> i32 {
+    match (src.pick(3), v) {
+        (0, Some(Variable { kind: Kind::Enumeration { values, .. }, .. })) => values[src.pick(values.len())],
+        // An Integer inside its range (the Roller's counts of inlets and outlets,
+        // its kind of roll): keeps sequences on the paths where the model computes.
+        (0, Some(Variable { kind: Kind::Integer, range, .. })) if range.lo.is_finite() && range.hi - range.lo < 256.0 => {
+            range.lo as i32 + src.pick((range.hi - range.lo) as usize + 1) as i32
+        }
+        (1, _) => NASTY_INTS[src.pick(NASTY_INTS.len())],
+        _ => src.u32() as i32,
+    }
+}
+
+fn boolean(src: &mut Source) -> i32 {
+    match src.pick(4) {
+        0 | 1 => src.pick(2) as i32,
+        2 => [2, -1, i32::MIN, i32::MAX, 255][src.pick(5)],
+        _ => src.u32() as i32,
+    }
+}
+
+/// A value reference: mostly of the wanted kind, sometimes any variable's,
+/// sometimes unknown.
+fn vr(d: Desc, src: &mut Source, want: impl std::ops::Fn(&Variable) -> bool) -> u32 {
+    match src.pick(8) {
+        0 => src.u32(),
+        1 => [0, u32::MAX, d.by_vr.len() as u32, 1000][src.pick(4)],
+        2 => d.variables[src.pick(d.variables.len())].vr,
+        _ => {
+            let wanted: Vec<&Variable> = d.variables.iter().filter(|v| want(v)).collect();
+            if wanted.is_empty() {
+                src.u32()
+            } else {
+                wanted[src.pick(wanted.len())].vr
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------- oracle
+
+/// The co-simulation states of FMI 2.0 that this FMU can be in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum St {
+    Instantiated,
+    Init,
+    StepComplete,
+    StepFailed,
+    Terminated,
+    Error,
+    /// Model Exchange only (the oracle does not predict the ME state machine).
+    Event,
+    Continuous,
+}
+
+impl St {
+    /// The serialized phase byte (documented order of fmi/core/src/snapshot.rs).
+    fn from_byte(b: u8) -> Option<St> {
+        [
+            St::Instantiated,
+            St::Init,
+            St::StepComplete,
+            St::StepFailed,
+            St::Terminated,
+            St::Error,
+            St::Event,
+            St::Continuous,
+        ]
+        .get(b as usize)
+        .copied()
+    }
+}
+
+/// Where the standard allows each call (FMI 2.0 co-simulation state table;
+/// stepInProgress and stepCanceled never occur: steps are synchronous).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fn {
+    SetDebugLogging,
+    SetupExperiment,
+    EnterInit,
+    ExitInit,
+    Terminate,
+    Reset,
+    Get,
+    Set,
+    StateOp,
+    GetDirectionalDerivative,
+    ModelExchange,
+    SetRealInputDerivatives,
+    GetRealOutputDerivatives,
+    DoStep,
+    CancelStep,
+    GetStatus,
+}
+
+fn allowed(f: Fn, s: St) -> bool {
+    use St::*;
+    match f {
+        Fn::SetDebugLogging | Fn::Reset | Fn::StateOp => true,
+        Fn::SetupExperiment | Fn::EnterInit => s == Instantiated,
+        Fn::ExitInit => s == Init,
+        Fn::Terminate => matches!(s, StepComplete | StepFailed),
+        Fn::Get | Fn::GetDirectionalDerivative => s != Instantiated,
+        Fn::Set | Fn::SetRealInputDerivatives => matches!(s, Instantiated | Init | StepComplete),
+        Fn::GetRealOutputDerivatives => matches!(s, StepComplete | StepFailed | Terminated | Error),
+        Fn::DoStep => s == StepComplete,
+        // Model Exchange functions: decided per call in op_unsupported.
+        Fn::ModelExchange => true,
+        Fn::CancelStep => false,
+        Fn::GetStatus => matches!(s, StepComplete | StepFailed | Terminated),
+    }
+}
+
+/// May `v` be set in state `s`? FMI 2.0, section 2.2.7, for co-simulation.
+fn settable(v: &Variable, s: St) -> bool {
+    if v.variability == Variability::Constant {
+        return false;
+    }
+    match v.causality {
+        Causality::Input => true,
+        Causality::Parameter => match s {
+            St::Instantiated => matches!(v.initial, Initial::Exact | Initial::Approx),
+            St::Init => v.initial == Initial::Exact,
+            _ => v.variability == Variability::Tunable,
+        },
+        _ => false,
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Family {
+    Real,
+    Integer,
+    Boolean,
+    String,
+}
+
+fn family(v: &Variable) -> Family {
+    match v.kind {
+        Kind::Real => Family::Real,
+        Kind::Integer | Kind::Enumeration { .. } => Family::Integer,
+        Kind::Boolean => Family::Boolean,
+        Kind::String => Family::String,
+    }
+}
+
+fn var(d: Desc, vr: u32, f: Family) -> Option<&'static Variable> {
+    d.variable(vr).filter(|v| family(v) == f)
+}
+
+/// What the oracle knows of an FMU state it holds.
+#[derive(Clone, Debug)]
+struct StateInfo {
+    ptr: usize,
+    st: St,
+    time: f64,
+    /// Values of the instance when it was saved, as far as the oracle knows.
+    values: Values,
+    initialized: bool,
+    /// Saved by a Model Exchange instance.
+    me: bool,
+}
+
+/// How far the oracle can predict model-dependent outcomes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Values {
+    /// Start values and a plain experiment: initialization and moderate
+    /// steps must succeed.
+    Pristine,
+    /// Changed, all with moderate magnitudes.
+    Moderate,
+    /// Some value of magnitude above 1e13 or below 1e-12 was accepted.
+    Extreme,
+    /// Restored from bytes forged by the harness (checksum recomputed).
+    Forged,
+}
+
+impl Values {
+    fn worsen(self, to: Values) -> Values {
+        let rank = |v: Values| v as u8;
+        if rank(to) > rank(self) {
+            to
+        } else {
+            self
+        }
+    }
+}
+
+fn magnitude(x: f64) -> Values {
+    let a = x.abs();
+    // Physical values of this kind of model lie well inside: E up to 1e12
+    // Pa, thicknesses down to 1e-9 m, speeds below 1e3 m/s.
+    if a == 0.0 || (1e-12..=1e13).contains(&a) {
+        Values::Moderate
+    } else {
+        Values::Extreme
+    }
+}
+
+/// One instance slot of a sequence.
+struct Slot {
+    c: Instance,
+    log: Box<Log>,
+    /// FMI 2.0's callbacks (FMI 3.0 passes the logger itself).
+    _functions: Option<Box<fmi2CallbackFunctions>>,
+    /// Instantiated without a logger (FMI 3.0): no log lines to check.
+    silent: bool,
+    name: String,
+    st: St,
+    time: f64,
+    values: Values,
+    /// Initialization ended since the instance was created or reset.
+    initialized: bool,
+    /// A Model Exchange instance: the oracle checks arguments, statuses,
+    /// log lines, finiteness and memory, but not the ME state machine.
+    me: bool,
+    poisoned: bool,
+    armed: bool,
+    /// Which of logStatusWarning/Discard/Error and logAll are on.
+    status_log: [bool; 3],
+    log_all: bool,
+    states: Vec<StateInfo>,
+}
+
+/// A serialized state the harness got from the FMU.
+#[derive(Clone)]
+struct Blob {
+    bytes: Vec<u8>,
+    info: StateInfo,
+}
+
+/// A broken rule: what was called, what came back, what was expected.
+#[derive(Debug, Clone)]
+pub struct Violation(pub String);
+
+/// A non-finite output of a known kind (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Finding {
+    OverflowAfterExtremeValues,
+    ForgedState,
+    /// fmi2GetReal in the error state of an instance whose initialization
+    /// never ended returns outputs computed from the unset state (inf).
+    OutputsOfUninitializedInstance,
+    /// A state the FMU serialized itself is refused by fmi2DeSerializeFMUstate
+    /// when it was saved while a parameter held an out-of-range value (legal
+    /// until initialization ends): its own bytes do not round-trip.
+    OwnStateRefusedOnDeserialize,
+}
+
+/// What one sequence did.
+#[derive(Default, Debug, Clone)]
+pub struct Outcome {
+    pub calls: u64,
+    /// Calls per answered status (OK, Warning, Discard, Error).
+    pub statuses: [u64; 4],
+    pub steps_ok: u64,
+    pub panics_caught: u64,
+    pub deserialized_ok: u64,
+    pub findings: Vec<(Finding, String)>,
+    /// Calls made on an instance, per state it was in (St order; the last
+    /// counts the Model Exchange states).
+    pub by_state: [u64; 7],
+}
+
+struct Run {
+    model: Fuzzed,
+    api: Api,
+    slots: [Option<Slot>; 2],
+    /// Pointers of FMU states that were freed (for double frees).
+    dead_states: Vec<usize>,
+    blobs: Vec<Blob>,
+    /// Readable memory that is no instance (a foreign component).
+    foreign: Box<[u64; 8]>,
+    out: Outcome,
+    /// Description of the call under way, for messages.
+    what: String,
+    /// FUZZ_TRACE set: print every call (for replaying one sequence).
+    trace: bool,
+    /// The messages the FMU logged in the last call checked by `after`.
+    last_log: Vec<String>,
+}
+
+const STEP_TOLERANCE: f64 = 1e-13;
+
+fn fail<T>(msg: String) -> Result<T, Violation> {
+    Err(Violation(msg))
+}
+
+impl Run {
+    /// The fuzzed model's description.
+    fn d(&self) -> Desc {
+        self.model.description
+    }
+
+    fn check_status(&mut self, s: i32, allowed: &[i32]) -> Result<(), Violation> {
+        self.out.calls += 1;
+        if self.trace {
+            eprintln!("{} -> {}", self.what, status_name(s));
+        }
+        if (0..=3).contains(&s) {
+            self.out.statuses[s as usize] += 1;
+        }
+        if !allowed.contains(&s) {
+            let names: Vec<&str> = allowed.iter().map(|&a| status_name(a)).collect();
+            return fail(format!(
+                "{}: returned {} ({s}), expected one of {names:?}",
+                self.what,
+                status_name(s)
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks the log lines of slot `i` after a call that returned `s`, and
+    /// moves the oracle's state on an error.
+    fn after(&mut self, i: usize, s: i32) -> Result<(), Violation> {
+        let what = self.what.clone();
+        let slot = self.slots[i].as_mut().expect("slot");
+        let lines = slot.log.take();
+        self.last_log = lines.iter().map(|l| l.message.clone()).collect();
+        let malformed = std::mem::take(&mut *slot.log.malformed.lock().unwrap());
+        if !malformed.is_empty() {
+            return fail(format!("{what}: malformed logger calls {malformed:?}"));
+        }
+        for l in &lines {
+            if !self.model.description.log_categories.contains(&l.category.as_str()) {
+                return fail(format!("{what}: log line with unknown category {l:?}"));
+            }
+            // (FMI 3.0's logger is given no instance name.)
+            if self.api == Api::Fmi2 && l.instance != slot.name {
+                return fail(format!(
+                    "{what}: log line names instance {:?}, not {:?}",
+                    l.instance, slot.name
+                ));
+            }
+        }
+        if (WARNING..=ERROR).contains(&s) {
+            let on = !slot.silent && (slot.log_all || slot.status_log[(s - WARNING) as usize]);
+            if on && !lines.iter().any(|l| l.status == s) {
+                return fail(format!(
+                    "{what}: returned {} without a log line saying why: {lines:?}",
+                    status_name(s)
+                ));
+            }
+        }
+        if s == ERROR {
+            slot.st = St::Error;
+        }
+        Ok(())
+    }
+
+    fn slot(&self, i: usize) -> &Slot {
+        self.slots[i].as_ref().expect("slot")
+    }
+
+    fn slot_mut(&mut self, i: usize) -> &mut Slot {
+        self.slots[i].as_mut().expect("slot")
+    }
+
+    fn finite(&mut self, i: usize, x: f64, name: &str) -> Result<(), Violation> {
+        if x.is_finite() {
+            return Ok(());
+        }
+        let (values, initialized) = (self.slot(i).values, self.slot(i).initialized);
+        let finding = match values {
+            Values::Forged => Finding::ForgedState,
+            Values::Extreme => Finding::OverflowAfterExtremeValues,
+            _ if !initialized => Finding::OutputsOfUninitializedInstance,
+            _ => {
+                return fail(format!(
+                    "{}: {name} = {x} is not finite (values: {values:?})",
+                    self.what
+                ))
+            }
+        };
+        self.out
+            .findings
+            .push((finding, format!("{}: {name} = {x}", self.what)));
+        Ok(())
+    }
+}
+
+/// Runs one sequence on `model` through `api`. `Err` is a broken rule.
+pub fn run(model: &Fuzzed, api: Api, bytes: &[u8]) -> Result<Outcome, Violation> {
+    let mut r = Run {
+        model: model.clone(),
+        api,
+        slots: [None, None],
+        dead_states: Vec::new(),
+        blobs: Vec::new(),
+        foreign: Box::new([0x5a5a_5a5a_5a5a_5a5a; 8]),
+        out: Outcome::default(),
+        what: String::new(),
+        trace: std::env::var_os("FUZZ_TRACE").is_some(),
+        last_log: Vec::new(),
+    };
+    let mut src = Source::new(bytes);
+    let result = (|| {
+        let mut ops = 0;
+        while !src.is_empty() && ops < 400 {
+            ops += 1;
+            step(&mut r, &mut src)?;
+        }
+        Ok(())
+    })();
+    // Free what is left, whatever happened.
+    for slot in r.slots.iter_mut() {
+        if let Some(s) = slot.take() {
+            unsafe { api.free_instance(s.c) };
+        }
+    }
+    result.map(|()| r.out)
+}
+
+fn new_slot(
+    name: String,
+    c: Instance,
+    log: Box<Log>,
+    functions: Option<Box<fmi2CallbackFunctions>>,
+    logging_on: bool,
+) -> Slot {
+    Slot {
+        c,
+        log,
+        _functions: functions,
+        silent: false,
+        name,
+        st: St::Instantiated,
+        time: 0.0,
+        values: Values::Pristine,
+        initialized: false,
+        me: false,
+        poisoned: false,
+        armed: false,
+        status_log: [true; 3],
+        log_all: false,
+        states: Vec::new(),
+    }
+    .with_logging(logging_on)
+}
+
+impl Slot {
+    fn with_logging(self, _logging_on: bool) -> Slot {
+        // logStatus* are on from the start whatever loggingOn says; logAll is off.
+        self
+    }
+}
+
+/// A component pointer for a call: mostly a live instance of a slot.
+enum Target {
+    Slot(usize),
+    Null,
+    Foreign,
+}
+
+fn target(r: &Run, src: &mut Source) -> Target {
+    let i = src.pick(2);
+    match src.pick(32) {
+        0 => Target::Null,
+        1 => Target::Foreign,
+        _ if r.slots[i].is_some() => Target::Slot(i),
+        _ if r.slots[1 - i].is_some() => Target::Slot(1 - i),
+        _ => Target::Null,
+    }
+}
+
+fn component(r: &Run, t: &Target) -> Instance {
+    match t {
+        Target::Slot(i) => r.slot(*i).c,
+        Target::Null => null_mut(),
+        Target::Foreign => r.foreign.as_ptr() as Instance,
+    }
+}
+
+/// Common frame of calls that take an instance: a call on NULL or a
+/// foreign pointer must answer fmi2Error; on an instance the expected
+/// status comes from `expect` (given the slot), unless the call is not
+/// allowed in the current state or the instance is poisoned.
+fn call_on<F, E>(
+    r: &mut Run,
+    t: Target,
+    f: Fn,
+    name: &str,
+    expect: E,
+    call: F,
+) -> Result<Option<(usize, i32)>, Violation>
+where
+    F: std::ops::FnOnce(Instance) -> i32,
+    E: std::ops::FnOnce(&Slot) -> Vec<i32>,
+{
+    let c = component(r, &t);
+    let i = match t {
+        Target::Slot(i) => i,
+        _ => {
+            r.what = format!(
+                "{name} on a {} component",
+                if c.is_null() { "NULL" } else { "foreign" }
+            );
+            let s = call(c);
+            r.check_status(s, &[ERROR])?;
+            return Ok(None);
+        }
+    };
+    let (st, poisoned) = (r.slot(i).st, r.slot(i).poisoned);
+    r.out.by_state[(st as usize).min(6)] += 1;
+    let me = if r.slot(i).me { "ME " } else { "" };
+    r.what = format!("{name} [slot {i}, {me}state {st:?}{}]", if poisoned { ", poisoned" } else { "" });
+    let slot = r.slot(i);
+    let expected = if slot.poisoned && f != Fn::Reset {
+        vec![ERROR]
+    } else if slot.me || matches!(slot.st, St::Event | St::Continuous) {
+        // Model Exchange: invalid arguments must still give fmi2Error; a
+        // valid call may be refused for the (unpredicted) state it is in.
+        // (A co-simulation instance reaches these states only by forged
+        // bytes; FMI 3.0 allows sets in Event Mode.)
+        let mut e = expect(slot);
+        if !e.contains(&ERROR) {
+            e.push(ERROR);
+        }
+        e
+    } else if !allowed(f, slot.st) {
+        vec![ERROR]
+    } else {
+        expect(slot)
+    };
+    let s = call(c);
+    if let Err(v) = r.check_status(s, &expected) {
+        let log: Vec<String> = r
+            .slot(i)
+            .log
+            .take()
+            .into_iter()
+            .map(|l| l.message)
+            .collect();
+        return fail(format!("{}; the FMU logged {log:?}", v.0));
+    }
+    r.after(i, s)?;
+    Ok(Some((i, s)))
+}
+
+/// An array of `n` elements for the FMU to read, or NULL.
+fn maybe_null<T>(src: &mut Source, v: &[T]) -> *const T {
+    if src.chance(12) {
+        std::ptr::null()
+    } else {
+        v.as_ptr()
+    }
+}
+
+fn step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let op = src.u8();
+    // Lifecycle and stepping calls are drawn more often than the rest, so
+    // that sequences get past initialization and into stepping.
+    match op % 64 {
+        0..=1 => op_instantiate(r, src),
+        2 => op_free_instance(r, src),
+        3 => op_setup(r, src),
+        4 => op_simple(r, src, Fn::EnterInit),
+        5 => op_simple(r, src, Fn::ExitInit),
+        6 => op_simple(r, src, Fn::Terminate),
+        7 => op_simple(r, src, Fn::Reset),
+        8..=10 => op_get(r, src, Family::Real),
+        11 => op_get(r, src, Family::Integer),
+        12 => op_get(r, src, Family::Boolean),
+        13 => op_get(r, src, Family::String),
+        14..=18 => op_set_real(r, src),
+        19..=20 => op_set_int(r, src, Family::Integer),
+        21..=22 => op_set_int(r, src, Family::Boolean),
+        23 => op_set_string(r, src),
+        24..=26 => op_get_state(r, src),
+        27..=28 => op_set_state(r, src),
+        29 => op_free_state(r, src),
+        30..=31 => op_serialize(r, src),
+        32..=34 => op_deserialize(r, src),
+        35..=40 => op_do_step(r, src),
+        41..=42 => op_status(r, src),
+        43 => op_unsupported(r, src),
+        44..=45 => op_input_derivatives(r, src),
+        46 => op_debug_logging(r, src),
+        47 => op_arm_panic(r, src),
+        // A quarter of the operations are legal lifecycle moves.
+        _ => op_lifecycle_macro(r, src),
+    }
+}
+
+fn op_instantiate(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    if r.api == Api::Fmi3 {
+        return op_instantiate3(r, src);
+    }
+    let i = src.pick(2);
+    if let Some(old) = r.slots[i].take() {
+        unsafe { fmi2FreeInstance(old.c) };
+    }
+    let log = Box::<Log>::default();
+    let functions = Box::new(callbacks(&log));
+    let me_offered = r.d().model_exchange;
+    let fmu_type = match src.pick(16) {
+        0 => [0, 2, -1, i32::MAX][src.pick(4)],
+        1..=4 if me_offered => 0,
+        _ => 1,
+    };
+    let right_type = fmu_type == 1 || (fmu_type == 0 && me_offered);
+    let guid_kind = src.pick(24);
+    let name = format!("fuzz{}", src.u8());
+    let name_c = CString::new(name.clone()).unwrap();
+    let guid_c = CString::new(match guid_kind {
+        0 => "{00000000-0000-0000-0000-000000000000}".to_string(),
+        1 => String::new(),
+        _ => r.d().guid.to_string(),
+    })
+    .unwrap();
+    let guid_ptr = if guid_kind == 2 && src.chance(128) {
+        std::ptr::null()
+    } else {
+        guid_c.as_ptr()
+    };
+    let guid_ok = guid_kind >= 2 && !guid_ptr.is_null();
+    let null_functions = src.chance(8);
+    let null_name = src.chance(8);
+    // What the FMU ships, so records load.
+    let resources = CString::new(format!("file://{}", r.model.resources)).unwrap();
+    let logging_on = boolean(src);
+    let null_resources = src.chance(128);
+    let c = unsafe {
+        fmi2Instantiate(
+            if null_name {
+                std::ptr::null()
+            } else {
+                name_c.as_ptr()
+            },
+            fmu_type,
+            guid_ptr,
+            if null_resources {
+                std::ptr::null()
+            } else {
+                resources.as_ptr()
+            },
+            if null_functions {
+                std::ptr::null()
+            } else {
+                &*functions
+            },
+            boolean(src),
+            logging_on,
+        )
+    };
+    r.what = format!(
+        "fmi2Instantiate(type {fmu_type}, guid ok {guid_ok}, functions NULL {null_functions}, resources NULL {null_resources})"
+    );
+    r.out.calls += 1;
+    // A model whose interface is in its resources cannot exist without them.
+    let resources_ok = !null_resources || !r.model.needs_resources;
+    let should = right_type && guid_ok && !null_functions && resources_ok;
+    if c.is_null() == should {
+        if !c.is_null() {
+            unsafe { fmi2FreeInstance(c) };
+        }
+        return fail(format!("{}: returned {c:?}", r.what));
+    }
+    let lines = log.take();
+    if c.is_null() {
+        if !null_functions && !lines.iter().any(|l| l.status == ERROR) {
+            return fail(format!("{}: refused without saying why: {lines:?}", r.what));
+        }
+        return Ok(());
+    }
+    let name = if null_name { String::new() } else { name };
+    if r.trace {
+        eprintln!("{} -> slot {i} = {c:?}", r.what);
+    }
+    let mut slot = new_slot(name, c, log, Some(functions), logging_on != 0);
+    slot.me = fmu_type == 0;
+    r.slots[i] = Some(slot);
+    Ok(())
+}
+
+/// FMI 3.0's instantiation: Co-Simulation or Model Exchange, with a wrong or
+/// NULL token, NULL strings, required intermediate variables (refused: none
+/// has intermediateUpdate), with or without a logger.
+fn op_instantiate3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let i = src.pick(2);
+    if let Some(old) = r.slots[i].take() {
+        unsafe { r.api.free_instance(old.c) };
+    }
+    let log = Box::<Log>::default();
+    let model_exchange = r.d().model_exchange && src.chance(64);
+    let token_kind = src.pick(24);
+    let name = format!("fuzz{}", src.u8());
+    let name_c = CString::new(name.clone()).unwrap();
+    let token_c = CString::new(match token_kind {
+        0 => "{00000000-0000-0000-0000-000000000000}".to_string(),
+        1 => String::new(),
+        _ => r.d().guid.to_string(),
+    })
+    .unwrap();
+    let null_token = token_kind >= 2 && src.chance(16);
+    let token_ok = token_kind >= 2 && !null_token;
+    // What the FMU ships, as a path (FMI 3.0 passes no URI).
+    let resources = CString::new(r.model.resources.as_str()).unwrap();
+    let required: Vec<u32> = if src.chance(12) { vec![vr(r.d(), src, |_| true)] } else { Vec::new() };
+    let no_logger = src.chance(12);
+    let logging_on = src.chance(128);
+    let null_name = src.chance(8);
+    let null_resources = src.chance(16);
+    let args = api::Instantiate3 {
+        model_exchange,
+        name: if null_name { std::ptr::null() } else { name_c.as_ptr() },
+        token: if null_token { std::ptr::null() } else { token_c.as_ptr() },
+        resource_path: if null_resources { std::ptr::null() } else { resources.as_ptr() },
+        logging_on,
+        event_mode_used: src.chance(16),
+        required: &required,
+        log: (!no_logger).then_some(&*log),
+    };
+    let c = unsafe { api::instantiate3(&args) };
+    r.what = format!(
+        "{}(token ok {token_ok}, required {required:?}, logger {}, resources NULL {null_resources})",
+        if model_exchange { "fmi3InstantiateModelExchange" } else { "fmi3InstantiateCoSimulation" },
+        !no_logger
+    );
+    r.out.calls += 1;
+    let resources_ok = !null_resources || !r.model.needs_resources;
+    let should = token_ok && (model_exchange || required.is_empty()) && resources_ok;
+    if c.is_null() == should {
+        if !c.is_null() {
+            unsafe { r.api.free_instance(c) };
+        }
+        return fail(format!("{}: returned {c:?}", r.what));
+    }
+    let lines = log.take();
+    if c.is_null() {
+        if !no_logger && !lines.iter().any(|l| l.status == ERROR) {
+            return fail(format!("{}: refused without saying why: {lines:?}", r.what));
+        }
+        return Ok(());
+    }
+    if r.trace {
+        eprintln!("{} -> slot {i} = {c:?}", r.what);
+    }
+    let mut slot = new_slot(name, c, log, None, logging_on);
+    slot.me = model_exchange;
+    slot.silent = no_logger;
+    r.slots[i] = Some(slot);
+    Ok(())
+}
+
+fn op_free_instance(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    match src.pick(6) {
+        0 => unsafe { api.free_instance(null_mut()) },
+        1 => unsafe { api.free_instance(r.foreign.as_ptr() as Instance) },
+        k => {
+            if let Some(slot) = r.slots[k % 2].take() {
+                // Its states go with it: their pointers are dead from now on.
+                r.dead_states.extend(slot.states.iter().map(|s| s.ptr));
+                unsafe { api.free_instance(slot.c) };
+            }
+        }
+    }
+    r.out.calls += 1;
+    Ok(())
+}
+
+fn op_setup(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    let sane = src.chance(160);
+    let (tol_def, tol, start, stop_def, stop) = if sane {
+        (src.pick(2) as i32, 1e-6, 0.0, src.pick(2) as i32, 10.0)
+    } else {
+        (boolean(src), real(src), real(src), boolean(src), real(src))
+    };
+    let bad = !start.is_finite()
+        || (stop_def != 0 && !(stop.is_finite() && stop >= start))
+        || (tol_def != 0 && !(tol.is_finite() && tol > 0.0));
+    // FMI 3.0 sets the experiment in fmi3EnterInitializationMode.
+    let api = r.api;
+    let (f, name) = match api {
+        Api::Fmi2 => (Fn::SetupExperiment, "fmi2SetupExperiment"),
+        Api::Fmi3 => (Fn::EnterInit, "fmi3EnterInitializationMode"),
+    };
+    let res = call_on(
+        r,
+        t,
+        f,
+        &format!("{name}({tol_def}, {tol:e}, {start:e}, {stop_def}, {stop:e})"),
+        |_| if bad { vec![ERROR] } else { vec![OK] },
+        |c| unsafe {
+            match api {
+                Api::Fmi2 => fmi2SetupExperiment(c, tol_def, tol, start, stop_def, stop),
+                Api::Fmi3 => api.enter_init(c, (tol_def, tol, start, stop_def, stop)),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        let slot = r.slot_mut(i);
+        slot.time = start;
+        if api == Api::Fmi3 {
+            slot.st = St::Init;
+        }
+        if !sane {
+            slot.values = slot
+                .values
+                .worsen(magnitude(start))
+                .worsen(Values::Moderate);
+            if tol_def != 0 {
+                slot.values = slot.values.worsen(magnitude(tol));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_simple(r: &mut Run, src: &mut Source, f: Fn) -> Result<(), Violation> {
+    let t = target(r, src);
+    let api = r.api;
+    let name = match f {
+        Fn::EnterInit => api.name("fmi2EnterInitializationMode", "fmi3EnterInitializationMode"),
+        Fn::ExitInit => api.name("fmi2ExitInitializationMode", "fmi3ExitInitializationMode"),
+        Fn::Terminate => api.name("fmi2Terminate", "fmi3Terminate"),
+        _ => api.name("fmi2Reset", "fmi3Reset"),
+    };
+    let res = call_on(
+        r,
+        t,
+        f,
+        name,
+        |slot| match f {
+            // Ending initialization computes with the values set so far.
+            Fn::ExitInit if slot.values != Values::Pristine => vec![OK, ERROR],
+            _ => vec![OK],
+        },
+        |c| unsafe {
+            match f {
+                // (FMI 3.0: a plain experiment from time 0.)
+                Fn::EnterInit => api.enter_init(c, (0, 0.0, 0.0, 0, 0.0)),
+                Fn::ExitInit => api.exit_init(c),
+                Fn::Terminate => api.terminate(c),
+                _ => api.reset(c),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        let slot = r.slot_mut(i);
+        match f {
+            Fn::EnterInit => {
+                slot.st = St::Init;
+                if api == Api::Fmi3 {
+                    slot.time = 0.0;
+                }
+            }
+            Fn::ExitInit => {
+                slot.st = St::StepComplete;
+                slot.initialized = true;
+            }
+            Fn::Terminate => slot.st = St::Terminated,
+            _ => {
+                slot.st = St::Instantiated;
+                slot.time = 0.0;
+                slot.values = Values::Pristine;
+                slot.initialized = false;
+                slot.poisoned = false;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The number of values an FMI 3.0 get or set is told: mostly `n`, at times
+/// one more or one less (refused: every variable is a scalar).
+fn count(api: Api, src: &mut Source, n: usize) -> usize {
+    match api {
+        Api::Fmi3 if src.chance(10) => if n > 0 && src.chance(128) { n - 1 } else { n + 1 },
+        _ => n,
+    }
+}
+
+/// FMI 3.0's integer function for an Integer-family variable: Int64 for
+/// enumerations, Int32 for the rest; at times the wrong one.
+fn int_type(d: Desc, api: Api, src: &mut Source, vrs: &[u32]) -> Int {
+    let enumeration = vrs
+        .first()
+        .and_then(|&x| var(d, x, Family::Integer))
+        .is_some_and(|v| matches!(v.kind, Kind::Enumeration { .. }));
+    if enumeration != (api == Api::Fmi3 && src.chance(24)) {
+        Int::Int64
+    } else {
+        Int::Int32
+    }
+}
+
+/// Does `v` travel through `int` in FMI 3.0 (always, in FMI 2.0)?
+fn int_fits(api: Api, int: Int, v: &Variable) -> bool {
+    api == Api::Fmi2 || matches!((int, v.kind), (Int::Int64, Kind::Enumeration { .. }) | (Int::Int32, Kind::Integer))
+}
+
+fn op_get(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let n = src.pick(6);
+    let d = r.d();
+    let mut vrs: Vec<u32> = (0..n).map(|_| vr(r.d(), src, |v| family(v) == fam)).collect();
+    if api == Api::Fmi3 && fam == Family::Real && n > 0 && src.chance(48) {
+        // FMI 3.0's added Float64 variables: time, and the event indicators.
+        let k = src.pick(n);
+        vrs[k] = match src.pick(d.number_of_event_indicators + 1) {
+            0 => fmi_core::standard::fmi3_types::TIME_VR,
+            e => fmi_core::standard::fmi3_types::first_event_indicator(d) + e as u32 - 1,
+        };
+    }
+    let added = |x: u32| api == Api::Fmi3 && fam == Family::Real && fmi_core::standard::fmi3_types::added(d, x).is_some();
+    let int = int_type(r.d(), api, src, &vrs);
+    let nv = count(api, src, n);
+    let null_vr = n > 0 && src.chance(10);
+    let null_values = n > 0 && src.chance(10);
+    let known = vrs
+        .iter()
+        .all(|&x| var(r.d(), x, fam).is_some_and(|v| fam != Family::Integer || int_fits(api, int, v)) || added(x));
+    let any_indicator = vrs.iter().any(|&x| added(x) && x != fmi_core::standard::fmi3_types::TIME_VR);
+    let name = format!(
+        "{}({vrs:?}{}{}{})",
+        match (fam, api) {
+            (Family::Real, Api::Fmi2) => "fmi2GetReal",
+            (Family::Integer, Api::Fmi2) => "fmi2GetInteger",
+            (Family::Boolean, Api::Fmi2) => "fmi2GetBoolean",
+            (Family::String, Api::Fmi2) => "fmi2GetString",
+            (Family::Real, Api::Fmi3) => "fmi3GetFloat64",
+            (Family::Integer, Api::Fmi3) if int == Int::Int32 => "fmi3GetInt32",
+            (Family::Integer, Api::Fmi3) => "fmi3GetInt64",
+            (Family::Boolean, Api::Fmi3) => "fmi3GetBoolean",
+            (Family::String, Api::Fmi3) => "fmi3GetString",
+        },
+        if null_vr { ", vr NULL" } else { "" },
+        if null_values { ", value NULL" } else { "" },
+        if nv != n { format!(", {nv} values") } else { String::new() }
+    );
+    let mut reals = vec![f64::NAN; n];
+    let mut ints = vec![-7i32; n];
+    let mut strs: Vec<fmi2String> = vec![std::ptr::null(); n];
+    let vr_ptr = if null_vr {
+        std::ptr::null()
+    } else {
+        vrs.as_ptr()
+    };
+    let res = call_on(
+        r,
+        t,
+        Fn::Get,
+        &name,
+        |slot| {
+            if null_vr || null_values || !known || nv != n {
+                vec![ERROR]
+            } else if slot.st == St::Init && slot.values != Values::Pristine {
+                // In initialization mode the outputs are computed first,
+                // which fails if the values set so far are inconsistent.
+                vec![OK, ERROR]
+            } else if slot.st == St::Error && fam == Family::Real && slot.values != Values::Pristine {
+                // In the error state computed values are answered only where
+                // the model can compute them (values set before a failed
+                // initialization may not allow it); the FMU says why.
+                vec![OK, ERROR]
+            } else if any_indicator && !slot.me {
+                // Event indicators are Model Exchange's.
+                vec![OK, ERROR]
+            } else {
+                vec![OK]
+            }
+        },
+        |c| unsafe {
+            match fam {
+                Family::Real => api.get_real(c, vr_ptr, n, if null_values { null_mut() } else { reals.as_mut_ptr() }, nv),
+                Family::Integer => {
+                    api.get_integer(int, c, vr_ptr, n, if null_values { null_mut() } else { ints.as_mut_ptr() }, nv)
+                }
+                Family::Boolean => api.get_boolean(c, vr_ptr, n, if null_values { null_mut() } else { ints.as_mut_ptr() }, nv),
+                Family::String => api.get_string(c, vr_ptr, n, if null_values { null_mut() } else { strs.as_mut_ptr() }, nv),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        for (k, &x) in vrs.iter().enumerate() {
+            if added(x) {
+                let time = r.slot(i).time;
+                if x == fmi_core::standard::fmi3_types::TIME_VR && !r.slot(i).me && reals[k].to_bits() != time.to_bits() {
+                    return fail(format!("{}: time = {}, expected {time}", r.what, reals[k]));
+                }
+                r.finite(i, reals[k], "an added Float64")?;
+                continue;
+            }
+            let v = var(r.d(), x, fam).expect("known");
+            match fam {
+                Family::Real => r.finite(i, reals[k], &v.name)?,
+                Family::Boolean if !(ints[k] == 0 || ints[k] == 1) => {
+                    return fail(format!(
+                        "{}: {} = {} is not a Boolean",
+                        r.what, v.name, ints[k]
+                    ))
+                }
+                Family::Integer => {
+                    if let Kind::Enumeration { values, .. } = v.kind {
+                        if !values.contains(&ints[k]) && r.slot(i).values != Values::Forged {
+                            return fail(format!(
+                                "{}: {} = {} is not an enumeration value",
+                                r.what, v.name, ints[k]
+                            ));
+                        }
+                    }
+                }
+                Family::String if strs[k].is_null() => {
+                    return fail(format!("{}: {} is a NULL string", r.what, v.name))
+                }
+                _ => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Frame of the three numeric setters: checks every (vr, value) pair.
+fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let n = src.pick(5);
+    let mut vrs = Vec::new();
+    let mut values = Vec::new();
+    let sane = src.chance(150);
+    for _ in 0..n {
+        let x = vr(r.d(), src, |v| {
+            family(v) == Family::Real
+                && matches!(v.causality, Causality::Input | Causality::Parameter)
+        });
+        let value = match var(r.d(), x, Family::Real) {
+            Some(v) if sane => sane_real(src, v),
+            _ => real(src),
+        };
+        vrs.push(x);
+        values.push(value);
+    }
+    let nv = count(api, src, n);
+    let null_vr = n > 0 && src.chance(8);
+    let null_values = n > 0 && src.chance(8);
+    let vr_ptr = if null_vr {
+        std::ptr::null()
+    } else {
+        vrs.as_ptr()
+    };
+    let value_ptr = if null_values {
+        std::ptr::null()
+    } else {
+        values.as_ptr()
+    };
+    let pairs: Vec<(u32, f64)> = vrs.iter().copied().zip(values.iter().copied()).collect();
+    let d = r.d();
+    let res = call_on(
+        r,
+        t,
+        Fn::Set,
+        &format!(
+            "{}({pairs:?}{}{}, {nv} values)",
+            api.name("fmi2SetReal", "fmi3SetFloat64"),
+            if null_vr { ", vr NULL" } else { "" },
+            if null_values { ", value NULL" } else { "" }
+        ),
+        |slot| {
+            let ok = nv == n
+                && !null_vr
+                && !null_values
+                && pairs.iter().all(|&(x, value)| match var(d, x, Family::Real) {
+                    Some(v) => {
+                        settable(v, slot.st)
+                            && value.is_finite()
+                            && (v.causality != Causality::Input || v.range.contains(value))
+                    }
+                    None => false,
+                });
+            vec![if ok { OK } else { ERROR }]
+        },
+        |c| unsafe { api.set_real(c, vr_ptr, n, value_ptr, nv) },
+    )?;
+    if let Some((i, OK)) = res {
+        let slot = r.slot_mut(i);
+        for &(_, value) in &pairs {
+            slot.values = slot
+                .values
+                .worsen(Values::Moderate)
+                .worsen(magnitude(value));
+        }
+    }
+    Ok(())
+}
+
+fn op_set_int(r: &mut Run, src: &mut Source, fam: Family) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let n = src.pick(4);
+    let mut vrs = Vec::new();
+    let mut values: Vec<i64> = Vec::new();
+    for _ in 0..n {
+        let x = vr(r.d(), src, |v| {
+            family(v) == fam && v.causality == Causality::Parameter
+        });
+        vrs.push(x);
+        values.push(if fam == Family::Boolean {
+            boolean(src) as i64
+        } else if api == Api::Fmi3 && src.chance(16) {
+            // Beyond any Int32 (FMI 3.0 gives enumerations 64 bits).
+            [i64::MAX, i64::MIN, 1 << 32, -(1 << 31) - 1][src.pick(4)]
+        } else {
+            integer(src, var(r.d(), x, fam)) as i64
+        });
+    }
+    let int = int_type(r.d(), api, src, &vrs);
+    let nv = count(api, src, n);
+    let null_vr = n > 0 && src.chance(8);
+    let null_values = n > 0 && src.chance(8);
+    let vr_ptr = if null_vr {
+        std::ptr::null()
+    } else {
+        vrs.as_ptr()
+    };
+    let narrow: Vec<i32> = values.iter().map(|&x| x as i32).collect();
+    let (value_ptr, narrow_ptr) = if null_values {
+        (std::ptr::null(), std::ptr::null())
+    } else {
+        (values.as_ptr(), narrow.as_ptr())
+    };
+    let pairs: Vec<(u32, i64)> = vrs.iter().copied().zip(values.iter().copied()).collect();
+    let name = match (fam, api, int) {
+        (Family::Boolean, _, _) => api.name("fmi2SetBoolean", "fmi3SetBoolean"),
+        (_, Api::Fmi2, _) => "fmi2SetInteger",
+        (_, _, Int::Int32) => "fmi3SetInt32",
+        _ => "fmi3SetInt64",
+    };
+    let d = r.d();
+    let res = call_on(
+        r,
+        t,
+        Fn::Set,
+        &format!(
+            "{name}({pairs:?}{}{}, {nv} values)",
+            if null_vr { ", vr NULL" } else { "" },
+            if null_values { ", value NULL" } else { "" }
+        ),
+        |slot| {
+            let ok = nv == n
+                && !null_vr
+                && !null_values
+                && pairs.iter().all(|&(x, value)| match var(d, x, fam) {
+                    Some(v) => {
+                        // What the FMU is given: FMI 2.0's Integer is 32 bits; FMI 3.0's Boolean a byte.
+                        let value = match (fam, api, int) {
+                            (Family::Boolean, _, _) => api.boolean_value(value as i32) as i64,
+                            (_, Api::Fmi3, Int::Int64) => value,
+                            _ => value as i32 as i64,
+                        };
+                        settable(v, slot.st)
+                            && (fam == Family::Boolean || int_fits(api, int, v))
+                            && match v.kind {
+                                Kind::Boolean => value == 0 || value == 1,
+                                Kind::Enumeration { values, .. } => values.iter().any(|&e| e as i64 == value),
+                                _ => true,
+                            }
+                    }
+                    None => false,
+                });
+            vec![if ok { OK } else { ERROR }]
+        },
+        |c| unsafe {
+            if fam == Family::Boolean {
+                api.set_boolean(c, vr_ptr, n, narrow_ptr, nv)
+            } else {
+                api.set_integer(int, c, vr_ptr, n, value_ptr, nv)
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        if n > 0 {
+            let slot = r.slot_mut(i);
+            slot.values = slot.values.worsen(Values::Moderate);
+        }
+    }
+    Ok(())
+}
+
+fn op_set_string(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let n = src.pick(3);
+    let vrs: Vec<u32> = (0..n)
+        .map(|_| vr(r.d(), src, |v| family(v) == Family::String))
+        .collect();
+    // Record names of the shipped library (a linear web, a curve), none, and an unknown name.
+    let texts: Vec<CString> = ["PET-12", "nonwoven-PP-spunbond", "steel-1.0", "", "a string"]
+        .iter()
+        .map(|t| CString::new(*t).unwrap())
+        .collect();
+    let values: Vec<fmi2String> = (0..n)
+        .map(|_| {
+            if src.chance(64) {
+                std::ptr::null()
+            } else {
+                texts[src.pick(texts.len())].as_ptr()
+            }
+        })
+        .collect();
+    let vr_ptr = maybe_null(src, &vrs);
+    let value_ptr = maybe_null(src, &values);
+    let nv = count(api, src, n);
+    let ok_args = nv == n && (n == 0 || (!vr_ptr.is_null() && !value_ptr.is_null()));
+    let known = vrs
+        .iter()
+        .all(|&x| var(r.d(), x, Family::String).is_some_and(|v| v.causality != Causality::Output));
+    let res = call_on(
+        r,
+        t,
+        Fn::Set,
+        &format!("{}({vrs:?}, {nv} values)", api.name("fmi2SetString", "fmi3SetString")),
+        |_| {
+            if ok_args && (n == 0 || known) {
+                vec![OK, ERROR]
+            } else {
+                vec![ERROR]
+            }
+        },
+        |c| unsafe { api.set_string(c, vr_ptr, n, value_ptr, nv) },
+    )?;
+    // A record (or a library path) may fail initialization, like any changed value.
+    if let Some((i, OK)) = res {
+        if n > 0 {
+            let slot = r.slot_mut(i);
+            slot.values = slot.values.worsen(Values::Moderate);
+        }
+    }
+    Ok(())
+}
+
+/// A state pointer to hand to the FMU: one of this slot's, another slot's,
+/// a freed one, NULL, or garbage (never dereferenced unless it is a live
+/// state of the instance: the FMU looks it up first).
+fn any_state(r: &Run, src: &mut Source, i: Option<usize>) -> usize {
+    let own: Vec<usize> = i
+        .and_then(|i| r.slots[i].as_ref())
+        .map(|s| s.states.iter().map(|x| x.ptr).collect())
+        .unwrap_or_default();
+    let other: Vec<usize> = i
+        .and_then(|i| r.slots[1 - i].as_ref())
+        .map(|s| s.states.iter().map(|x| x.ptr).collect())
+        .unwrap_or_default();
+    match src.pick(10) {
+        0 => 0,
+        1 => r.foreign.as_ptr() as usize,
+        2 if !other.is_empty() => other[src.pick(other.len())],
+        3 if !r.dead_states.is_empty() => r.dead_states[src.pick(r.dead_states.len())],
+        4 => src.u64() as usize | 1,
+        _ if !own.is_empty() => own[src.pick(own.len())],
+        _ => 0,
+    }
+}
+
+fn slot_of(t: &Target) -> Option<usize> {
+    match t {
+        Target::Slot(i) => Some(*i),
+        _ => None,
+    }
+}
+
+fn owns(r: &Run, i: usize, p: usize) -> Option<usize> {
+    r.slot(i).states.iter().position(|s| s.ptr == p && p != 0)
+}
+
+fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let initial = if src.chance(180) {
+        0
+    } else {
+        any_state(r, src, i)
+    };
+    let null_slot = src.chance(8);
+    let mut slot_value = initial as api::State;
+    let slot_ptr: *mut api::State = if null_slot {
+        null_mut()
+    } else {
+        &mut slot_value
+    };
+    let owned = i.and_then(|i| owns(r, i, initial));
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!(
+            "{}(*state = {initial:#x}{})",
+            api.name("fmi2GetFMUstate", "fmi3GetFMUState"),
+            if null_slot { ", state NULL" } else { "" }
+        ),
+        |_| {
+            vec![if !null_slot && (initial == 0 || owned.is_some()) {
+                OK
+            } else {
+                ERROR
+            }]
+        },
+        |c| unsafe { api.get_state(c, slot_ptr) },
+    )?;
+    if let Some((i, s)) = res {
+        let got = slot_value as usize;
+        if s != OK {
+            if got != initial {
+                return fail(format!("{}: failed but changed *state to {got:#x}", r.what));
+            }
+            return Ok(());
+        }
+        if got == 0 || (initial != 0 && got != initial) {
+            return fail(format!("{}: returned state {got:#x}", r.what));
+        }
+        if r.trace {
+            eprintln!("  state {got:#x} to slot {i}");
+        }
+        let slot = r.slot_mut(i);
+        let info = StateInfo {
+            ptr: got,
+            st: slot.st,
+            time: slot.time,
+            values: slot.values,
+            initialized: slot.initialized,
+            me: slot.me,
+        };
+        match owned {
+            Some(k) => slot.states[k] = info,
+            None => {
+                r.dead_states.retain(|&p| p != got);
+                r.slot_mut(i).states.push(info);
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let p = any_state(r, src, i);
+    let owned = i.and_then(|i| owns(r, i, p));
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!("{}({p:#x})", api.name("fmi2SetFMUstate", "fmi3SetFMUState")),
+        // A state of the other interface (ME/CS) is refused.
+        |slot| match owned.map(|k| &slot.states[k]) {
+            // A forged state may have any interface byte: either answer.
+            Some(state) if state.values == Values::Forged => vec![OK, ERROR],
+            Some(state) if state.me == slot.me => vec![OK],
+            _ => vec![ERROR],
+        },
+        |c| unsafe { api.set_state(c, p as api::State) },
+    )?;
+    if let (Some((i, OK)), Some(k)) = (res, owned) {
+        let slot = r.slot_mut(i);
+        let info = slot.states[k].clone();
+        slot.st = info.st;
+        slot.time = info.time;
+        slot.values = info.values;
+        slot.initialized = info.initialized;
+        // (fmi2OK means the interface matched.)
+        // A restored state continues where it was saved.
+        if !info.me && allowed(Fn::GetStatus, info.st) {
+            let (s, t) = unsafe { api.last_successful_time(slot.c) };
+            slot.log.take();
+            if s != OK || t.to_bits() != info.time.to_bits() {
+                return fail(format!(
+                    "{}: after restoring, last successful time is {t} ({s}), saved {}",
+                    r.what, info.time
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_free_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let p = any_state(r, src, i);
+    let null_slot = src.chance(8);
+    let mut slot_value = p as api::State;
+    let slot_ptr: *mut api::State = if null_slot {
+        null_mut()
+    } else {
+        &mut slot_value
+    };
+    let owned = i.and_then(|i| owns(r, i, p));
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!(
+            "{}(*state = {p:#x}{})",
+            api.name("fmi2FreeFMUstate", "fmi3FreeFMUState"),
+            if null_slot { ", state NULL" } else { "" }
+        ),
+        |_| {
+            vec![if !null_slot && (p == 0 || owned.is_some()) {
+                OK
+            } else {
+                ERROR
+            }]
+        },
+        |c| unsafe { api.free_state(c, slot_ptr) },
+    )?;
+    if let Some((i, s)) = res {
+        if s == OK {
+            if !slot_value.is_null() {
+                return fail(format!(
+                    "{}: *state is {slot_value:?} after the free, not NULL",
+                    r.what
+                ));
+            }
+            if let Some(k) = owned {
+                r.slot_mut(i).states.remove(k);
+                r.dead_states.push(p);
+            }
+        } else if slot_value as usize != p {
+            return fail(format!("{}: failed but changed *state", r.what));
+        }
+    }
+    Ok(())
+}
+
+fn op_serialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let p = any_state(r, src, i);
+    let owned = i.and_then(|i| owns(r, i, p));
+    let null_size = src.chance(10);
+    let mut size = usize::MAX;
+    let size_ptr: *mut usize = if null_size { null_mut() } else { &mut size };
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!("{}({p:#x})", api.name("fmi2SerializedFMUstateSize", "fmi3SerializedFMUStateSize")),
+        |_| {
+            vec![if owned.is_some() && !null_size {
+                OK
+            } else {
+                ERROR
+            }]
+        },
+        |c| unsafe { api.state_size(c, p as api::State, size_ptr) },
+    )?;
+    let Some((i, OK)) = res else { return Ok(()) };
+    if size == 0 || size > 1 << 20 {
+        return fail(format!("{}: size {size}", r.what));
+    }
+    // Serialize into a buffer that is big enough, too small, or NULL.
+    let (buf_len, null_buf) = match src.pick(8) {
+        0 => (size - 1, false),
+        1 => (0, false),
+        2 => (size, true),
+        3 => (size + 100, false),
+        _ => (size, false),
+    };
+    let mut buf = vec![0xa5u8; buf_len.max(1)];
+    let buf_ptr: *mut u8 = if null_buf { null_mut() } else { buf.as_mut_ptr() };
+    let (c, poisoned) = (r.slot(i).c, r.slot(i).poisoned);
+    r.what = format!(
+        "{}(size {buf_len} for {size}{})",
+        api.name("fmi2SerializeFMUstate", "fmi3SerializeFMUState"),
+        if null_buf { ", NULL buffer" } else { "" }
+    );
+    let expected = if poisoned || buf_len < size || null_buf {
+        ERROR
+    } else {
+        OK
+    };
+    let s = unsafe { api.serialize(c, p as api::State, buf_ptr, buf_len) };
+    r.check_status(s, &[expected])?;
+    r.after(i, s)?;
+    if s == OK {
+        buf.truncate(size);
+        let info = r.slot(i).states[owned.expect("owned")].clone();
+        if St::from_byte(buf[24]).is_none() {
+            return fail(format!("{}: phase byte {}", r.what, buf[24]));
+        }
+        r.blobs.push(Blob { bytes: buf, info });
+        if r.blobs.len() > 8 {
+            r.blobs.remove(0);
+        }
+    }
+    Ok(())
+}
+
+/// FNV-1a, 64 bit, as documented in fmi/core/src/snapshot.rs: the harness
+/// recomputes the checksum to forge states that get past it.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+fn fix_checksum(b: &mut [u8]) {
+    if b.len() >= 32 {
+        let n = b.len() - 8;
+        let sum = fnv1a(&b[..n]);
+        b[n..].copy_from_slice(&sum.to_le_bytes());
+    }
+}
+
+#[derive(Debug, PartialEq)]
+enum Bytes {
+    Genuine,
+    /// Changed without fixing the checksum, truncated, or extended: refused.
+    Corrupt,
+    /// Changed and the checksum recomputed: accepted or refused.
+    Forged,
+    Random,
+}
+
+fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let (mut bytes, mut kind, info) = if r.blobs.is_empty() || src.chance(40) {
+        let n = src.pick(80);
+        (
+            (0..n).map(|_| src.u8()).collect::<Vec<u8>>(),
+            Bytes::Random,
+            None,
+        )
+    } else {
+        let b = r.blobs[src.pick(r.blobs.len())].clone();
+        (b.bytes, Bytes::Genuine, Some(b.info))
+    };
+    if kind == Bytes::Genuine {
+        match src.pick(8) {
+            0 | 1 => {}
+            2 => {
+                // Flip bits anywhere; the checksum no longer matches.
+                for _ in 0..1 + src.pick(4) {
+                    let k = src.pick(256) * bytes.len() / 256;
+                    bytes[k] ^= 1 << src.pick(8);
+                }
+                kind = Bytes::Corrupt;
+            }
+            3 => {
+                let keep = src.pick(256) * bytes.len() / 256;
+                bytes.truncate(keep);
+                kind = Bytes::Corrupt;
+            }
+            4 => {
+                bytes.extend((0..1 + src.pick(16)).map(|_| src.u8()));
+                kind = Bytes::Corrupt;
+            }
+            _ => {
+                // Forge: overwrite some bytes (header or payload), recompute
+                // the checksum.
+                for _ in 0..1 + src.pick(6) {
+                    let k = src.pick(256) * (bytes.len() - 8) / 256;
+                    bytes[k] = match src.pick(4) {
+                        0 => 0xff,
+                        1 => 0,
+                        _ => src.u8(),
+                    };
+                }
+                if src.chance(64) {
+                    // A whole Real of the payload: NaN, inf, 0, negative...
+                    let k = 25 + 8 * src.pick((bytes.len().saturating_sub(41)) / 8 + 1);
+                    if k + 8 <= bytes.len() - 8 {
+                        bytes[k..k + 8].copy_from_slice(&real(src).to_le_bytes());
+                    }
+                }
+                fix_checksum(&mut bytes);
+                kind = Bytes::Forged;
+            }
+        }
+    }
+    // Flips that cancel out (the same bit twice) leave genuine bytes.
+    if kind != Bytes::Random && r.blobs.iter().any(|b| b.bytes == bytes) {
+        kind = Bytes::Genuine;
+    }
+    let t = target(r, src);
+    let i = slot_of(&t);
+    let initial = if src.chance(200) {
+        0
+    } else {
+        any_state(r, src, i)
+    };
+    let owned = i.and_then(|i| owns(r, i, initial));
+    let null_bytes = src.chance(8);
+    let null_slot = src.chance(8);
+    let mut slot_value = initial as api::State;
+    let slot_ptr: *mut api::State = if null_slot {
+        null_mut()
+    } else {
+        &mut slot_value
+    };
+    let bytes_ptr = if null_bytes { std::ptr::null() } else { bytes.as_ptr() };
+    let args_ok =
+        !null_slot && (initial == 0 || owned.is_some()) && (!null_bytes || bytes.is_empty());
+    let slot_me = i.is_some_and(|i| r.slot(i).me);
+    let genuine_pristine = info.as_ref().is_some_and(|info| info.values == Values::Pristine);
+    let genuine_ok_args = kind == Bytes::Genuine && args_ok;
+    // A state of a Model Exchange instance does not fit a co-simulation one
+    // (and back): the state carries its interface, and the FMU may refuse it
+    // here or when it is set.
+    let foreign_interface = info.as_ref().is_some_and(|info| info.me != slot_me);
+    let res = call_on(
+        r,
+        t,
+        Fn::StateOp,
+        &format!(
+            "{}({kind:?}, {} bytes, *state = {initial:#x})",
+            api.name("fmi2DeSerializeFMUstate", "fmi3DeserializeFMUState"),
+            bytes.len()
+        ),
+        |_| match (&kind, args_ok) {
+            (_, false) | (Bytes::Corrupt, _) => vec![ERROR],
+            (Bytes::Genuine, true) if foreign_interface => vec![OK, ERROR],
+            (Bytes::Genuine, true) if genuine_pristine => vec![OK],
+            // Should be fmi2OK; fmi2Error is a known finding (below).
+            (Bytes::Genuine, true) => vec![OK, ERROR],
+            _ => vec![OK, ERROR],
+        },
+        |c| unsafe { api.deserialize(c, bytes_ptr, bytes.len(), slot_ptr) },
+    )?;
+    let Some((i, s)) = res else { return Ok(()) };
+    let got = slot_value as usize;
+    if s == ERROR && genuine_ok_args && !r.slot(i).poisoned && !foreign_interface {
+        let what = format!("{}: {:?}", r.what, r.last_log);
+        r.out.findings.push((Finding::OwnStateRefusedOnDeserialize, what));
+    }
+    if s != OK {
+        if got != initial {
+            return fail(format!("{}: failed but changed *state", r.what));
+        }
+        return Ok(());
+    }
+    r.out.deserialized_ok += 1;
+    if r.trace {
+        eprintln!("  state {got:#x} to slot {i} (deserialized)");
+    }
+    // Bytes that were accepted: a known phase and a finite time.
+    let st = St::from_byte(bytes[24]);
+    let time = f64::from_le_bytes(bytes[25..33].try_into().unwrap());
+    let (Some(st), true) = (st, time.is_finite()) else {
+        return fail(format!(
+            "{}: accepted phase byte {} and time {time}",
+            r.what, bytes[24]
+        ));
+    };
+    let genuine = kind == Bytes::Genuine;
+    // Forged bytes keep the interface of the state they were made from.
+    let source_me = info.as_ref().map_or(slot_me, |info| info.me);
+    let info = match (kind, info) {
+        (Bytes::Genuine, Some(info)) => StateInfo { ptr: got, ..info },
+        _ => StateInfo {
+            ptr: got,
+            st,
+            time,
+            values: Values::Forged,
+            initialized: true,
+            me: source_me,
+        },
+    };
+    if got == 0 || (initial != 0 && got != initial) {
+        return fail(format!("{}: returned state {got:#x}", r.what));
+    }
+    match owned {
+        Some(k) => r.slot_mut(i).states[k] = info,
+        None => {
+            r.dead_states.retain(|&p| p != got);
+            r.slot_mut(i).states.push(info);
+        }
+    }
+    // A genuine state serializes to the same bytes again.
+    if let Some(k) = owns(r, i, got) {
+        let c = r.slot(i).c;
+        let mut size = 0usize;
+        let mut again = vec![0u8; bytes.len()];
+        let ok = unsafe {
+            api.state_size(c, got as api::State, &mut size) == OK
+                && size == bytes.len()
+                && api.serialize(c, got as api::State, again.as_mut_ptr(), size) == OK
+        };
+        let poisoned = r.slot(i).poisoned;
+        r.slot(i).log.take();
+        // (Forged bytes may hold non-canonical fields, e.g. values behind a
+        // false flag, which the model does not keep: only genuine ones must
+        // come back byte for byte.)
+        if !poisoned && (!ok || (genuine && again != bytes)) {
+            let diff: Vec<(usize, u8, u8)> = bytes
+                .iter()
+                .zip(&again)
+                .enumerate()
+                .filter(|(_, (a, b))| a != b)
+                .map(|(k, (a, b))| (k, *a, *b))
+                .collect();
+            return fail(format!(
+                "{}: the state does not serialize to the bytes it came from (size {size}, differing bytes (offset, given, now) {diff:?})",
+                r.what
+            ));
+        }
+        let _ = k;
+    }
+    Ok(())
+}
+
+fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let name = api.name("fmi2DoStep", "fmi3DoStep");
+    let t = target(r, src);
+    let Some(i) = slot_of(&t) else {
+        let c = component(r, &t);
+        r.what = format!("{name} on NULL/foreign");
+        let (s, _) = unsafe { api.do_step(c, 0.0, 0.1, 1, false) };
+        return r.check_status(s, &[ERROR]);
+    };
+    let (time, st_before, poisoned_before) = (r.slot(i).time, r.slot(i).st, r.slot(i).poisoned);
+    let (tc, t_exact) = match src.pick(16) {
+        0 => (real(src), false),
+        1 => (time + time.abs().max(1.0) * 1e-9, false),
+        2 => (time * (1.0 + 1e-15), false),
+        _ => (time, true),
+    };
+    let h = match src.pick(8) {
+        0 => real(src),
+        1 => [1e-9, 1e-6, 1e3, 1e6][src.pick(4)],
+        _ => [1e-3, 0.01, 0.1, 0.5][src.pick(4)],
+    };
+    let no_prior = boolean(src);
+    // FMI 3.0's out-arguments are required.
+    let null_outs = api == Api::Fmi3 && src.chance(8);
+    let mut answered = None;
+    let tol = STEP_TOLERANCE * tc.abs().max(time.abs()).max(1.0);
+    let t_ok = tc.is_finite() && (t_exact || (tc - time).abs() <= 0.5 * tol);
+    let t_bad = !tc.is_finite() || (tc - time).abs() > 2.0 * tol;
+    let h_ok = h.is_finite() && h > 0.0;
+    let res = call_on(
+        r,
+        t,
+        Fn::DoStep,
+        &format!("{name}({tc:e}, {h:e}{}) at time {time:e}", if null_outs { ", NULL out-arguments" } else { "" }),
+        |slot| {
+            if !h_ok || t_bad || null_outs {
+                vec![ERROR]
+            } else if !t_ok {
+                vec![OK, DISCARD, ERROR]
+            } else if slot.armed {
+                // The hook panics once the model has stepped.
+                vec![ERROR, DISCARD]
+            } else if slot.values == Values::Pristine && h <= 10.0 {
+                vec![OK]
+            } else {
+                vec![OK, DISCARD, ERROR]
+            }
+        },
+        |c| unsafe {
+            let (s, outs) = api.do_step(c, tc, h, no_prior, null_outs);
+            answered = outs;
+            s
+        },
+    )?;
+    let Some((i, s)) = res else { return Ok(()) };
+    let slot = r.slot_mut(i);
+    match s {
+        OK => {
+            slot.time = tc + h;
+            // A step of extreme length (inputs extrapolated with their
+            // derivatives over 1e308 s...) counts as an extreme value.
+            if magnitude(h) == Values::Extreme || magnitude(tc + h) == Values::Extreme {
+                slot.values = slot.values.worsen(Values::Extreme);
+            }
+            r.out.steps_ok += 1;
+            let c = r.slot(i).c;
+            if let Some((flags, reached)) = answered {
+                // No event, no stop, no early return: a step is whole.
+                if flags != [0; 3] || reached.to_bits() != (tc + h).to_bits() {
+                    return fail(format!("{}: answered flags {flags:?}, lastSuccessfulTime {reached}", r.what));
+                }
+            }
+            let (st, last) = unsafe { api.last_successful_time(c) };
+            r.slot(i).log.take();
+            if st != OK || last.to_bits() != (tc + h).to_bits() {
+                // t + h can overflow to infinity: that is a finding of its own.
+                if st == OK && !last.is_finite() {
+                    r.finite(i, last, "last successful time")?;
+                    r.slot_mut(i).values = Values::Extreme;
+                } else {
+                    return fail(format!(
+                        "{}: then last successful time {last} ({st}), expected {}",
+                        r.what,
+                        tc + h
+                    ));
+                }
+            }
+            // Every output is finite after a successful step.
+            let reals: Vec<&Variable> = r.d()
+                .variables
+                .iter()
+                .filter(|v| family(v) == Family::Real)
+                .collect();
+            let vrs: Vec<u32> = reals.iter().map(|v| v.vr).collect();
+            let mut values = vec![f64::NAN; vrs.len()];
+            let gs = unsafe { api.get_real(c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr(), vrs.len()) };
+            r.slot(i).log.take();
+            if gs != OK {
+                return fail(format!(
+                    "{}: then fmi2GetReal of every Real answered {gs}",
+                    r.what
+                ));
+            }
+            r.what = format!("{} then fmi2GetReal", r.what);
+            for (v, x) in reals.iter().zip(values) {
+                r.finite(i, x, &v.name)?;
+            }
+        }
+        DISCARD => {
+            if slot.armed {
+                // Discarded before the hook fired: still armed.
+            }
+            slot.st = St::StepFailed;
+        }
+        ERROR => {
+            if slot.armed && !slot.me && h_ok && t_ok && !null_outs && st_before == St::StepComplete && !poisoned_before {
+                slot.armed = false;
+                slot.poisoned = true;
+                r.out.panics_caught += 1;
+            }
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+fn op_status(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    if r.api == Api::Fmi3 {
+        // FMI 3.0 has no status functions.
+        return op_unsupported3(r, src);
+    }
+    let t = target(r, src);
+    let which = src.pick(5);
+    let kind = match src.pick(4) {
+        0 => src.u32() as i32,
+        _ => src.pick(5) as i32,
+    };
+    let null_value = src.chance(16);
+    let mut real_v = f64::NAN;
+    let mut int_v = -7i32;
+    let mut str_v: fmi2String = std::ptr::null();
+    let name = [
+        "fmi2GetStatus",
+        "fmi2GetRealStatus",
+        "fmi2GetIntegerStatus",
+        "fmi2GetBooleanStatus",
+        "fmi2GetStringStatus",
+    ][which];
+    let res = call_on(
+        r,
+        t,
+        Fn::GetStatus,
+        &format!(
+            "{name}(kind {kind}{})",
+            if null_value { ", value NULL" } else { "" }
+        ),
+        |_| match (which, kind) {
+            (1, 2) | (3, 3) => vec![if null_value { ERROR } else { OK }],
+            // Status kinds the FMU does not provide answer fmi2Discard.
+            _ if null_value => vec![DISCARD, ERROR],
+            _ => vec![DISCARD],
+        },
+        |c| unsafe {
+            let rv = if null_value {
+                null_mut()
+            } else {
+                &mut real_v as *mut f64
+            };
+            let iv = if null_value {
+                null_mut()
+            } else {
+                &mut int_v as *mut i32
+            };
+            let sv = if null_value {
+                null_mut()
+            } else {
+                &mut str_v as *mut fmi2String
+            };
+            match which {
+                0 => fmi2GetStatus(c, kind, iv),
+                1 => fmi2GetRealStatus(c, kind, rv),
+                2 => fmi2GetIntegerStatus(c, kind, iv),
+                3 => fmi2GetBooleanStatus(c, kind, iv),
+                _ => fmi2GetStringStatus(c, kind, sv),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        match which {
+            1 => {
+                let expected = r.slot(i).time;
+                r.finite(i, real_v, "last successful time")?;
+                if real_v.to_bits() != expected.to_bits() {
+                    return fail(format!(
+                        "{}: last successful time {real_v}, expected {expected}",
+                        r.what
+                    ));
+                }
+            }
+            3 if int_v != 0 => return fail(format!("{}: terminated = {int_v}", r.what)),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Model Exchange functions, output derivatives and fmi2CancelStep: not
+/// offered, so fmi2Error in every state; directional derivatives with one
+/// array for dvKnown and dvUnknown: refused unless empty.
+fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    if r.api == Api::Fmi3 {
+        return op_unsupported3(r, src);
+    }
+    let t = target(r, src);
+    let which = src.pick(14);
+    let n = src.pick(4);
+    let vrs: Vec<u32> = (0..n).map(|_| vr(r.d(), src, |_| true)).collect();
+    let mut buf = vec![0.0f64; 8];
+    // Values for fmi2SetContinuousStates: nasty ones, or near the start.
+    for x in buf.iter_mut() {
+        *x = if src.chance(128) { 1.0 - (src.u8() as f64) * 1e-5 } else { real(src) };
+    }
+    let set_states = buf.clone();
+    let mut flags = [0i32; 2];
+    let mut info = fmi2EventInfo::default();
+    let null = src.chance(64);
+    let p = if null { null_mut() } else { buf.as_mut_ptr() };
+    let orders = vec![1i32; n];
+    let x = real(src);
+    let (f, name) = match which {
+        0 => (Fn::GetDirectionalDerivative, "fmi2GetDirectionalDerivative"),
+        11 => (Fn::CancelStep, "fmi2CancelStep"),
+        12 | 13 => (Fn::GetRealOutputDerivatives, "fmi2GetRealOutputDerivatives"),
+        _ => (Fn::ModelExchange, "a Model Exchange function"),
+    };
+    let n_out = n.min(buf.len());
+    let d = r.d();
+    let res = call_on(
+        r,
+        t,
+        f,
+        &format!("{name} (#{which}, n = {n}{})", if null { ", NULL array" } else { "" }),
+        |slot| {
+            let nx = d.states.len();
+            let sized = !null || n == 0;
+            if f == Fn::GetRealOutputDerivatives {
+                vec![OK, ERROR]
+            } else if f == Fn::GetDirectionalDerivative && n == 0 {
+                // Nothing asked: OK, or an error where outputs are not computable.
+                vec![OK, ERROR]
+            } else if slot.me && f == Fn::ModelExchange && (which <= 5 || (sized && n == nx) || (which == 8 && sized)) {
+                // Model Exchange calls with arrays of the right size (nx
+                // states, any number of event indicators checked by the FMU);
+                // a state that is no length of web is discarded.
+                vec![OK, DISCARD, ERROR]
+            } else {
+                vec![ERROR]
+            }
+        },
+        |c| unsafe {
+            match which {
+                0 => fmi2GetDirectionalDerivative(c, vrs.as_ptr(), n, vrs.as_ptr(), n, p, p),
+                1 => fmi2EnterEventMode(c),
+                2 => fmi2NewDiscreteStates(c, if null { null_mut() } else { &mut info }),
+                3 => fmi2EnterContinuousTimeMode(c),
+                4 => {
+                    fmi2CompletedIntegratorStep(c, 1, flags.as_mut_ptr(), flags.as_mut_ptr().add(1))
+                }
+                5 => fmi2SetTime(c, x),
+                6 => fmi2SetContinuousStates(c, p, n),
+                7 => fmi2GetDerivatives(c, p, n),
+                8 => fmi2GetEventIndicators(c, p, n),
+                9 => fmi2GetContinuousStates(c, p, n),
+                10 => fmi2GetNominalsOfContinuousStates(c, p, n),
+                11 => fmi2CancelStep(c),
+                _ => fmi2GetRealOutputDerivatives(c, vrs.as_ptr(), n_out, orders.as_ptr(), p),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        let what = match which {
+            5 | 6 => return accepted_set(r, i, which, &set_states[..n.min(set_states.len())], x),
+            7 => "a derivative",
+            8 => "an event indicator",
+            9 => "a continuous state",
+            10 => "a nominal",
+            12 | 13 => "an output derivative",
+            _ => return Ok(()),
+        };
+        if !null {
+            for &v in &buf[..n_out] {
+                r.finite(i, v, what)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A time (#5) or continuous states (#6) the FMU accepted, in either
+/// interface: states must have been finite; the instance's values now span
+/// what was set.
+fn accepted_set(r: &mut Run, i: usize, which: usize, states: &[f64], time: f64) -> Result<(), Violation> {
+    if which == 6 {
+        if let Some(x) = states.iter().find(|x| !x.is_finite()) {
+            return fail(format!("{}: accepted the continuous state {x}", r.what));
+        }
+    }
+    let set: &[f64] = if which == 6 { states } else { std::slice::from_ref(&time) };
+    let slot = r.slot_mut(i);
+    for &x in set {
+        slot.values = slot.values.worsen(Values::Moderate).worsen(magnitude(x));
+    }
+    Ok(())
+}
+
+/// FMI 3.0's other functions: Model Exchange's (refused by a co-simulation
+/// instance), directional derivatives with value counts, the counts of
+/// states and event indicators, and those this FMU refuses in every state
+/// (clocks, configuration mode, Step Mode's event mode, output and adjoint
+/// derivatives, Scheduled Execution); the types it has no variables of accept
+/// only empty calls.
+fn op_unsupported3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    use fmi_testkit::fmi3 as c3;
+    let which = src.pick(22);
+    if which == 21 {
+        let s = unsafe {
+            c3::fmi3InstantiateScheduledExecution(
+                c"fuzz".as_ptr(),
+                std::ptr::null(),
+                std::ptr::null(),
+                0,
+                0,
+                null_mut(),
+                None,
+                None,
+                None,
+                None,
+            )
+        };
+        r.out.calls += 1;
+        if !s.is_null() {
+            return fail(format!("fmi3InstantiateScheduledExecution returned {s:?}"));
+        }
+        return Ok(());
+    }
+    let t = target(r, src);
+    let n = src.pick(4);
+    let m = src.pick(4);
+    let unknowns: Vec<u32> = (0..n).map(|_| vr(r.d(), src, |v| v.causality == Causality::Output)).collect();
+    let knowns: Vec<u32> = (0..m).map(|_| vr(r.d(), src, |v| v.causality == Causality::Input)).collect();
+    let (n_seed, n_sens) = (count(Api::Fmi3, src, m), count(Api::Fmi3, src, n));
+    let mut buf = vec![0.0f64; 8];
+    for x in buf.iter_mut() {
+        *x = if src.chance(128) { 1.0 - (src.u8() as f64) * 1e-5 } else { real(src) };
+    }
+    let set_states = buf.clone();
+    let seed = vec![1.0f64; 8];
+    let null = src.chance(64);
+    let p = if null { null_mut() } else { buf.as_mut_ptr() };
+    let x = real(src);
+    let mut flags = [0u8; 6];
+    let mut next = f64::NAN;
+    let mut number = usize::MAX;
+    let (f, name) = match which {
+        0 => (Fn::GetDirectionalDerivative, "fmi3GetDirectionalDerivative"),
+        16 => (Fn::Get, "fmi3GetFloat32"),
+        17 => (Fn::Set, "fmi3SetUInt8"),
+        _ => (Fn::ModelExchange, "another fmi3 function"),
+    };
+    let (nx, nz) = (r.d().states.len(), r.d().number_of_event_indicators);
+    let res = call_on(
+        r,
+        t,
+        f,
+        &format!("{name} (#{which}, n = {n}, m = {m}{})", if null { ", NULL array" } else { "" }),
+        |slot| {
+            let sized = !null || n == 0;
+            match which {
+                0 if n_seed != m || n_sens != n || (null && n > 0) => vec![ERROR],
+                // Unknowns and knowns the FMU has no derivative of are refused.
+                0 => vec![OK, ERROR],
+                1..=10 if !slot.me => vec![ERROR],
+                2 | 4 if null => vec![ERROR],
+                1..=5 => vec![OK, DISCARD],
+                6..=10 if sized && (n == nx || (which == 8 && n == nz)) => vec![OK, DISCARD],
+                11 | 12 if slot.me && !null => vec![OK],
+                16 | 17 if n == 0 => vec![OK],
+                _ => vec![ERROR],
+            }
+        },
+        |c| unsafe {
+            let [a, b, e, d, g, h] = &mut flags;
+            let number = if null { null_mut() } else { &mut number as *mut usize };
+            match which {
+                0 => c3::fmi3GetDirectionalDerivative(
+                    c,
+                    unknowns.as_ptr(),
+                    n,
+                    knowns.as_ptr(),
+                    m,
+                    seed.as_ptr(),
+                    n_seed,
+                    p,
+                    n_sens,
+                ),
+                1 => c3::fmi3EnterEventMode(c),
+                2 if null => c3::fmi3UpdateDiscreteStates(c, a, b, null_mut(), d, g, &mut next),
+                2 => c3::fmi3UpdateDiscreteStates(c, a, b, e, d, g, &mut next),
+                3 => c3::fmi3EnterContinuousTimeMode(c),
+                4 => c3::fmi3CompletedIntegratorStep(c, 1, a, if null { null_mut() } else { h }),
+                5 => c3::fmi3SetTime(c, x),
+                6 => c3::fmi3SetContinuousStates(c, p, n),
+                7 => c3::fmi3GetContinuousStateDerivatives(c, p, n),
+                8 => c3::fmi3GetEventIndicators(c, p, n),
+                9 => c3::fmi3GetContinuousStates(c, p, n),
+                10 => c3::fmi3GetNominalsOfContinuousStates(c, p, n),
+                11 => c3::fmi3GetNumberOfContinuousStates(c, number),
+                12 => c3::fmi3GetNumberOfEventIndicators(c, number),
+                13 => c3::fmi3EnterStepMode(c),
+                14 => c3::fmi3GetOutputDerivatives(c, unknowns.as_ptr(), n, [1i32; 4].as_ptr(), p, n),
+                15 => c3::fmi3GetClock(c, unknowns.as_ptr(), n, a),
+                16 => c3::fmi3GetFloat32(c, unknowns.as_ptr(), n, [0f32; 4].as_mut_ptr(), n),
+                17 => c3::fmi3SetUInt8(c, knowns.as_ptr(), n, [0u8; 4].as_ptr(), n),
+                18 => c3::fmi3EnterConfigurationMode(c),
+                19 => c3::fmi3GetAdjointDerivative(c, unknowns.as_ptr(), n, knowns.as_ptr(), m, seed.as_ptr(), m, p, n),
+                _ => c3::fmi3EvaluateDiscreteStates(c),
+            }
+        },
+    )?;
+    if let Some((i, OK)) = res {
+        let what = match which {
+            5 | 6 => return accepted_set(r, i, which, &set_states[..n.min(set_states.len())], x),
+            11 | 12 if number != [nx, nz][which - 11] => {
+                return fail(format!("{}: answered {number}", r.what));
+            }
+            0 => "a directional derivative",
+            7 => "a derivative",
+            8 => "an event indicator",
+            9 => "a continuous state",
+            10 => "a nominal",
+            _ => return Ok(()),
+        };
+        if !null {
+            for &v in &buf[..n] {
+                r.finite(i, v, what)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_input_derivatives(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    if r.api == Api::Fmi3 {
+        // FMI 3.0 has no input derivatives.
+        return op_unsupported3(r, src);
+    }
+    let t = target(r, src);
+    let n = src.pick(4);
+    let vrs: Vec<u32> = (0..n)
+        .map(|_| {
+            vr(r.d(), src, |v| {
+                v.causality == Causality::Input && family(v) == Family::Real
+            })
+        })
+        .collect();
+    let orders: Vec<i32> = (0..n)
+        .map(|_| {
+            if src.chance(200) {
+                1
+            } else {
+                integer(src, None)
+            }
+        })
+        .collect();
+    let values: Vec<f64> = (0..n)
+        .map(|_| {
+            if src.chance(128) {
+                (src.u8() as f64 - 128.0) / 16.0
+            } else {
+                real(src)
+            }
+        })
+        .collect();
+    let vr_ptr = maybe_null(src, &vrs);
+    let order_ptr = maybe_null(src, &orders);
+    let value_ptr = maybe_null(src, &values);
+    let valid = n == 0
+        || (!vr_ptr.is_null() && !order_ptr.is_null() && !value_ptr.is_null())
+            && vrs.iter().zip(&orders).zip(&values).all(|((&x, &o), v)| {
+                var(r.d(), x, Family::Real).is_some_and(|v| v.causality == Causality::Input)
+                    && o == 1
+                    && v.is_finite()
+            });
+    let can = r.d().can_interpolate_inputs;
+    let res = call_on(
+        r,
+        t,
+        Fn::SetRealInputDerivatives,
+        &format!("fmi2SetRealInputDerivatives({vrs:?}, {orders:?}, {values:?})"),
+        // The model may refuse derivatives it cannot use (e.g. with a
+        // solver that holds the inputs), which it says in the log.
+        // With canInterpolateInputs false every call is refused, an empty one too.
+        |_| {
+            if valid && can && n > 0 {
+                vec![OK, ERROR]
+            } else {
+                vec![if valid && can { OK } else { ERROR }]
+            }
+        },
+        |c| unsafe { fmi2SetRealInputDerivatives(c, vr_ptr, n, order_ptr, value_ptr) },
+    )?;
+    if let Some((i, OK)) = res {
+        if n > 0 {
+            let slot = r.slot_mut(i);
+            slot.values = slot.values.worsen(Values::Moderate);
+            for v in &values {
+                slot.values = slot.values.worsen(magnitude(*v));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_debug_logging(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let t = target(r, src);
+    let cats = r.d().log_categories;
+    let n = src.pick(4);
+    let names: Vec<CString> = (0..n)
+        .map(|_| match src.pick(8) {
+            0 => CString::new("noSuchCategory").unwrap(),
+            1 => CString::new("").unwrap(),
+            _ => CString::new(cats[src.pick(cats.len())]).unwrap(),
+        })
+        .collect();
+    let mut ptrs: Vec<fmi2String> = names.iter().map(|s| s.as_ptr()).collect();
+    if n > 0 && src.chance(12) {
+        ptrs[0] = std::ptr::null();
+    }
+    let array = maybe_null(src, &ptrs);
+    let on = boolean(src);
+    let strs: Vec<String> = names
+        .iter()
+        .map(|s| s.to_string_lossy().into_owned())
+        .collect();
+    let known =
+        !ptrs.contains(&std::ptr::null()) && strs.iter().all(|s| cats.contains(&s.as_str()));
+    let ok = n == 0 || (!array.is_null() && known);
+    let res = call_on(
+        r,
+        t,
+        Fn::SetDebugLogging,
+        &format!("{}({on}, {strs:?})", api.name("fmi2SetDebugLogging", "fmi3SetDebugLogging")),
+        |_| vec![if ok { OK } else { ERROR }],
+        |c| unsafe { api.set_debug_logging(c, on, n, array) },
+    )?;
+    if let Some((i, OK)) = res {
+        let slot = r.slot_mut(i);
+        let on = on != 0;
+        let status_cats = ["logStatusWarning", "logStatusDiscard", "logStatusError"];
+        if n == 0 {
+            slot.status_log = [on; 3];
+            slot.log_all = on;
+        } else {
+            for (k, c) in status_cats.iter().enumerate() {
+                if strs.iter().any(|s| s == c) {
+                    slot.status_log[k] = on;
+                }
+            }
+            if strs.iter().any(|s| s == "logAll") {
+                slot.log_all = on;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn op_arm_panic(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let t = target(r, src);
+    if !src.chance(64) {
+        return op_lifecycle_macro(r, src);
+    }
+    let cat = CString::new(TEST_PANIC_CATEGORY).unwrap();
+    let p = cat.as_ptr();
+    let api = r.api;
+    let res = call_on(
+        r,
+        t,
+        Fn::SetDebugLogging,
+        "arm the panic hook",
+        |_| vec![OK],
+        |c| unsafe { api.set_debug_logging(c, 1, 1, &p) },
+    )?;
+    if let Some((i, OK)) = res {
+        r.slot_mut(i).armed = true;
+    }
+    Ok(())
+}
+
+/// A legal move: instantiate, or the next lifecycle call of the state the
+/// slot is in, with sane arguments. Keeps random sequences going deep.
+/// Integer parameters with a small range (the Roller's inlets, outlets and
+/// kind of roll): their values in one valid fmi2SetInteger (fmi3SetInt32) in
+/// the instantiated state, so that sequences run through the configurations
+/// they select (several ports, a roll), which random sets rarely reach.
+fn configured_integers(d: Desc) -> Vec<&'static Variable> {
+    d
+        .variables
+        .iter()
+        .filter(|v| v.kind == Kind::Integer && v.causality == Causality::Parameter && v.range.lo.is_finite() && v.range.hi - v.range.lo < 256.0)
+        .collect()
+}
+
+fn configure(r: &mut Run, i: usize, src: &mut Source) -> Result<(), Violation> {
+    let vars = configured_integers(r.d());
+    if vars.is_empty() {
+        return Ok(());
+    }
+    let vrs: Vec<u32> = vars.iter().map(|v| v.vr).collect();
+    let values: Vec<i64> = vars.iter().map(|v| v.range.lo as i64 + src.pick((v.range.hi - v.range.lo) as usize + 1) as i64).collect();
+    let (api, c) = (r.api, r.slot(i).c);
+    let what = std::mem::replace(&mut r.what, format!("configuration {:?} [slot {i}]", vrs.iter().zip(&values).collect::<Vec<_>>()));
+    let s = unsafe { api.set_integer(Int::Int32, c, vrs.as_ptr(), vrs.len(), values.as_ptr(), vrs.len()) };
+    r.out.calls += 1;
+    r.check_status(s, &[OK])?;
+    r.after(i, s)?;
+    let slot = r.slot_mut(i);
+    slot.values = slot.values.worsen(Values::Moderate);
+    r.what = what;
+    Ok(())
+}
+
+fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    let i = src.pick(2);
+    let api = r.api;
+    let Some(slot) = r.slots[i].as_ref() else {
+        let log = Box::<Log>::default();
+        let functions = Box::new(callbacks(&log));
+        let name = CString::new(format!("fuzz{i}")).unwrap();
+        let g = CString::new(r.d().guid.as_ref()).unwrap();
+        // No resources where the model can do without (as importers may pass none).
+        let (uri, path) = (CString::new(format!("file://{}", r.model.resources)).unwrap(), CString::new(r.model.resources.as_str()).unwrap());
+        let (uri, path) = if r.model.needs_resources { (uri.as_ptr(), path.as_ptr()) } else { (std::ptr::null(), std::ptr::null()) };
+        let c = unsafe {
+            match api {
+                Api::Fmi2 => fmi2Instantiate(name.as_ptr(), 1, g.as_ptr(), uri, &*functions, 0, 0),
+                Api::Fmi3 => api::instantiate3(&api::Instantiate3 {
+                    model_exchange: false,
+                    name: name.as_ptr(),
+                    token: g.as_ptr(),
+                    resource_path: path,
+                    logging_on: false,
+                    event_mode_used: false,
+                    required: &[],
+                    log: Some(&*log),
+                }),
+            }
+        };
+        r.out.calls += 1;
+        if c.is_null() {
+            return fail(format!(
+                "{} with valid arguments returned NULL: {:?}",
+                api.name("fmi2Instantiate", "fmi3InstantiateCoSimulation"),
+                log.take()
+            ));
+        }
+        log.take();
+        let functions = (api == Api::Fmi2).then_some(functions);
+        r.slots[i] = Some(new_slot(format!("fuzz{i}"), c, log, functions, false));
+        return Ok(());
+    };
+    if slot.me && slot.st == St::StepComplete && !slot.poisoned {
+        return me_integration(r, i);
+    }
+    let (c, st, time, poisoned, pristine) = (
+        slot.c,
+        slot.st,
+        slot.time,
+        slot.poisoned,
+        slot.values == Values::Pristine,
+    );
+    r.what = format!("lifecycle move [slot {i}, state {st:?}]");
+    let (s, expected, next): (i32, Vec<i32>, Option<St>) = unsafe {
+        if poisoned || matches!(st, St::Error | St::Terminated | St::StepFailed) {
+            (api.reset(c), vec![OK], Some(St::Instantiated))
+        } else {
+            match st {
+                St::Instantiated => {
+                    if src.chance(64) {
+                        configure(r, i, src)?;
+                    }
+                    if api == Api::Fmi2 {
+                        let s = fmi2SetupExperiment(c, 0, 0.0, time, 0, 0.0);
+                        r.check_status(s, &[OK])?;
+                        r.after(i, s)?;
+                    }
+                    (api.enter_init(c, (0, 0.0, time, 0, 0.0)), vec![OK], Some(St::Init))
+                }
+                St::Init => (
+                    api.exit_init(c),
+                    if pristine { vec![OK] } else { vec![OK, ERROR] },
+                    Some(St::StepComplete),
+                ),
+                _ => {
+                    // A few ordinary steps.
+                    let armed = r.slot(i).armed;
+                    let (s, _) = api.do_step(c, time, 0.01, 1, false);
+                    let expected = if armed {
+                        vec![ERROR, DISCARD]
+                    } else if pristine {
+                        vec![OK]
+                    } else {
+                        vec![OK, DISCARD, ERROR]
+                    };
+                    (s, expected, None)
+                }
+            }
+        }
+    };
+    r.check_status(s, &expected)?;
+    r.after(i, s)?;
+    let slot = r.slot_mut(i);
+    if s == OK {
+        match next {
+            Some(St::Instantiated) => {
+                slot.st = St::Instantiated;
+                slot.time = 0.0;
+                slot.values = Values::Pristine;
+                slot.initialized = false;
+                slot.poisoned = false;
+            }
+            Some(n) => {
+                slot.initialized |= n == St::StepComplete;
+                slot.st = n
+            }
+            None => {
+                slot.time = time + 0.01;
+                r.out.steps_ok += 1;
+            }
+        }
+    } else if next.is_none() {
+        if s == DISCARD {
+            slot.st = St::StepFailed;
+        } else if s == ERROR && slot.armed {
+            slot.armed = false;
+            slot.poisoned = true;
+            r.out.panics_caught += 1;
+        }
+    }
+    Ok(())
+}
+
+/// A Model Exchange instance after initialization: the calls an integrator
+/// makes for one explicit Euler step of 1 ms. Every answer OK or Error (the
+/// oracle does not predict the ME state machine); states, derivatives and
+/// event indicators that come back with OK must be finite.
+fn me_integration(r: &mut Run, i: usize) -> Result<(), Violation> {
+    let (c, api) = (r.slot(i).c, r.api);
+    let nx = r.d().states.len();
+    let nz = r.d().number_of_event_indicators;
+    let mut x = vec![f64::NAN; nx];
+    let mut dx = vec![f64::NAN; nx];
+    let mut z = vec![f64::NAN; nz];
+    let t = r.slot(i).time;
+    for k in 0..6 {
+        let (name, s) = unsafe {
+            match k {
+                0 => (
+                    api.name("fmi2EnterContinuousTimeMode", "fmi3EnterContinuousTimeMode"),
+                    api.enter_continuous_time_mode(c),
+                ),
+                1 => (api.name("fmi2SetTime", "fmi3SetTime"), api.set_time(c, t + 1e-3)),
+                2 => (
+                    api.name("fmi2GetContinuousStates", "fmi3GetContinuousStates"),
+                    api.get_continuous_states(c, x.as_mut_ptr(), nx),
+                ),
+                3 => (
+                    api.name("fmi2GetDerivatives", "fmi3GetContinuousStateDerivatives"),
+                    api.get_derivatives(c, dx.as_mut_ptr(), nx),
+                ),
+                4 => (
+                    api.name("fmi2GetEventIndicators", "fmi3GetEventIndicators"),
+                    api.get_event_indicators(c, z.as_mut_ptr(), nz),
+                ),
+                _ => (
+                    api.name("fmi2CompletedIntegratorStep", "fmi3CompletedIntegratorStep"),
+                    api.completed_integrator_step(c),
+                ),
+            }
+        };
+        r.what = format!("ME integration: {name}");
+        r.check_status(s, &[OK, DISCARD, ERROR])?;
+        r.after(i, s)?;
+        if s != OK {
+            return Ok(());
+        }
+        let values = match k {
+            2 => x.clone(),
+            3 => dx.clone(),
+            4 => z.clone(),
+            _ => Vec::new(),
+        };
+        for v in values {
+            r.finite(i, v, name)?;
+        }
+    }
+    r.slot_mut(i).time = t + 1e-3;
+    r.out.steps_ok += 1;
+    Ok(())
+}

@@ -1,0 +1,450 @@
+//! The Line: the FMI model hooks of a whole line, on top of the house. Built
+//! from its spec (`spec`) with its interface (`interface`); its parts and
+//! where they stand are an `Ode`, which the hooks call down into: `stepping`
+//! for initialization, steps and events, the network for evaluations.
+
+use crate::interface::{self, Binding, Interface};
+use crate::network::Network;
+use crate::ode::{Ode, Scratch};
+use crate::part::Part;
+use crate::spec::{self, ModelKind, Spec, StartMode, PROFILE_FOLDER, SPEC_FILE};
+use crate::stepping;
+use fmi_core::description::{Causality, ModelDescription};
+use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
+use solver::stiff::Rosenbrock;
+use std::sync::Arc;
+
+/// What the line shares among its copies: fixed at instantiation.
+#[derive(Debug)]
+pub struct Shared {
+    pub spec: Spec,
+    pub description: ModelDescription,
+    pub bindings: Vec<Binding>,
+}
+
+/// One line.json, one GUID: equal GUIDs, equal lines.
+impl PartialEq for Shared {
+    fn eq(&self, other: &Shared) -> bool {
+        self.description.guid == other.description.guid
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Line {
+    pub shared: Arc<Shared>,
+    /// The parts, joined, and where they stand: what the hooks below call down into.
+    pub ode: Ode,
+    /// The parameters of the line itself.
+    tolerance: f64,
+    start_equilibrium: bool,
+    /// A part follows a profile: time moves the equations.
+    profiled: bool,
+}
+
+impl Line {
+    /// A line from its spec text (the FMU's resources/line.json).
+    pub fn from_spec(text: &str) -> FmiResult<Line> {
+        let spec = Spec::parse(text).map_err(FmiError::error)?;
+        let mut parts = Vec::with_capacity(spec.parts.len());
+        for ps in &spec.parts {
+            let mut part = match ps.model {
+                ModelKind::ConvertingSpan => Part::span(),
+                ModelKind::Roller => Part::roller(),
+            };
+            apply_start(&mut part, ps).map_err(|e| FmiError::error(format!("line.json: part {}: {e}", ps.name)))?;
+            if ps.profile.is_some() {
+                let vr = part.description().variable_by_name("profile").expect("parts have a profile").vr;
+                part.set_string(vr, &format!("{PROFILE_FOLDER}/{}.json", ps.name))?;
+            }
+            parts.push(part);
+        }
+        let active: Vec<Vec<usize>> = parts.iter().map(Part::active_states).collect();
+        let start_equilibrium = spec.start == StartMode::Equilibrium;
+        let Interface { description, bindings } = interface::build(&spec, &parts, &active, spec::guid(text), start_equilibrium);
+        let profiled = spec.parts.iter().any(|p| p.profile.is_some());
+        Ok(Line {
+            shared: Arc::new(Shared { spec, description, bindings }),
+            ode: Ode::new(parts, interface::DEFAULT_TOLERANCE),
+            tolerance: interface::DEFAULT_TOLERANCE,
+            start_equilibrium,
+            profiled,
+        })
+    }
+
+    fn binding(&self, vr: u32) -> FmiResult<Binding> {
+        self.shared.bindings.get(vr as usize).copied().filter(|_| vr > 0).ok_or_else(|| fmi_core::model::unknown_vr(vr))
+    }
+
+    pub fn spec(&self) -> &Spec {
+        &self.shared.spec
+    }
+
+    pub fn parts(&self) -> &[Part] {
+        &self.ode.parts
+    }
+
+    pub fn network(&self) -> Option<&Network> {
+        self.ode.net.as_ref()
+    }
+
+    pub fn states(&self) -> &[f64] {
+        &self.ode.x
+    }
+
+    pub fn time(&self) -> f64 {
+        self.ode.time
+    }
+
+    pub fn integrator(&self) -> Option<&Rosenbrock> {
+        self.ode.integrator.as_ref()
+    }
+
+    /// The line's variable `vr` of a part was set: other than an input (a parameter, which FMI
+    /// allows only before the network exists), it changes more than the states and inputs do.
+    fn part_set(&mut self, vr: u32) {
+        let input = self.shared.description.variable(vr).is_some_and(|v| v.causality == Causality::Input);
+        if let (false, Some(net)) = (input, self.ode.net.as_mut()) {
+            net.parts_changed();
+        }
+    }
+
+    /// d(unknown)/d(known) of the line now, by central differences (step 1e-6
+    /// of the known's size: truncation ~1e-12, rounding ~1e-10 relative). Known:
+    /// a state or an input of the line; unknown: an output or a derivative.
+    /// Before initialization has built the network (an instance that failed
+    /// before it ended: the error state), only inputs are known, and the parts
+    /// answer at their own values, as fmi2GetReal does then.
+    fn partial_derivative(&self, unknown: u32, known: u32) -> FmiResult<f64> {
+        let state = self.shared.description.states.iter().position(|&vr| vr == known);
+        if state.is_some() && self.ode.net.is_none() {
+            return Err(FmiError::error("the line is not initialized: it has no states yet"));
+        }
+        let input = match self.shared.bindings.get(known as usize) {
+            Some(&Binding::Real { part, vr, .. }) if state.is_none() => Some((part, vr)),
+            _ => None,
+        };
+        let value = match (state, input) {
+            (Some(k), _) => self.ode.x[k],
+            (None, Some((part, vr))) => self.ode.parts[part].get_real(vr)?,
+            _ => return Err(FmiError::error(format!("value reference {known} is neither a state nor an input of the line"))),
+        };
+        let scale = match (state, &self.ode.net) {
+            (Some(k), Some(net)) => self.ode.nominal(net, k),
+            _ => 1.0,
+        };
+        let d = 1e-6 * value.abs().max(scale);
+        let mut probe = self.clone();
+        let mut at = |x: f64| -> FmiResult<f64> {
+            match (state, input) {
+                (Some(k), _) => probe.ode.x[k] = x,
+                (None, Some((part, vr))) => probe.ode.parts[part].set_real(vr, x)?,
+                _ => unreachable!("checked above"),
+            }
+            probe.ode.settle()?;
+            probe.get_real(unknown)
+        };
+        let (hi, lo) = (at(value + d)?, at(value - d)?);
+        Ok((hi - lo) / (2.0 * d))
+    }
+}
+
+/// Sets a part's start values from line.json, each through the part's own setter.
+fn apply_start(part: &mut Part, ps: &spec::PartSpec) -> Result<(), String> {
+    use fmi_core::description::Kind;
+    let d = part.description();
+    for (name, value) in &ps.start {
+        if name == "solver" {
+            continue; // the line integrates; the span's own solver is not used
+        }
+        let v = d.variable_by_name(name).ok_or_else(|| format!("{name}: {} has no such variable", d.model_identifier))?;
+        let bad = || format!("{name} = {value}: not a value of its type");
+        let r = match v.kind {
+            Kind::Real => part.set_real(v.vr, value.as_f64().ok_or_else(bad)?),
+            Kind::Integer | Kind::Enumeration { .. } => part.set_integer(v.vr, value.as_i64().and_then(|i| i32::try_from(i).ok()).ok_or_else(bad)?),
+            Kind::Boolean => part.set_boolean(v.vr, value.as_bool().ok_or_else(bad)?),
+            Kind::String => part.set_string(v.vr, value.as_str().ok_or_else(bad)?),
+        };
+        r.map_err(|e| format!("{name} = {value}: {}", e.message))?;
+    }
+    Ok(())
+}
+
+impl Variables for Line {
+    fn get_real(&self, vr: u32) -> FmiResult<f64> {
+        match self.binding(vr)? {
+            Binding::Real { part, port, .. } => Ok(self.ode.parts[part].real(port)),
+            Binding::LoadCell { part, cos_wrap } => self.ode.parts[part].load_cell(cos_wrap),
+            Binding::Tolerance => Ok(self.tolerance),
+            Binding::Part { .. } | Binding::StartAtEquilibrium => Err(fmi_core::model::unknown_vr(vr)),
+        }
+    }
+
+    fn set_real(&mut self, vr: u32, value: f64) -> FmiResult {
+        match self.binding(vr)? {
+            Binding::Real { part, vr: part_vr, port } => {
+                self.ode.parts[part].write(port, value)?;
+                self.part_set(vr);
+                // An input moves the outputs that depend on it; a failure shows when they are read.
+                // One that moves no connection (a motor torque) changes only what its part computes when read.
+                if self.ode.net.as_ref().is_none_or(|net| net.input_moves_connections(part, part_vr)) {
+                    let _ = self.ode.settle();
+                }
+                Ok(())
+            }
+            Binding::Tolerance => {
+                self.tolerance = value;
+                Ok(())
+            }
+            _ => Err(fmi_core::model::unknown_vr(vr)),
+        }
+    }
+
+    fn get_integer(&self, vr: u32) -> FmiResult<i32> {
+        match self.binding(vr)? {
+            Binding::Part { part, vr } => self.ode.parts[part].get_integer(vr),
+            _ => Err(fmi_core::model::unknown_vr(vr)),
+        }
+    }
+
+    fn set_integer(&mut self, vr: u32, value: i32) -> FmiResult {
+        match self.binding(vr)? {
+            Binding::Part { part, vr: part_vr } => {
+                self.ode.parts[part].set_integer(part_vr, value)?;
+                self.part_set(vr);
+                Ok(())
+            }
+            _ => Err(fmi_core::model::unknown_vr(vr)),
+        }
+    }
+
+    fn get_boolean(&self, vr: u32) -> FmiResult<bool> {
+        match self.binding(vr)? {
+            Binding::Part { part, vr } => self.ode.parts[part].get_boolean(vr),
+            Binding::StartAtEquilibrium => Ok(self.start_equilibrium),
+            _ => Err(fmi_core::model::unknown_vr(vr)),
+        }
+    }
+
+    fn set_boolean(&mut self, vr: u32, value: bool) -> FmiResult {
+        match self.binding(vr)? {
+            Binding::Part { part, vr: part_vr } => {
+                self.ode.parts[part].set_boolean(part_vr, value)?;
+                self.part_set(vr);
+                Ok(())
+            }
+            Binding::StartAtEquilibrium => {
+                self.start_equilibrium = value;
+                Ok(())
+            }
+            _ => Err(fmi_core::model::unknown_vr(vr)),
+        }
+    }
+
+    fn get_string(&self, vr: u32) -> FmiResult<&str> {
+        Err(fmi_core::model::unknown_vr(vr))
+    }
+
+    fn set_string(&mut self, vr: u32, _value: &str) -> FmiResult {
+        Err(fmi_core::model::unknown_vr(vr))
+    }
+
+    fn save_variables(&self, out: &mut StateWriter) {
+        for part in &self.ode.parts {
+            part.save_variables(out);
+        }
+        out.f64(self.tolerance);
+        out.bool(self.start_equilibrium);
+    }
+
+    fn load_variables(&mut self, input: &mut StateReader) -> FmiResult {
+        for (part, spec) in self.ode.parts.iter_mut().zip(&self.shared.spec.parts) {
+            // The part's messages name its own variables ("L is ..."): the line's are "<part>.L".
+            part.load_variables(input).map_err(|mut e| {
+                e.message = format!("{}.{}", spec.name, e.message);
+                e
+            })?;
+        }
+        self.tolerance = input.finite("tolerance")?;
+        self.start_equilibrium = input.bool("startAtEquilibrium")?;
+        Ok(())
+    }
+}
+
+impl Model for Line {
+    fn instantiate(resources: &Resources) -> FmiResult<Self> {
+        let path = resources.file(SPEC_FILE)?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| FmiError::error(format!("cannot read {}: {e} (the Line FMU's line is in resources/{SPEC_FILE})", path.display())))?;
+        Line::from_spec(&text)
+    }
+
+    fn description(&self) -> &ModelDescription {
+        &self.shared.description
+    }
+
+    fn save_state(&self, out: &mut StateWriter) {
+        for part in &self.ode.parts {
+            part.save_state(out);
+        }
+        out.bool(self.ode.net.is_some());
+        out.i32(self.ode.x.len() as i32);
+        for &x in &self.ode.x {
+            out.f64(x);
+        }
+        out.f64(self.ode.time);
+        out.f64(self.ode.next_event);
+        out.f64(self.ode.integrator.as_ref().map_or(0.0, |r| r.next_step));
+        out.f64(self.ode.rtol);
+        out.i32(self.ode.scratch.rtol_scale.len() as i32);
+        for &x in &self.ode.scratch.rtol_scale {
+            out.f64(x);
+        }
+    }
+
+    fn load_state(&mut self, r: &mut StateReader) -> FmiResult {
+        for part in &mut self.ode.parts {
+            part.load_state(r)?;
+        }
+        let initialized = r.bool("initialized")?;
+        let n = r.i32("number of states")?;
+        let mut x = Vec::new();
+        for _ in 0..n.max(0) {
+            x.push(r.finite("state")?);
+        }
+        self.ode.time = r.finite("time")?;
+        self.ode.next_event = r.f64("next event")?;
+        let next_step = r.finite("next step")?;
+        self.ode.rtol = r.finite("integrator tolerance")?;
+        let scales = r.i32("number of tolerance scales")?;
+        let mut rtol_scale = Vec::new();
+        for _ in 0..scales.max(0) {
+            rtol_scale.push(r.finite("tolerance scale")?);
+        }
+        if initialized {
+            // The parameters set the network (a roll's radius is a state only while it is wound):
+            // out of their ranges, say which, before the structure they break.
+            fmi_core::instance::states::check_values(self, true)?;
+            let net = Network::new(&self.shared.spec, &self.ode.parts).map_err(FmiError::error)?;
+            if x.len() != net.len() {
+                return Err(FmiError::error(format!("the state holds {} line states, the line has {}", x.len(), net.len())));
+            }
+            let mut integrator = Rosenbrock::new(stepping::METHOD, net.len(), net.kl, net.ku);
+            integrator.next_step = next_step;
+            self.ode.integrator = Some(integrator);
+            self.ode.net = Some(net);
+        } else {
+            // Before initialization the line has no integrator, so no tolerance scales to keep.
+            if !rtol_scale.is_empty() {
+                return Err(FmiError::error(format!("the state holds {} tolerance scales, the line is not initialized", rtol_scale.len())));
+            }
+            self.ode.net = None;
+            self.ode.integrator = None;
+        }
+        self.ode.x = x;
+        self.ode.ramps.clear();
+        self.ode.scratch = Scratch::default();
+        if let Some(net) = &self.ode.net {
+            if rtol_scale.len() != net.len() {
+                return Err(FmiError::error(format!("the state holds {} tolerance scales, the line has {} states", rtol_scale.len(), net.len())));
+            }
+            let mut scratch = stepping::scratch(&self.ode, net.len());
+            scratch.rtol_scale = rtol_scale;
+            self.ode.scratch = scratch;
+        }
+        self.ode.settle()
+    }
+
+    fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult {
+        let Binding::Real { part, vr: part_vr, .. } = self.binding(vr)? else {
+            return Err(FmiError::error(format!("value reference {vr} is not an input")));
+        };
+        let base = self.ode.parts[part].get_real(part_vr)?;
+        match self.ode.ramps.iter_mut().find(|(p, v, _, _)| *p == part && *v == part_vr) {
+            Some(r) => *r = (part, part_vr, base, value),
+            None => self.ode.ramps.push((part, part_vr, base, value)),
+        }
+        Ok(())
+    }
+
+    fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
+        let spec = self.shared.clone();
+        stepping::initialize(&mut self.ode, &spec.spec, self.tolerance, self.start_equilibrium, experiment, resources)
+    }
+
+    fn set_time(&mut self, time: f64) {
+        if time != self.ode.time {
+            self.ode.time = time;
+            // Model Exchange: a failure shows when the states are set or outputs read.
+            let _ = self.ode.settle();
+        }
+    }
+
+    fn do_step(&mut self, h: f64) -> FmiResult {
+        stepping::step(&mut self.ode, h, self.profiled)
+    }
+
+    fn event_update(&mut self) -> EventUpdate {
+        stepping::event_update(&mut self.ode)
+    }
+
+    fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
+        x.copy_from_slice(&self.ode.x);
+        Ok(())
+    }
+
+    fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
+        if let Some(bad) = x.iter().position(|v| !v.is_finite()) {
+            return Err(FmiError::discard(format!("state {bad} = {} is not finite", x[bad])));
+        }
+        // The states before, to go back to if the parts refuse these.
+        self.ode.scratch.x.copy_from_slice(&self.ode.x);
+        self.ode.x.copy_from_slice(x);
+        if let Err(e) = self.ode.settle() {
+            self.ode.x.copy_from_slice(&self.ode.scratch.x);
+            let _ = self.ode.settle();
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    fn get_derivatives(&self, dx: &mut [f64]) -> FmiResult {
+        let net = self.ode.net.as_ref().ok_or_else(|| FmiError::error("the line is not initialized"))?;
+        net.derivatives(&self.ode.parts, dx)
+    }
+
+    fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
+        let Some(net) = &self.ode.net else { return Err(FmiError::error("the line is not initialized")) };
+        let mut buffer = [0.0; 8];
+        for (k, s) in net.states.iter().enumerate() {
+            let part = &self.ode.parts[s.part];
+            let n = part.state_count();
+            part.get_nominals(&mut buffer[..n])?;
+            nominals[k] = buffer[s.index];
+        }
+        Ok(())
+    }
+
+    fn get_event_indicators(&self, z: &mut [f64]) -> FmiResult {
+        let mut k = 0;
+        for part in &self.ode.parts {
+            let n = part.event_indicator_count();
+            part.get_event_indicators(&mut z[k..k + n])?;
+            k += n;
+        }
+        Ok(())
+    }
+
+    fn partial_derivative(&self, unknown: u32, known: u32, _of: Jacobian) -> FmiResult<f64> {
+        self.partial_derivative(unknown, known)
+    }
+
+    fn outputs_defined(&self) -> FmiResult {
+        self.ode.parts.iter().try_for_each(Part::outputs_defined)
+    }
+
+    fn inputs_valid(&self) -> FmiResult {
+        self.ode.parts.iter().try_for_each(Part::inputs_valid)
+    }
+
+    fn provisional_state(&mut self) {}
+}

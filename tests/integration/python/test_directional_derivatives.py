@@ -1,0 +1,432 @@
+"""Directional derivatives (fmi2GetDirectionalDerivative) of the span against
+central finite differences of the same FMU, through FMPy.
+
+Every known is perturbed on its own: an input by fmi2SetReal, the state (Model
+Exchange) by fmi2SetContinuousStates. A central difference with step h has a
+truncation error ~ h^2/6 * |y'''| and a rounding error ~ eps_mach * |y| / h.
+The steps are 1e-6 of each known's scale (|value|, at least its nominal), on
+which the outputs are smooth (rational in the state and the speeds; the
+stress-strain curve is a cubic between nodes 5e-3 apart in strain, and no
+stencil crosses a node or the slack kink): truncation ~ 1e-12 relative. The
+rounding bound is computed per entry from the output's magnitude. An entry
+passes when |analytic - FD| <= RTOL * |FD| + the rounding bound; RTOL = 1e-6
+is far above both errors and far below what a missing term costs (the
+smallest terms of the equations are O(strain) ~ 1e-3 of the leading one).
+Every comparison also checks that the negated Jacobian would fail it.
+"""
+
+import itertools
+from pathlib import Path
+
+import pytest
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2Real
+from webline.fmus import effects as effects_of
+
+RTOL = 1e-6
+STEP = 1e-6
+EPS = 2.2e-16
+# Rounding of an output relative to its size: the strain L/x - 1 loses
+# log10(1/strain) digits, so its absolute error is ~ eps_mach * (1 + strain); a
+# margin of 1e3 over eps_mach covers that and the few operations after it.
+ROUNDING = 1e3 * EPS
+
+# The span's effects as its model description names them: every combination is checked.
+EFFECTS = effects_of(Path(__file__).resolve().parents[3] / "modelDescription.xml")
+COMBINATIONS = [dict(zip(EFFECTS, bits)) for bits in itertools.product([False, True], repeat=len(EFFECTS))]
+INPUTS = ("web_a.v", "web_a.eps", "web_b.v", "frame_a.x", "frame_a.y", "frame_b.x", "frame_b.y")
+NOMINAL = {"web_a.v": 1.0, "web_a.eps": 1e-3, "web_b.v": 1.0, "unstretchedLength": 1.0}
+UNKNOWNS = ("v", "T", "web_a.F", "web_b.F", "web_b.eps", "summary_Tension", "summary_Length",
+            "summary_Strain", "summary_Stress", "m_web", "der(unstretchedLength)")
+# A taut span away from equilibrium (dx/dt != 0, so the damping term's every
+# part counts); the rollers 1 m apart on a slant, so that every position matters.
+POINT = {"web_a.v": 5.0, "web_a.eps": 1e-3, "web_b.v": 5.02,
+         "frame_a.x": 0.1, "frame_a.y": 0.2, "frame_b.x": 0.9, "frame_b.y": 0.8}
+PARAMS = {"startAtEquilibrium": False, "eps_start": 2e-3, "wp2.d_r": 0.01, "toUnitF": 3, "toUnitV": 2}
+
+
+def label(effects):
+    on = [k for k, v in effects.items() if v]
+    return "+".join(on) or "none"
+
+
+def refused_in_me(effects):
+    """The span refuses these in Model Exchange: includeMass needs dv_b/dt and
+    damping with variableLength needs dL/dt, input rates ME does not give."""
+    return effects.get("includeMass") or (effects.get("includeDamping") and effects.get("variableLength"))
+
+
+@pytest.fixture(scope="module")
+def md(fmu_path):
+    return read_model_description(str(fmu_path))
+
+
+@pytest.fixture(scope="module")
+def vr(md):
+    return {v.name: v.valueReference for v in md.modelVariables}
+
+
+def instantiate(unzipdir, md, kind, log=None):
+    cls = FMU2Model if kind == "ModelExchange" else FMU2Slave
+    fmu = cls(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier,
+              instanceName="jacobian")
+    fmu.instantiate(loggingOn=log is not None, callbacks=None)
+    return fmu
+
+
+def set_values(fmu, vr, values):
+    for name, value in values.items():
+        if isinstance(value, bool):
+            fmu.setBoolean([vr[name]], [value])
+        elif isinstance(value, str):
+            fmu.setString([vr[name]], [value])
+        elif isinstance(value, int):
+            fmu.setInteger([vr[name]], [value])
+        else:
+            fmu.setReal([vr[name]], [value])
+
+
+def start(fmu, vr, values, me):
+    fmu.setupExperiment(startTime=0.0)
+    set_values(fmu, vr, values)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    if me:
+        fmu.newDiscreteStates()
+        fmu.enterContinuousTimeMode()
+
+
+class Perturb:
+    """Sets one known to a value and back: an input, or the state (ME)."""
+
+    def __init__(self, fmu, vr, name):
+        self.fmu, self.name = fmu, name
+        self.state = name == "unstretchedLength"
+        self.vr = vr[name]
+        self.value = fmu.getReal([self.vr])[0]
+
+    def set(self, value):
+        if self.state:
+            self.fmu.setContinuousStates((fmi2Real * 1)(value), 1)
+        else:
+            self.fmu.setReal([self.vr], [value])
+
+
+def jacobians(fmu, vr, unknowns, knowns):
+    """The analytic and the finite-difference Jacobian, and each entry's rounding bound."""
+    u_refs = [vr[n] for n in unknowns]
+    analytic, fd, noise = {}, {}, {}
+    # dx/dt is a difference of flows ~ the speeds: it rounds on their scale, not its own.
+    speeds = fmu.getReal([vr["web_a.v"], vr["web_b.v"]])
+    scale = {"der(unstretchedLength)": max(abs(s) for s in speeds)}
+    for k in knowns:
+        column = fmu.getDirectionalDerivative(u_refs, [vr[k]], [1.0])
+        p = Perturb(fmu, vr, k)
+        h = STEP * max(abs(p.value), NOMINAL.get(k, 1.0))
+        p.set(p.value + h)
+        up = fmu.getReal(u_refs)
+        p.set(p.value - h)
+        down = fmu.getReal(u_refs)
+        p.set(p.value)
+        for i, n in enumerate(unknowns):
+            analytic[n, k] = column[i]
+            fd[n, k] = (up[i] - down[i]) / (2 * h)
+            noise[n, k] = ROUNDING * max(abs(up[i]), abs(down[i]), scale.get(n, 0.0)) / h
+    return analytic, fd, noise
+
+
+def compare(what, analytic, fd, noise):
+    """Max relative error over the entries; fails on any entry out of tolerance."""
+    worst, flipped_caught, nonzero = 0.0, 0, 0
+    for key, a in analytic.items():
+        err = abs(a - fd[key])
+        allowed = RTOL * abs(fd[key]) + noise[key]
+        assert err <= allowed, f"{what}: d({key[0]})/d({key[1]}) = {a!r}, finite difference {fd[key]!r}"
+        if abs(fd[key]) > noise[key] / RTOL:
+            nonzero += 1
+            worst = max(worst, err / abs(fd[key]))
+            flipped_caught += abs(-a - fd[key]) > RTOL * abs(fd[key]) + noise[key]
+    assert nonzero > 0, f"{what}: every entry is zero, nothing was tested"
+    assert flipped_caught == nonzero, f"{what}: a wrong sign would pass"
+    return worst
+
+
+ME_RESULTS, CS_RESULTS = {}, {}
+
+
+@pytest.mark.parametrize("effects", COMBINATIONS, ids=label)
+def test_model_exchange_matches_finite_differences(unzipdir, md, vr, effects):
+    if refused_in_me(effects):
+        pytest.skip("refused in Model Exchange (needs input rates ME does not give)")
+    fmu = instantiate(unzipdir, md, "ModelExchange")
+    try:
+        start(fmu, vr, {**PARAMS, **effects, **POINT}, me=True)
+        knowns = INPUTS + ("unstretchedLength",)
+        a, f, n = jacobians(fmu, vr, UNKNOWNS, knowns)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    worst = compare(f"ME {label(effects)}", a, f, n)
+    ME_RESULTS[label(effects)] = worst
+    print(f"ME {label(effects)}: max relative error {worst:.1e}")
+
+
+def cs_after_steps(fmu, vr, given_rates):
+    """Three steps with moving inputs (backward-difference rates), then the
+    point; optionally input derivatives given for the next step."""
+    t, h = 0.0, 1e-3
+    for i in range(3):
+        fmu.setReal([vr["web_b.v"], vr["frame_b.x"]], [POINT["web_b.v"] - 0.01 * (3 - i), POINT["frame_b.x"] - 1e-4 * (3 - i)])
+        fmu.doStep(t, h)
+        t += h
+    fmu.setReal([vr[k] for k in POINT], list(POINT.values()))
+    if given_rates:
+        names = ["web_b.v", "frame_a.x", "frame_b.y", "frame_b.x"]
+        fmu.setRealInputDerivatives([vr[k] for k in names], [1, 1, 1, 1], [3.0, 0.02, -0.05, 0.1])
+
+
+@pytest.mark.parametrize("given_rates", [False, True], ids=["estimated-rates", "given-rates"])
+@pytest.mark.parametrize("effects", COMBINATIONS, ids=label)
+def test_co_simulation_matches_finite_differences(unzipdir, md, vr, effects, given_rates):
+    """After steps: d(outputs)/d(inputs) at the current state, the input rates
+    the outputs read (the given derivatives, or the estimate from the last
+    step) held; with given rates dL/dt still moves with the roller positions."""
+    fmu = instantiate(unzipdir, md, "CoSimulation")
+    try:
+        start(fmu, vr, {**PARAMS, **effects, **POINT}, me=False)
+        cs_after_steps(fmu, vr, given_rates)
+        a, f, n = jacobians(fmu, vr, UNKNOWNS, INPUTS)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    what = f"CS {label(effects)} {'given' if given_rates else 'estimated'} rates"
+    worst = compare(what, a, f, n)
+    CS_RESULTS[what] = worst
+    print(f"{what}: max relative error {worst:.1e}")
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("damping", [False, True], ids=["elastic", "damped"])
+def test_nonlinear_record_matches_finite_differences(unzipdir, md, vr, kind, damping):
+    """The PCHIP curve's tangent modulus (and its slope, with damping), at a
+    strain of 1.5e-2 between the nodes 1e-2 and 2e-2."""
+    me = kind == "ModelExchange"
+    fmu = instantiate(unzipdir, md, kind)
+    values = {**PARAMS, **POINT, "wp2.record": "nonwoven-PP-spunbond", "eps_start": 1.5e-2,
+              "includeDamping": damping, "preventNegativeTension": True}
+    try:
+        start(fmu, vr, values, me=me)
+        if not me:
+            cs_after_steps(fmu, vr, False)
+        knowns = INPUTS + (("unstretchedLength",) if me else ())
+        a, f, n = jacobians(fmu, vr, UNKNOWNS, knowns)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    worst = compare(f"{kind} nonwoven", a, f, n)
+    print(f"{kind} nonwoven-PP-spunbond damping={damping}: max relative error {worst:.1e}")
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_slack_web_has_zero_tension_derivatives(unzipdir, md, vr, kind):
+    """preventNegativeTension on a slack web: the tension is clamped at 0, so
+    its derivatives are 0, while the strain's are not."""
+    me = kind == "ModelExchange"
+    fmu = instantiate(unzipdir, md, kind)
+    try:
+        start(fmu, vr, {**PARAMS, **POINT, "eps_start": -1e-3, "preventNegativeTension": True,
+                        "includeDamping": True}, me=me)
+        knowns = INPUTS + (("unstretchedLength",) if me else ())
+        a, f, n = jacobians(fmu, vr, UNKNOWNS, knowns)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    for name in ("T", "web_a.F", "web_b.F", "summary_Tension", "summary_Stress"):
+        assert all(a[name, k] == 0.0 for k in knowns), name
+    compare(f"{kind} slack", a, f, n)
+
+
+@pytest.mark.parametrize("effects", COMBINATIONS, ids=label)
+def test_initialization_mode_matches_finite_differences(unzipdir, md, vr, effects):
+    """In initialization mode the initial unknowns (the state among them)
+    depend on the inputs through the start at equilibrium; input derivatives
+    given before initialization make the state's own terms (x dv_b/dt, the
+    moving rollers' dL/dt / x) count too."""
+    fmu = instantiate(unzipdir, md, "CoSimulation")
+    try:
+        fmu.setupExperiment(startTime=0.0)
+        set_values(fmu, vr, {**PARAMS, **effects, **POINT, "startAtEquilibrium": True})
+        names = ["web_b.v", "frame_a.x", "frame_b.y"]
+        fmu.setRealInputDerivatives([vr[k] for k in names], [1, 1, 1], [3.0, 0.02, -0.05])
+        fmu.enterInitializationMode()
+        unknowns = UNKNOWNS + ("unstretchedLength",)
+        a, f, n = jacobians(fmu, vr, unknowns, INPUTS)
+        fmu.exitInitializationMode()
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    worst = compare(f"init {label(effects)}", a, f, n)
+    print(f"initialization {label(effects)}: max relative error {worst:.1e}")
+
+
+class Log:
+    def __init__(self):
+        self.messages = []
+
+    def __call__(self, component, instance, status, category, message):
+        self.messages.append(message.decode())
+
+
+@pytest.mark.parametrize("kind, unknown, known, says", [
+    ("CoSimulation", "T", "unstretchedLength", "unstretchedLength (value reference 31) is not a known in Co-Simulation"),
+    ("CoSimulation", "T", "L", "L (value reference 1) is not a known"),
+    ("ModelExchange", "T", "wp2.E", "wp2.E (value reference 7) is not a known"),
+    ("ModelExchange", "unstretchedLength", "web_a.v", "unstretchedLength (value reference 31) is not an unknown"),
+    ("CoSimulation", "L", "web_a.v", "L (value reference 1) is not an unknown"),
+    ("CoSimulation", 9999, "web_a.v", "value reference 9999 (no variable) is not an unknown"),
+])
+def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind, unknown, known, says):
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+    from fmpy import calloc, free
+
+    log = Log()
+    fmu = FMU2Model if kind == "ModelExchange" else FMU2Slave
+    fmu = fmu(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bad")
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(lambda c, i, s, cat, msg: log(c, i, s, cat, msg))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    fmu.instantiate(loggingOn=True, callbacks=callbacks)
+    try:
+        start(fmu, vr, {}, me=kind == "ModelExchange")
+        ref = lambda x: x if isinstance(x, int) else vr[x]
+        with pytest.raises(FMICallException):
+            fmu.getDirectionalDerivative([ref(unknown)], [ref(known)], [1.0])
+        assert any(says in m for m in log.messages), log.messages
+        # The instance is in the error state; fmi2Reset brings it back.
+        fmu.reset()
+        start(fmu, vr, {}, me=kind == "ModelExchange")
+        assert len(fmu.getDirectionalDerivative([vr["T"]], [vr["web_b.v"]], [1.0])) == 1
+    finally:
+        fmu.freeInstance()
+
+
+# ---------------------------------------------------------------- the Roller
+# The same check on the Roller: states omega, r, y, y' (ME), inputs web_a.F,
+# web_b.F, web_a.eps, tau_m, F_load and those of the extra inlets and outlets
+# (a merge and a split: cases with ports; elsewhere unused, their derivatives 0).
+# The outputs are polynomials in the states and inputs (degree <= 4 in r), or
+# the merged strain, a smooth ratio, so the same steps and tolerances apply.
+
+ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load", "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps",
+                 "web_a4.F", "web_a4.eps", "web_b2.F", "web_b3.F", "web_b4.F")
+ROLLER_STATES = ("omega", "r", "y", "y_dot")
+ROLLER_UNKNOWNS = ("web_a.v", "web_b.v", "web_b.eps", "omega", "r", "y", "y_dot", "tau", "web_a.x", "web_a.y",
+                   "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)", "web_a2.v", "web_a4.v",
+                   "web_b2.v", "web_b2.eps", "web_b4.eps")
+ROLLER_POINT = {"web_a.F": 180.0, "web_b.F": 230.0, "web_a.eps": 1e-3, "tau_m": 1.5, "F_load": 400.0,
+                "web_a2.F": 120.0, "web_a2.eps": 4e-3, "web_a3.F": 60.0, "web_a3.eps": -5e-4, "web_a4.F": 90.0,
+                "web_a4.eps": 2e-2, "web_b2.F": 70.0, "web_b3.F": 110.0, "web_b4.F": 40.0}
+ROLLER_PARAMS = {"J": 0.3, "R": 0.15, "b": 0.02, "v_start": 5.0, "wound.thickness": 1e-4, "wound.density": 900.0,
+                 "wound.width": 1.2, "carriage.m": 3.0, "carriage.d": 40.0, "carriage.k": 2000.0, "carriage.y_start": 0.5,
+                 "web_a.m": 0.12, "web_a2.m": 0.05, "web_a3.m": 0.3, "web_a4.m": 0.02}
+# Tables linear over the first 10 s: the test points sit inside one piece.
+DRIVES = {
+    "idler": {},
+    "torque": {"torque": [[0, 1.0], [10, 3.0]]},
+    "tension": {"tension": [[0, 200.0], [10, 260.0]]},
+    "speed": {"speed": [[0, 5.0], [10, 6.0]]},
+}
+ROLLER_CASES = [
+    (drive, roll, carriage, (1, 1))
+    for drive in DRIVES
+    for roll in (0, 1, 2)
+    if not (drive == "tension" and roll == 0)  # a tension drive is an unwinder's or a winder's
+    for carriage in (False, True)
+] + [
+    # (inlets, outlets): a nip on a dancer, a slitter's unwinder, a winder of four webs.
+    ("speed", 0, True, (3, 2)),
+    ("tension", 1, False, (2, 4)),
+    ("idler", 2, True, (4, 4)),
+    ("torque", 0, False, (4, 1)),
+]
+
+
+def roller_label(case):
+    drive, roll, carriage, (inlets, outlets) = case
+    ports = f"-{inlets}in{outlets}out" if (inlets, outlets) != (1, 1) else ""
+    return f"{drive}-{['roller', 'unwinder', 'winder'][roll]}{'-dancer' if carriage else ''}{ports}"
+
+
+@pytest.fixture(scope="module")
+def roller(fmus):
+    from fmpy import extract
+
+    path = fmus / "Roller.fmu"
+    md = read_model_description(str(path))
+    return md, extract(str(path)), {v.name: v.valueReference for v in md.modelVariables}
+
+
+def roller_jacobians(fmu, vr, unknowns, knowns):
+    u_refs = [vr[n] for n in unknowns]
+    states = ROLLER_STATES
+    analytic, fd, noise = {}, {}, {}
+    for k in knowns:
+        column = fmu.getDirectionalDerivative(u_refs, [vr[k]], [1.0])
+        x = fmu.getReal([vr[s] for s in states])
+        value = x[states.index(k)] if k in states else fmu.getReal([vr[k]])[0]
+        h = STEP * max(abs(value), 1e-3 if k.endswith(".eps") or k == "r" else 1.0)
+
+        def put(v):
+            if k in states:
+                x2 = list(x)
+                x2[states.index(k)] = v
+                fmu.setContinuousStates((fmi2Real * 4)(*x2), 4)
+            else:
+                fmu.setReal([vr[k]], [v])
+
+        put(value + h)
+        up = fmu.getReal(u_refs)
+        put(value - h)
+        down = fmu.getReal(u_refs)
+        put(value)
+        for i, n in enumerate(unknowns):
+            analytic[n, k] = column[i]
+            fd[n, k] = (up[i] - down[i]) / (2 * h)
+            noise[n, k] = ROUNDING * max(abs(up[i]), abs(down[i]), 1.0) / h
+    return analytic, fd, noise
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("case", ROLLER_CASES, ids=roller_label)
+def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
+    import json
+
+    md, unzipdir, vr = roller
+    drive, roll, carriage, (inlets, outlets) = case
+    profile = dict(DRIVES[drive])
+    if carriage:
+        profile["load"] = [[0, 50.0], [10, 80.0]]
+    path = tmp_path / "profile.json"
+    path.write_text(json.dumps(profile))
+    me = kind == "ModelExchange"
+    fmu = instantiate(unzipdir, md, kind)
+    try:
+        values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "profile": str(path),
+                  "inlets": inlets, "outlets": outlets}
+        start(fmu, vr, values, me=me)
+        if me:
+            fmu.setTime(0.25)
+            # Away from the start values: the carriage moving, the roll grown.
+            fmu.setContinuousStates((fmi2Real * 4)(33.0, 0.16, 0.52, -0.03), 4)
+        else:
+            fmu.doStep(0.0, 0.25)
+        knowns = ROLLER_INPUTS + (ROLLER_STATES if me else ())
+        a, f, n = roller_jacobians(fmu, vr, ROLLER_UNKNOWNS, knowns)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    what = f"Roller {kind} {roller_label(case)}"
+    worst = compare(what, a, f, n)
+    print(f"{what}: max relative error {worst:.1e}")
