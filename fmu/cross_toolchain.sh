@@ -22,7 +22,7 @@
 # Order: MinGW-w64 first (building std for Windows calls its dlltool), then
 # rustc-web. Exports CROSS_CARGO and CROSS_RUSTC and the Windows target's linker.
 # APT_OPTIONS (e.g. "-o Dir::State::Lists=DIR") points apt at another state:
-# the tests resolve against a partial one (tests/setup/test_toolchain.py).
+# the tests resolve against a partial one (fmu/tests/test_setup.py).
 
 APT_OPTIONS="${APT_OPTIONS:-}"
 RUST_WEB_UNPACKED=(rustc-web cargo-web rust-web-src libstd-rust-web-dev)
