@@ -8,7 +8,7 @@ use profiles::{Profile, Table, Value};
 use std::sync::Arc;
 
 /// The table keys a roller's profile may have.
-pub const TABLES: [&str; 5] = ["speed", "torque", "tension", "strain", "load"];
+pub const TABLES: [&str; 6] = ["speed", "torque", "tension", "strain", "load", "nip"];
 
 /// A table of `TABLES` by position: looked up on every evaluation, so by index, not by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -18,6 +18,8 @@ pub enum Key {
     Tension,
     Strain,
     Load,
+    /// A nip's load N [R7].
+    Nip,
 }
 
 /// How the roller is driven: at most one of the profile's drive tables.
@@ -41,7 +43,7 @@ pub struct Loaded {
     pub text: Arc<str>,
     pub drive: Drive,
     /// The profile's tables in the order of `TABLES`, found once.
-    pub tables: Arc<[Option<Table>; 5]>,
+    pub tables: Arc<[Option<Table>; 6]>,
 }
 
 impl Loaded {
@@ -76,6 +78,14 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
     }
     if profile.table("load").is_some() && !p.carriage {
         return Err("a load table needs carriage = true".into());
+    }
+    if let Some(nip) = profile.table("nip") {
+        if !p.traction {
+            return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
+        }
+        if let Some(&[t, n]) = nip.points().iter().find(|&&[_, n]| !(n >= 0.0 && n.is_finite())) {
+            return Err(format!("nip: the load at {t} s is {n} N; a nip presses with a load >= 0"));
+        }
     }
     for e in &profile.events {
         for (name, value) in &e.changes {

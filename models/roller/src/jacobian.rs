@@ -3,14 +3,15 @@
 //! (omega, r, y, y') and the inputs. The profile's tables are functions of
 //! time only, so they and their slopes are held.
 
-use crate::parameters::{Inputs, Parameters};
+use crate::contact::{self, Dual};
+use crate::parameters::{Inputs, Parameters, STATES};
 use crate::physics::{self, Roll};
 use std::f64::consts::PI;
 
-/// A direction in the knowns: d(omega, r, y, y') and d(inputs).
+/// A direction in the knowns: d(omega, r, y, y', v_web) and d(inputs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Direction {
-    pub state: [f64; 4],
+    pub state: [f64; STATES],
     pub u: Inputs,
 }
 
@@ -20,10 +21,15 @@ pub struct Direction {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Tangents {
     pub surface_speed: f64,
+    pub web_speed: f64,
+    pub slip: f64,
+    pub traction_used: f64,
+    pub mu_eff: f64,
+    pub h_air: f64,
     pub strain_leaving: f64,
     pub drive_torque: f64,
-    /// d of (omega, r, y, y')/dt.
-    pub derivatives: [f64; 4],
+    /// d of (omega, r, y, y', v_web)/dt.
+    pub derivatives: [f64; STATES],
     pub omega: f64,
     pub radius: f64,
     /// The carriage's (y, y').
@@ -37,8 +43,9 @@ pub struct Tangents {
 /// every state, input and time, for as long as the parameters and the roll stay: [R1], [R2]
 /// and [R4] are then linear with coefficients made of parameters. So for a roller that winds
 /// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on).
+/// Not where the web may slip: [R7] is nonlinear.
 pub fn tangents_fixed(p: &Parameters) -> bool {
-    !p.winding() && p.inlets <= 1
+    !p.winding() && p.inlets <= 1 && !p.traction
 }
 
 /// What the tangents read besides the direction: the roller now, its drive's tables read at
@@ -58,6 +65,8 @@ pub struct Point<'a> {
     pub torque: f64,
     /// The leaving strain follows a table.
     pub strain_table: bool,
+    /// Where the web may slip: the contact [R6]–[R8] now (its differentials zero).
+    pub contact: Option<contact::State>,
 }
 
 impl<'a> Point<'a> {
@@ -67,6 +76,7 @@ impl<'a> Point<'a> {
         let p = self.params;
         let r = self.roll.radius;
         let c = if p.winding() { p.roll_sign() * p.wound_thickness / (2.0 * PI) } else { 0.0 };
+        let friction = self.contact.map(|s| contact::contact(p, &s).force.x);
         Linearization {
             params: p,
             inputs: self.inputs,
@@ -79,9 +89,10 @@ impl<'a> Point<'a> {
             r_rate: c * self.speed / r,
             slope: self.speed_slope.unwrap_or(0.0),
             tension: self.tension,
-            web_torque: physics::web_torque(p, r, self.inputs),
+            web_torque: friction.map_or_else(|| physics::web_torque(p, r, self.inputs), |f| -r * f),
             torque: self.torque,
             strain_table: self.strain_table,
+            contact: self.contact,
         }
     }
 }
@@ -114,6 +125,7 @@ pub struct Linearization<'a> {
     web_torque: f64,
     torque: f64,
     strain_table: bool,
+    contact: Option<contact::State>,
 }
 
 impl Linearization<'_> {
@@ -121,7 +133,7 @@ impl Linearization<'_> {
     #[inline]
     pub fn along(&self, d: &Direction) -> Tangents {
         let (p, u) = (self.params, self.inputs);
-        let [d_omega, d_r, d_y, d_y_dot] = d.state;
+        let [d_omega, d_r, d_y, d_y_dot, d_v_web] = d.state;
         let (omega, r, j, v, c, r_rate) = (self.omega, self.r, self.inertia, self.v, self.c, self.r_rate);
         let winding = p.winding();
         // [R3]: J(r), and with v = r*omega (or a speed table) r' = s*h_w*v/(2*pi*r).
@@ -129,7 +141,23 @@ impl Linearization<'_> {
         let d_v = if self.speed_table { 0.0 } else { omega * d_r + r * d_omega };
         let d_r_rate = c * (d_v * r - v * d_r) / (r * r);
         let web_torque = self.web_torque;
-        let d_web_torque = d_r * (u.pull_forward(p) - u.pull_back(p)) + r * (d.u.pull_forward(p) - d.u.pull_back(p));
+        // Where the web may slip [R6]–[R8]: the contact along d, its friction f moving the roller by -r*f.
+        let along_contact = self.contact.map(|s| {
+            let s = contact::State {
+                v_web: Dual::new(s.v_web.x, d_v_web),
+                v_surface: Dual::new(s.v_surface.x, d_v),
+                t_a: Dual::new(s.t_a.x, d.u.force_a[0]),
+                t_b: Dual::new(s.t_b.x, d.u.force_b[0]),
+                radius: Dual::new(r, d_r),
+                ..s
+            };
+            let c = contact::contact(p, &s);
+            (c, contact::web_acceleration(p, &s, c.force).d, contact::traction_used(p, &s, c.mu_eff).d)
+        });
+        let d_web_torque = match &along_contact {
+            Some((c, _, _)) => -d_r * c.force.x - r * c.force.d,
+            None => d_r * (u.pull_forward(p) - u.pull_back(p)) + r * (d.u.pull_forward(p) - d.u.pull_back(p)),
+        };
         let (d_torque, d_omega_rate) = if self.speed_table {
             // tau = J*v'/r + b*omega - r*(F_b - F_a); omega' = v'/r - v*r'/r^2.
             let slope = self.slope;
@@ -153,11 +181,21 @@ impl Linearization<'_> {
         } else {
             (0.0, 0.0)
         };
+        let surface = if self.speed_table { 0.0 } else { d_v };
+        let (web_speed, slip, traction_used, mu_eff, h_air, d_v_web_rate) = match &along_contact {
+            Some((c, rate, used)) => (d_v_web, d_v_web - surface, *used, c.mu_eff.d, c.h_air.d, *rate),
+            None => (surface, 0.0, 0.0, 0.0, 0.0, 0.0),
+        };
         Tangents {
-            surface_speed: if self.speed_table { 0.0 } else { d_v },
+            surface_speed: surface,
+            web_speed,
+            slip,
+            traction_used,
+            mu_eff,
+            h_air,
             strain_leaving: if self.strain_table { 0.0 } else { strain_leaving_tangent(p, u, &d.u) },
             drive_torque: d_torque,
-            derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate],
+            derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate, d_v_web_rate],
             omega: d_omega,
             radius: d_r,
             carriage: [d_y, d_y_dot],

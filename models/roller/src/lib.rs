@@ -5,6 +5,7 @@
 //!
 //! * `parameters` — what the user sets and the inputs, in SI units;
 //! * `physics` — the equations [R1]–[R5] and their exact steps;
+//! * `contact` — where the web may slip: its speed over the roller, friction, air film [R6]–[R8];
 //! * `drive` — the profile: the drive and the tables of time it follows;
 //! * `jacobian` — the partial derivatives of the outputs and state derivatives;
 //! * `variables` — each variable of modelDescription.xml bound to its field;
@@ -13,6 +14,7 @@
 
 #![deny(unsafe_code)]
 
+pub mod contact;
 pub mod description;
 pub mod drive;
 pub mod jacobian;

@@ -2,10 +2,11 @@
 //! calls (initialization, steps, Model Exchange, FMU states). Its equations
 //! are in `physics`, its drive and tables in `drive`.
 
+use crate::contact::{self, Dual};
 use crate::description::{Real, DESCRIPTION};
 use crate::drive::{self, Drive, Key, Loaded};
 use crate::jacobian::{Direction, Linearization, Point, Tangents};
-use crate::parameters::{Inputs, Parameters};
+use crate::parameters::{Inputs, Parameters, STATES};
 use crate::physics::{self, Roll};
 use fmi_core::{Compiled, EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use profiles::Value;
@@ -20,6 +21,8 @@ pub struct Roller {
     roll: Roll,
     /// Carriage travel y (down positive) and speed.
     pub(crate) carriage: [f64; 2],
+    /// The web's speed over the roller [R6] (with traction; else the surface's, unused).
+    v_web: f64,
     /// The time now, s: profiles are tables of it.
     time: f64,
     /// The time up to which the profile's breaks and events are applied. Later, a table is read on
@@ -31,7 +34,7 @@ pub struct Roller {
 }
 
 impl Roller {
-    /// Sets the Model Exchange states at `active` (indices into (omega, r, y, y')) to `x`, the
+    /// Sets the Model Exchange states at `active` (indices into (omega, r, y, y', v_web)) to `x`, the
     /// others kept: what `set_continuous_states` does with the full vector, without forming it
     /// where only omega moves (a roller that neither winds nor carries a dancer).
     pub fn set_active_states(&mut self, active: &[usize], x: &[f64]) -> FmiResult {
@@ -39,7 +42,7 @@ impl Roller {
             self.omega = CompensatedSum::from_parts(omega, 0.0);
             return Ok(());
         }
-        let mut full = [0.0; 4];
+        let mut full = [0.0; STATES];
         self.get_continuous_states(&mut full)?;
         for (&i, &value) in active.iter().zip(x) {
             full[i] = value;
@@ -91,6 +94,80 @@ impl Roller {
         }
     }
 
+    /// The web's speed over the roller [R6]: the surface's where the web cannot slip.
+    #[inline]
+    pub fn web_speed(&self) -> f64 {
+        if self.params.traction {
+            self.v_web
+        } else {
+            self.surface_speed()
+        }
+    }
+
+    /// v_web - v [R6].
+    pub fn slip(&self) -> f64 {
+        self.web_speed() - self.surface_speed()
+    }
+
+    /// The contact's state now [R6]–[R8] (its differentials zero: `jacobian` sets them).
+    fn contact_state(&self) -> contact::State {
+        self.contact_state_at(self.time, self.omega(), self.v_web)
+    }
+
+    /// The contact's state at time t with the roller at omega and the web at v_web (a step's trial point).
+    fn contact_state_at(&self, t: f64, omega: f64, v_web: f64) -> contact::State {
+        let (u, r) = (&self.inputs, self.roll.radius);
+        let v_surface = match (self.drive(), self.table(Key::Speed)) {
+            (Drive::Speed, Some(table)) => self.read(table, t).0,
+            _ => physics::surface_speed(r, omega),
+        };
+        contact::State {
+            v_web: Dual::new(v_web, 0.0),
+            v_surface: Dual::new(v_surface, 0.0),
+            t_a: Dual::new(u.force_a[0], 0.0),
+            t_b: Dual::new(u.force_b[0], 0.0),
+            nip_load: self.table(Key::Nip).map_or(0.0, |table| self.read(table, t).0),
+            radius: Dual::new(r, 0.0),
+        }
+    }
+
+    /// The coefficient of friction after the air film [R8] (0 without traction).
+    pub fn mu_eff(&self) -> f64 {
+        if self.params.traction {
+            contact::contact(&self.params, &self.contact_state()).mu_eff.x
+        } else {
+            0.0
+        }
+    }
+
+    /// The air film's thickness [R8] (0 without traction or air).
+    pub fn h_air(&self) -> f64 {
+        if self.params.traction {
+            contact::contact(&self.params, &self.contact_state()).h_air.x
+        } else {
+            0.0
+        }
+    }
+
+    /// The share of the available traction in use [R7] (0 without traction).
+    pub fn traction_used(&self) -> f64 {
+        if !self.params.traction {
+            return 0.0;
+        }
+        let state = self.contact_state();
+        contact::traction_used(&self.params, &state, contact::contact(&self.params, &state).mu_eff).x
+    }
+
+    /// The webs' torque on the roller: r*(F_b - F_a) [R1], or with traction the friction's, -r*f [R6].
+    #[inline]
+    fn web_torque(&self) -> f64 {
+        if self.params.traction {
+            -self.roll.radius * contact::contact(&self.params, &self.contact_state()).force.x
+        } else {
+            physics::web_torque(&self.params, self.roll.radius, &self.inputs)
+        }
+    }
+
     /// Whether the equations depend on time at fixed states and inputs on the
     /// piece of the profile they read at t: one of its tables has a slope there.
     pub fn varies_with_time(&self, t: f64) -> bool {
@@ -129,7 +206,7 @@ impl Roller {
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
     pub fn drive_torque(&self) -> f64 {
         match (self.drive(), self.table(Key::Speed)) {
-            (Drive::Speed, Some(t)) => physics::speed_drive_torque(&self.params, &self.roll, &self.inputs, self.omega.value(), self.read(t, self.time).1),
+            (Drive::Speed, Some(t)) => physics::speed_drive_torque(&self.params, &self.roll, self.web_torque(), self.omega.value(), self.read(t, self.time).1),
             _ => self.torque_at(self.time).0,
         }
     }
@@ -156,22 +233,28 @@ impl Roller {
         physics::contact_height(&self.params, self.carriage[0])
     }
 
-    /// d/dt of (omega, r, y, y') now [R1]–[R4], for Model Exchange.
-    pub fn derivatives(&self) -> [f64; 4] {
+    /// d/dt of (omega, r, y, y', v_web) now [R1]–[R4], [R6], for Model Exchange.
+    pub fn derivatives(&self) -> [f64; STATES] {
         let p = &self.params;
         let v = self.surface_speed();
         let (radius_rate, inertia_rate) =
             if p.winding() { (self.roll.radius_rate(p, v), self.roll.inertia_rate(p, v)) } else { (0.0, 0.0) };
         let omega_rate = match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => physics::omega_rate_at_speed(self.read(t, self.time).1, v, self.roll.radius, radius_rate),
-            _ => physics::omega_rate(p, &self.roll, &self.inputs, self.omega.value(), self.torque_at(self.time).0, inertia_rate),
+            _ => physics::omega_rate(p, &self.roll, self.web_torque(), self.omega.value(), self.torque_at(self.time).0, inertia_rate),
+        };
+        let v_web_rate = if p.traction {
+            let state = self.contact_state();
+            contact::web_acceleration(p, &state, contact::contact(p, &state).force).x
+        } else {
+            0.0
         };
         let carriage = if p.carriage {
             [self.carriage[1], physics::carriage_acceleration(p, self.carriage, self.carriage_force(self.time).0)]
         } else {
             [0.0, 0.0]
         };
-        [omega_rate, radius_rate, carriage[0], carriage[1]]
+        [omega_rate, radius_rate, carriage[0], carriage[1], v_web_rate]
     }
 
     /// The unit direction of one known: a state or an input (None: neither).
@@ -182,6 +265,7 @@ impl Roller {
             Real::r => d.state[1] = 1.0,
             Real::y => d.state[2] = 1.0,
             Real::y_dot => d.state[3] = 1.0,
+            Real::v_web => d.state[4] = 1.0,
             k => *Self::input_field(&mut d.u, k)? = 1.0,
         }
         Some(d)
@@ -212,6 +296,7 @@ impl Roller {
             tension,
             torque: if speed_table.is_some() { 0.0 } else { self.drive_torque() },
             strain_table: self.table(Key::Strain).is_some(),
+            contact: self.params.traction.then(|| self.contact_state()),
         };
         point.linearize()
     }
@@ -248,7 +333,15 @@ impl Roller {
         let p = &self.params;
         let r = self.roll.radius;
         let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
+        let mut v_web = self.v_web;
         let (omega, travel) = match &speed_table {
+            _ if p.traction => {
+                // [R6]-[R7] are nonlinear and stiff (the friction's slope over the web's small mass):
+                // an L-stable Rosenbrock method on (omega, v_web), the inputs held. No roll winds here.
+                let y = self.slipping_step(t, h)?;
+                v_web = y[1];
+                (CompensatedSum::from_parts(y[0], 0.0), 0.0)
+            }
             Some(table) => {
                 let (v0, slope) = self.read(table, t); // at the piece's start, after its events
                 let v1 = v0 + slope * h; // the left limit at a jump that ends the piece
@@ -290,8 +383,18 @@ impl Roller {
                 physics::web_torque(p, r, &self.inputs)
             )));
         }
-        (self.omega, self.roll, self.carriage) = (omega, roll, carriage);
+        (self.omega, self.roll, self.carriage, self.v_web) = (omega, roll, carriage, v_web);
         Ok(())
+    }
+
+    /// (omega, v_web) after [t, t+h] of a piece [R6]-[R7], the inputs held.
+    fn slipping_step(&self, t: f64, h: f64) -> FmiResult<[f64; 2]> {
+        let y0 = [self.omega(), self.v_web];
+        let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
+        let control = solver::Control { rtol: SLIP_RTOL, atol: [scale(y0[0]), scale(y0[1])], initial_step: h, max_steps: 100_000 };
+        solver::rosenbrock::integrate(&Slipping { roller: self, t0: t }, h, y0, &control)
+            .map(|solution| solution.y)
+            .map_err(|failure| FmiError::discard(format!("the web's slip on the roller could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
     /// A communication step [time, time+h], split where a table kinks or jumps
@@ -328,6 +431,8 @@ impl Roller {
         };
         self.omega = CompensatedSum::from_parts(speed / p.radius, 0.0);
         self.carriage = [p.carriage_start, 0.0];
+        // The web starts with the surface: sticking.
+        self.v_web = speed;
         self.time = time;
         self.events_at = time;
         self.next_event = 0;
@@ -348,7 +453,7 @@ impl Model for Roller {
         out.f64(self.omega.hi());
         out.f64(self.omega.lo());
         let r = &self.roll;
-        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.time, self.events_at] {
+        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.v_web, self.time, self.events_at] {
             out.f64(x);
         }
         out.i32(self.next_event as i32);
@@ -364,6 +469,7 @@ impl Model for Roller {
             reference_inertia: r.finite("reference J")?,
         };
         self.carriage = [r.finite("y")?, r.finite("y_dot")?];
+        self.v_web = r.finite("v_web")?;
         self.time = r.finite("time")?;
         self.events_at = r.finite("events applied until")?;
         let next = r.i32("next event")?;
@@ -389,6 +495,14 @@ impl Model for Roller {
     }
 
     fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
+        let p = &self.params;
+        if p.traction && (p.roll != 0 || p.inlets > 1 || p.outlets > 1) {
+            return Err(FmiError::error(format!(
+                "includeTraction = true with roll = {}, inlets = {}, outlets = {}: a web slips only on a roller with one web \
+                 in and one out that winds no roll (an idler, a driven roller, a dancer)",
+                p.roll, p.inlets, p.outlets
+            )));
+        }
         let (profile, unmatched) = match drive::load(&self.params, resources)? {
             Ok(loaded) => (Some(loaded), None),
             Err(unmatched) => (None, unmatched),
@@ -417,7 +531,7 @@ impl Model for Roller {
     // Model Exchange: the importer integrates (omega, r, y, y').
 
     fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
-        x.copy_from_slice(&[self.omega.value(), self.roll.radius, self.carriage[0], self.carriage[1]]);
+        x.copy_from_slice(&[self.omega.value(), self.roll.radius, self.carriage[0], self.carriage[1], self.web_speed()]);
         Ok(())
     }
 
@@ -429,6 +543,7 @@ impl Model for Roller {
         self.omega = CompensatedSum::from_parts(x[0], 0.0);
         self.roll = Roll { radius: x[1], inertia, ..self.roll };
         self.carriage = [x[2], x[3]];
+        self.v_web = x[4];
         Ok(())
     }
 
@@ -448,7 +563,7 @@ impl Model for Roller {
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
-        nominals.copy_from_slice(&[1.0, self.params.radius, 1.0, 1.0]);
+        nominals.copy_from_slice(&[1.0, self.params.radius, 1.0, 1.0, 1.0]);
         Ok(())
     }
 
@@ -468,6 +583,60 @@ impl Model for Roller {
             next_event_time: self.profile.as_ref().and_then(|l| l.profile.next_break(self.time)),
             states_changed: rolled || speed_drive,
         }
+    }
+}
+
+/// The roller's own step where the web may slip: tight, as the Line's tolerance is, so that a
+/// co-simulation's error is its coupling's.
+const SLIP_RTOL: f64 = 1e-10;
+const SLIP_ATOL: f64 = 1e-12;
+
+/// [R6]-[R7] over a piece, as an ODE in (omega, v_web) from the piece's start t0.
+struct Slipping<'a> {
+    roller: &'a Roller,
+    t0: f64,
+}
+
+impl Slipping<'_> {
+    /// The contact and the rates at time t0 + s, the roller at y, along (d_omega, d_v_web).
+    fn at(&self, s: f64, y: &[f64; 2], d: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+        let (roller, t) = (self.roller, self.t0 + s);
+        let (p, r) = (&roller.params, roller.roll.radius);
+        let speed_table = roller.table(Key::Speed).filter(|_| roller.drive() == Drive::Speed);
+        let mut state = roller.contact_state_at(t, y[0], y[1]);
+        state.v_web.d = d[1];
+        state.v_surface.d = if speed_table.is_some() { 0.0 } else { r * d[0] };
+        let f = contact::contact(p, &state).force;
+        let (omega_rate, d_omega_rate) = match speed_table {
+            Some(table) => (roller.read(table, t).1 / r, 0.0),
+            None => {
+                let j = roller.roll.inertia;
+                ((-r * f.x + roller.torque_at(t).0 - p.damping * y[0]) / j, (-r * f.d - p.damping * d[0]) / j)
+            }
+        };
+        let a = contact::web_acceleration(p, &state, f);
+        ([omega_rate, a.x], [d_omega_rate, a.d])
+    }
+}
+
+impl solver::Ode<2> for Slipping<'_> {
+    fn rhs(&self, s: f64, y: &[f64; 2]) -> [f64; 2] {
+        self.at(s, y, [0.0, 0.0]).0
+    }
+
+    fn jacobian(&self, s: f64, y: &[f64; 2]) -> [[f64; 2]; 2] {
+        let (c0, c1) = (self.at(s, y, [1.0, 0.0]).1, self.at(s, y, [0.0, 1.0]).1);
+        [[c0[0], c1[0]], [c0[1], c1[1]]]
+    }
+
+    /// Tables of time (a drive's ramp, the nip's load) move f at fixed y: a central difference.
+    fn time_derivative(&self, s: f64, y: &[f64; 2]) -> [f64; 2] {
+        if !self.roller.varies_with_time(self.t0 + s) {
+            return [0.0; 2];
+        }
+        let e = 1e-7 * (self.t0 + s).abs().max(1e-3);
+        let (hi, lo) = (self.rhs(s + e, y), self.rhs(s - e, y));
+        [(hi[0] - lo[0]) / (2.0 * e), (hi[1] - lo[1]) / (2.0 * e)]
     }
 }
 

@@ -21,9 +21,26 @@ pub struct Parameters {
     /// Webs arriving (web_a, web_a2, ...) and leaving (web_b, web_b2, ...), 1..=4.
     pub inlets: i32,
     pub outlets: i32,
-    /// Mass per unstretched length of each arriving web [R5], kg/m.
+    /// Mass per unstretched length of each arriving web [R5], kg/m (the first also the web's on
+    /// the wrap [R6]).
     pub mass_a: [f64; PORTS],
+    /// The web may slip: its speed over the roller is a state [R6]–[R8].
+    pub traction: bool,
+    /// Friction coefficient between web and roller, wrap angle (rad), slip speed scale (m/s) [R7].
+    pub traction_mu: f64,
+    pub traction_wrap: f64,
+    pub traction_v_slip: f64,
+    /// The web's width, for the tension per width under the air film [R8], m.
+    pub traction_width: f64,
+    /// Friction coefficient at a nip (its load is the profile's `nip` table) [R7].
+    pub nip_mu: f64,
+    /// The surfaces' combined roughness (0: no air film) and the air's viscosity [R8].
+    pub air_roughness: f64,
+    pub air_viscosity: f64,
 }
+
+/// The roller's Model Exchange states: (omega, r, y, y', v_web).
+pub const STATES: usize = 5;
 
 /// The most webs a roller takes in or gives out.
 pub const PORTS: usize = 4;

@@ -95,11 +95,12 @@ pub fn web_torque(p: &Parameters, radius: f64, u: &Inputs) -> f64 {
     radius * (u.pull_forward(p) - u.pull_back(p))
 }
 
-/// d(omega)/dt [R1] at the drive torque `torque`, J moving at `inertia_rate` (a roll being
+/// d(omega)/dt [R1] at the webs' torque `web_torque` ([R1]'s r*(F_b - F_a), or [R6]'s -r*f where
+/// the web may slip) and the drive torque `torque`, J moving at `inertia_rate` (a roll being
 /// wound: d(J*omega)/dt = J*omega' + J'*omega).
 #[inline]
-pub fn omega_rate(p: &Parameters, roll: &Roll, u: &Inputs, omega: f64, torque: f64, inertia_rate: f64) -> f64 {
-    (web_torque(p, roll.radius, u) + torque - p.damping * omega - inertia_rate * omega) / roll.inertia
+pub fn omega_rate(p: &Parameters, roll: &Roll, web_torque: f64, omega: f64, torque: f64, inertia_rate: f64) -> f64 {
+    (web_torque + torque - p.damping * omega - inertia_rate * omega) / roll.inertia
 }
 
 /// d(omega)/dt of a surface that follows a speed v(t) with slope v' [R2]: omega = v/r, r moving at r'.
@@ -109,10 +110,10 @@ pub fn omega_rate_at_speed(slope: f64, speed: f64, radius: f64, radius_rate: f64
 }
 
 /// The torque [R1] that makes the surface follow a speed table with slope v' (r and J held):
-/// J*v'/r + b*omega - r*(F_b - F_a).
+/// J*v'/r + b*omega - (the webs' torque, as in `omega_rate`).
 #[inline]
-pub fn speed_drive_torque(p: &Parameters, roll: &Roll, u: &Inputs, omega: f64, slope: f64) -> f64 {
-    roll.inertia * slope / roll.radius + p.damping * omega - web_torque(p, roll.radius, u)
+pub fn speed_drive_torque(p: &Parameters, roll: &Roll, web_torque: f64, omega: f64, slope: f64) -> f64 {
+    roll.inertia * slope / roll.radius + p.damping * omega - web_torque
 }
 
 /// [R1] with r and J held over a piece of length h: the drive torque is

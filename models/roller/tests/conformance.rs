@@ -5,17 +5,29 @@ use fmi_testkit::conformance::{Hints, Point};
 /// A speed drive from a profile: the drive's torque then answers the web
 /// tensions within the step (tau lists web_a.F and web_b.F); the same with
 /// every inlet and outlet in use, where the extra ports' tensions reach tau
-/// and their strains the merged web_b.eps [R5].
+/// and their strains the merged web_b.eps [R5]; a web that may slip on a wrap
+/// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides.
 fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
+    let nip = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/traction_nip.json");
     let all_ports = vec![("inlets", 4.0), ("outlets", 4.0)];
+    let slipping = vec![
+        ("includeTraction", 1.0),
+        ("traction.wrap", 1.5),
+        ("nip.mu", 0.4),
+        ("air.roughness", 1.5e-5), // the film (about 28 um here) between sigma and 3 sigma
+        ("v_start", 12.0),
+        ("web_a.F", 100.0),
+        ("web_b.F", 108.0),
+    ];
     Hints {
         points: vec![
             Point { values: vec![], texts: vec![("profile", speed_drive.into())] },
             Point { values: all_ports, texts: vec![("profile", speed_drive.into())] },
+            Point { values: slipping, texts: vec![("profile", nip.into())] },
         ],
         texts: vec![("profile", speed_drive.into())],
-        refusals: vec![],
+        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller"],
     }
 }
 
