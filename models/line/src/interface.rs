@@ -30,7 +30,8 @@ pub enum Binding {
 
 /// Part parameters the line does not offer: the line solves and starts the
 /// parts itself, and its outputs are SI.
-const NOT_OFFERED: [&str; 8] = ["startAtEquilibrium", "useSensor", "toUnitV", "toUnitF", "solver", "tolerance", "substeps", "profile"];
+/// `includeTraction` decides which states a roller has: the line's structure, fixed by its scene.
+const NOT_OFFERED: [&str; 9] = ["startAtEquilibrium", "useSensor", "toUnitV", "toUnitF", "solver", "tolerance", "substeps", "profile", "includeTraction"];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.
 pub const DEFAULT_TOLERANCE: f64 = 1e-9;
@@ -176,7 +177,13 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
                 }
             }
             role => {
-                let mut names = vec![("web_b.v", "v"), ("omega", "omega"), ("tau", "tau"), ("web_b.eps", "eps")];
+                let mut names = vec![("v", "v"), ("omega", "omega"), ("tau", "tau"), ("web_b.eps", "eps")];
+                if let Some(air) = parts[p].traction() {
+                    names.extend([("v_web", "v_web"), ("slip", "slip"), ("traction", "traction"), ("mu_eff", "mu_eff")]);
+                    if air {
+                        names.push(("h_air", "h_air"));
+                    }
+                }
                 if matches!(role, Role::Unwinder | Role::Winder) {
                     names.push(("r", "r"));
                 }

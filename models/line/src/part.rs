@@ -294,7 +294,8 @@ impl Part {
 
     /// The part's continuous states the line integrates (indices into its
     /// Model Exchange state vector): a Roller's radius only on a roll being
-    /// wound, its carriage only on a dancer.
+    /// wound, its carriage only on a dancer, the web's speed over it only where
+    /// the web may slip.
     pub fn active_states(&self) -> Vec<usize> {
         match self {
             Part::Span(_) => vec![0],
@@ -306,8 +307,19 @@ impl Part {
                 if r.params.carriage {
                     states.extend([2, 3]);
                 }
+                if r.params.traction {
+                    states.push(4);
+                }
                 states
             }
+        }
+    }
+
+    /// Where the web may slip on a roller [R6]: whether, and whether under an air film [R8].
+    pub fn traction(&self) -> Option<bool> {
+        match self {
+            Part::Roller(r) if r.params.traction => Some(r.params.air_roughness > 0.0),
+            _ => None,
         }
     }
 

@@ -543,7 +543,10 @@ impl Model for Roller {
         self.omega = CompensatedSum::from_parts(x[0], 0.0);
         self.roll = Roll { radius: x[1], inertia, ..self.roll };
         self.carriage = [x[2], x[3]];
-        self.v_web = x[4];
+        // Without traction x[4] is the surface's speed, not a state of the roller's own.
+        if self.params.traction {
+            self.v_web = x[4];
+        }
         Ok(())
     }
 
