@@ -408,3 +408,116 @@ fn the_guid_is_the_line_files_hash() {
     assert_ne!(a, line::spec::guid("{\"a\": 2}"));
     assert_eq!(a.len(), 38, "{a}");
 }
+
+// Traction [R6]-[R8]: the closed forms of docs/physics.md ("Rollers that slip"), in lines whose
+// spans carry the web's Kelvin-Voigt damping (the wrap's mode needs it). PET as above: EA = 225 kN.
+
+const MU: f64 = 0.3;
+const WRAP: f64 = std::f64::consts::FRAC_PI_2;
+const V_SLIP: f64 = 1e-3;
+/// The web's mass per length: density * width * thickness.
+const WEB_MASS: f64 = 1390.0 * 1.0 * 50e-6;
+
+/// A roller the web may slip on; `start` (over these defaults) and `profile` as `roller`.
+fn slipping(name: &str, start: Value, profile: Option<Value>) -> Value {
+    let mut p = roller(name, "roller", start, profile);
+    for (k, v) in [("includeTraction", json!(true)), ("traction.mu", json!(MU)), ("traction.wrap", json!(WRAP)), ("web_a.m", json!(WEB_MASS))] {
+        if p["start"].get(k).is_none() {
+            p["start"][k] = v;
+        }
+    }
+    p
+}
+
+/// src (5 m/s, strain 1e-3) - a - node - b - snk, the spans damped.
+fn through(node: Value, v_sink: f64, start: &str) -> Value {
+    let mut src = prescribed("src", "source", json!([[0.0, 5.0]]));
+    src["start"]["web_a.eps"] = json!(1e-3);
+    let name = node["name"].as_str().unwrap().to_string();
+    let parts = vec![src, span("a", 1.0, 1e-3, &["includeDamping"]), node, span("b", 1.0, 1e-3, &["includeDamping"]), prescribed("snk", "sink", json!([[0.0, v_sink]]))];
+    line_spec(parts, chain(&["src", "a", &name, "b", "snk"]), start)
+}
+
+/// A roll driven 10 % slower than the web drags on it: the web slides (s = 0.5 m/s = 500 v_slip),
+/// so T_b = T_a exp(mu theta); the strains follow from the mass balance: 1 + eps_b = (v_snk/v_src)(1 + eps_src)
+/// for the span after it, eps_a = eps_b exp(-mu theta) before it (one web), and the web crosses the
+/// roll at v_w = v_src (1 + eps_a)/(1 + eps_src). At the equilibrium start and held there, at 1 and 10 ms.
+#[test]
+fn a_drag_roll_slides_at_the_capstan_ratio() {
+    let drag = slipping("drag", json!({"J": 0.05, "R": 0.1, "b": 0.0}), Some(json!({"speed": [[0.0, 4.5]]})));
+    let spec = through(drag, 5.005, "equilibrium");
+    let eps_b = 5.005 / 5.0 * 1.001 - 1.0;
+    let eps_a = eps_b * (-MU * WRAP).exp();
+    let v_w = 5.0 * (1.0 + eps_a) / 1.001;
+    for h in [1e-3, 1e-2] {
+        let mut line = initialized(&spec);
+        for step in 0..=50 {
+            if step > 0 {
+                line.do_step(h).unwrap();
+            }
+            let (t_a, t_b) = (get(&line, "a.T"), get(&line, "b.T"));
+            assert!(((t_b / t_a).ln() / (MU * WRAP) - 1.0).abs() < 1e-6, "h = {h}, step {step}: ratio {}", t_b / t_a);
+            assert!((get(&line, "a.eps") - eps_a).abs() < 1e-6 * eps_b, "eps_a {} vs {eps_a}", get(&line, "a.eps"));
+            assert!((get(&line, "b.eps") - eps_b).abs() < 1e-6 * eps_b);
+            assert!((get(&line, "drag.v_web") - v_w).abs() < 1e-6 * 5.0, "v_web {} vs {v_w}", get(&line, "drag.v_web"));
+            assert!(get(&line, "drag.slip") > 50.0 * V_SLIP && get(&line, "drag.traction") > 0.99);
+        }
+    }
+}
+
+/// An idler at rest on a running line is spun up by friction: while the web slides, its surface
+/// accelerates at R^2 T_a (exp(mu theta) - 1)/J (b = 0); then it sticks, |s| <= 5 v_slip.
+#[test]
+fn an_idler_at_rest_is_spun_up_by_friction_then_sticks() {
+    let (j, r) = (0.01, 0.05);
+    let idler = slipping("idler", json!({"J": j, "R": r, "b": 0.0, "v_start": 0.0, "traction.slip_start": 5.0}), None);
+    let mut line = initialized(&through(idler, 5.0 * 1.002 / 1.001, "given"));
+    let (mut slid, mut stuck) = (0, 0);
+    for _ in 0..400 {
+        line.do_step(1e-3).unwrap();
+        let slip = get(&line, "idler.slip");
+        let acceleration = r * get(&line, "der(idler.omega)");
+        // After the sudden start's transient (the wrap's mode, damped within a few ms).
+        if slip > 50.0 * V_SLIP && line.time() > 0.02 {
+            let expected = r * r * get(&line, "a.T") * ((MU * WRAP).exp() - 1.0) / j;
+            assert!((acceleration / expected - 1.0).abs() < 1e-6, "t = {}: {acceleration} vs {expected}", line.time());
+            slid += 1;
+        } else if get(&line, "idler.traction") <= 0.9 {
+            assert!(slip.abs() <= 5.0 * V_SLIP, "t = {}: sticking at {slip} m/s", line.time());
+            stuck += 1;
+        }
+    }
+    assert!(slid > 50 && stuck > 100, "slid {slid} steps, stuck {stuck}");
+}
+
+/// A nip alone (no wrap) on a roll driven slower than the web: T_b - T_a = mu_nip N while it slides.
+#[test]
+fn a_sliding_nip_passes_mu_n() {
+    let mut nip = slipping("nip", json!({"J": 0.05, "R": 0.1, "b": 0.0, "traction.wrap": 0.0, "nip.mu": 0.5}), None);
+    nip["profile"] = json!({"speed": [[0.0, 4.5]], "nip": [[0.0, 200.0]]});
+    let (mut line, r) = instantiate(&through(nip, 5.005, "equilibrium")).unwrap();
+    let warnings = line.initialize(&Experiment::default(), &r).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    for _ in 0..20 {
+        line.do_step(1e-2).unwrap();
+        let (t_a, t_b) = (get(&line, "a.T"), get(&line, "b.T"));
+        assert!((t_b - t_a - 100.0).abs() < 1e-6 * t_b, "T_b - T_a = {}", t_b - t_a);
+        assert!(get(&line, "nip.slip") > 50.0 * V_SLIP);
+    }
+}
+
+/// A pull roll a little faster than the web sticks: at most 90 % of its traction in use, |s| <= 5 v_slip,
+/// and the line starts flat (the equilibrium start is steady).
+#[test]
+fn a_roll_that_sticks_slips_by_the_order_of_v_slip() {
+    let pull = slipping("pull", json!({"J": 0.05, "R": 0.1, "b": 0.0}), Some(json!({"speed": [[0.0, 5.001]]})));
+    let mut line = initialized(&through(pull, 5.0015, "equilibrium"));
+    let x0 = line.states().to_vec();
+    line.do_step(0.1).unwrap();
+    let used = get(&line, "pull.traction");
+    assert!(used > 0.05 && used <= 0.9, "traction {used}");
+    assert!(get(&line, "pull.slip").abs() <= 5.0 * V_SLIP);
+    for (a, b) in x0.iter().zip(line.states()) {
+        assert!((a - b).abs() <= 1e-9 * a.abs().max(1.0), "the start is not steady: {a} -> {b}");
+    }
+}

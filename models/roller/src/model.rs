@@ -431,8 +431,7 @@ impl Roller {
         };
         self.omega = CompensatedSum::from_parts(speed / p.radius, 0.0);
         self.carriage = [p.carriage_start, 0.0];
-        // The web starts with the surface: sticking.
-        self.v_web = speed;
+        self.v_web = speed + p.traction_slip_start;
         self.time = time;
         self.events_at = time;
         self.next_event = 0;

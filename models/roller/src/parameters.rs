@@ -30,6 +30,8 @@ pub struct Parameters {
     pub traction_mu: f64,
     pub traction_wrap: f64,
     pub traction_v_slip: f64,
+    /// The web's speed over the roller at the start minus the surface's [R6], m/s.
+    pub traction_slip_start: f64,
     /// The web's width, for the tension per width under the air film [R8], m.
     pub traction_width: f64,
     /// Friction coefficient at a nip (its load is the profile's `nip` table) [R7].

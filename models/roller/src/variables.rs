@@ -82,6 +82,7 @@ fmi_core::bind_variables! {
         mu_eff: computed(mu_eff()),
         h_air: computed(h_air()),
         der_v_web: computed(derivatives()[4]),
+        traction_slip_start: param(params.traction_slip_start),
     }
     integer {
         roll: param(params.roll),
