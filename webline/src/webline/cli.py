@@ -109,9 +109,28 @@ def summary(scene, result: Result) -> str:
     for d in [c for c in scene.parts if isinstance(c, Dancer) and f"{c.name}.y" in keys]:
         y = result.column(f"{d.name}.y")
         lines.append(f"  dancer {d.name}: position {y[0]:.4f} m at start, {y.min():.4f} .. {y.max():.4f} m, {y[-1]:.4f} m at the end")
+    for c in [c for c in scene.parts if getattr(c, "traction", None) is not None and f"{c.name}.traction" in keys]:
+        lines.append(f"  {traction_report(c.name, result.time, result.column(f'{c.name}.traction'))}")
     for t, name, what in info.get("events", []):
         lines.append(f"  event at t = {t:g} s: {name} changed {what}")
     return "\n".join(lines)
+
+
+# The share of its traction at which a roller counts as sliding (docs/physics.md, "Rollers that slip").
+SLIDING = 0.99
+
+
+def traction_report(name: str, time, used) -> str:
+    """Will it slip? The most traction a roller used, and when; and where it used SLIDING or more, when
+    it first slid, when it last did and for how long in all."""
+    k = int(np.argmax(used))
+    text = f"{name}: {100 * used[k]:.0f} % of its traction at most (t = {time[k]:.3g} s)"
+    sliding = used >= SLIDING
+    if not sliding.any():
+        return text + "; it never slid"
+    dt = np.diff(time, prepend=time[0])
+    first, last = time[sliding][0], time[sliding][-1]
+    return text + f"; it slid from t = {first:.3g} s to {last:.3g} s, {float(np.sum(dt[sliding])):.3g} s in all"
 
 
 def system_summary(result: Result) -> str:
@@ -142,6 +161,9 @@ def cmd_export(args):
         return 0
     if args.fmi3:
         raise SceneError("--fmi3 goes with --fmu (an SSP archive carries the FMI 2.0 FMUs)")
+    from .engines import refuse_traction
+
+    refuse_traction(scene)
     system = compile_scene(scene, args.fmu_dir)
     system.step = args.step or export_step(system)
     path = write_ssp(system, args.output or Path(args.out) / f"{scene.name}.ssp")
@@ -170,6 +192,9 @@ def cmd_run(args):
     from .engines import run_scene
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+    # Every roller the web may slip on reports its traction (the summary's "will it slip?").
+    scene.record += [(c.name, "traction") for c in scene.parts
+                     if getattr(c, "traction", None) is not None and (c.name, "traction") not in scene.record]
     engine = args.engine
     if args.reference and engine == "reference":
         raise SceneError("--reference compares an engine with the reference; --engine reference is the reference itself")

@@ -20,6 +20,7 @@ there the strain goes through the roller (web_a<k>.eps in, web_b<j>.eps out).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile, span_effects
@@ -62,8 +63,10 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     start = {}
     profile = {}
     speed = scene.speed_profile(node)
+    traction = getattr(node, "traction", None)
     if speed is not None:
-        start.update(J=PRESCRIBED_J, R=PRESCRIBED_R, b=0.0)
+        # With traction the radius counts (the web's mass on the wrap, the air film): the scene's.
+        start.update(J=PRESCRIBED_J, R=float(node.R) if traction is not None else PRESCRIBED_R, b=0.0)
         profile["speed"] = table(speed)
     else:
         start.update(J=float(node.J), R=float(node.R), b=float(node.b))
@@ -92,10 +95,33 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
             "carriage.y_start": float(y0),
         })
         profile["load"] = table(node.load.shifted(-node.stiffness * (y0 - node.y_start)))
+    if traction is not None:
+        start.update(traction_values(scene, node))
+        if traction.nip_load is not None:
+            profile["nip"] = table(traction.nip_load)
     sets = [{"time": float(e.time), **{k: float(v) for k, v in e.changes.items()}} for e in scene.events if e.component == node.name]
     if sets:
         profile["set"] = sets
     return Component(node.name, "roller", fmu, start, profile or None)
+
+
+def traction_values(scene: Scene, node) -> dict:
+    """The Roller's parameters where the web may slip on it [R6]-[R8]: the web arriving sets the mass
+    on the wrap (web_a.m) and the width the air film sees."""
+    t = node.traction
+    web = scene.span_before(node).wp2
+    return {
+        "includeTraction": True,
+        "traction.mu": float(t.mu),
+        "traction.wrap": math.radians(node.wrap or 0.0),
+        "traction.v_slip": float(t.v_slip),
+        "traction.width": float(web.width),
+        "traction.slip_start": float(t.slip_start),
+        "web_a.m": float(web.rho_l),
+        "nip.mu": float(t.nip_mu),
+        "air.roughness": float(t.roughness),
+        "air.viscosity": float(t.viscosity),
+    }
 
 
 def _dancer_of(scene: Scene, span: Span):
@@ -153,8 +179,6 @@ def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
     c = scene.component(cname)
     if isinstance(c, Span):
         return SPAN_VARIABLES[quantity]
-    if quantity == "v":
-        return "web_b.v" if not scene.spans_in(c) else "web_a.v"
     return ROLLER_VARIABLES[quantity]
 
 
@@ -172,6 +196,9 @@ def equilibrium_starts(scene: Scene, at: float = 0.0) -> tuple[dict, dict]:
     starts = {sp.name: {"eps_start": float(z[ode.i_eps[sp.name]])} for sp in scene.spans}
     for m in ode.movers:
         starts[m.name] = {"v_start": float(m.R * z[ode.i_omega[m.name]])}
+    for m in ode.slippers:  # the web's speed over it, as its slip over the surface's
+        v = ode.speed(m, at, z)
+        starts.setdefault(m.name, {})["traction.slip_start"] = float(z[ode.i_vw[m.name]] - v)
     return starts, {d.name: float(z[ode.i_y[d.name]]) for d in ode.dancers}
 
 

@@ -25,8 +25,22 @@ import numpy as np
 from . import names
 from .names import ARCHIVE_ENGINES, DEFAULT, engine_name
 from .result import Result
+from .scene import SceneError
 from .ssp import SSD, SspError, _variables
 from .system import System
+
+
+def refuse_traction(scene):
+    """A web that may slip is refused by the parts' co-simulation and its SSP: while it sticks, friction
+    holds the web on its wrap so stiffly that explicit coupling is stable only at steps of some ten
+    microseconds (`webline check` predicts them), which change as it sticks and slides."""
+    slips = [c for c in scene.nodes if getattr(c, "traction", None) is not None]
+    if slips:
+        c = slips[0]
+        raise SceneError(f"{c.where}: {c.type} {c.name!r} has traction: explicit coupling of parts follows a web that "
+                         "may slip only at steps of some ten microseconds (see `webline check`), so the parts' "
+                         "co-simulation and its SSP export refuse it; run the scene as one Line FMU (webline run's "
+                         "default engine) or with --engine reference")
 
 
 def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None = None, force: bool = False,
@@ -60,6 +74,8 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
         result.info["step"] = step or scene.step
     elif engine == "parts":
         from .compiler import run_scene as run_parts
+
+        refuse_traction(scene)
         from .stability import operating_lines
 
         warnings += check_step(lambda: operating_lines(scene, fmu_dir), scene.name, step or scene.step, force,
@@ -70,6 +86,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
         from .ssp import write_ssp
         from .stability import export_step
 
+        refuse_traction(scene)
         with tempfile.TemporaryDirectory(prefix="webline-ssp-") as tmp:
             system = compile_scene(scene, fmu_dir)
             system.step = export_step(system)

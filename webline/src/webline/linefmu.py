@@ -32,7 +32,8 @@ TEMPLATE = "line"
 
 # A scene's recorded quantity -> the Line FMU's output of that part.
 OUTPUTS = {"T": "T", "eps": "eps", "L": "length", "F_a": "F_a", "F_b": "F_b",
-           "v": "v", "omega": "omega", "tau": "tau", "y": "y", "y_dot": "y_dot"}
+           "v": "v", "omega": "omega", "tau": "tau", "y": "y", "y_dot": "y_dot",
+           "v_web": "v_web", "slip": "slip", "traction": "traction", "mu_eff": "mu_eff", "h_air": "h_air"}
 
 
 class LineFmuError(RuntimeError):

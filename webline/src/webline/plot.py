@@ -10,9 +10,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 from .result import Result  # noqa: E402
 
 
-# What a column's unit measures, for the axis label; a unit not listed is shown alone.
-QUANTITY_OF_UNIT = {"N": "tension", "m/s": "speed", "1": "strain", "rad/s": "angular speed", "m": "length or position", "N.m": "torque"}
+# What a column's unit measures, for the axis label; a unit not listed is shown alone. Numbers without a
+# unit are told apart by their quantity: a strain, the share of a roller's traction in use, a coefficient.
+QUANTITY_OF_UNIT = {"N": "tension", "m/s": "speed", "rad/s": "angular speed", "m": "length or position", "N.m": "torque"}
+DIMENSIONLESS = {"eps": "strain", "traction": "traction in use", "mu_eff": "friction coefficient"}
 FIRST = ("N", "m/s")  # tensions on top, then speeds, then the rest in recording order
+
+
+def _panel(key: str, unit: str) -> tuple:
+    """The panel a column goes on: its unit, and for a number its quantity."""
+    return (unit, DIMENSIONLESS.get(key.rsplit(".", 1)[-1], "strain")) if unit == "1" else (unit, QUANTITY_OF_UNIT.get(unit))
 
 
 def plot(result: Result, path, title=None, reference: Result | None = None):
@@ -20,18 +27,19 @@ def plot(result: Result, path, title=None, reference: Result | None = None):
     unit (strains of 1e-3 and angular speeds of 40 rad/s never share one):
     tensions (N) on top, speeds (m/s) below, then strain, angular speed,
     position, torque as recorded; each curve in line order."""
-    panels = {}  # unit -> [column key]
+    panels = {}  # (unit, what it measures) -> [column key]
     for c in result.columns:
         key, unit = c.split(" [")[0], c.split(" [")[1].rstrip("]")
-        panels.setdefault(unit, []).append(key)
-    units = [u for u in FIRST if u in panels] + [u for u in panels if u not in FIRST]
+        panels.setdefault(_panel(key, unit), []).append(key)
+    first = [p for u in FIRST for p in panels if p[0] == u]
+    units = first + [p for p in panels if p not in first]
     fig, axes = plt.subplots(len(units), 1, figsize=(9, 2.6 * len(units) + 0.6), sharex=True, squeeze=False)
-    for ax, unit in zip(axes[:, 0], units):
-        for key in panels[unit]:
+    for ax, (unit, what) in zip(axes[:, 0], units):
+        for key in panels[(unit, what)]:
             (line,) = ax.plot(result.time, result.column(key), lw=1.3, label=key)
             if reference is not None and key in reference.keys():
                 ax.plot(reference.time, reference.column(key), lw=0.8, ls="--", color=line.get_color())
-        ax.set_ylabel(f"{QUANTITY_OF_UNIT[unit]} [{unit}]" if unit in QUANTITY_OF_UNIT else f"[{unit}]")
+        ax.set_ylabel(f"{what} [{unit}]" if what else f"[{unit}]")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best", fontsize=8, ncol=2)
     axes[-1, 0].set_xlabel("time [s]")

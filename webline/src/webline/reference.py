@@ -19,7 +19,10 @@ scene. States:
   that start at it (several at a slitter, [S3]); the web mass of a span
   before it (with includeMass) adds m_up*R^2: F_b = T + p + m*dv_b/dt and
   v_b = R*omega;
-* each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0).
+* each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0);
+* where the web may slip on a roller or dancer (docs/physics.md, "Rollers that slip"), the web's
+  speed over it v_w: m_w dv_w/dt = T_b - T_a + f, the spans on both sides see v_w, and the roller
+  turns by -R*f instead of R*(T_b - T_a) (`friction`).
 
 Tension: T = EA*(eps + d_r*deps/dt) (damping), or for a web record's
 stress-strain table T = A*(sigma(eps) + d_r*dsigma/deps*deps/dt); clamped at
@@ -60,11 +63,13 @@ class LineODE:
         self.spans = scene.spans
         self.movers = [c for c in scene.nodes if isinstance(c, (Roller, Dancer)) and c.has_fmu]
         self.dancers = [c for c in scene.nodes if isinstance(c, Dancer)]
-        n_s, n_m = len(self.spans), len(self.movers)
+        self.slippers = [c for c in scene.nodes if getattr(c, "traction", None) is not None]
+        n_s, n_m, n_d = len(self.spans), len(self.movers), len(self.dancers)
         self.i_eps = {sp.name: i for i, sp in enumerate(self.spans)}
         self.i_omega = {m.name: n_s + i for i, m in enumerate(self.movers)}
         self.i_y = {d.name: n_s + n_m + 2 * i for i, d in enumerate(self.dancers)}
-        self.n = n_s + n_m + 2 * len(self.dancers)
+        self.i_vw = {c.name: n_s + n_m + 2 * n_d + i for i, c in enumerate(self.slippers)}
+        self.n = n_s + n_m + 2 * n_d + len(self.slippers)
         # The line's shape, once: each span's rollers, each roller's spans in and out.
         self.up = {sp.name: scene.upstream(sp) for sp in self.spans}
         self.down = {sp.name: scene.downstream(sp) for sp in self.spans}
@@ -102,12 +107,23 @@ class LineODE:
         J, R, b = self.inertia[node.name]
         return R * z[self.i_omega[node.name]]
 
+    def contact(self, node, t, z, v, q):
+        """Where the web may slip on `node`: its friction on the web and what it reports, at (t, z)."""
+        (up,), (down,) = self.ins[node.name], self.outs[node.name]
+        web = self.web[up.name][1]
+        R = self.inertia[node.name][1] if node.name in self.inertia else node.R
+        tr = node.traction
+        load = self.pv(tr.nip_load, t) if tr.nip_load is not None else 0.0
+        return friction(tr, R, node.wrap or 0.0, web, z[self.i_vw[node.name]], v[node.name], q[up.name]["T"], q[down.name]["T"], load)
+
     def evaluate(self, t, z):
         """Rates and every quantity of the line at (t, z)."""
         s = self.s
         dz = np.zeros(self.n)
         q = {}
         v = {node.name: self.speed(node, t, z) for node in s.nodes}
+        # The spans see the web's speed where it may slip, the surface's elsewhere.
+        w = {**v, **{c.name: z[i] for c, i in zip(self.slippers, self.i_vw.values())}}
         for sp in self.spans:
             up, down = self.up[sp.name], self.down[sp.name]
             w1, w2 = self.web[sp.name]
@@ -118,7 +134,7 @@ class LineODE:
             else:
                 L, dL = sp.length, 0.0
             eps = z[self.i_eps[sp.name]]
-            va, vb = v[up.name], v[down.name]
+            va, vb = w[up.name], w[down.name]
             if va >= 0:
                 qa = va / self.entry(up, t, z)
             else:  # web entering backwards carries the span's own strain
@@ -148,6 +164,9 @@ class LineODE:
             F_down = sum(q[sp.name]["T"] for sp in self.outs[node.name])
             F_up = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[node.name])
             m_up = sum(q[sp.name]["m"] for sp in self.ins[node.name])
+            if node.name in self.i_vw:  # the web pulls the roller through its friction only [R6]
+                contact = self.contact(node, t, z, v, q)
+                F_down, F_up = -contact["f"], 0.0
             num = R * (F_down - F_up) + self.torque(node, t) - b * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
@@ -161,6 +180,11 @@ class LineODE:
                 dvb = self.pslope(prof) if prof is not None else 0.0
             qs = q[sp.name]
             qs["F_b"] = qs["T"] + qs["p"] + qs["m"] * dvb
+        for c in self.slippers:
+            contact = self.contact(c, t, z, v, q)
+            (up,), (down,) = self.ins[c.name], self.outs[c.name]
+            dz[self.i_vw[c.name]] = (q[down.name]["T"] - q[up.name]["T"] + contact["f"]) / contact["m_w"]
+            q[c.name] = contact
         for d in self.dancers:
             i = self.i_y[d.name]
             y, ydot = z[i], z[i + 1]
@@ -269,6 +293,8 @@ class LineODE:
             names[i] = f"{k!r}'s speed"
         for k, i in self.i_y.items():
             names[i], names[i + 1] = f"dancer {k!r}'s position", f"dancer {k!r}'s carriage speed"
+        for k, i in self.i_vw.items():
+            names[i] = f"the web's speed over {k!r}"
         return names
 
     def given_state(self, t=0.0):
@@ -279,6 +305,8 @@ class LineODE:
             z[self.i_omega[node.name]] = s.initial_speed(node, t) / node.R
         for d in self.dancers:
             z[self.i_y[d.name]] = d.y_start
+        for c in self.slippers:
+            z[self.i_vw[c.name]] = s.initial_speed(c, t) + c.traction.slip_start
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
             if sp.eps_start is not None:
                 eps = sp.eps_start
@@ -319,6 +347,8 @@ class LineODE:
                 row.append(q[cname][quantity])
             elif quantity == "v":
                 row.append(v[cname])
+            elif quantity in ("v_web", "slip", "traction", "mu_eff", "h_air"):
+                row.append(q[cname][quantity])
             elif quantity == "eps":
                 row.append(self.pv(c.strain, t))
             elif quantity == "omega":
@@ -340,7 +370,59 @@ def atol_of(ode: LineODE, z0):
     for name, i in ode.i_y.items():
         a[i] = 1e-13
         a[i + 1] = 1e-12
+    for name, i in ode.i_vw.items():
+        a[i] = 1e-11
     return a
+
+
+# The least wrap whose web mass counts (a roller the web touches only at a nip), as the Roller's.
+THETA_MIN = np.radians(5.0)
+
+
+def friction(tr, R, wrap_deg, web, v_w, v_s, T_a, T_b, load) -> dict:
+    """The contact of a web that may slip (docs/physics.md, [R6]-[R8]): the friction f on the web along
+    its motion, from the capstan law on the wrap after a nip, both regularized in the slip's direction
+    g = tanh(s/v_slip), under Knox and Sweeney's air film; with what a roller with traction reports."""
+    theta = np.radians(wrap_deg)
+    s = v_w - v_s
+    g = np.tanh(s / tr.v_slip)
+    mu, h = tr.mu, 0.0
+    if tr.roughness > 0.0:
+        V = abs(v_w + v_s) / 2.0
+        tw = (T_a + T_b) / (2.0 * web.width)
+        if tw <= 0.0:
+            h, mu = 3.0 * tr.roughness, 0.0
+        else:
+            h = 0.643 * R * (12.0 * tr.viscosity * V / tw) ** (2.0 / 3.0)
+            mu = tr.mu * min(1.0, max(0.0, (3.0 * tr.roughness - h) / (2.0 * tr.roughness)))
+    n = tr.nip_mu * load
+    f_nip = -n * g
+    T_m = max(T_a - f_nip, 0.0)
+    f_wrap = -2.0 * np.sqrt(T_m * max(T_b, 0.0)) * np.sinh(mu * theta * g / 2.0)
+    return {"f": f_nip + f_wrap, "m_w": web.rho_l * R * max(theta, THETA_MIN), "v_web": v_w, "slip": s,
+            "traction": traction_used(T_a, T_b, n, mu * theta), "mu_eff": mu, "h_air": h}
+
+
+def traction_used(T_a, T_b, n, w):
+    """The share of the traction in use: g solving T_b = (T_a + n g) exp(w g), |g| (docs/physics.md)."""
+    if T_a <= 0.0 or T_b <= 0.0:
+        if n > 0.0 and w == 0.0:
+            return abs(T_b - T_a) / n
+        return 0.0 if T_a == T_b else 1.0
+    if n == 0.0 and w == 0.0:
+        return 0.0 if T_a == T_b else 1.0
+    if n == 0.0:
+        return abs(np.log(T_b / T_a)) / w
+    if w == 0.0:
+        return abs(T_b - T_a) / n
+    from scipy.optimize import brentq
+
+    lo = -T_a / n * (1.0 - 1e-15)  # T_a + n g > 0 there
+    phi = lambda g: np.log(T_a + n * g) + w * g - np.log(T_b)
+    hi = 1.0
+    while phi(hi) < 0.0:
+        hi *= 2.0
+    return abs(brentq(phi, lo, hi, xtol=1e-15))
 
 
 def reference(scene: Scene, times=None, rtol=RTOL) -> Result:

@@ -42,6 +42,13 @@ QUANTITIES = {
     "winder": {"v": "m/s", "omega": "rad/s", "tau": "N.m"},
     "dancer": {"v": "m/s", "omega": "rad/s", "y": "m", "y_dot": "m/s"},
 }
+# What a roller or dancer the web may slip on records besides (docs/physics.md, "Rollers that slip").
+TRACTION_QUANTITIES = {"v_web": "m/s", "slip": "m/s", "traction": "1", "mu_eff": "1", "h_air": "m"}
+
+
+def quantities_of(c) -> dict:
+    """What a component records: its type's quantities, and where the web may slip the traction's."""
+    return {**QUANTITIES[c.type], **(TRACTION_QUANTITIES if getattr(c, "traction", None) is not None else {})}
 
 
 class SceneError(ValueError):
@@ -91,6 +98,20 @@ class Drive:
 
 
 @dataclass
+class Traction:
+    """Where the web may slip on a roller or dancer [R6]-[R8]: friction on the wrap (mu, with the
+    roller's wrap angle), at a nip (nip_mu, pressed with nip_load), under an air film (roughness)."""
+
+    mu: float = 0.0
+    v_slip: float = 1e-3
+    roughness: float = 0.0
+    viscosity: float = 1.81e-5
+    nip_mu: float = 0.0
+    nip_load: Profile | None = None
+    slip_start: float = 0.0  # the web's speed over the roller at a given start, minus the surface's
+
+
+@dataclass
 class Component:
     name: str
     type: str
@@ -129,8 +150,9 @@ class Roller(Component):
     v_start: float | None = None
     drive: Drive = field(default_factory=lambda: Drive("idler"))
     strain: Profile | None = None  # unwinder: strain of the web leaving the roll
-    wrap: float | None = None  # degrees: a load cell on its bearings (Line FMU output <name>.F)
+    wrap: float | None = None  # degrees: a load cell on its bearings (Line FMU output <name>.F), the wrap traction acts on
     trim: float = 0.0  # a slitter: the width cut off as trim (m), which leaves without tension
+    traction: Traction | None = None  # the web may slip on it
 
     @property
     def has_fmu(self):
@@ -154,6 +176,7 @@ class Dancer(Component):
     y_start: float = 0.0
     v_start: float | None = None
     wrap: float | None = None
+    traction: Traction | None = None
 
     has_fmu = True
 
@@ -318,7 +341,7 @@ class Scene:
 
     def columns(self):
         """The recorded columns: 'name.quantity [unit]'."""
-        return [f"{c}.{q} [{QUANTITIES[self.component(c).type][q]}]" for c, q in self.record]
+        return [f"{c}.{q} [{quantities_of(self.component(c))[q]}]" for c, q in self.record]
 
 
 def start_strain(span: Span, up, down, va: float, vb: float, eps_a: float) -> float:
@@ -362,6 +385,9 @@ def profiles_of(c):
     d = getattr(c, "drive", None)
     if d is not None and d.profile is not None:
         out.append(d.profile)
+    t = getattr(c, "traction", None)
+    if t is not None and t.nip_load is not None:
+        out.append(t.nip_load)
     return out
 
 
@@ -668,7 +694,7 @@ def _span(r, o_node, name, webs) -> Span:
 
 def _roller(r, o_node, name, kind) -> Roller:
     what = f"{kind} {name!r}"
-    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap"]
+    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip"]
     if kind == "roller":
         optional += ["merge", "split", "trim"]  # side paths: read by _branch
     required = ["type", "name"]
@@ -679,10 +705,16 @@ def _roller(r, o_node, name, kind) -> Roller:
     drives = {"roller": ("torque", "speed"), "unwinder": ("torque", "tension", "speed"), "winder": ("torque", "tension", "speed")}
     if "drive" in o:
         c.drive = _drive(r, o["drive"], f"{what}: drive", drives[kind])
+    slips = "traction" in o or "nip" in o
     if c.drive.kind == "speed":
-        for k in ("J", "R", "b", "v_start"):
+        # With traction the roll's radius sets the web's mass on it and the air film: R is needed then.
+        for k in ("J", "b", "v_start") if slips else ("J", "R", "b", "v_start"):
             if k in o:
-                raise r.err(r.key_pos(o[k]), f"{what}: {k} is not used: a speed-driven roller follows its speed profile exactly (no Roller FMU)")
+                raise r.err(r.key_pos(o[k]), f"{what}: {k} is not used: a speed-driven roller follows its speed profile exactly")
+        if slips:
+            if "R" not in o:
+                raise r.err(o_node, f"{what} needs the key 'R' with traction (the web's mass on the wrap and the air film depend on it)")
+            c.R = r.quantity(o["R"], units.LENGTH, f"{what}: R", positive=True)
     else:
         for k in ("J", "R"):
             if k not in o:
@@ -702,7 +734,43 @@ def _roller(r, o_node, name, kind) -> Roller:
         if "split" not in o:
             raise r.err(r.key_pos(o["trim"]), f"{what}: trim goes with split (the width a slitter cuts off)")
         c.trim = r.quantity(o["trim"], units.LENGTH, f"{what}: trim", nonnegative=True)
+    if slips:
+        for k, why in (("merge", "a laminating nip"), ("split", "a slitter")):
+            if k in o:
+                raise r.err(r.key_pos(o["traction" if "traction" in o else "nip"]),
+                            f"{what}: traction or a nip on {why} is not modelled: the web slips only on a roller with one web in and one out")
+        if kind != "roller":
+            raise r.err(r.key_pos(o["traction" if "traction" in o else "nip"]),
+                        f"{what}: traction or a nip on an {kind} is not modelled (its roll's radius changes): put it on a roller or a dancer")
+        c.traction = _traction(r, o, what, c.wrap)
     return c
+
+
+def _traction(r, o, what, wrap) -> Traction:
+    """The keys "traction" (friction on the wrap, which needs "wrap") and "nip" of a roller or dancer."""
+    t = Traction()
+    if "traction" in o:
+        tr = r.keys(o["traction"], f"{what}: traction", required=("mu",), optional=("v_slip", "air", "slip_start"))
+        if wrap is None or wrap == 0.0:
+            raise r.err(r.key_pos(o["traction"]), f"{what}: traction acts on the web's wrap: give the roller a \"wrap\" angle")
+        t.mu = r.quantity(tr["mu"], units.DIMENSIONLESS, f"{what}: traction: mu", nonnegative=True)
+        if "v_slip" in tr:
+            t.v_slip = r.quantity(tr["v_slip"], units.SPEED, f"{what}: traction: v_slip", positive=True)
+        if "slip_start" in tr:
+            t.slip_start = r.quantity(tr["slip_start"], units.SPEED, f"{what}: traction: slip_start")
+        if "air" in tr:
+            air = r.keys(tr["air"], f"{what}: traction: air", required=("roughness",), optional=("viscosity",))
+            t.roughness = r.quantity(air["roughness"], units.LENGTH, f"{what}: traction: air: roughness", positive=True)
+            if "viscosity" in air:
+                t.viscosity = r.quantity(air["viscosity"], units.VISCOSITY, f"{what}: traction: air: viscosity", positive=True)
+    if "nip" in o:
+        nip = r.keys(o["nip"], f"{what}: nip", required=("load", "mu"))
+        t.nip_mu = r.quantity(nip["mu"], units.DIMENSIONLESS, f"{what}: nip: mu", nonnegative=True)
+        t.nip_load = r.profile(nip["load"], units.FORCE, f"{what}: nip: load")
+        negative = next(((tk, v) for tk, v in t.nip_load.knots if v < 0), None)
+        if negative is not None:
+            raise r.err(nip["load"], f"{what}: nip: load {negative[1]:g} N at t = {negative[0]:g} s: a nip presses with a load >= 0")
+    return t
 
 
 # A strain the span FMU accepts: (-1, 10] (its eps_start and web_a.eps).
@@ -751,9 +819,10 @@ def _dancer(r, o_node, name) -> Dancer:
         o_node,
         what,
         required=("type", "name", "J", "R", "mass", "load", "damping", "y_start"),
-        optional=("b", "stiffness", "v_start", "description", "wrap"),
+        optional=("b", "stiffness", "v_start", "description", "wrap", "traction", "nip"),
     )
     U = units
+    wrap = _wrap(r, o, what)
     return Dancer(
         name=name,
         type="dancer",
@@ -767,7 +836,8 @@ def _dancer(r, o_node, name) -> Dancer:
         stiffness=r.quantity(o["stiffness"], U.STIFFNESS, f"{what}: stiffness", nonnegative=True) if "stiffness" in o else 0.0,
         y_start=r.quantity(o["y_start"], U.LENGTH, f"{what}: y_start", positive=True),
         v_start=r.quantity(o["v_start"], U.SPEED, f"{what}: v_start") if "v_start" in o else None,
-        wrap=_wrap(r, o, what),
+        wrap=wrap,
+        traction=_traction(r, o, what, wrap) if "traction" in o or "nip" in o else None,
     )
 
 
@@ -872,6 +942,8 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     for b in {b.node: b for b in branches}.values():  # once per nip or slitter
         (_check_merge if b.kind == "merge" else _check_split)(r, scene, b, raw)
 
+    _check_traction(r, scene, raw)
+
     # Spans next to a dancer take their length from it; no other span may.
     for c in scene.spans:
         node = raw[c.name]
@@ -911,8 +983,9 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
             comp = next((c for c in parts if c.name == cname), None)
             if comp is None:
                 raise r.err(n, f"record: no component {cname!r} in the line")
-            if q not in QUANTITIES[comp.type]:
-                raise r.err(n, f"record: a {comp.type} records {', '.join(QUANTITIES[comp.type])}, not {q!r}")
+            if q not in quantities_of(comp):
+                slip = " (traction's v_web, slip, traction, mu_eff, h_air go with a \"traction\" or \"nip\")" if q in TRACTION_QUANTITIES else ""
+                raise r.err(n, f"record: {comp.type} {cname!r} records {', '.join(quantities_of(comp))}, not {q!r}{slip}")
             record.append((cname, q))
     else:
         record = [(c.name, "T") for c in parts if isinstance(c, Span)] + [(c.name, "v") for c in parts if not isinstance(c, Span)]
@@ -993,6 +1066,24 @@ def _branches(r, node, kind, roller, raw, webs) -> list:
 
 
 MATERIAL = ("E", "thickness", "density", "d_r")
+
+
+def _check_traction(r, scene: Scene, raw):
+    """A roller the web may slip on moves the web on its wrap as a mass [R6]: the mode of that mass
+    between the two spans (about a kilohertz for a thin film) is damped by their Kelvin-Voigt damping
+    only, so both need includeDamping with a retardation time d_r > 0. Web mass (includeMass) next to
+    it is not modelled."""
+    for node in scene.nodes:
+        if getattr(node, "traction", None) is None:
+            continue
+        what = f"{node.type} {node.name!r}"
+        for sp in scene.spans_in(node) + scene.spans_out(node):
+            if "includeDamping" not in sp.effects or not sp.wp2.d_r > 0:
+                raise r.err(raw[sp.name], f"span {sp.name!r} next to {what}, which has traction, needs the effect includeDamping "
+                                          f"and a web with d_r > 0 (its d_r is {sp.wp2.d_r:g} s): the web's mass on the wrap "
+                                          "moves between the two spans, and their damping is what damps it")
+            if "includeMass" in sp.effects:
+                raise r.err(raw[sp.name], f"span {sp.name!r} next to {what}, which has traction: includeMass there is not modelled")
 
 
 def _check_split(r, scene: Scene, b: Branch, raw):

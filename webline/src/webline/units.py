@@ -41,9 +41,10 @@ STIFFNESS = Kind("a stiffness (force per length)", "N/m", ("N/m", "kN/m"))
 LIN_DAMPING = Kind("a translational damping (force per speed)", "N.s/m", ("N.s/m",))
 ANGLE = Kind("an angle", "deg", ("deg", "rad"))
 AREAL_DENSITY = Kind("a mass per area (a coat weight)", "kg/m2", ("g/m2", "kg/m2"))
+VISCOSITY = Kind("a dynamic viscosity", "Pa.s", ("Pa.s", "mPa.s"))
 
 KINDS = (DIMENSIONLESS, LENGTH, TIME, MASS, SPEED, FORCE, PRESSURE, DENSITY, INERTIA, TORQUE,
-         ROT_DAMPING, ANGULAR_SPEED, STIFFNESS, LIN_DAMPING, ANGLE, AREAL_DENSITY)
+         ROT_DAMPING, ANGULAR_SPEED, STIFFNESS, LIN_DAMPING, ANGLE, AREAL_DENSITY, VISCOSITY)
 KIND_OF_UNIT = {unit: kind for kind in KINDS for unit in kind.units}
 
 _QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S+)?\s*$")
