@@ -52,9 +52,10 @@ OUT = ROOT / "out"
 DOC = ROOT / "docs" / "line-fmu.md"
 
 
-def long_line(spans: int, stop: float = 2.0) -> str:
+def long_line(spans: int, stop: float = 2.0, traction: bool = False) -> str:
     """A paper line of `spans` spans: tension-driven unwinder, idlers, a pull
-    roll that sets the speed (10 m/s, 2 % slower from 0.5 s), a tension-driven winder."""
+    roll that sets the speed (10 m/s, 2 % slower from 0.5 s), a tension-driven winder.
+    `traction`: the web may slip on every idler (90 degrees of wrap, mu 0.3)."""
     web = {"paper": {"E": "5 GPa", "thickness": "100 um", "width": "1.2 m", "density": "800 kg/m3", "d_r": "0.5 ms"}}
     line = [{"type": "unwinder", "name": "unwind", "J": "8 kg.m2", "R": "0.5 m", "b": "0.1 N.m.s",
              "drive": {"tension": "400 N"}, "strain": 0.0, "v_start": "10 m/s"}]
@@ -66,14 +67,16 @@ def long_line(spans: int, stop: float = 2.0) -> str:
             line.append({"type": "roller", "name": "pull",
                          "drive": {"speed": {"table": [["0 s", "10 m/s"], ["0.5 s", "10 m/s"], ["0.6 s", "9.8 m/s"]]}}})
         else:
-            line.append({"type": "roller", "name": f"idler{i}", "J": "0.05 kg.m2", "R": "0.08 m", "b": "0.002 N.m.s", "v_start": "10 m/s"})
+            line.append({"type": "roller", "name": f"idler{i}", "J": "0.05 kg.m2", "R": "0.08 m", "b": "0.002 N.m.s", "v_start": "10 m/s",
+                         **({"wrap": "90 deg", "traction": {"mu": 0.3}} if traction else {})})
     if spans == 1:
         line.append({"type": "sink", "name": "pull", "speed": {"table": [["0 s", "10 m/s"], ["0.5 s", "10 m/s"], ["0.6 s", "9.8 m/s"]]}})
     else:
         line.append({"type": "winder", "name": "rewind", "J": "6 kg.m2", "R": "0.4 m", "b": "0.1 N.m.s",
                      "drive": {"tension": "400 N"}, "v_start": "10 m/s"})
     record = [f"s{i}.T" for i in range(spans)]
-    return json.dumps({"name": f"line{spans}", "description": f"a paper line of {spans} spans", "stop_time": f"{stop} s",
+    name = f"line{spans}" + ("_traction" if traction else "")
+    return json.dumps({"name": name, "description": f"a paper line of {spans} spans", "stop_time": f"{stop} s",
                        "step": "1 ms", "start": "equilibrium", "webs": web, "line": line, "record": record})
 
 
@@ -168,6 +171,20 @@ def main():
         torque = "idler0.tau_m" if spans > 2 else "unwind.tau_m"
         costs = [native(exe, fmu, tmp / f"u{spans}-{h}", torque, "s0.T", h, 200 if quick else int(2.0 / h)) for h in (1e-3, 1e-2)]
         lines.append(f"| {spans} span{'s' if spans > 1 else ''} | {n} | {costs[0]:,.0f} | {costs[1]:,.0f} |")
+    lines.append("")
+
+    # What traction costs: the 10-span line with the web free to slip on every idler, beside it without.
+    lines += ["### What traction costs (the 10-span line at 1 ms)", "",
+              "| line | states | ns per step | largest error over 2 s, of scale |", "|---|---:|---:|---:|"]
+    for traction in (False, True):
+        scene = parse_scene(long_line(10, stop=0.7 if quick else 2.0, traction=traction), source="line10", fmu_dir=OUT)
+        fmu = linefmu.export(scene, tmp / f"{scene.name}.fmu", OUT)
+        from fmpy import read_model_description
+
+        n = len(read_model_description(str(fmu)).derivatives)
+        cost = native(exe, fmu, tmp / f"u-{scene.name}", "idler0.tau_m", "s0.T", 1e-3, 200 if quick else 2000)
+        what = "traction on its 8 idlers" if traction else "no slip"
+        lines.append(f"| 10 spans, {what} | {n} | {cost:,.0f} | {worst(linefmu.run(scene, OUT, step=1e-3), scene):.1e} |")
     lines.append("")
 
     # Accuracy against time.

@@ -11,8 +11,8 @@
 //! [R8]  h = 0.643 r (12 eta V / T_w)^(2/3),  V = |v_w + r omega|/2,  T_w = (T_a + T_b)/(2 W)
 //!       mu_eff = mu * clamp((3 sigma - h)/(2 sigma), 0, 1)   (sigma > 0; without air mu_eff = mu)
 //!
-//! Each function returns the value and its differential along a direction (`Dual`), so the
-//! tangents are the equations' own, differentiated once, here.
+//! Each result is a value with its gradient in the contact's knowns (`Dual`): the tangents are the
+//! equations' own, differentiated once, here, and formed once per point for every direction.
 
 use crate::parameters::Parameters;
 
@@ -20,32 +20,74 @@ use crate::parameters::Parameters;
 /// carries the web over a short arc there, and [R6] needs a mass to stay an ODE.
 pub const THETA_MIN: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
-/// A value and its differential along one direction.
+/// The contact's knowns, the components of a gradient: the web's speed, the surface's, the
+/// tensions T_a and T_b, the radius.
+pub const V_WEB: usize = 0;
+pub const V_SURFACE: usize = 1;
+pub const T_A: usize = 2;
+pub const T_B: usize = 3;
+pub const RADIUS: usize = 4;
+pub type Gradient = [f64; 5];
+
+/// A value and its gradient in the knowns.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Dual {
     pub x: f64,
-    pub d: f64,
+    pub d: Gradient,
 }
 
 impl Dual {
-    pub const fn new(x: f64, d: f64) -> Dual {
+    pub const fn constant(x: f64) -> Dual {
+        Dual { x, d: [0.0; 5] }
+    }
+
+    fn known(x: f64, i: usize) -> Dual {
+        let mut d = [0.0; 5];
+        d[i] = 1.0;
         Dual { x, d }
+    }
+
+    /// The differential along a direction in the knowns.
+    #[inline]
+    pub fn along(&self, direction: &Gradient) -> f64 {
+        self.d.iter().zip(direction).map(|(g, d)| g * d).sum()
+    }
+
+    /// f(self), f' its slope there.
+    fn map(self, x: f64, slope: f64) -> Dual {
+        Dual { x, d: self.d.map(|g| slope * g) }
+    }
+
+    fn plus(self, o: Dual) -> Dual {
+        Dual { x: self.x + o.x, d: std::array::from_fn(|i| self.d[i] + o.d[i]) }
+    }
+
+    fn minus(self, o: Dual) -> Dual {
+        Dual { x: self.x - o.x, d: std::array::from_fn(|i| self.d[i] - o.d[i]) }
+    }
+
+    fn times(self, o: Dual) -> Dual {
+        Dual { x: self.x * o.x, d: std::array::from_fn(|i| self.d[i] * o.x + self.x * o.d[i]) }
+    }
+
+    fn scaled(self, a: f64) -> Dual {
+        self.map(a * self.x, a)
     }
 }
 
-/// What the contact needs from the roller, each with its differential.
+/// What the contact needs from the roller now.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct State {
-    pub v_web: Dual,
-    pub v_surface: Dual,
-    pub t_a: Dual,
-    pub t_b: Dual,
-    /// The nip's load N (a table of time: held along a direction).
+    pub v_web: f64,
+    pub v_surface: f64,
+    pub t_a: f64,
+    pub t_b: f64,
+    /// The nip's load N (a table of time: no known of the contact).
     pub nip_load: f64,
-    pub radius: Dual,
+    pub radius: f64,
 }
 
-/// The contact's results [R6]–[R8], each with its differential.
+/// The contact's results [R6]–[R8], each with its gradient.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Contact {
     /// The friction force on the web, along its motion.
@@ -59,11 +101,18 @@ pub fn wrap_mass(p: &Parameters, radius: f64) -> f64 {
     p.mass_a[0] * radius * p.traction_wrap.max(THETA_MIN)
 }
 
-/// The web's acceleration over the roller [R6], with its differential.
+/// The web's acceleration over the roller [R6].
 pub fn web_acceleration(p: &Parameters, s: &State, friction: Dual) -> Dual {
-    let m = wrap_mass(p, s.radius.x);
-    let a = (s.t_b.x - s.t_a.x + friction.x) / m;
-    Dual::new(a, (s.t_b.d - s.t_a.d + friction.d) / m - a * s.radius.d / s.radius.x)
+    // (T_b - T_a + f)/m_w with m_w proportional to r.
+    let mut pull = friction;
+    pull.x += s.t_b - s.t_a;
+    pull.d[T_B] += 1.0;
+    pull.d[T_A] -= 1.0;
+    let m = wrap_mass(p, s.radius);
+    let a = pull.scaled(1.0 / m);
+    let mut a_r = a;
+    a_r.d[RADIUS] -= a.x / s.radius;
+    a_r
 }
 
 fn positive(t: Dual) -> Dual {
@@ -78,56 +127,55 @@ fn positive(t: Dual) -> Dual {
 fn air(p: &Parameters, s: &State) -> (Dual, Dual) {
     let sigma = p.air_roughness;
     if sigma <= 0.0 {
-        return (Dual::default(), Dual::new(p.traction_mu, 0.0));
+        return (Dual::default(), Dual::constant(p.traction_mu));
     }
-    let speed = Dual::new(0.5 * (s.v_web.x + s.v_surface.x), 0.5 * (s.v_web.d + s.v_surface.d));
-    let (v, dv) = if speed.x < 0.0 { (-speed.x, -speed.d) } else { (speed.x, speed.d) };
-    let tw = (s.t_a.x + s.t_b.x) / (2.0 * p.traction_width);
-    let dtw = (s.t_a.d + s.t_b.d) / (2.0 * p.traction_width);
-    if tw <= 0.0 {
+    let speed = Dual::known(s.v_web, V_WEB).plus(Dual::known(s.v_surface, V_SURFACE)).scaled(0.5);
+    let v = if speed.x < 0.0 { speed.scaled(-1.0) } else { speed };
+    let tw = Dual::known(s.t_a, T_A).plus(Dual::known(s.t_b, T_B)).scaled(1.0 / (2.0 * p.traction_width));
+    if tw.x <= 0.0 {
         // No tension presses the web down: it lifts off, no traction (reported as a film of 3 sigma).
-        return (Dual::new(3.0 * sigma, 0.0), Dual::default());
+        return (Dual::constant(3.0 * sigma), Dual::default());
     }
-    if v == 0.0 {
-        return (Dual::default(), Dual::new(p.traction_mu, 0.0));
+    if v.x == 0.0 {
+        return (Dual::default(), Dual::constant(p.traction_mu));
     }
-    let h = 0.643 * s.radius.x * (12.0 * p.air_viscosity * v / tw).powf(2.0 / 3.0);
-    let dh = h * ((2.0 / 3.0) * (dv / v - dtw / tw) + s.radius.d / s.radius.x);
-    let a = (3.0 * sigma - h) / (2.0 * sigma);
+    // h = 0.643 r (12 eta v / t_w)^(2/3): d ln h = d ln r + (2/3)(d ln v - d ln t_w).
+    let h = 0.643 * s.radius * (12.0 * p.air_viscosity * v.x / tw.x).powf(2.0 / 3.0);
+    let mut d = [0.0; 5];
+    for (i, di) in d.iter_mut().enumerate() {
+        *di = h * ((2.0 / 3.0) * (v.d[i] / v.x - tw.d[i] / tw.x));
+    }
+    d[RADIUS] += h / s.radius;
+    let h = Dual { x: h, d };
+    let a = (3.0 * sigma - h.x) / (2.0 * sigma);
     let mu = if a >= 1.0 {
-        Dual::new(p.traction_mu, 0.0)
+        Dual::constant(p.traction_mu)
     } else if a <= 0.0 {
         Dual::default()
     } else {
-        Dual::new(p.traction_mu * a, -p.traction_mu * dh / (2.0 * sigma))
+        h.map(p.traction_mu * a, -p.traction_mu / (2.0 * sigma))
     };
-    (Dual::new(h, dh), mu)
+    (h, mu)
 }
 
 /// [R7] and [R8] at the contact's state.
 pub fn contact(p: &Parameters, s: &State) -> Contact {
-    let slip = s.v_web.x - s.v_surface.x;
-    let d_slip = s.v_web.d - s.v_surface.d;
-    let g = (slip / p.traction_v_slip).tanh();
-    let dg = (1.0 - g * g) / p.traction_v_slip * d_slip;
-    let (h_air, mu_eff) = air(p, s);
-    let nip = p.nip_mu * s.nip_load;
-    let f_nip = Dual::new(-nip * g, -nip * dg);
-    let t_m = positive(Dual::new(s.t_a.x - f_nip.x, s.t_a.d - f_nip.d));
-    let t_b = positive(s.t_b);
-    let product = t_m.x * t_b.x;
-    let (root, d_root) = if product > 0.0 {
-        let root = product.sqrt();
-        (root, (t_m.d * t_b.x + t_m.x * t_b.d) / (2.0 * root))
-    } else {
-        (0.0, 0.0)
+    let slip = Dual::known(s.v_web, V_WEB).minus(Dual::known(s.v_surface, V_SURFACE));
+    let g = {
+        let g = (slip.x / p.traction_v_slip).tanh();
+        slip.map(g, (1.0 - g * g) / p.traction_v_slip)
     };
-    let theta = p.traction_wrap;
-    let k = 0.5 * theta * mu_eff.x;
-    let dk = 0.5 * theta * mu_eff.d;
-    let (sh, ch) = ((k * g).sinh(), (k * g).cosh());
-    let f_wrap = Dual::new(-2.0 * root * sh, -2.0 * (d_root * sh + root * ch * (dk * g + k * dg)));
-    Contact { force: Dual::new(f_nip.x + f_wrap.x, f_nip.d + f_wrap.d), mu_eff, h_air }
+    let (h_air, mu_eff) = air(p, s);
+    let f_nip = g.scaled(-p.nip_mu * s.nip_load);
+    let t_m = positive(Dual::known(s.t_a, T_A).minus(f_nip));
+    let t_b = positive(Dual::known(s.t_b, T_B));
+    let product = t_m.times(t_b);
+    let root = if product.x > 0.0 { product.map(product.x.sqrt(), 0.5 / product.x.sqrt()) } else { Dual::default() };
+    // sinh(k g), k = mu_eff theta / 2.
+    let kg = mu_eff.scaled(0.5 * p.traction_wrap).times(g);
+    let sinh = kg.map(kg.x.sinh(), kg.x.cosh());
+    let f_wrap = root.times(sinh).scaled(-2.0);
+    Contact { force: f_nip.plus(f_wrap), mu_eff, h_air }
 }
 
 /// The share of the available traction the tensions use: the direction g in [R7]'s law at rest,
@@ -135,27 +183,29 @@ pub fn contact(p: &Parameters, s: &State) -> Contact {
 /// |ln(T_b/T_a)|/(mu_eff theta), at a nip alone |T_b - T_a|/(mu_nip N). With no traction
 /// available (a slack side, no friction), 1 where the tensions differ, else 0.
 pub fn traction_used(p: &Parameters, s: &State, mu_eff: Dual) -> Dual {
-    let (t_a, t_b) = (s.t_a, s.t_b);
+    let (t_a, t_b) = (Dual::known(s.t_a, T_A), Dual::known(s.t_b, T_B));
     let nip = p.nip_mu * s.nip_load;
-    let wrap = mu_eff.x * p.traction_wrap;
-    let saturated = || Dual::new(if t_a.x == t_b.x { 0.0 } else { 1.0 }, 0.0);
+    let wrap = mu_eff.scaled(p.traction_wrap);
+    let saturated = || Dual::constant(if t_a.x == t_b.x { 0.0 } else { 1.0 });
+    let nip_alone = || t_b.minus(t_a).scaled(1.0 / nip);
     if t_a.x <= 0.0 || t_b.x <= 0.0 {
-        return if nip > 0.0 && wrap == 0.0 { abs(ratio_nip(t_a, t_b, nip)) } else { saturated() };
+        return if nip > 0.0 && wrap.x == 0.0 { abs(nip_alone()) } else { saturated() };
     }
-    if nip == 0.0 && wrap == 0.0 {
+    if nip == 0.0 && wrap.x == 0.0 {
         return saturated();
     }
     if nip == 0.0 {
         // |ln(T_b/T_a)|/(mu theta)
-        let x = (t_b.x / t_a.x).ln() / wrap;
-        let dx = (t_b.d / t_b.x - t_a.d / t_a.x) / wrap - x * mu_eff.d / mu_eff.x;
-        return abs(Dual::new(x, dx));
+        let ln = t_b.map(t_b.x.ln(), 1.0 / t_b.x).minus(t_a.map(t_a.x.ln(), 1.0 / t_a.x));
+        let x = ln.x / wrap.x;
+        return abs(Dual { x, d: std::array::from_fn(|i| (ln.d[i] - x * wrap.d[i]) / wrap.x) });
     }
-    if wrap == 0.0 {
-        return abs(ratio_nip(t_a, t_b, nip));
+    if wrap.x == 0.0 {
+        return abs(nip_alone());
     }
     // phi(g) = ln(T_a + n g) + w g - ln T_b = 0, increasing in g where T_a + n g > 0: Newton from the
     // nip's own estimate, kept inside that domain.
+    let w = wrap.x;
     let mut g = ((t_b.x - t_a.x) / nip).clamp(-1.0, 1.0);
     for _ in 0..50 {
         let m = t_a.x + nip * g;
@@ -163,25 +213,21 @@ pub fn traction_used(p: &Parameters, s: &State, mu_eff: Dual) -> Dual {
             g = 0.5 * (g - t_a.x / nip);
             continue;
         }
-        let step = ((m).ln() + wrap * g - t_b.x.ln()) / (nip / m + wrap);
+        let step = (m.ln() + w * g - t_b.x.ln()) / (nip / m + w);
         g -= step;
         if step.abs() <= 1e-15 * (1.0 + g.abs()) {
             break;
         }
     }
     let m = t_a.x + nip * g;
-    // dphi = dT_a/m + theta g dmu - dT_b/T_b + (n/m + w) dg = 0
-    let dg = -(t_a.d / m + p.traction_wrap * g * mu_eff.d - t_b.d / t_b.x) / (nip / m + wrap);
-    abs(Dual::new(g, dg))
-}
-
-fn ratio_nip(t_a: Dual, t_b: Dual, nip: f64) -> Dual {
-    Dual::new((t_b.x - t_a.x) / nip, (t_b.d - t_a.d) / nip)
+    // dphi = dT_a/m + g dw - dT_b/T_b + (n/m + w) dg = 0
+    let slope = nip / m + w;
+    abs(Dual { x: g, d: std::array::from_fn(|i| -(t_a.d[i] / m + g * wrap.d[i] - t_b.d[i] / t_b.x) / slope) })
 }
 
 fn abs(x: Dual) -> Dual {
     if x.x < 0.0 {
-        Dual::new(-x.x, -x.d)
+        x.scaled(-1.0)
     } else {
         x
     }
@@ -205,7 +251,7 @@ mod tests {
     }
 
     fn state(v_web: f64, v_surface: f64, t_a: f64, t_b: f64) -> State {
-        State { v_web: Dual::new(v_web, 0.0), v_surface: Dual::new(v_surface, 0.0), t_a: Dual::new(t_a, 0.0), t_b: Dual::new(t_b, 0.0), nip_load: 0.0, radius: Dual::new(0.05, 0.0) }
+        State { v_web, v_surface, t_a, t_b, nip_load: 0.0, radius: 0.05 }
     }
 
     /// Sliding (s >> v_slip) on a wrap, at rest: the capstan law, T_b = T_a exp(mu theta).
@@ -256,39 +302,42 @@ mod tests {
         assert!((mu.x - 0.3 * a).abs() < 1e-15, "{} {}", mu.x, 0.3 * a);
     }
 
-    /// Every differential against central differences of the values, along random directions.
+    /// Every gradient against central differences of the values, along several directions.
     #[test]
-    fn the_differentials_are_the_equations_own() {
+    fn the_gradients_are_the_equations_own() {
         let cases = [
-            (Parameters { ..params() }, 0.0),
+            (params(), 0.0),
             (Parameters { nip_mu: 0.5, ..params() }, 150.0),
             (Parameters { air_roughness: 2e-6, ..params() }, 0.0),
             (Parameters { air_roughness: 2e-6, nip_mu: 0.4, ..params() }, 90.0),
         ];
         let points = [(5.0004, 5.0, 60.0, 75.0), (4.9993, 5.0, 90.0, 70.0), (12.0, 11.998, 40.0, 41.0)];
-        let dirs = [(1.3e-4, -0.7e-4, 0.9, -1.7), (-2e-4, 1e-4, -2.0, 0.5)];
+        let directions: [Gradient; 2] = [[1.3e-4, -0.7e-4, 0.9, -1.7, 1e-3], [-2e-4, 1e-4, -2.0, 0.5, -2e-3]];
         for (p, n) in &cases {
             for &(vw, vs, ta, tb) in &points {
-                for &(dvw, dvs, dta, dtb) in &dirs {
+                for d in &directions {
                     let at = |e: f64| State {
-                        v_web: Dual::new(vw + e * dvw, dvw),
-                        v_surface: Dual::new(vs + e * dvs, dvs),
-                        t_a: Dual::new(ta + e * dta, dta),
-                        t_b: Dual::new(tb + e * dtb, dtb),
+                        v_web: vw + e * d[V_WEB],
+                        v_surface: vs + e * d[V_SURFACE],
+                        t_a: ta + e * d[T_A],
+                        t_b: tb + e * d[T_B],
                         nip_load: *n,
-                        radius: Dual::new(0.05 + e * 1e-3, 1e-3),
+                        radius: 0.05 + e * d[RADIUS],
                     };
                     let e = 1e-5; // the displacements are small beside the speeds themselves
                     let c = contact(p, &at(0.0));
                     let (hi, lo) = (contact(p, &at(e)), contact(p, &at(-e)));
-                    let fd = (hi.force.x - lo.force.x) / (2.0 * e);
-                    assert!((c.force.d - fd).abs() <= 1e-6 * (fd.abs() + 1.0), "force: {} vs {fd} at {:?} {n} {vw} {dvw}", c.force.d, (p.nip_mu, p.air_roughness));
-                    let fd = (hi.mu_eff.x - lo.mu_eff.x) / (2.0 * e);
-                    assert!((c.mu_eff.d - fd).abs() <= 1e-6 * (fd.abs() + 1e-3), "mu: {} vs {fd}", c.mu_eff.d);
-                    let used = |s: &State, m: Dual| traction_used(p, s, m);
-                    let fd = (used(&at(e), hi.mu_eff).x - used(&at(-e), lo.mu_eff).x) / (2.0 * e);
-                    let u = used(&at(0.0), c.mu_eff);
-                    assert!((u.d - fd).abs() <= 1e-6 * (fd.abs() + 1e-3), "used: {} vs {fd}", u.d);
+                    let close = |what: &str, x: Dual, hi: f64, lo: f64, floor: f64| {
+                        let fd = (hi - lo) / (2.0 * e);
+                        assert!((x.along(d) - fd).abs() <= 1e-6 * (fd.abs() + floor), "{what}: {} vs {fd}", x.along(d));
+                    };
+                    close("force", c.force, hi.force.x, lo.force.x, 1.0);
+                    close("mu_eff", c.mu_eff, hi.mu_eff.x, lo.mu_eff.x, 1e-3);
+                    close("h_air", c.h_air, hi.h_air.x, lo.h_air.x, 1e-9);
+                    let used = |s: &State, m: Dual| traction_used(p, s, m).x;
+                    close("traction", traction_used(p, &at(0.0), c.mu_eff), used(&at(e), hi.mu_eff), used(&at(-e), lo.mu_eff), 1e-3);
+                    let acc = |s: &State, f: Dual| web_acceleration(p, s, f).x;
+                    close("acceleration", web_acceleration(p, &at(0.0), c.force), acc(&at(e), hi.force), acc(&at(-e), lo.force), 1.0);
                 }
             }
         }

@@ -3,7 +3,7 @@
 //! (omega, r, y, y') and the inputs. The profile's tables are functions of
 //! time only, so they and their slopes are held.
 
-use crate::contact::{self, Dual};
+use crate::contact::{self, Contact, Dual};
 use crate::parameters::{Inputs, Parameters, STATES};
 use crate::physics::{self, Roll};
 use std::f64::consts::PI;
@@ -76,7 +76,11 @@ impl<'a> Point<'a> {
         let p = self.params;
         let r = self.roll.radius;
         let c = if p.winding() { p.roll_sign() * p.wound_thickness / (2.0 * PI) } else { 0.0 };
-        let friction = self.contact.map(|s| contact::contact(p, &s).force.x);
+        // Where the web may slip, the contact and what it moves, with their gradients, once for every direction.
+        let slip = self.contact.map(|s| {
+            let c = contact::contact(p, &s);
+            Slip { web_acceleration: contact::web_acceleration(p, &s, c.force), traction_used: contact::traction_used(p, &s, c.mu_eff), contact: c }
+        });
         Linearization {
             params: p,
             inputs: self.inputs,
@@ -89,10 +93,10 @@ impl<'a> Point<'a> {
             r_rate: c * self.speed / r,
             slope: self.speed_slope.unwrap_or(0.0),
             tension: self.tension,
-            web_torque: friction.map_or_else(|| physics::web_torque(p, r, self.inputs), |f| -r * f),
+            web_torque: slip.as_ref().map_or_else(|| physics::web_torque(p, r, self.inputs), |s| -r * s.contact.force.x),
             torque: self.torque,
             strain_table: self.strain_table,
-            contact: self.contact,
+            slip,
         }
     }
 }
@@ -125,7 +129,14 @@ pub struct Linearization<'a> {
     web_torque: f64,
     torque: f64,
     strain_table: bool,
-    contact: Option<contact::State>,
+    slip: Option<Slip>,
+}
+
+/// Where the web may slip on the roller: the contact [R6]-[R8] and what it moves, with gradients.
+struct Slip {
+    contact: Contact,
+    web_acceleration: Dual,
+    traction_used: Dual,
 }
 
 impl Linearization<'_> {
@@ -141,21 +152,14 @@ impl Linearization<'_> {
         let d_v = if self.speed_table { 0.0 } else { omega * d_r + r * d_omega };
         let d_r_rate = c * (d_v * r - v * d_r) / (r * r);
         let web_torque = self.web_torque;
-        // Where the web may slip [R6]–[R8]: the contact along d, its friction f moving the roller by -r*f.
-        let along_contact = self.contact.map(|s| {
-            let s = contact::State {
-                v_web: Dual::new(s.v_web.x, d_v_web),
-                v_surface: Dual::new(s.v_surface.x, d_v),
-                t_a: Dual::new(s.t_a.x, d.u.force_a[0]),
-                t_b: Dual::new(s.t_b.x, d.u.force_b[0]),
-                radius: Dual::new(r, d_r),
-                ..s
-            };
-            let c = contact::contact(p, &s);
-            (c, contact::web_acceleration(p, &s, c.force).d, contact::traction_used(p, &s, c.mu_eff).d)
+        // Where the web may slip [R6]–[R8]: the contact along d (its knowns: the speeds, the tensions, r),
+        // its friction f moving the roller by -r*f.
+        let along_contact = self.slip.as_ref().map(|s| {
+            let d = [d_v_web, d_v, d.u.force_a[0], d.u.force_b[0], d_r];
+            (s.contact.force.x, s.contact.force.along(&d), s.web_acceleration.along(&d), s.traction_used.along(&d), s.contact.mu_eff.along(&d), s.contact.h_air.along(&d))
         });
-        let d_web_torque = match &along_contact {
-            Some((c, _, _)) => -d_r * c.force.x - r * c.force.d,
+        let d_web_torque = match along_contact {
+            Some((f, df, ..)) => -d_r * f - r * df,
             None => d_r * (u.pull_forward(p) - u.pull_back(p)) + r * (d.u.pull_forward(p) - d.u.pull_back(p)),
         };
         let (d_torque, d_omega_rate) = if self.speed_table {
@@ -182,8 +186,8 @@ impl Linearization<'_> {
             (0.0, 0.0)
         };
         let surface = if self.speed_table { 0.0 } else { d_v };
-        let (web_speed, slip, traction_used, mu_eff, h_air, d_v_web_rate) = match &along_contact {
-            Some((c, rate, used)) => (d_v_web, d_v_web - surface, *used, c.mu_eff.d, c.h_air.d, *rate),
+        let (web_speed, slip, traction_used, mu_eff, h_air, d_v_web_rate) = match along_contact {
+            Some((_, _, rate, used, mu_eff, h_air)) => (d_v_web, d_v_web - surface, used, mu_eff, h_air, rate),
             None => (surface, 0.0, 0.0, 0.0, 0.0, 0.0),
         };
         Tangents {

@@ -2,7 +2,7 @@
 //! calls (initialization, steps, Model Exchange, FMU states). Its equations
 //! are in `physics`, its drive and tables in `drive`.
 
-use crate::contact::{self, Dual};
+use crate::contact;
 use crate::description::{Real, DESCRIPTION};
 use crate::drive::{self, Drive, Key, Loaded};
 use crate::jacobian::{Direction, Linearization, Point, Tangents};
@@ -109,7 +109,7 @@ impl Roller {
         self.web_speed() - self.surface_speed()
     }
 
-    /// The contact's state now [R6]–[R8] (its differentials zero: `jacobian` sets them).
+    /// The contact's state now [R6]–[R8].
     fn contact_state(&self) -> contact::State {
         self.contact_state_at(self.time, self.omega(), self.v_web)
     }
@@ -122,12 +122,12 @@ impl Roller {
             _ => physics::surface_speed(r, omega),
         };
         contact::State {
-            v_web: Dual::new(v_web, 0.0),
-            v_surface: Dual::new(v_surface, 0.0),
-            t_a: Dual::new(u.force_a[0], 0.0),
-            t_b: Dual::new(u.force_b[0], 0.0),
+            v_web,
+            v_surface,
+            t_a: u.force_a[0],
+            t_b: u.force_b[0],
             nip_load: self.table(Key::Nip).map_or(0.0, |table| self.read(table, t).0),
-            radius: Dual::new(r, 0.0),
+            radius: r,
         }
     }
 
@@ -161,10 +161,19 @@ impl Roller {
     /// The webs' torque on the roller: r*(F_b - F_a) [R1], or with traction the friction's, -r*f [R6].
     #[inline]
     fn web_torque(&self) -> f64 {
-        if self.params.traction {
-            -self.roll.radius * contact::contact(&self.params, &self.contact_state()).force.x
-        } else {
-            physics::web_torque(&self.params, self.roll.radius, &self.inputs)
+        let friction = self.params.traction.then(|| {
+            let state = self.contact_state();
+            (state, contact::contact(&self.params, &state).force)
+        });
+        self.web_torque_with(friction)
+    }
+
+    /// `web_torque` with the friction where the web may slip, as found.
+    #[inline]
+    fn web_torque_with(&self, friction: Option<(contact::State, contact::Dual)>) -> f64 {
+        match friction {
+            Some((_, f)) => -self.roll.radius * f.x,
+            None => physics::web_torque(&self.params, self.roll.radius, &self.inputs),
         }
     }
 
@@ -236,19 +245,19 @@ impl Roller {
     /// d/dt of (omega, r, y, y', v_web) now [R1]–[R4], [R6], for Model Exchange.
     pub fn derivatives(&self) -> [f64; STATES] {
         let p = &self.params;
+        // The friction where the web may slip, once for both rates it moves.
+        let friction = p.traction.then(|| {
+            let state = self.contact_state();
+            (state, contact::contact(p, &state).force)
+        });
         let v = self.surface_speed();
         let (radius_rate, inertia_rate) =
             if p.winding() { (self.roll.radius_rate(p, v), self.roll.inertia_rate(p, v)) } else { (0.0, 0.0) };
         let omega_rate = match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => physics::omega_rate_at_speed(self.read(t, self.time).1, v, self.roll.radius, radius_rate),
-            _ => physics::omega_rate(p, &self.roll, self.web_torque(), self.omega.value(), self.torque_at(self.time).0, inertia_rate),
+            _ => physics::omega_rate(p, &self.roll, self.web_torque_with(friction), self.omega.value(), self.torque_at(self.time).0, inertia_rate),
         };
-        let v_web_rate = if p.traction {
-            let state = self.contact_state();
-            contact::web_acceleration(p, &state, contact::contact(p, &state).force).x
-        } else {
-            0.0
-        };
+        let v_web_rate = friction.map_or(0.0, |(state, f)| contact::web_acceleration(p, &state, f).x);
         let carriage = if p.carriage {
             [self.carriage[1], physics::carriage_acceleration(p, self.carriage, self.carriage_force(self.time).0)]
         } else {
@@ -600,35 +609,36 @@ struct Slipping<'a> {
 }
 
 impl Slipping<'_> {
-    /// The contact and the rates at time t0 + s, the roller at y, along (d_omega, d_v_web).
-    fn at(&self, s: f64, y: &[f64; 2], d: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    /// The rates at time t0 + s, the roller at y, and their partials in (omega, v_web).
+    fn at(&self, s: f64, y: &[f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
+        use contact::{V_SURFACE, V_WEB};
         let (roller, t) = (self.roller, self.t0 + s);
         let (p, r) = (&roller.params, roller.roll.radius);
         let speed_table = roller.table(Key::Speed).filter(|_| roller.drive() == Drive::Speed);
-        let mut state = roller.contact_state_at(t, y[0], y[1]);
-        state.v_web.d = d[1];
-        state.v_surface.d = if speed_table.is_some() { 0.0 } else { r * d[0] };
+        let state = roller.contact_state_at(t, y[0], y[1]);
         let f = contact::contact(p, &state).force;
+        // d(surface speed)/d(omega): r, or 0 where the surface follows a table.
+        let dv = if speed_table.is_some() { 0.0 } else { r };
+        let (df_domega, df_dv_web) = (f.d[V_SURFACE] * dv, f.d[V_WEB]);
         let (omega_rate, d_omega_rate) = match speed_table {
-            Some(table) => (roller.read(table, t).1 / r, 0.0),
+            Some(table) => (roller.read(table, t).1 / r, [0.0, 0.0]),
             None => {
                 let j = roller.roll.inertia;
-                ((-r * f.x + roller.torque_at(t).0 - p.damping * y[0]) / j, (-r * f.d - p.damping * d[0]) / j)
+                ((-r * f.x + roller.torque_at(t).0 - p.damping * y[0]) / j, [(-r * df_domega - p.damping) / j, -r * df_dv_web / j])
             }
         };
         let a = contact::web_acceleration(p, &state, f);
-        ([omega_rate, a.x], [d_omega_rate, a.d])
+        ([omega_rate, a.x], [d_omega_rate, [a.d[V_SURFACE] * dv, a.d[V_WEB]]])
     }
 }
 
 impl solver::Ode<2> for Slipping<'_> {
     fn rhs(&self, s: f64, y: &[f64; 2]) -> [f64; 2] {
-        self.at(s, y, [0.0, 0.0]).0
+        self.at(s, y).0
     }
 
     fn jacobian(&self, s: f64, y: &[f64; 2]) -> [[f64; 2]; 2] {
-        let (c0, c1) = (self.at(s, y, [1.0, 0.0]).1, self.at(s, y, [0.0, 1.0]).1);
-        [[c0[0], c1[0]], [c0[1], c1[1]]]
+        self.at(s, y).1
     }
 
     /// Tables of time (a drive's ramp, the nip's load) move f at fixed y: a central difference.

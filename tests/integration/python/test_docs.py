@@ -55,7 +55,7 @@ def test_the_check_can_fail(tmp_path):
 def test_no_tracked_file_cites_a_path_outside_the_repository():
     """The project's own docs/physics.md holds the model: nothing points at a folder beside the
     checkout (such as the team's shared notes), which users never have."""
-    listed = subprocess.run(["git", "grep", "-n", "-I", "-E", r"\.\./shared/|shared/docs/", "--", ".", ":!tests/python/test_docs.py"],
+    listed = subprocess.run(["git", "grep", "-n", "-I", "-E", r"\.\./shared/|shared/docs/", "--", ".", ":!tests/integration/python/test_docs.py"],
                             cwd=ROOT, capture_output=True, text=True)
     assert listed.stdout == "", listed.stdout
 

@@ -79,6 +79,7 @@ class LineODE:
         self.web = {sp.name: (sp.wp1, sp.wp2) for sp in self.spans}
         self.inertia = {m.name: [m.J, m.R, m.b] for m in self.movers}
         self.segment = (0.0, scene.stop_time)
+        self.stuck = False  # the web held to every roller's surface (the equilibrium's first search)
 
     # profile values inside the current segment [a, b]: the left limit at b
     def pv(self, profile, t):
@@ -123,7 +124,7 @@ class LineODE:
         q = {}
         v = {node.name: self.speed(node, t, z) for node in s.nodes}
         # The spans see the web's speed where it may slip, the surface's elsewhere.
-        w = {**v, **{c.name: z[i] for c, i in zip(self.slippers, self.i_vw.values())}}
+        w = v if self.stuck else {**v, **{c.name: z[i] for c, i in zip(self.slippers, self.i_vw.values())}}
         for sp in self.spans:
             up, down = self.up[sp.name], self.down[sp.name]
             w1, w2 = self.web[sp.name]
@@ -164,7 +165,7 @@ class LineODE:
             F_down = sum(q[sp.name]["T"] for sp in self.outs[node.name])
             F_up = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[node.name])
             m_up = sum(q[sp.name]["m"] for sp in self.ins[node.name])
-            if node.name in self.i_vw:  # the web pulls the roller through its friction only [R6]
+            if node.name in self.i_vw and not self.stuck:  # the web pulls the roller through its friction only [R6]
                 contact = self.contact(node, t, z, v, q)
                 F_down, F_up = -contact["f"], 0.0
             num = R * (F_down - F_up) + self.torque(node, t) - b * omega
@@ -233,30 +234,30 @@ class LineODE:
     def equilibrium(self, z0, t=0.0):
         """The state where every rate vanishes, from z0 (SciPy's root, 'hybr'), checked before it is
         returned (`STEADY`). A dancer without a spring is steady at any position: its position is held
-        at its start and its carriage's balance of forces checked on its own, which names what is off."""
+        at its start and its carriage's balance of forces checked on its own, which names what is off.
+        Where the web may slip, the line is solved first with the web held to every roller's surface,
+        then with its speeds free from there: away from its steady tensions the friction saturates, and
+        a search through such states stalls."""
         springless = [d for d in self.dancers if d.stiffness == 0.0]
         held = [self.i_y[d.name] for d in springless]  # their positions: held
         balance = [i + 1 for i in held]  # their accelerations: checked afterwards
-        free = np.array([i for i in range(self.n) if i not in held], dtype=int)
-        rows = np.array([i for i in range(self.n) if i not in balance], dtype=int)
+        slips = list(self.i_vw.values())
         z = z0.copy()
-        # Scaled by the start, then again by the first answer: a strain that starts at 0 is scaled
-        # by its tolerance at first, a thousand times below its steady value, and hybr stalls there.
-        for _ in range(2):
-            scale = np.maximum(np.abs(z), atol_of(self, z0) * 1e6)
-
-            def rates(u, scale=scale):
-                x = z.copy()
-                x[free] = u * scale[free]
-                return self.rhs(t, x)[rows]
-
-            sol = root(rates, z[free] / scale[free], method="hybr", options={"xtol": 1e-15})
-            z[free] = sol.x * scale[free]
+        if slips:
+            self.stuck = True
+            try:
+                z, _ = self._solve(t, z0, z, held + slips, balance + slips)
+            finally:
+                self.stuck = False
+            for c in self.slippers:
+                z[self.i_vw[c.name]] = self.speed(c, t, z)
+        z, scale = self._solve(t, z0, z, held, balance)
         off = self.unsteadiness(t, z, scale)
+        rows = np.array([i for i in range(self.n) if i not in balance], dtype=int)
         if len(rows) and not np.max(off[rows]) < STEADY:
             worst = self.state_names()[rows[np.argmax(off[rows])]]
             raise EquilibriumError(f"{self.s.path}: the line has no steady state at t = {t:g} s for its drives "
-                                   f"(SciPy's root: {sol.message.strip()} The rate of {worst} stays at "
+                                   f"(SciPy's root: {self.last_root.message.strip()} The rate of {worst} stays at "
                                    f"{np.max(off[rows]):.2g} of its scale); {GIVEN}")
         for d, i in zip(springless, balance):
             if not off[i] < STEADY:
@@ -272,6 +273,28 @@ class LineODE:
                     f"the line has no steady state to start from. Give the dancer a \"stiffness\" (its spring takes the "
                     f"difference), or {GIVEN}")
         return z
+
+    def _solve(self, t, z0, z, held, skipped):
+        """SciPy's root on the rates but `skipped`, over the states but `held`, from z; (z, scale)."""
+        free = np.array([i for i in range(self.n) if i not in held], dtype=int)
+        rows = np.array([i for i in range(self.n) if i not in skipped], dtype=int)
+        z = z.copy()
+        # Scaled by the start, then again by the first answer: a strain that starts at 0 is scaled
+        # by its tolerance at first, a thousand times below its steady value, and hybr stalls there.
+        for _ in range(2):
+            scale = np.maximum(np.abs(z), atol_of(self, z0) * 1e6)
+            for c in self.slippers:  # the web's speed over a roller moves on the scale of its slip
+                scale[self.i_vw[c.name]] = c.traction.v_slip
+
+            def rates(u, scale=scale):
+                x = z.copy()
+                x[free] = u * scale[free]
+                return self.rhs(t, x)[rows]
+
+            sol = root(rates, z[free] / scale[free], method="hybr", options={"xtol": 1e-15})
+            z[free] = sol.x * scale[free]
+        self.last_root = sol
+        return z, scale
 
     def unsteadiness(self, t, z, scale):
         """Each rate at z relative to how much it changes when every state moves by its own size
