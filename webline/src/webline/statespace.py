@@ -217,8 +217,8 @@ def report(ss: StateSpace, modes: list[LineMode]) -> str:
         out.append("  the line is not steady here (A, B, C, D describe deviations from a moving point): "
                    + ", ".join(f"{s}' = {r:.4g} {_rate_unit(ss.units.get(s, ''))}" for s, r in moving))
     out.append("  modes, slowest first: f_n = |lambda|/2 pi, damping ratio = -Re(lambda)/|lambda|, one eigenvalue of")
-    out.append("  each conjugate pair; ± what an error of "
-               f"{DERIVATIVE_ACCURACY:g} in A's entries may move them by; parts by their states' participation")
+    out.append("  each conjugate pair; ± how far a relative inaccuracy of "
+               f"{DERIVATIVE_ACCURACY:g} in A's entries may move them; parts by their states' participation")
     out.append(f"  {'f_n [Hz]':>10} {'±':>7} {'damping':>8} {'±':>7}  {'eigenvalue [1/s]':<20} parts that move most")
     for m in modes:
         lam = m.eigenvalue
