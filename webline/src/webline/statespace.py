@@ -71,7 +71,7 @@ class StateSpace:
         """The states that are not steady here, with their rates: those whose x' exceeds STEADY of the
         terms of their row of A (a span's flows, which cancel to rounding when steady) and of the
         state itself per second."""
-        scale = np.maximum(np.abs(self.A) @ np.abs(self.x), np.abs(self.x) / 1.0)
+        scale = np.maximum(np.abs(self.A) @ np.abs(self.x), np.abs(self.x) / 1.0)  # x per second
         return [(s, float(r)) for s, r, c in zip(self.states, self.dx0, scale) if abs(r) > STEADY * c]
 
     def modes(self) -> list[LineMode]:
@@ -115,7 +115,8 @@ class StateSpace:
         savemat(path, {
             "A": self.A, "B": self.B, "C": self.C, "D": self.D,
             "states": cell(self.states), "inputs": cell(self.inputs), "outputs": cell(self.outputs),
-            "x0": self.x.reshape(-1, 1), "dx0": self.dx0.reshape(-1, 1), "u0": self.u.reshape(-1, 1), "y0": self.y.reshape(-1, 1), "t": float(self.time),
+            "x0": self.x.reshape(-1, 1), "dx0": self.dx0.reshape(-1, 1), "u0": self.u.reshape(-1, 1),
+            "y0": self.y.reshape(-1, 1), "t": float(self.time),
             "state_units": cell(self.units.get(s, "") for s in self.states),
             "input_units": cell(self.units.get(s, "") for s in self.inputs),
             "output_units": cell(self.units.get(s, "") for s in self.outputs),
@@ -171,6 +172,7 @@ def linearize(scene, at: float = 0.0, fmu_dir=None) -> StateSpace:
         inputs = [v for v in variables if v.causality == "input"]
         outputs = [v for v in variables if v.causality == "output"]
         vrs = lambda vs: [v.valueReference for v in vs]  # noqa: E731
+        rates = [d.variable.valueReference for d in md.derivatives]
         with fmpy_log.collecting_proxied() as messages:
             try:
                 fmu = instantiate_fmu(path, md, "ModelExchange")
@@ -180,13 +182,11 @@ def linearize(scene, at: float = 0.0, fmu_dir=None) -> StateSpace:
                              stop_time=at, output_interval=at / RUN_INTERVALS or 1.0, relative_tolerance=RUN_TOLERANCE,
                              output=[])
                 n = len(states)
-                J = directional_jacobian(fmu, [d.variable.valueReference for d in md.derivatives] + vrs(outputs),
-                                         vrs(states) + vrs(inputs))
+                J = directional_jacobian(fmu, rates + vrs(outputs), vrs(states) + vrs(inputs))
                 x = np.array(fmu.getReal(vrs(states)) if states else [], dtype=float)
                 u = np.array(fmu.getReal(vrs(inputs)) if inputs else [], dtype=float)
                 y = np.array(fmu.getReal(vrs(outputs)) if outputs else [], dtype=float)
-                dx0 = np.array(fmu.getReal([d.variable.valueReference for d in md.derivatives]) if states else [],
-                               dtype=float)
+                dx0 = np.array(fmu.getReal(rates) if states else [], dtype=float)
             except Exception as e:  # FMPy names the call; the FMU's log says why
                 raise linefmu.LineFmuError(f"{scene.name}: linearizing at t = {at:g} s: {e}"
                                            + "".join(f"\n  {m}" for _, m in messages[-3:])) from e
