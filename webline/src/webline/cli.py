@@ -5,6 +5,7 @@
     webline export SCENE.json -o LINE.ssp
     webline export SCENE.json --fmu [-o Line.fmu] [--fmi3]
     webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
+    webline linearize SCENE.json [--at TIME] [--bode INPUT:OUTPUT ...] [-o MODEL.mat]
     webline reference SCENE.json
     webline convergence SCENE.json [--engine parts|line] [--steps 2ms,1ms,0.5ms]
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
@@ -277,6 +278,31 @@ def cmd_check(args):
     return status
 
 
+def bode_arg(text: str) -> tuple[str, str]:
+    """--bode INPUT:OUTPUT, e.g. unwind.tau_m:entry.T."""
+    if text.count(":") != 1 or not all(text.split(":")):
+        raise argparse.ArgumentTypeError(f"{text!r} is not INPUT:OUTPUT (e.g. unwind.tau_m:entry.T)")
+    return tuple(text.split(":"))
+
+
+def cmd_linearize(args):
+    """The scene's Line FMU linearized at --at: the state-space model as a .mat, the modes, Bode plots."""
+    from .statespace import bode, linearize, report
+
+    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+    ss = linearize(scene, args.at, args.fmu_dir)
+    for pair in args.bode or []:  # every name checked before anything is written
+        ss.input_index(pair[0]), ss.output_index(pair[1])
+    modes = ss.modes()
+    print(report(ss, modes))
+    out = Path(args.out)
+    written = [str(ss.write_mat(args.output or out / f"{scene.name}_linear.mat"))]
+    for i, o in args.bode or []:
+        written.append(str(bode(ss, i, o, out / f"{scene.name}_bode_{i}_{o}.png", modes)))
+    print("wrote " + ", ".join(written))
+    return 0
+
+
 def cmd_reference(args):
     from .reference import reference
 
@@ -392,6 +418,17 @@ def main(argv=None):
                    help="Jacobians from fmi2GetDirectionalDerivative or central differences (auto: the former when the FMU provides it)")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.set_defaults(func=cmd_check)
+
+    p = sub.add_parser("linearize", help="the scene's Line FMU linearized at a time: A, B, C, D with names (.mat), "
+                                         "its modes and the parts that move in each, Bode plots")
+    p.add_argument("scene")
+    p.add_argument("--at", type=time_arg, default=0.0, help="the time to linearize at (default 0: the start)")
+    p.add_argument("--bode", type=bode_arg, action="append", metavar="INPUT:OUTPUT",
+                   help="a Bode plot from a Line input to a Line output, e.g. unwind.tau_m:entry.T (repeat for more)")
+    p.add_argument("-o", "--output", type=Path, help="the model (default: OUT/SCENE_linear.mat)")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
+    p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
+    p.set_defaults(func=cmd_linearize)
 
     p = sub.add_parser("reference", help="the monolithic SciPy reference of a scene, as CSV")
     p.add_argument("scene")

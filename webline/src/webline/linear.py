@@ -1,11 +1,14 @@
 """A line linearized: one Block (x' = A x + B u, y = C x + D u) per component and the Line that connects them.
 
 `linearization` builds a Line from a System's FMUs; `stability` builds the
-master's one-step map from it. Both raise StabilityError.
+master's one-step map from it. Both raise StabilityError. A `Mode` is an
+eigenvalue; `participation` tells which states carry each (`stability`, and
+`statespace` for the whole line as one FMU).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -13,6 +16,34 @@ import numpy as np
 
 class StabilityError(RuntimeError):
     pass
+
+
+@dataclass
+class Mode:
+    eigenvalue: complex
+
+    @property
+    def omega_n(self):
+        return abs(self.eigenvalue)
+
+    @property
+    def frequency(self):  # Hz, damped
+        return abs(self.eigenvalue.imag) / (2 * math.pi)
+
+    @property
+    def damping(self):
+        return -self.eigenvalue.real / abs(self.eigenvalue) if self.eigenvalue else 0.0
+
+
+def participation(M: np.ndarray):
+    """M's eigenvalues, their participation factors P (column k: |l_ik r_ik| over the states i, from the
+    left and right eigenvectors of eigenvalue k, summing to 1: the same whatever units the states are
+    in), and the left and right eigenvectors (columns)."""
+    from scipy.linalg import eig
+
+    lam, vl, vr = eig(M, left=True, right=True)
+    P = np.abs(np.conj(vl) * vr)
+    return lam, P / np.maximum(P.sum(axis=0), np.finfo(float).tiny), vl, vr
 
 
 @dataclass

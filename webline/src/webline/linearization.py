@@ -110,14 +110,10 @@ class ModelInstance:
         return bool(self.md.modelExchange.providesDirectionalDerivative)
 
     def jacobians_by_derivatives(self, inputs, outputs):
-        """[A B; C D] column by column with fmi2GetDirectionalDerivative (seed: one known at a time)."""
+        """[A B; C D] with fmi2GetDirectionalDerivative (`directional_jacobian`)."""
         known = [v.valueReference for v in self.state_vars] + [self.vr(u) for u in inputs]
         unknown = self.derivative_vrs + [self.vr(y) for y in outputs]
-        J = np.zeros((len(unknown), len(known)))
-        for c in range(len(known)):
-            J[:, c] = self._call("fmi2GetDirectionalDerivative",
-                                 lambda: self.fmu.getDirectionalDerivative(unknown, [known[c]], [1.0]))
-        return J
+        return self._call("fmi2GetDirectionalDerivative", lambda: directional_jacobian(self.fmu, unknown, known))
 
     def jacobians_by_differences(self, inputs, outputs):
         """[A B; C D] by central differences of the derivatives and outputs."""
@@ -157,6 +153,15 @@ class ModelInstance:
         except FMICallException:
             pass
         self.fmu.freeInstance()
+
+
+def directional_jacobian(fmu, unknowns: list, knowns: list) -> np.ndarray:
+    """d unknowns / d knowns (value references) of an FMI 2.0 instance, column by column with
+    fmi2GetDirectionalDerivative (seed: one known at a time)."""
+    J = np.zeros((len(unknowns), len(knowns)))
+    for c, known in enumerate(knowns):
+        J[:, c] = fmu.getDirectionalDerivative(unknowns, [known], [1.0])
+    return J
 
 
 def model_exchange_start(component):

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 from scipy.linalg import expm, null_space
 
-from .linear import Block, Line, StabilityError
+from .linear import Block, Line, Mode, StabilityError, participation
 
 ALGORITHMS = ("jacobi", "gauss-seidel")
 COUPLINGS = ("hold", "extrapolate")
@@ -196,23 +196,6 @@ def stable_step(line: Line, algorithm: str, coupling: str, h_range=None, per_dec
 # ---------------------------------------------------------------- modes and the hand estimate
 
 
-@dataclass
-class Mode:
-    eigenvalue: complex
-
-    @property
-    def omega_n(self):
-        return abs(self.eigenvalue)
-
-    @property
-    def frequency(self):  # Hz, damped
-        return abs(self.eigenvalue.imag) / (2 * math.pi)
-
-    @property
-    def damping(self):
-        return -self.eigenvalue.real / abs(self.eigenvalue) if self.eigenvalue else 0.0
-
-
 def modes(line: Line) -> list[Mode]:
     """Eigenvalues of the coupled continuous system, fastest first (one of each complex pair)."""
     A_c, _ = line.continuous()
@@ -366,12 +349,8 @@ class CouplingLimit:
 def growing_part(line: Line, h: float, algorithm: str, coupling: str) -> str:
     """The block whose states and signals carry most of the one-step map's largest mode at h
     (participation factors |l_k r_k|: the same whatever units the states are in)."""
-    from scipy.linalg import eig
-
-    M = step_map(line, h, algorithm, coupling)
-    lam, vl, vr = eig(M, left=True, right=True)
-    i = int(np.argmax(np.abs(lam)))
-    p = np.abs(np.conj(vl[:, i]) * vr[:, i])
+    lam, P, _, _ = participation(step_map(line, h, algorithm, coupling))
+    p = P[:, int(np.argmax(np.abs(lam)))]
     ox, ou, oy, _ = line.offsets()
     share = [p[ox[k]:ox[k + 1]].sum() + p[ou[k]:ou[k + 1]].sum() + p[oy[k]:oy[k + 1]].sum() for k in range(len(line.blocks))]
     return line.blocks[int(np.argmax(share))].name

@@ -1,0 +1,296 @@
+"""A line's state-space model from its Line FMU: A, B, C, D at a time, its modes, a frequency response.
+
+The scene is exported as one Line FMU (`linefmu.export`), instantiated in Model
+Exchange, run there with FMPy's CVode to the time asked (from its start, the
+equilibrium unless the scene says given) and linearized with
+fmi2GetDirectionalDerivative: dx' = A dx + B du, dy = C dx + D du around the
+states, inputs and outputs it has then. The inputs are all the Line's inputs
+(motor torques, dancers' loads), the outputs all its outputs.
+
+The Line's directional derivatives are central differences of the line, about
+1e-7 relative (docs/line-fmu.md, Limits); each mode carries what such an error
+of A's entries can move its eigenvalue by (`LineMode.error`).
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import fmpy_log, linefmu
+from .linear import Mode, participation
+from .linearization import directional_jacobian
+
+# The Line's directional derivatives: central differences, about this relative error per entry.
+DERIVATIVE_ACCURACY = 1e-7
+# CVode's relative tolerance on the way to the time asked: the operating point to about 1e-9
+# of the states, below what the derivatives resolve.
+RUN_TOLERANCE = 1e-10
+# FMPy's loop stops this often on the way (CVode takes at most 500 steps between two stops).
+RUN_INTERVALS = 1000
+# A state is steady when its rate is below this fraction of its row's terms |A_ij x_j| and of itself per second.
+STEADY = 1e-6
+# A mode's parts: those with at least this share of its participation, at most SHOWN_PARTS of them.
+SHOWN_SHARE = 0.05
+SHOWN_PARTS = 4
+
+
+@dataclass
+class StateSpace:
+    """dx' = A dx + B du, dy = C dx + D du around the operating point (x, u, y) at `time`, where the
+    states move at x' = dx0 (zero where the line is steady)."""
+
+    scene: str
+    time: float
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    states: list[str]
+    inputs: list[str]
+    outputs: list[str]
+    x: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    dx0: np.ndarray
+    units: dict = field(default_factory=dict)  # variable name -> unit ("" for none)
+    messages: list[str] = field(default_factory=list)  # what the FMU logged as a warning or worse
+
+    def input_index(self, name: str) -> int:
+        return _index(name, self.inputs, "input")
+
+    def output_index(self, name: str) -> int:
+        return _index(name, self.outputs, "output")
+
+    def moving(self) -> list[tuple[str, float]]:
+        """The states that are not steady here, with their rates: those whose x' exceeds STEADY of the
+        terms of their row of A (a span's flows, which cancel to rounding when steady) and of the
+        state itself per second."""
+        scale = np.maximum(np.abs(self.A) @ np.abs(self.x), np.abs(self.x) / 1.0)  # x per second
+        return [(s, float(r)) for s, r, c in zip(self.states, self.dx0, scale) if abs(r) > STEADY * c]
+
+    def modes(self) -> list[LineMode]:
+        """The eigenvalues of A (one of each complex pair), slowest first, with the parts that move in each."""
+        if self.A.size == 0:
+            return []
+        lam, P, vl, vr = participation(self.A)
+        parts = [s.split(".")[0] for s in self.states]
+        out = []
+        for k in np.argsort(np.abs(lam), kind="stable"):
+            if lam[k].imag < 0:
+                continue
+            share = {}
+            for p, part in zip(P[:, k], parts):
+                share[part] = share.get(part, 0.0) + float(p)
+            ranked = sorted(share.items(), key=lambda kv: -kv[1])
+            moving = [(part, s, [st.split(".", 1)[1] for st, q in zip(self.states, P[:, k])
+                                 if st.startswith(part + ".") and q >= SHOWN_SHARE * s])
+                      for part, s in ranked[:SHOWN_PARTS] if s >= SHOWN_SHARE]
+            out.append(LineMode(complex(lam[k]), moving, _eigenvalue_error(self.A, vl[:, k], vr[:, k])))
+        return out
+
+    def response(self, input: str, output: str, hz) -> np.ndarray:
+        """The frequency response d output / d input at the frequencies `hz`: C (j w I - A)^-1 B + D,
+        solved at each frequency (SciPy's freqresp goes through poles and zeros, which loses digits
+        on a line whose A spans 1e-1 to 1e6)."""
+        i, o = self.input_index(input), self.output_index(output)
+        n = self.A.shape[0]
+        b, c = self.B[:, i], self.C[o]
+        return np.array([c @ np.linalg.solve(2j * math.pi * f * np.eye(n) - self.A, b) + self.D[o, i] for f in hz])
+
+    def write_mat(self, path) -> Path:
+        """A MATLAB file (scipy.io.savemat, format 5): A, B, C, D; the names `states`, `inputs`,
+        `outputs` as cell arrays of strings; the operating point x0, u0, y0 and the states' rates
+        there, dx0; the time `t` (s); the units `state_units`, `input_units`, `output_units`; `scene`."""
+        from scipy.io import savemat
+
+        cell = lambda names: np.array(list(names), dtype=object).reshape(-1, 1)  # noqa: E731
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        savemat(path, {
+            "A": self.A, "B": self.B, "C": self.C, "D": self.D,
+            "states": cell(self.states), "inputs": cell(self.inputs), "outputs": cell(self.outputs),
+            "x0": self.x.reshape(-1, 1), "dx0": self.dx0.reshape(-1, 1), "u0": self.u.reshape(-1, 1),
+            "y0": self.y.reshape(-1, 1), "t": float(self.time),
+            "state_units": cell(self.units.get(s, "") for s in self.states),
+            "input_units": cell(self.units.get(s, "") for s in self.inputs),
+            "output_units": cell(self.units.get(s, "") for s in self.outputs),
+            "scene": self.scene,
+        }, do_compression=True, oned_as="column")
+        return path
+
+
+@dataclass
+class LineMode(Mode):
+    """A mode of the line: its eigenvalue, the parts whose states carry it, how far A's error may move it."""
+
+    parts: list  # [(part, share of the participation, [its states that carry it])], largest first
+    error: float  # bound of |d eigenvalue| from DERIVATIVE_ACCURACY of A's entries (1/s)
+
+    @property
+    def natural_frequency(self):  # Hz
+        return self.omega_n / (2 * math.pi)
+
+    @property
+    def resolved(self) -> bool:
+        """Whether the eigenvalue is told from zero by the derivatives' accuracy."""
+        return self.omega_n > self.error
+
+
+def _index(name, names, what):
+    if name not in names:
+        raise linefmu.LineFmuError(f"the line has no {what} {name!r}; its {what}s: {', '.join(names) or 'none'}")
+    return names.index(name)
+
+
+def _eigenvalue_error(A, left, right) -> float:
+    """First-order bound of how far an eigenvalue moves when each entry of A is off by up to
+    DERIVATIVE_ACCURACY of itself: eps |l|^T |A| |r| / |l^H r| (the componentwise condition number)."""
+    return DERIVATIVE_ACCURACY * float(np.abs(left) @ np.abs(A) @ np.abs(right)) / max(abs(np.conj(left) @ right), 1e-300)
+
+
+def linearize(scene, at: float = 0.0, fmu_dir=None) -> StateSpace:
+    """The scene's Line FMU linearized at time `at` (s) after its start."""
+    from fmpy import extract, read_model_description, simulate_fmu
+    from fmpy.simulation import instantiate_fmu
+
+    if not (at >= 0.0 and math.isfinite(at)):
+        raise linefmu.LineFmuError(f"{scene.name}: --at {at} s: the time must be 0 or later")
+    workdir = Path(tempfile.mkdtemp(prefix="webline-linearize-"))
+    fmu = None
+    try:
+        path = extract(str(linefmu.export(scene, workdir / f"{scene.name}.fmu", fmu_dir, start=linefmu.run_start(scene))),
+                       unzipdir=str(workdir / "fmu"))
+        md = read_model_description(path)
+        variables = [v for v in md.modelVariables if v.type == "Real"]
+        states = [d.variable.derivative for d in md.derivatives]
+        inputs = [v for v in variables if v.causality == "input"]
+        outputs = [v for v in variables if v.causality == "output"]
+        vrs = lambda vs: [v.valueReference for v in vs]  # noqa: E731
+        rates = [d.variable.valueReference for d in md.derivatives]
+        with fmpy_log.collecting_proxied() as messages:
+            try:
+                fmu = instantiate_fmu(path, md, "ModelExchange")
+                # FMPy's loop: initialization, CVode between events, each event at its time; it ends in
+                # fmi2Terminate, where the standard still allows the reads below.
+                simulate_fmu(path, model_description=md, fmu_instance=fmu, fmi_type="ModelExchange",
+                             stop_time=at, output_interval=at / RUN_INTERVALS or 1.0, relative_tolerance=RUN_TOLERANCE,
+                             output=[])
+                n = len(states)
+                J = directional_jacobian(fmu, rates + vrs(outputs), vrs(states) + vrs(inputs))
+                x = np.array(fmu.getReal(vrs(states)) if states else [], dtype=float)
+                u = np.array(fmu.getReal(vrs(inputs)) if inputs else [], dtype=float)
+                y = np.array(fmu.getReal(vrs(outputs)) if outputs else [], dtype=float)
+                dx0 = np.array(fmu.getReal(rates) if states else [], dtype=float)
+            except Exception as e:  # FMPy names the call; the FMU's log says why
+                raise linefmu.LineFmuError(f"{scene.name}: linearizing at t = {at:g} s: {e}"
+                                           + "".join(f"\n  {m}" for _, m in messages[-3:])) from e
+        return StateSpace(
+            scene=scene.name, time=at, A=J[:n, :n], B=J[:n, n:], C=J[n:, :n], D=J[n:, n:],
+            states=[v.name for v in states], inputs=[v.name for v in inputs], outputs=[v.name for v in outputs],
+            x=x, u=u, y=y, dx0=dx0, units={v.name: _unit(v) for v in variables},
+            messages=[m for status, m in messages if status >= fmpy_log.WARNING],
+        )
+    finally:
+        if fmu is not None:
+            fmu.freeInstance()
+        shutil.rmtree(workdir, ignore_errors=True)
+
+
+def _unit(v) -> str:
+    return v.unit or (v.declaredType.unit if v.declaredType is not None and v.declaredType.unit else "")
+
+
+def report(ss: StateSpace, modes: list[LineMode]) -> str:
+    """The operating point's size and the modes, slowest first: natural frequency, damping ratio,
+    eigenvalue, each with what the derivatives' accuracy allows, and the parts that move most."""
+    out = [f"{ss.scene}: linearized at t = {ss.time:g} s (Line FMU in Model Exchange, fmi2GetDirectionalDerivative): "
+           f"{len(ss.states)} states, {len(ss.inputs)} inputs ({', '.join(ss.inputs) or 'none'}), {len(ss.outputs)} outputs"]
+    out += [f"  FMU: {m}" for m in ss.messages]
+    moving = ss.moving()
+    if moving:
+        out.append("  the line is not steady here (A, B, C, D describe deviations from a moving point): "
+                   + ", ".join(f"{s}' = {r:.4g} {_rate_unit(ss.units.get(s, ''))}" for s, r in moving))
+    out.append("  modes, slowest first: f_n = |lambda|/2 pi, damping ratio = -Re(lambda)/|lambda|, one eigenvalue of")
+    out.append("  each conjugate pair; ± how far a relative inaccuracy of "
+               f"{DERIVATIVE_ACCURACY:g} in A's entries may move them; parts by their states' participation")
+    out.append(f"  {'f_n [Hz]':>10} {'±':>7} {'damping':>8} {'±':>7}  {'eigenvalue [1/s]':<20} parts that move most")
+    for m in modes:
+        lam = m.eigenvalue
+        parts = ", ".join(f"{part} {100 * s:.0f} %" + (f" ({', '.join(states)})" if len(states) < _n_states(ss, part) else "")
+                          for part, s, states in m.parts)
+        if not m.resolved:
+            out.append(f"  {'0':>10} {'':>7} {'':>8} {'':>7}  {'0':<20} {parts}: {_still(ss, m)}")
+            continue
+        eig = f"{lam.real:.5g}" + (f"{lam.imag:+.5g}j" if lam.imag > m.error else "")
+        kind = "" if lam.imag > m.error else f" (no oscillation: time constant {1 / m.omega_n:.3g} s)"
+        out.append(f"  {m.natural_frequency:>10.4g} {m.error / (2 * math.pi):>7.1g} {m.damping:>8.4f} "
+                   f"{m.error / m.omega_n:>7.1g}  {eig:<20} {parts}{kind}")
+    return "\n".join(out)
+
+
+def _still(ss: StateSpace, m: LineMode) -> str:
+    """Why a mode's eigenvalue is zero: the states that carry it are prescribed (their rows of A and B
+    vanish: a drive sets the speed), or nothing pulls them back."""
+    rows = [i for i, s in enumerate(ss.states) for part, _, states in m.parts if s in {f"{part}.{x}" for x in states}]
+    if rows and not np.any(ss.A[rows]) and not np.any(ss.B[rows]):
+        return "a speed its drive prescribes (0 within the derivatives' accuracy)"
+    return "nothing pulls it back (0 within the derivatives' accuracy)"
+
+
+def _rate_unit(unit: str) -> str:
+    return f"{unit}/s" if unit else "1/s"
+
+
+def _n_states(ss, part):
+    return sum(s.startswith(part + ".") for s in ss.states)
+
+
+def frequencies(modes: list[LineMode], per_decade: int = 100) -> np.ndarray:
+    """A Bode plot's frequencies (Hz): a decade below the slowest mode to a decade above the fastest,
+    with each mode's damped and natural frequency in it, so that no resonance peak falls between points."""
+    f = [m.natural_frequency for m in modes if m.resolved]
+    lo, hi = (min(f) / 10, max(f) * 10) if f else (0.1, 1000.0)
+    grid = np.geomspace(lo, hi, int(per_decade * math.log10(hi / lo)) + 1)
+    peaks = [g for m in modes if m.resolved for g in (m.frequency, m.natural_frequency) if lo < g < hi]
+    return np.unique(np.concatenate([grid, peaks]))
+
+
+def bode(ss: StateSpace, input: str, output: str, path, modes: list[LineMode]) -> Path:
+    """A PNG of the frequency response from `input` to `output`: magnitude and phase over frequency,
+    each mode's natural frequency marked and named by the part that moves most in it."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    hz = frequencies(modes)
+    h = ss.response(input, output, hz)
+    unit_in, unit_out = ss.units.get(input, ""), ss.units.get(output, "")
+    fig, (mag, phase) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
+    mag.loglog(hz, np.abs(h), lw=1.3)
+    phase.semilogx(hz, np.degrees(np.unwrap(np.angle(h))), lw=1.3)
+    for m in modes:
+        if m.resolved and hz[0] <= m.natural_frequency <= hz[-1]:
+            for ax in (mag, phase):
+                ax.axvline(m.natural_frequency, color="0.6", lw=0.7, ls=":")
+            name = m.parts[0][0] if m.parts else ""
+            mag.annotate(f"{m.natural_frequency:.3g} Hz {name}", (m.natural_frequency, 1.0), xycoords=("data", "axes fraction"),
+                         rotation=90, va="top", ha="right", fontsize=7, color="0.35")
+    mag.set_ylabel(f"|{output} / {input}| [{unit_out or '1'} per {unit_in or '1'}]")
+    phase.set_ylabel("phase [deg]")
+    phase.set_xlabel("frequency [Hz]")
+    for ax in (mag, phase):
+        ax.grid(True, which="both", alpha=0.3)
+    fig.suptitle(f"{ss.scene}: from {input} to {output}, linearized at t = {ss.time:g} s", fontsize=10)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
