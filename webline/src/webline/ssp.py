@@ -326,7 +326,8 @@ def read_ssp(path, target_dir) -> System:
                 if zf.getinfo(own).file_size > PROFILE_BYTES:
                     raise SspError(f"{w}: {el.get('source')}: {own} is larger than {PROFILE_BYTES} bytes")
                 try:
-                    profile = json.loads(zf.read(own))
+                    # An empty one is a part's without a drive (written so that it finds its own file).
+                    profile = json.loads(zf.read(own)) or None
                 except ValueError as e:
                     raise SspError(f"{w}: {el.get('source')}: {own} is not JSON ({e})") from None
         components.append(Component(name=name, kind=KINDS[model], fmu=fmu,
