@@ -23,6 +23,8 @@ pub struct Parameters {
     pub outlets: i32,
     /// Mass per unstretched length of each arriving web [R5], kg/m.
     pub mass_a: [f64; PORTS],
+    /// The webs stay layers [R6]: each outlet passes one inlet's strain on.
+    pub layered: bool,
 }
 
 /// The most webs a roller takes in or gives out.
