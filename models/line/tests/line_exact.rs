@@ -181,7 +181,8 @@ fn a_failed_equilibrium_search_leaves_the_parts_as_they_were() {
     spec["parts"][4] = roller("pull", "roller", json!({"J": 0.01, "R": 0.1, "b": 0.0, "v_start": 10.0}), None);
     let mut line = initialized(&spec);
     let (parts, x) = (line.parts().to_vec(), line.states().to_vec());
-    let why = line::equilibrium::solve(&mut line.ode).expect_err("this line has no steady state");
+    let spec = line.spec().clone();
+    let why = line::equilibrium::solve(&mut line.ode, &spec).expect_err("this line has no steady state");
     assert!(why.starts_with("no steady state"), "{why}");
     assert_eq!(line.states(), &x[..]);
     assert!(line.parts() == parts, "the parts were left at the search's last trial point");
@@ -490,6 +491,36 @@ fn a_laminates_layers_keep_their_strains_and_their_tensions_add() {
         let merged = (m[0] + m[1]) / (m[0] / (1.0 + eps[0]) + m[1] / (1.0 + eps[1])) - 1.0;
         let one_web = (ea_pet + ea_al) * ((1.0 + merged) * 5.01 / 5.0 - 1.0);
         assert!((one_web - get(&line, "lam.T")).abs() > 1e-4 * one_web, "{start}: the merged web is as far");
+    }
+}
+
+/// A laminate whose span stands still is steady at any strains of its layers that pull as one: the
+/// equilibrium start moves them together from their start (Newton's Jacobian is singular otherwise).
+/// The line at rest, its webs from tension-driven unwinders (100 N, 50 N), the pull roll driven by
+/// 30 N m, a winder holding 200 N: the laminate after the pull roll carries 200 N, the one before it
+/// 200 N + 30 N m / 0.1 m, each with its layers at one strain (they started at one: eps_start 0).
+#[test]
+fn a_laminate_at_rest_starts_with_its_layers_moved_together() {
+    let mut spec = laminate_line("equilibrium");
+    let unwinder = |name: &str, tension: f64| {
+        roller(name, "unwinder", json!({"J": 0.5, "R": 0.1, "v_start": 0.0, "roll": 1}), Some(json!({"tension": [[0.0, tension]]})))
+    };
+    spec["parts"][0] = unwinder("film_in", 100.0);
+    spec["parts"][2] = unwinder("foil_in", 50.0);
+    spec["parts"][4]["profile"]["speed"] = json!([[0.0, 0.0]]);
+    spec["parts"][7] = roller("pull", "roller", json!({"J": 0.01, "R": 0.1, "v_start": 0.0, "inlets": 2, "outlets": 2, "layered": true}),
+                              Some(json!({"torque": [[0.0, 30.0]]})));
+    spec["parts"][10] = roller("out", "winder", json!({"J": 0.5, "R": 0.1, "v_start": 0.0, "roll": 2, "inlets": 2, "layered": true}),
+                               Some(json!({"tension": [[0.0, 200.0]]})));
+    let line = initialized(&spec);
+    let (ea_pet, ea_al) = (4.5e9 * 50e-6, 69e9 * 20e-6);
+    for (name, tension) in [("film", 100.0), ("foil", 50.0), ("lam", 500.0), ("rew", 200.0)] {
+        let got = get(&line, &format!("{name}.T"));
+        assert!((got - tension).abs() < 1e-9 * tension, "{name}.T = {got}, not {tension}");
+    }
+    for name in ["lam", "rew"] {
+        let (pet, al) = (get(&line, &format!("{name}.T_PET")) / ea_pet, get(&line, &format!("{name}.T_Al")) / ea_al);
+        assert!((pet - al).abs() < 1e-12 * pet, "{name}: the layers' strains {pet} and {al}");
     }
 }
 
