@@ -242,6 +242,36 @@ def test_a_laminates_layers_at_zero_draw_and_under_draw_in_every_engine(names, s
             assert abs(got - w) <= bound * abs(w), f"{engine}: {key} = {got}, closed form {w}"
 
 
+def test_a_laminate_on_a_dancer_whose_web_changes_matches_the_reference(fmus):
+    """The shipped dancer's spans carrying a laminate from the source (every layer at its strain), the first
+    span's web changed at 0.5 s to a laminate with a thicker PET (an event: each layer to the new web's).
+    The Line FMU's layers (their frames from the dancer, their set events) against the reference's at
+    1 ms and 10 ms, to LAYERS of each column's scale (measured 1.8e-9 and 2.8e-9)."""
+    import json
+
+    from webline import linefmu
+    from webline.accuracy import errors
+
+    data = json.loads((SCENES / "dancer.json").read_text())
+    data["webs"] = {"PET": {"E": "4.5 GPa", "thickness": "25 um", "width": "1 m", "density": "1390 kg/m3"},
+                    "PE": {"E": "0.4 GPa", "thickness": "40 um", "width": "1 m", "density": "920 kg/m3"},
+                    "PET2": {"E": "4.5 GPa", "thickness": "30 um", "width": "1 m", "density": "1390 kg/m3"},
+                    "lam": {"laminate": ["PET", "PE"], "adhesive": "2 g/m2"}, "lam2": {"laminate": ["PET2", "PE"]}}
+    for part in data["line"]:
+        if part["type"] == "span":
+            part["web"] = "lam"
+    data.update(stop_time="0.6 s", events=[{"time": "0.5 s", "component": "down_leg", "set": {"web": "lam2"}}],
+                record=["down_leg.T", "down_leg.T_PET", "down_leg.T_PE", "up_leg.T", "up_leg.T_PE", "dancer.y", "dancer.v"])
+    scene = parse_scene(json.dumps(data), "laminate_dancer.json")
+    ref = reference(scene, times=1e-3 * np.arange(601))
+    for h in (1e-3, 1e-2):
+        errs = errors(linefmu.run(scene, fmus, step=h), ref)
+        key = max(errs, key=errs.get)
+        assert errs[key] < LAYERS, f"h = {h}: {key} off by {errs[key]:.2e}"
+    jump = ref.column("down_leg.T_PET")[501] / ref.column("down_leg.T_PET")[500]
+    assert 1.15 < jump < 1.25, jump  # the thicker PET at the strain it had: 30/25 the tension
+
+
 STEP = """{
   "name": "layer_step", "stop_time": "0.6 s", "step": "1 ms",
   "webs": {"PET": {"E": "4.5 GPa", "thickness": "23 um", "width": "1 m", "density": "1390 kg/m3"},
