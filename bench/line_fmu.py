@@ -112,7 +112,7 @@ def native(exe: Path, fmu: Path, folder: Path, torque: str, output: str, h: floa
 
 
 def line_in_libcosim(fmu: Path, scene, h: float) -> Result:
-    names = [f"{c}.{linefmu.OUTPUTS[q]}" for c, q in scene.record]
+    names = [linefmu.output(c, q) for c, q in scene.record]
     time_, rows, wall = linefmu.run_libcosim(fmu, names, h, scene.stop_time)
     return Result(scene.name, scene.columns(), time_, rows, {"method": "Line FMU in libcosim", "step": h, "wall_time": wall})
 
@@ -196,7 +196,7 @@ def main():
     fmu = linefmu.export(splice, tmp / "splice.fmu", OUT, start="given")
     from fmpy import simulate_fmu
 
-    names = [f"{c}.{linefmu.OUTPUTS[q]}" for c, q in splice.record]
+    names = [linefmu.output(c, q) for c, q in splice.record]
     for tol in (1e-7, 1e-8, 1e-9, 1e-10, 1e-11):
         out = simulate_fmu(str(fmu), stop_time=splice.stop_time, step_size=1e-3, output_interval=1e-3, output=names,
                            start_values={"tolerance": tol}, relative_tolerance=tol)

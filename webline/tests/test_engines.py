@@ -70,11 +70,12 @@ def test_the_parts_refuse_a_step_above_their_coupling_limit(fmus, tmp_path):
 
 def test_a_forced_run_at_twice_the_limit_is_stopped_by_the_growth_detector(fmus, tmp_path):
     """--force at 2 x 0.912 ms (the map's radius 1.037 per step): the oscillation of the laminate's tension
-    grows, and the master stops the run (at 0.22 s) with the span's name and a non-zero exit."""
+    grows, and the master stops the run (at 0.22 s) with the span's name (its foil layer's FMU, lam1.Al)
+    and a non-zero exit."""
     path = scene_file(tmp_path, "laminator_unequal_sources", stop_time="0.5 s")
     run = webline("run", path, "--engine", "parts", "--step", "1.824ms", "--force", "--out", tmp_path, "--no-plot")
     assert run.returncode == 2, run.stdout
-    assert "the tension of span 'lam1' oscillates ever more at t = 0.2" in run.stderr, run.stderr
+    assert "the tension of span 'lam1.Al' oscillates ever more at t = 0.2" in run.stderr, run.stderr
     assert "unstable at this step" in run.stderr
 
 

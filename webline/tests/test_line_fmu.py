@@ -66,7 +66,7 @@ def test_every_shipped_scene_matches_the_reference_at_1_and_10_ms(name, h, line_
 def test_model_exchange_in_fmpys_cvode_matches_the_reference(name, line_dir, tmp_path):
     scene = load_scene(SCENES / f"{name}.json", fmu_dir=line_dir)
     path = linefmu.export(scene, tmp_path / f"{name}.fmu", line_dir, start=scene.start or "given")
-    outputs = [f"{c}.{linefmu.OUTPUTS[q]}" for c, q in scene.record]
+    outputs = [linefmu.output(c, q) for c, q in scene.record]
     h = scene.step
     out = simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=scene.stop_time, output_interval=h,
                        relative_tolerance=1e-9, output=outputs)

@@ -212,7 +212,7 @@ def test_webs_may_name_webs_defined_later():
     path = CASES / "laminate_defined_first.json"
     later = load_scene(path)
     assert list(later.webs) == ["PET", "Al", "PETAl", "paper"]
-    assert later.webs["PETAl"].layers == ("PET", "Al", "paper")
+    assert later.webs["PETAl"].layer_names == ("PET", "Al", "paper")
     import json
 
     data = json.loads(path.read_text())

@@ -251,6 +251,35 @@ def test_engines_agree_with_the_master_on_two_spans(two_spans, tmp_path):
     assert max(relative_difference(fmpy, libcosim).values()) > 1e-4
 
 
+def test_columns_made_of_several_variables_travel_with_the_archive(two_spans, tmp_path):
+    """A laminate's columns are sums of its layers' spans' variables (System.sums, docs/merge-split.md [M6]):
+    the archive keeps them in webline's annotation, read_ssp gives them back, and libcosim, FMPy and the
+    master each give the column the sum of what they record (to AGREE of the master's); a term that
+    names no recorded variable is refused."""
+    two_spans.components[1].profile = None
+    two_spans.sums = [("both.T [N]", [(0, 1.0), (1, 1.0)]), ("first.eps [1]", [(2, 0.5), (2, 0.5)])]
+    archive = write_ssp(two_spans, tmp_path / "line.ssp")
+    system = read_ssp(archive, tmp_path / "x")
+    assert system.sums == two_spans.sums and system.record == two_spans.record
+    raw = Master(read_ssp(archive, tmp_path / "y"), Options.engine()).run()  # as read: the sums applied
+    system.sums = None
+    each = Master(system, Options.engine()).run()
+    system.sums = two_spans.sums
+    assert raw.columns == ["both.T [N]", "first.eps [1]"]
+    assert raw.data[:, 0] == pytest.approx(each.data[:, 0] + each.data[:, 1], rel=1e-15)
+    assert raw.data[:, 1] == pytest.approx(each.data[:, 2], rel=1e-15)
+    for result in (run_libcosim(tmp_path / "x", system), run_fmpy(archive, system)):
+        assert result.columns == raw.columns and result.data.shape[1] == 2
+    assert max(relative_difference(run_libcosim(tmp_path / "x", system), raw).values()) < AGREE
+    broken = tmp_path / "broken.ssp"
+    with zipfile.ZipFile(archive) as src, zipfile.ZipFile(broken, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            dst.writestr(info, data.replace(b'variable="1"', b'variable="9"') if info.filename == "SystemStructure.ssd" else data)
+    with pytest.raises(SspError, match=r"recorded column 'both.T \[N\]': a term '9' x '1.0' \(needs a recorded variable's index"):
+        read_ssp(broken, tmp_path / "z")
+
+
 def test_fmpy_boolean_literals_are_converted(two_spans, tmp_path):
     """FMPy would set includeDamping="false" as True; the harness passes 0.0: damping off changes the run."""
     two_spans.components[0].start["includeDamping"] = False

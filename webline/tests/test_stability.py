@@ -200,6 +200,7 @@ def compiled(path, fmus):
 
     system = compile_scene(load_scene(path), fmus)
     system.record = [(c.name, "summary_Tension") for c in system.components if c.kind == "span"]
+    system.sums = None  # every span's own tension, a laminate's layers each (its columns are these variables)
     return system
 
 

@@ -3,18 +3,41 @@
 //! same evaluation and banded Jacobian the integrator uses. A roll's radius
 //! is never steady while web winds on or off, so it keeps its start value
 //! (the steady state of the line at that radius), and so does the speed of a
-//! roller whose speed a table prescribes.
+//! roller whose speed a table prescribes. A laminate whose span stands still
+//! is steady at any strains of its layers that pull as one: they move together
+//! from their start.
 
 use crate::ode::{residual_and_jacobian, Ode};
+use crate::spec::Spec;
 use solver::band::{Band, BandLu};
 
 const MAX_ITERATIONS: usize = 50;
 /// Converged when no state moves by more than this fraction of its size.
 const STEP_TOLERANCE: f64 = 1e-13;
 
+/// Per state, the first layer's state of a laminate it moves with (the other layers of a laminate
+/// whose span stands still, both its speeds 0: their rates are 0 at any strain, [M6]); else None.
+fn tied_layers(ode: &Ode, spec: &Spec) -> Vec<Option<usize>> {
+    let net = ode.net.as_ref().expect("initialized");
+    let mut tied = vec![None; net.len()];
+    for lam in &spec.laminates {
+        let parts: Vec<usize> = lam.layers.iter().filter_map(|l| spec.part(&l.part)).collect();
+        let still = parts.iter().all(|&p| {
+            let d = ode.parts[p].description();
+            ["web_a.v", "web_b.v"].iter().all(|name| d.variable_by_name(name).and_then(|v| ode.parts[p].get_real(v.vr).ok()) == Some(0.0))
+        });
+        if still {
+            for &p in &parts[1..] {
+                tied[net.first_state[p]] = Some(net.first_state[parts[0]]);
+            }
+        }
+    }
+    tied
+}
+
 /// Moves the line's states to its steady state, or says why there is none
 /// (the states are then as they were).
-pub fn solve(ode: &mut Ode) -> Result<(), String> {
+pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
     let net = ode.net.as_ref().expect("initialized");
     let n = net.len();
     if n == 0 {
@@ -22,6 +45,7 @@ pub fn solve(ode: &mut Ode) -> Result<(), String> {
     }
     let (kl, ku) = (net.kl, net.ku);
     let frozen: Vec<bool> = net.states.iter().map(|s| ode.parts[s.part].held_at_steady_state(s.index)).collect();
+    let tied = tied_layers(ode, spec);
     let size: Vec<f64> = (0..n).map(|k| ode.scratch.atol[k] / (ode.rtol * ode.scratch.rtol_scale[k])).collect();
     let x0 = ode.x.clone();
     // The parts as they are: a failed search leaves them where its last trial took them (a
@@ -33,14 +57,16 @@ pub fn solve(ode: &mut Ode) -> Result<(), String> {
     let mut lu = BandLu::new(n, kl, ku);
     let mut trial = vec![0.0; n];
     let norm = |f: &[f64]| f.iter().zip(&size).map(|(r, s)| (r / s).abs()).fold(0.0, f64::max);
+    // A held state's residual: its move from the start, less its first layer's where it is tied to one.
+    let held = |i: usize, x: &[f64]| x[i] - x0[i] - tied[i].map_or(0.0, |f| x[f] - x0[f]);
     let result = (|| {
         for _ in 0..MAX_ITERATIONS {
             residual_and_jacobian(ode, &x, &mut f, Some(&mut jac)).map_err(|e| e.into_message())?;
             for i in 0..n {
-                if frozen[i] {
-                    f[i] = x[i] - x0[i];
+                if frozen[i] || tied[i].is_some() {
+                    f[i] = held(i, &x);
                     for j in i.saturating_sub(kl)..(i + ku + 1).min(n) {
-                        jac.set(i, j, if i == j { 1.0 } else { 0.0 });
+                        jac.set(i, j, if i == j { 1.0 } else if tied[i] == Some(j) { -1.0 } else { 0.0 });
                     }
                 }
             }
@@ -60,8 +86,8 @@ pub fn solve(ode: &mut Ode) -> Result<(), String> {
                 let ok = residual_and_jacobian(ode, &trial, &mut trial_f, None).is_ok();
                 if ok {
                     for i in 0..n {
-                        if frozen[i] {
-                            trial_f[i] = trial[i] - x0[i];
+                        if frozen[i] || tied[i].is_some() {
+                            trial_f[i] = held(i, &trial);
                         }
                     }
                 }

@@ -5,6 +5,7 @@
 //! checks calls against and, written as XML by `line-description`, the
 //! modelDescription.xml the FMU ships: one builder for both.
 
+use crate::laminate::{Laminate, Quantity};
 use crate::part::Part;
 use crate::port::Port;
 use crate::spec::{PartSpec, Role, Spec};
@@ -22,6 +23,8 @@ pub enum Binding {
     Part { part: usize, vr: u32 },
     /// The resultant of the two web forces on a roller's bearings, for a wrap angle with this cosine.
     LoadCell { part: usize, cos_wrap: f64 },
+    /// A laminate span's own `quantity`, made of its layers' (`Interface::laminates[laminate]`).
+    Laminate { laminate: usize, quantity: Quantity },
     /// The line integrator's relative tolerance.
     Tolerance,
     /// Whether initialization solves the line's steady state.
@@ -40,6 +43,8 @@ pub struct Interface {
     pub description: ModelDescription,
     /// By value reference (index 0 unused).
     pub bindings: Vec<Binding>,
+    /// The laminate spans, whose outputs `Binding::Laminate` computes.
+    pub laminates: Vec<Laminate>,
 }
 
 struct Builder<'a> {
@@ -236,6 +241,8 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
             derivatives.push(line_der);
         }
     }
+    let laminates = Laminate::of(spec, parts);
+    offer_laminates(&mut b, spec, &laminates, &mut outputs);
     let n_indicators = parts.iter().map(Part::event_indicator_count).sum();
     let all = |vrs: &[u32]| -> Cow<'static, [Dependency]> { Cow::Owned(vrs.iter().map(|&vr| Dependency { vr, on: None }).collect()) };
     let mut initial: Vec<u32> = outputs.clone();
@@ -263,5 +270,36 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
         derivatives: all(&derivatives),
         number_of_event_indicators: n_indicators,
     };
-    Interface { description, bindings: b.bindings }
+    Interface { description, bindings: b.bindings, laminates }
+}
+
+/// Each laminate span's outputs, after every part's variables: `<name>.T`, `.eps`, `.F_a`, `.F_b`,
+/// `.length` (each its first layer's variable of that kind, renamed, bound to the laminate), and
+/// each layer's tension, `<name>.T_<label>`.
+fn offer_laminates(b: &mut Builder, spec: &Spec, laminates: &[Laminate], outputs: &mut Vec<u32>) {
+    for (k, (lam, ls)) in laminates.iter().zip(&spec.laminates).enumerate() {
+        let first = lam.layers[0].part;
+        for (quantity, name, label) in Quantity::ALL {
+            let vr = b.part_variable(first, &spec.parts[first], name, label, Causality::Output);
+            let row = &mut b.variables[vr as usize - 1];
+            let what = match quantity {
+                Quantity::Tension => "tension, the sum of its layers'".to_string(),
+                Quantity::Strain => "strain, its layers' weighted by their stiffness E*A (T/sum E*A without damping)".into(),
+                Quantity::EntryForce | Quantity::ExitForce => format!("{name} of its layers, summed"),
+                Quantity::Length => "length, which its layers share".into(),
+            };
+            row.name = Cow::Owned(format!("{}.{label}", lam.name));
+            row.description = Cow::Owned(format!("{}: the laminate's {what}", lam.name));
+            b.bindings[vr as usize] = Binding::Laminate { laminate: k, quantity };
+            outputs.push(vr);
+        }
+        for (layer, ls) in lam.layers.iter().zip(&ls.layers) {
+            let ps = &spec.parts[layer.part];
+            let vr = b.part_variable(layer.part, ps, "summary_Tension", "", Causality::Output);
+            let row = &mut b.variables[vr as usize - 1];
+            row.name = Cow::Owned(format!("{}.T_{}", lam.name, ls.label));
+            row.description = Cow::Owned(format!("{}: the tension of its layer {} (part {})", lam.name, ls.label, ps.name));
+            outputs.push(vr);
+        }
+    }
 }

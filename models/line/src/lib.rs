@@ -7,6 +7,7 @@
 //! * `spec` — line.json;
 //! * `port` — a part's variable resolved once, and a connection between parts;
 //! * `part` — the span's and the Roller's own models, behind one face;
+//! * `laminate` — a laminate span: a span part per layer, and the laminate's own outputs;
 //! * `chain` — the Jacobian chained from the parts' tangents;
 //! * `network` — states, connections, the web-mass loop, the band;
 //! * `ode` — the line as one ODE and where it stands; f and its Jacobian;
@@ -22,6 +23,7 @@
 pub mod chain;
 pub mod equilibrium;
 pub mod interface;
+pub mod laminate;
 pub mod line;
 pub mod network;
 pub mod ode;

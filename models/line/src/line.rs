@@ -4,6 +4,7 @@
 //! for initialization, steps and events, the network for evaluations.
 
 use crate::interface::{self, Binding, Interface};
+use crate::laminate::Laminate;
 use crate::network::Network;
 use crate::ode::{Ode, Scratch};
 use crate::part::Part;
@@ -20,6 +21,7 @@ pub struct Shared {
     pub spec: Spec,
     pub description: ModelDescription,
     pub bindings: Vec<Binding>,
+    pub laminates: Vec<Laminate>,
 }
 
 /// One line.json, one GUID: equal GUIDs, equal lines.
@@ -60,10 +62,10 @@ impl Line {
         }
         let active: Vec<Vec<usize>> = parts.iter().map(Part::active_states).collect();
         let start_equilibrium = spec.start == StartMode::Equilibrium;
-        let Interface { description, bindings } = interface::build(&spec, &parts, &active, spec::guid(text), start_equilibrium);
+        let Interface { description, bindings, laminates } = interface::build(&spec, &parts, &active, spec::guid(text), start_equilibrium);
         let profiled = spec.parts.iter().any(|p| p.profile.is_some());
         Ok(Line {
-            shared: Arc::new(Shared { spec, description, bindings }),
+            shared: Arc::new(Shared { spec, description, bindings, laminates }),
             ode: Ode::new(parts, interface::DEFAULT_TOLERANCE),
             tolerance: interface::DEFAULT_TOLERANCE,
             start_equilibrium,
@@ -174,6 +176,7 @@ impl Variables for Line {
         match self.binding(vr)? {
             Binding::Real { part, port, .. } => Ok(self.ode.parts[part].real(port)),
             Binding::LoadCell { part, cos_wrap } => self.ode.parts[part].load_cell(cos_wrap),
+            Binding::Laminate { laminate, quantity } => Ok(self.shared.laminates[laminate].value(&self.ode.parts, quantity)),
             Binding::Tolerance => Ok(self.tolerance),
             Binding::Part { .. } | Binding::StartAtEquilibrium => Err(fmi_core::model::unknown_vr(vr)),
         }
@@ -368,6 +371,9 @@ impl Model for Line {
 
     fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
         let spec = self.shared.clone();
+        for laminate in &spec.laminates {
+            laminate.check(&spec.spec, &self.ode.parts)?;
+        }
         stepping::initialize(&mut self.ode, &spec.spec, self.tolerance, self.start_equilibrium, experiment, resources)
     }
 

@@ -31,6 +31,35 @@ pub struct Spec {
     /// Jacobian is banded.
     pub parts: Vec<PartSpec>,
     pub connections: Vec<Connection>,
+    /// Spans that carry a laminate: each a span part per layer, side by side; the line offers the
+    /// laminate's own outputs (`<name>.T`, `.eps`, `.F_a`, `.F_b`, `.length`, `.T_<label>`).
+    #[serde(default)]
+    pub laminates: Vec<LaminateSpec>,
+}
+
+/// A laminate span: its name (which names its outputs) and its layers, each a span part of the line.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaminateSpec {
+    pub name: String,
+    pub layers: Vec<LayerSpec>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayerSpec {
+    /// The layer's span part.
+    pub part: String,
+    /// Names its tension output, `<laminate>.T_<label>`.
+    pub label: String,
+}
+
+/// A laminate's own outputs: a layer label may not be one of them (nor `T_` and another label).
+pub const LAMINATE_OUTPUTS: [&str; 5] = ["T", "eps", "F_a", "F_b", "length"];
+
+/// Letters, digits and _: a name that may prefix a variable's.
+fn plain(name: &str) -> bool {
+    !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 #[derive(Clone, Copy, Debug, Deserialize)]
@@ -135,9 +164,12 @@ impl Spec {
         }
         let mut seen = std::collections::BTreeSet::new();
         for p in &spec.parts {
-            let plain = !p.name.is_empty() && p.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-            if !plain {
-                return Err(format!("line.json: part name {:?}: use letters, digits and _ only (it prefixes variable names)", p.name));
+            // A laminate's layer is `<laminate>.<label>`: plain names joined by dots.
+            if !p.name.split('.').all(plain) {
+                return Err(format!(
+                    "line.json: part name {:?}: use letters, digits and _ only, in names joined by dots (it prefixes variable names)",
+                    p.name
+                ));
             }
             // A part without a profile finds resources/<name>.json as its own: not these.
             if p.name == "line" || p.name == "profile" {
@@ -156,7 +188,40 @@ impl Spec {
                 }
             }
         }
+        spec.check_laminates()?;
         Ok(spec)
+    }
+
+    /// Each laminate: a name of its own, at least two layers, each a span part once, labels that
+    /// name outputs of their own.
+    fn check_laminates(&self) -> Result<(), String> {
+        let mut used = std::collections::BTreeSet::new();
+        for lam in &self.laminates {
+            let what = format!("line.json: laminate {:?}", lam.name);
+            if !plain(&lam.name) || self.part(&lam.name).is_some() || self.laminates.iter().filter(|l| l.name == lam.name).count() > 1 {
+                return Err(format!("{what}: its name must be plain (letters, digits, _) and no other part's or laminate's"));
+            }
+            if lam.layers.len() < 2 {
+                return Err(format!("{what}: a laminate has at least two layers, not {}", lam.layers.len()));
+            }
+            for layer in &lam.layers {
+                let span = self.part(&layer.part).map(|p| self.parts[p].role == Role::Span);
+                if span != Some(true) {
+                    return Err(format!("{what}: layer {:?} is no span part of the line", layer.part));
+                }
+                if !used.insert(layer.part.as_str()) {
+                    return Err(format!("{what}: part {:?} is a layer twice", layer.part));
+                }
+                let label = layer.label.as_str();
+                let taken = LAMINATE_OUTPUTS.contains(&label)
+                    || lam.layers.iter().filter(|l| l.label == label).count() > 1
+                    || label.strip_prefix("T_").is_some_and(|rest| lam.layers.iter().any(|l| l.label == rest));
+                if !plain(label) || taken {
+                    return Err(format!("{what}: layer label {label:?} must be plain and name an output of its own"));
+                }
+            }
+        }
+        Ok(())
     }
 
     pub fn part(&self, name: &str) -> Option<usize> {

@@ -109,7 +109,7 @@ pub fn initialize(
     ode.scratch = scratch(ode, ode.x.len());
     apply_events(ode)?;
     if start_equilibrium {
-        if let Err(why) = equilibrium::solve(ode) {
+        if let Err(why) = equilibrium::solve(ode, spec) {
             warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values"));
         }
     }

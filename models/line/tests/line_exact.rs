@@ -181,7 +181,8 @@ fn a_failed_equilibrium_search_leaves_the_parts_as_they_were() {
     spec["parts"][4] = roller("pull", "roller", json!({"J": 0.01, "R": 0.1, "b": 0.0, "v_start": 10.0}), None);
     let mut line = initialized(&spec);
     let (parts, x) = (line.parts().to_vec(), line.states().to_vec());
-    let why = line::equilibrium::solve(&mut line.ode).expect_err("this line has no steady state");
+    let spec = line.spec().clone();
+    let why = line::equilibrium::solve(&mut line.ode, &spec).expect_err("this line has no steady state");
     assert!(why.starts_with("no steady state"), "{why}");
     assert_eq!(line.states(), &x[..]);
     assert!(line.parts() == parts, "the parts were left at the search's last trial point");
@@ -519,5 +520,141 @@ fn a_roll_that_sticks_slips_by_the_order_of_v_slip() {
     assert!(get(&line, "pull.slip").abs() <= 5.0 * V_SLIP);
     for (a, b) in x0.iter().zip(line.states()) {
         assert!((a - b).abs() <= 1e-9 * a.abs().max(1.0), "the start is not steady: {a} -> {b}");
+    }
+}
+
+/// A laminate of PET and foil: each layer a span part, sources at their own speeds and strains, a
+/// speed-driven nip and pull roll (`layered`: each passes its layers' strains on at their ports),
+/// a sink. Layer i arrives at 1+eps_i = (v_n/v_i)(1+eps_src,i) and, in a span drawn by r = v_out/v_n,
+/// carries E_i A_i ((1+eps_i) r - 1) ([M6]).
+fn laminate_line(start: &str) -> Value {
+    let al = [("E", 69e9), ("thickness", 20e-6), ("width", 1.0), ("density", 2700.0), ("d_r", 1e-3)];
+    let layer = |name: &str, web: &[(&str, f64); 5]| {
+        let mut s = span(name, 0.6, 0.0, &[]);
+        for (side, (k, v)) in ["wp1", "wp2"].iter().flat_map(|side| web.iter().map(move |kv| (side, kv))) {
+            s["start"][format!("{side}.{k}")] = json!(v);
+        }
+        s
+    };
+    let mut film_in = prescribed("film_in", "source", json!([[0.0, 4.99]]));
+    film_in["start"]["web_a.eps"] = json!(1e-3);
+    let mut foil_in = prescribed("foil_in", "source", json!([[0.0, 4.998]]));
+    foil_in["start"]["web_a.eps"] = json!(2e-4);
+    let mut nip = prescribed("nip", "roller", json!([[0.0, 5.0]]));
+    let mut pull = prescribed("pull", "roller", json!([[0.0, 5.01]]));
+    for r in [&mut nip, &mut pull] {
+        for (k, v) in [("inlets", json!(2)), ("outlets", json!(2)), ("layered", json!(true))] {
+            r["start"][k] = v;
+        }
+    }
+    let mut out = prescribed("out", "sink", json!([[0.0, 5.03]]));
+    out["start"]["inlets"] = json!(2);
+    out["start"]["layered"] = json!(true);
+    let parts = vec![film_in, layer("film", &PET), foil_in, layer("foil", &al), nip, layer("lam.PET", &PET), layer("lam.Al", &al), pull,
+                     layer("rew.PET", &PET), layer("rew.Al", &al), out];
+    let mut c = chain(&["film_in", "film", "nip"]);
+    c.extend(chain(&["foil_in", "foil", "nip"]).into_iter().map(|mut k| {
+        for end in ["from", "to"] {
+            if k[end][0] == "nip" {
+                k[end][1] = json!(k[end][1].as_str().unwrap().replace("web_a", "web_a2"));
+            }
+        }
+        k
+    }));
+    c.push(connect("film", "web_b.eps", "nip", "web_a.eps"));
+    c.push(connect("foil", "web_b.eps", "nip", "web_a2.eps"));
+    for (up, down, spans) in [("nip", "pull", ["lam.PET", "lam.Al"]), ("pull", "out", ["rew.PET", "rew.Al"])] {
+        for (k, sp) in spans.iter().enumerate() {
+            let (a, b) = (["web_b", "web_b2"][k], ["web_a", "web_a2"][k]);
+            c.extend([connect(up, &format!("{a}.v"), sp, "web_a.v"), connect(up, &format!("{a}.eps"), sp, "web_a.eps"),
+                      connect(down, &format!("{b}.v"), sp, "web_b.v"), connect(sp, "web_b.eps", down, &format!("{b}.eps")),
+                      connect(sp, "web_a.F", up, &format!("{a}.F")), connect(sp, "web_b.F", down, &format!("{b}.F"))]);
+        }
+    }
+    let mut spec = line_spec(parts, c, start);
+    spec["laminates"] = json!([{"name": "lam", "layers": [{"part": "lam.PET", "label": "PET"}, {"part": "lam.Al", "label": "Al"}]},
+                               {"name": "rew", "layers": [{"part": "rew.PET", "label": "PET"}, {"part": "rew.Al", "label": "Al"}]}]);
+    spec
+}
+
+/// The laminate's outputs against the closed form from an equilibrium start (Newton's steady state:
+/// 1e-12 of each value) and after 40 time constants L/v (0.12 s) from a given one (what is left of
+/// three lags in a row, t^2/2 e^(-t), and the integrator's tolerance: 1e-9); a laminate of one web at
+/// the mass-weighted strain [M2] would be 1e-4 off.
+#[test]
+fn a_laminates_layers_keep_their_strains_and_their_tensions_add() {
+    let (ea_pet, ea_al) = (4.5e9 * 50e-6, 69e9 * 20e-6);
+    let eps = [5.0 / 4.99 * 1.001 - 1.0, 5.0 / 4.998 * 1.0002 - 1.0];
+    let layers = |r: f64| [ea_pet * ((1.0 + eps[0]) * r - 1.0), ea_al * ((1.0 + eps[1]) * r - 1.0)];
+    for (start, tolerance, steps) in [("equilibrium", 1e-12, 0), ("given", 1e-9, 500)] {
+        let mut line = initialized(&laminate_line(start));
+        for _ in 0..steps {
+            line.do_step(0.01).unwrap();
+        }
+        for (name, r) in [("lam", 5.01 / 5.0), ("rew", 5.03 / 5.0)] {
+            let [t_pet, t_al] = layers(r);
+            let total = t_pet + t_al;
+            for (output, want) in [("T", total), ("T_PET", t_pet), ("T_Al", t_al), ("F_a", total), ("F_b", total), ("eps", total / (ea_pet + ea_al)), ("length", 0.6)] {
+                let got = get(&line, &format!("{name}.{output}"));
+                assert!((got - want).abs() <= tolerance * want.abs(), "{start}: {name}.{output} = {got}, closed form {want}");
+            }
+            assert_eq!(get(&line, &format!("{name}.T_PET")), get(&line, &format!("{name}.PET.T")));
+        }
+        let m = [1390.0 * 50e-6, 2700.0 * 20e-6];
+        let merged = (m[0] + m[1]) / (m[0] / (1.0 + eps[0]) + m[1] / (1.0 + eps[1])) - 1.0;
+        let one_web = (ea_pet + ea_al) * ((1.0 + merged) * 5.01 / 5.0 - 1.0);
+        assert!((one_web - get(&line, "lam.T")).abs() > 1e-4 * one_web, "{start}: the merged web is as far");
+    }
+}
+
+/// A laminate whose span stands still is steady at any strains of its layers that pull as one: the
+/// equilibrium start moves them together from their start (Newton's Jacobian is singular otherwise).
+/// The line at rest, its webs from tension-driven unwinders (100 N, 50 N), the pull roll driven by
+/// 30 N m, a winder holding 200 N: the laminate after the pull roll carries 200 N, the one before it
+/// 200 N + 30 N m / 0.1 m, each with its layers at one strain (they started at one: eps_start 0).
+#[test]
+fn a_laminate_at_rest_starts_with_its_layers_moved_together() {
+    let mut spec = laminate_line("equilibrium");
+    let unwinder = |name: &str, tension: f64| {
+        roller(name, "unwinder", json!({"J": 0.5, "R": 0.1, "v_start": 0.0, "roll": 1}), Some(json!({"tension": [[0.0, tension]]})))
+    };
+    spec["parts"][0] = unwinder("film_in", 100.0);
+    spec["parts"][2] = unwinder("foil_in", 50.0);
+    spec["parts"][4]["profile"]["speed"] = json!([[0.0, 0.0]]);
+    spec["parts"][7] = roller("pull", "roller", json!({"J": 0.01, "R": 0.1, "v_start": 0.0, "inlets": 2, "outlets": 2, "layered": true}),
+                              Some(json!({"torque": [[0.0, 30.0]]})));
+    spec["parts"][10] = roller("out", "winder", json!({"J": 0.5, "R": 0.1, "v_start": 0.0, "roll": 2, "inlets": 2, "layered": true}),
+                               Some(json!({"tension": [[0.0, 200.0]]})));
+    let line = initialized(&spec);
+    let (ea_pet, ea_al) = (4.5e9 * 50e-6, 69e9 * 20e-6);
+    for (name, tension) in [("film", 100.0), ("foil", 50.0), ("lam", 500.0), ("rew", 200.0)] {
+        let got = get(&line, &format!("{name}.T"));
+        assert!((got - tension).abs() < 1e-9 * tension, "{name}.T = {got}, not {tension}");
+    }
+    for name in ["lam", "rew"] {
+        let (pet, al) = (get(&line, &format!("{name}.T_PET")) / ea_pet, get(&line, &format!("{name}.T_Al")) / ea_al);
+        assert!((pet - al).abs() < 1e-12 * pet, "{name}: the layers' strains {pet} and {al}");
+    }
+}
+
+#[test]
+fn bad_laminates_are_refused_with_the_reason() {
+    let good = laminate_line("given");
+    let cases: Vec<(Value, &str)> = vec![
+        ({ let mut s = good.clone(); s["laminates"][0]["layers"][1]["label"] = json!("eps"); s }, "layer label \"eps\" must be plain"),
+        ({ let mut s = good.clone(); s["laminates"][0]["layers"][1]["label"] = json!("T_PET"); s }, "layer label \"T_PET\""),
+        ({ let mut s = good.clone(); s["laminates"][0]["layers"][1]["part"] = json!("pull"); s }, "layer \"pull\" is no span part"),
+        ({ let mut s = good.clone(); s["laminates"][1]["layers"][0]["part"] = json!("lam.PET"); s }, "part \"lam.PET\" is a layer twice"),
+        ({ let mut s = good.clone(); s["laminates"][1]["name"] = json!("lam"); s }, "laminate \"lam\": its name"),
+        ({ let mut s = good.clone(); s["laminates"][0]["layers"] = json!([{"part": "lam.PET", "label": "PET"}]); s }, "at least two layers"),
+        ({ let mut s = good.clone(); s["parts"][5]["name"] = json!("lam..PET"); s }, "part name \"lam..PET\""),
+        ({ let mut s = good.clone(); s["parts"][6]["start"]["L"] = json!(0.7); s }, "lam.Al.L = 0.7 m, but lam.PET.L = 0.6 m"),
+    ];
+    for (spec, expected) in cases {
+        let err = match instantiate(&spec) {
+            Ok((mut line, r)) => line.initialize(&Experiment::default(), &r).unwrap_err(),
+            Err(e) => e,
+        };
+        assert!(err.message.contains(expected), "expected {expected:?} in: {}", err.message);
     }
 }

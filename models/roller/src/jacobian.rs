@@ -4,7 +4,7 @@
 //! time only, so they and their slopes are held.
 
 use crate::contact::{self, Contact, Dual};
-use crate::parameters::{Inputs, Parameters, STATES};
+use crate::parameters::{Inputs, Parameters, PORTS, STATES};
 use crate::physics::{self, Roll};
 use std::f64::consts::PI;
 
@@ -26,7 +26,8 @@ pub struct Tangents {
     pub traction_used: f64,
     pub mu_eff: f64,
     pub h_air: f64,
-    pub strain_leaving: f64,
+    /// The strain leaving at each outlet (`strain_leaving`).
+    pub outlet_strains: [f64; PORTS],
     pub drive_torque: f64,
     /// d of (omega, r, y, y', v_web)/dt.
     pub derivatives: [f64; STATES],
@@ -39,13 +40,21 @@ pub struct Tangents {
     pub contact_y: f64,
 }
 
+impl Tangents {
+    /// The tangent of `Roller::strain_leaving(outlet)`.
+    #[inline]
+    pub fn strain_leaving(&self, outlet: usize) -> f64 {
+        self.outlet_strains[outlet]
+    }
+}
+
 /// Whether the tangents along omega, the carriage's y and y' and every input are the same at
 /// every state, input and time, for as long as the parameters and the roll stay: [R1], [R2]
 /// and [R4] are then linear with coefficients made of parameters. So for a roller that winds
-/// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on).
-/// Not where the web may slip: [R7] is nonlinear.
+/// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on, and so do
+/// layers [R9], each its own). Not where the web may slip: [R7] is nonlinear.
 pub fn tangents_fixed(p: &Parameters) -> bool {
-    !p.winding() && p.inlets <= 1 && !p.traction
+    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction
 }
 
 /// What the tangents read besides the direction: the roller now, its drive's tables read at
@@ -101,13 +110,17 @@ impl<'a> Point<'a> {
     }
 }
 
-/// d(eps_b) of [R5] along d(inputs): one inlet passes its strain on.
-fn strain_leaving_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
+/// d(eps_b) of [R5] along d(inputs) at each outlet: one inlet passes its strain on, and so does each
+/// of the inlets that stay layers [R9].
+fn strain_leaving_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> [f64; PORTS] {
+    if p.layered {
+        return std::array::from_fn(|k| d.strain_a[physics::layer_inlet(p, k)]);
+    }
     if p.inlets == 1 {
-        return d.strain_a[0];
+        return [d.strain_a[0]; PORTS];
     }
     let gradient = physics::merged_strain_gradient(p, &u.strain_a);
-    gradient.iter().zip(&d.strain_a).map(|(g, x)| g * x).sum()
+    [gradient.iter().zip(&d.strain_a).map(|(g, x)| g * x).sum(); PORTS]
 }
 
 /// A roller's values the tangents along any direction use (`Point::linearize`).
@@ -197,7 +210,7 @@ impl Linearization<'_> {
             traction_used,
             mu_eff,
             h_air,
-            strain_leaving: if self.strain_table { 0.0 } else { strain_leaving_tangent(p, u, &d.u) },
+            outlet_strains: if self.strain_table { [0.0; PORTS] } else { strain_leaving_tangent(p, u, &d.u) },
             drive_torque: d_torque,
             derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate, d_v_web_rate],
             omega: d_omega,

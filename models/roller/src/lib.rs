@@ -4,7 +4,7 @@
 //! standard and the C API, this crate only the model.
 //!
 //! * `parameters` — what the user sets and the inputs, in SI units;
-//! * `physics` — the equations [R1]–[R5] and their exact steps;
+//! * `physics` — the equations [R1]–[R5], [R9] and their exact steps;
 //! * `contact` — where the web may slip: its speed over the roller, friction, air film [R6]–[R8];
 //! * `drive` — the profile: the drive and the tables of time it follows;
 //! * `jacobian` — the partial derivatives of the outputs and state derivatives;

@@ -183,10 +183,14 @@ impl Roller {
         self.profile.as_ref().is_some_and(|l| l.tables.iter().flatten().any(|table| self.read(table, t).1 != 0.0))
     }
 
-    /// The strain of the leaving web (at every outlet): the profile's, else
-    /// the arriving web's, merged [R5] when several arrive.
-    pub fn strain_leaving(&self) -> f64 {
-        self.table(Key::Strain).map_or_else(|| physics::merged_strain(&self.params, &self.inputs.strain_a), |t| self.read(t, self.time).0)
+    /// The strain of the web leaving at outlet `outlet` (0-based): the profile's, else the arriving
+    /// web's, merged [R5] when several arrive, or where they stay layers its own inlet's [R9].
+    pub fn strain_leaving(&self, outlet: usize) -> f64 {
+        match self.table(Key::Strain) {
+            Some(t) => self.read(t, self.time).0,
+            None if self.params.layered => self.inputs.strain_a[physics::layer_inlet(&self.params, outlet)],
+            None => physics::merged_strain(&self.params, &self.inputs.strain_a),
+        }
     }
 
     /// The load cell's reading for a wrap angle with this cosine (the Line's `NAME.F`).

@@ -39,6 +39,8 @@ pub struct Parameters {
     /// The surfaces' combined roughness (0: no air film) and the air's viscosity [R8].
     pub air_roughness: f64,
     pub air_viscosity: f64,
+    /// The webs stay layers [R9]: each outlet passes one inlet's strain on.
+    pub layered: bool,
 }
 
 /// The roller's Model Exchange states: (omega, r, y, y', v_web).

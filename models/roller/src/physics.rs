@@ -7,6 +7,7 @@
 //! [R4]  m*y'' = F_load + load - F_a - F_b - d*y' - k*(y - y_start)    (a dancer's carriage)
 //! [R5]  1/(1+eps_b) = sum_i (m_i/M)/(1+eps_i), M = sum_i m_i          (several inlets: the merge)
 //!       evaluated as eps_b = sum_i q_i*eps_i / sum_i q_i, q_i = m_i/(1+eps_i)
+//! [R9]  eps_b,k = eps_a,((k-1) mod n)+1                                 (layered: each outlet one inlet's)
 //!
 //! Over a piece of a communication step where the inputs are held and the
 //! profiles are linear in time, [R1] with r and J held is a linear ODE with
@@ -35,6 +36,14 @@ pub fn merged_strain(p: &Parameters, strain: &[f64; PORTS]) -> f64 {
         total += q;
     }
     weighted / total
+}
+
+/// The inlet (0-based) whose strain outlet `outlet` (0-based) passes on where the webs stay layers [R9]:
+/// (outlet mod inlets), so that n inlets pass to n outlets one by one, and one inlet's layers to as
+/// many outlets per lane after a slitter, lane after lane.
+#[inline]
+pub fn layer_inlet(p: &Parameters, outlet: usize) -> usize {
+    outlet % ports(p.inlets)
 }
 
 /// d(eps_b)/d(eps_i) of [R5], for each inlet i (0 beyond `inlets`):

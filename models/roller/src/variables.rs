@@ -32,7 +32,7 @@ fmi_core::bind_variables! {
         F_load: input(load),
         web_a_v: computed(web_speed()),
         web_b_v: computed(web_speed()),
-        web_b_eps: computed(strain_leaving()),
+        web_b_eps: computed(strain_leaving(0)),
         omega: computed(omega()),
         r: computed(radius()),
         y: computed(carriage[0]),
@@ -63,11 +63,11 @@ fmi_core::bind_variables! {
         web_a3_v: computed(web_speed()),
         web_a4_v: computed(web_speed()),
         web_b2_v: computed(web_speed()),
-        web_b2_eps: computed(strain_leaving()),
+        web_b2_eps: computed(strain_leaving(1)),
         web_b3_v: computed(web_speed()),
-        web_b3_eps: computed(strain_leaving()),
+        web_b3_eps: computed(strain_leaving(2)),
         web_b4_v: computed(web_speed()),
-        web_b4_eps: computed(strain_leaving()),
+        web_b4_eps: computed(strain_leaving(3)),
         traction_mu: param(params.traction_mu),
         traction_wrap: param(params.traction_wrap),
         traction_v_slip: param(params.traction_v_slip),
@@ -92,6 +92,7 @@ fmi_core::bind_variables! {
     boolean {
         carriage: param(params.carriage),
         includeTraction: param(params.traction),
+        layered: param(params.layered),
     }
     string {
         profile: param(params.profile),

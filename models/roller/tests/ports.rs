@@ -304,9 +304,10 @@ fn directional_derivatives_agree_with_central_differences() {
         ("web_b.F", 150.0), ("web_b2.F", 210.0), ("web_b3.F", 90.0), ("web_b4.F", 170.0),
         ("web_a.eps", 1.1e-3), ("web_a2.eps", 4.2e-3), ("web_a3.eps", -2e-4), ("web_a4.eps", 0.05), ("tau_m", 1.5), ("F_load", 1e3)];
     #[rustfmt::skip]
-    let points: [(&[(&str, f64)], Option<&str>); 2] = [
+    let points: [(&[(&str, f64)], Option<&str>); 3] = [
         (&[("inlets", 3.0), ("outlets", 2.0), ("carriage", 1.0), ("b", 0.3), ("web_a.m", 0.2), ("web_a2.m", 0.05), ("web_a3.m", 0.7)], Some(speed_drive)),
         (&[("inlets", 4.0), ("outlets", 4.0), ("roll", 2.0), ("wound.thickness", 1e-3), ("wound.density", 1000.0), ("web_a4.m", 3.0)], None),
+        (&[("inlets", 2.0), ("outlets", 4.0), ("layered", 1.0), ("web_a.m", 0.2)], None),
     ];
     let unknowns: Vec<u32> = DESCRIPTION
         .variables
@@ -348,8 +349,9 @@ fn directional_derivatives_agree_with_central_differences() {
             }
         }
     }
-    // The merge's and the ports' derivatives were among them (23 + 26 nonzero), and the unused ports' zeros.
-    assert!(compared >= 45 && zeros > 100, "{compared} compared, {zeros} zero"); // 49 and 651 as written
+    // The merge's, the ports' and the layers' derivatives were among them (23 + 26 nonzero at the first two
+    // points, 12 at the layered one), and the unused ports' zeros.
+    assert!(compared >= 55 && zeros > 100, "{compared} compared, {zeros} zero"); // 61 and 989 as written
 }
 
 #[test]
@@ -400,13 +402,14 @@ fn fixed_tangents_are_the_same_at_every_state_input_and_time() {
     use roller::description::Real;
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
     #[rustfmt::skip]
-    let rollers: [(&[(&str, f64)], Option<&str>, bool); 6] = [
+    let rollers: [(&[(&str, f64)], Option<&str>, bool); 7] = [
         (&[], None, true),
         (&[("b", 0.3), ("outlets", 2.0)], None, true),
         (&[], Some(speed_drive), true),
         (&[("roll", 2.0), ("wound.thickness", 1e-3), ("wound.density", 1000.0)], None, false),
         (&[("inlets", 3.0), ("web_a.m", 0.2), ("web_a2.m", 0.05), ("web_a3.m", 0.7)], None, false),
         (&[("carriage", 1.0)], None, true),
+        (&[("inlets", 3.0), ("outlets", 3.0), ("layered", 1.0)], None, true),
     ];
     #[rustfmt::skip]
     let points: [&[(&str, f64)]; 2] = [
@@ -440,5 +443,27 @@ fn fixed_tangents_are_the_same_at_every_state_input_and_time() {
         }
         assert_eq!(roller::jacobian::tangents_fixed(&m.params), fixed, "{settings:?}");
         assert_eq!(tangents[0] == tangents[1], fixed, "{settings:?}: tangents {:?} and {:?}", tangents[0], tangents[1]);
+    }
+}
+
+/// [R6]: where the webs stay layers, outlet k passes on the strain of inlet ((k-1) mod inlets) + 1,
+/// exactly (a copy), whatever the masses; a nip of three layers passes each to its own outlet, a
+/// slitter cutting two layers into two lanes passes each layer to its outlet in every lane. The
+/// same rollers without `layered` merge the strains [R5] instead, so the check can fail.
+#[test]
+fn layers_pass_each_strain_on_at_their_own_port() {
+    let strains = [("web_a.eps", 1.1e-3), ("web_a2.eps", 4.2e-3), ("web_a3.eps", -2e-4)];
+    let masses = [("web_a.m", 0.2), ("web_a2.m", 0.05), ("web_a3.m", 0.7)];
+    for (inlets, outlets) in [(3usize, 3usize), (2, 4), (1, 4)] {
+        let ports = [("inlets", inlets as f64), ("outlets", outlets as f64)];
+        let layered = roller(&[&ports[..], &strains[..inlets], &masses[..inlets], &[("layered", 1.0)]].concat());
+        let merged = roller(&[&ports[..], &strains[..inlets], &masses[..inlets]].concat());
+        for (k, outlet) in ["web_b.eps", "web_b2.eps", "web_b3.eps", "web_b4.eps"].iter().enumerate().take(outlets) {
+            let want = strains[k % inlets].1;
+            assert_eq!(get(&layered, outlet), want, "{inlets} inlets, {outlets} outlets: {outlet}");
+            if inlets > 1 {
+                assert!(rel(get(&merged, outlet), want) > 0.1, "without layered {outlet} merges: {}", get(&merged, outlet));
+            }
+        }
     }
 }

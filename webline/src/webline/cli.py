@@ -267,7 +267,7 @@ def cmd_check(args):
                 continue
             system = compile_scene(scene, args.fmu_dir, settle=False)
             lines = lambda scene=scene: operating_lines(scene, args.fmu_dir, args.method)  # noqa: E731
-            kind_of = lambda name, scene=scene: scene.component(name).type  # noqa: E731
+            kind_of = scene.part_type
         try:
             points = lines()
             limits = coupling_limits(points, (("gauss-seidel", "extrapolate"), PLAIN), kind_of)

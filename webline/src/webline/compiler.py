@@ -16,6 +16,11 @@ end from its tangent points (web_a.y, web_b.y; the x are constants).
 A nip where webs merge and a slitter that splits the web use the Roller's
 extra ports (web_a2..4, web_b2..4; docs/merge-split.md, "The FMUs' wiring"):
 there the strain goes through the roller (web_a<k>.eps in, web_b<j>.eps out).
+A span that carries a laminate is a ConvertingSpan per layer, `NAME.<label>`,
+side by side between the same rollers, each at a port of its own (the rollers
+`layered`: each outlet passes one inlet's strain on, [R6]); a layer takes its
+strain from the span that brings its web, as a plain span after a plain roller
+does (docs/merge-split.md, [M6]).
 """
 
 from __future__ import annotations
@@ -129,14 +134,22 @@ def _dancer_of(scene: Scene, span: Span):
     return up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
 
 
-def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effects: tuple, positions: dict) -> Component:
+def layer_parts(span: Span) -> list[str]:
+    """The components of a span: itself, or one per layer of a laminate, `NAME.<label>` ([M6])."""
+    return [f"{span.name}.{label}" for label in span.labels] if span.layered else [span.name]
+
+
+def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effects: tuple, positions: dict,
+          layer: int = 0) -> Component:
+    """The ConvertingSpan of a span, or of its layer `layer` (a laminate's: that layer's webs)."""
     dancer = _dancer_of(scene, span)
     y0 = positions.get(dancer.name, dancer.y_start) if dancer is not None else None  # the carriage's start
     lib = scene.web_library
+    wp1, wp2 = span.wp1.plies[layer], span.wp2.plies[layer]
     start = {
         "L": float(span.length if span.length is not None else y0),
-        **web_values("wp1", span.wp1, lib),
-        **web_values("wp2", span.wp2, lib),
+        **web_values("wp1", wp1, lib),
+        **web_values("wp2", wp2, lib),
         **{e: e in span.effects for e in effects},
         # The start strain is given, not the FMU's equilibrium of its first inputs
         # (FMPy's first inputs are all 0.0): every engine starts the same.
@@ -160,7 +173,7 @@ def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effect
             start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(y0),
                           "frame_a.x": 2.0 * float(dancer.R)})
     sets = []
-    webs = {"wp1": span.wp1, "wp2": span.wp2}
+    webs = {"wp1": wp1, "wp2": wp2}
     for e in scene.events:
         if e.component != span.name:
             continue
@@ -169,10 +182,11 @@ def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effect
             changes["wp1"] = changes["wp2"] = changes.pop("web")
         entry = {"time": float(e.time)}
         for side, web in changes.items():
+            web = web.plies[layer]  # a laminate's layer changes to the new web's (scene: as many layers)
             entry.update(web_values(side, web, lib, clear_record=bool(webs[side].record)))
             webs[side] = web
         sets.append(entry)
-    return Component(span.name, "span", fmu, start, {"set": sets} if sets else None)
+    return Component(layer_parts(span)[layer], "span", fmu, start, {"set": sets} if sets else None)
 
 
 def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
@@ -180,6 +194,37 @@ def _record_variable(scene: Scene, cname: str, quantity: str) -> str:
     if isinstance(c, Span):
         return SPAN_VARIABLES[quantity]
     return ROLLER_VARIABLES[quantity]
+
+
+def _record(scene: Scene) -> tuple[list, list | None]:
+    """The variables the System records for the scene's columns, and how they make the columns
+    (`System.sums`; None where each column is one variable). A laminate's column is made of its layers'
+    ([M6]): T, F_a and F_b their sums, eps their strains weighted by E*A, L the first's, T_<label> one
+    layer's tension."""
+    if not any(isinstance(scene.component(c), Span) and scene.component(c).layered for c, _ in scene.record):
+        return [(c, _record_variable(scene, c, q)) for c, q in scene.record], None
+    record, sums = [], []
+
+    def read(comp, var):
+        if (comp, var) not in record:
+            record.append((comp, var))
+        return record.index((comp, var))
+
+    for (c, q), column in zip(scene.record, scene.columns()):
+        sp = scene.component(c)
+        if not (isinstance(sp, Span) and sp.layered):
+            terms = [(read(c, _record_variable(scene, c, q)), 1.0)]
+        elif q.startswith("T_"):
+            terms = [(read(layer_parts(sp)[sp.labels.index(q[2:])], SPAN_VARIABLES["T"]), 1.0)]
+        elif q == "L":
+            terms = [(read(layer_parts(sp)[0], SPAN_VARIABLES["L"]), 1.0)]
+        elif q == "eps":
+            EA = [w.EA for w in sp.wp2.plies]
+            terms = [(read(name, SPAN_VARIABLES["eps"]), k / sum(EA)) for name, k in zip(layer_parts(sp), EA)]
+        else:
+            terms = [(read(name, SPAN_VARIABLES[q]), 1.0) for name in layer_parts(sp)]
+        sums.append((column, terms))
+    return record, sums
 
 
 def equilibrium_starts(scene: Scene, at: float = 0.0) -> tuple[dict, dict]:
@@ -193,7 +238,7 @@ def equilibrium_starts(scene: Scene, at: float = 0.0) -> tuple[dict, dict]:
 
     ode = LineODE(scene)
     z = ode.operating_state(at)
-    starts = {sp.name: {"eps_start": float(z[ode.i_eps[sp.name]])} for sp in scene.spans}
+    starts = {name: {"eps_start": float(z[ode.i_eps[sp.name] + i])} for sp in scene.spans for i, name in enumerate(layer_parts(sp))}
     for m in ode.movers:
         starts[m.name] = {"v_start": float(m.R * z[ode.i_omega[m.name]])}
     for m in ode.slippers:  # the web's speed over it, as its slip over the surface's
@@ -212,13 +257,34 @@ def port(side: str, k: int) -> str:
 
 
 def _ports(scene: Scene, node, side: str, spans: list) -> int:
-    """How many webs meet at (side "web_a") or leave (side "web_b") a roller: the Roller has four of each."""
-    if len(spans) > MAX_PORTS:
+    """How many webs meet at (side "web_a") or leave (side "web_b") a roller, a laminate's layers each
+    one: the Roller has four of each."""
+    count = sum(len(sp.wp2.plies if side == "web_a" else sp.wp1.plies) for sp in spans)
+    if count > MAX_PORTS:
         what = "merges" if side == "web_a" else "splits the web into"
         webs = "webs" if side == "web_a" else "lanes"
-        raise TooManyWebs(f"{scene.path}: {node.type} {node.name!r} {what} {len(spans)} {webs} ({', '.join(sp.name for sp in spans)}); "
-                         f"the Roller FMU has at most {MAX_PORTS} {'inlets' if side == 'web_a' else 'outlets'}")
-    return len(spans)
+        layers = f" of {count} layers in all (each layer of a laminate takes a port)" if count != len(spans) else ""
+        raise TooManyWebs(f"{scene.path}: {node.type} {node.name!r} {what} {len(spans)} {webs} ({', '.join(sp.name for sp in spans)})"
+                         f"{layers}; the Roller FMU has at most {MAX_PORTS} {'inlets' if side == 'web_a' else 'outlets'}")
+    return count
+
+
+def roller_ports(scene: Scene, node) -> tuple[dict, dict]:
+    """The Roller's ports of `node`: {(span, layer): port} for the webs arriving (inlets) and leaving
+    (outlets), 1-based, in port order (the main line's span first, each span's layers in its order).
+    At a nip into a laminate each layer leaves at the port its web arrived at, so that the Roller
+    (`layered`) passes each layer's strain on: outlet k takes inlet ((k - 1) mod inlets) + 1 ([M6])."""
+    ins, outs = scene.spans_in(node), scene.spans_out(node)
+    inlets = {(sp.name, i): 0 for sp in ins for i in range(len(sp.wp2.plies))}
+    inlets = {key: k for k, key in enumerate(inlets, 1)}
+    outlets = {}
+    for sp in outs:
+        if len(ins) > 1 and sp.layered:
+            outlets.update({(sp.name, i): inlets[(src.name, j)] for i, (src, j) in enumerate(scene.layer_sources(sp))})
+        else:
+            for i in range(len(sp.wp1.plies)):
+                outlets[(sp.name, i)] = len(outlets) + 1
+    return inlets, outlets
 
 
 def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibrium=True, at=0.0) -> System:
@@ -246,14 +312,19 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
         positions = {}
     effects = span_effects(d)
     rollers = []
+    ports = {}
     for n in scene.nodes:
         comp = _roller(scene, n, roller_fmu, positions)
         ins, outs = scene.spans_in(n), scene.spans_out(n)
+        ports[n.name] = roller_ports(scene, n)
         if _ports(scene, n, "web_a", ins) > 1:
-            comp.start["inlets"] = len(ins)
-            comp.start.update({f"{port('web_a', k)}.m": float(m) for k, m in enumerate(scene.inlet_masses(n), 1)})
+            comp.start["inlets"] = len(ports[n.name][0])
+            if len(ins) > 1 and not any(sp.layered for sp in outs):  # webs merged into one [R5]
+                comp.start.update({f"{port('web_a', k)}.m": float(m) for k, m in enumerate(scene.inlet_masses(n), 1)})
+            else:  # the webs stay layers, each passed on at its port
+                comp.start["layered"] = True
         if _ports(scene, n, "web_b", outs) > 1:
-            comp.start["outlets"] = len(outs)
+            comp.start["outlets"] = len(ports[n.name][1])
         rollers.append(comp)
     # The strains the spans start at when the scene gives none: the reference's own given start
     # (scene.start_strain, the merged strain [M2] after a nip), so that every engine starts alike.
@@ -261,7 +332,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
 
     ode = LineODE(scene)
     z = ode.given_state()
-    spans = [_span(scene, sp, float(z[ode.i_eps[sp.name]]), span_fmu, solvers, effects, positions) for sp in scene.spans]
+    spans = [_span(scene, sp, float(z[ode.i_eps[sp.name] + i]), span_fmu, solvers, effects, positions, i)
+             for sp in scene.spans for i in range(len(sp.wp2.plies))]
     for comp in rollers + spans:
         comp.start.update(equilibrium.get(comp.name, {}))
 
@@ -270,29 +342,42 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
     def connect(src, out, dst, inp):
         connections.append(Connection((src, out), (dst, inp)))
 
-    def branched(node):  # a nip or a slitter: the strain goes through the Roller
-        return len(scene.spans_in(node)) > 1 or len(scene.spans_out(node)) > 1
+    def through(node):  # several ports (a nip, a slitter, a laminate's layers): the strain goes through the Roller
+        return any(len(p) > 1 for p in ports[node.name])
 
     for sp in scene.spans:
         up, down = scene.upstream(sp), scene.downstream(sp)
-        a = port("web_b", scene.spans_out(up).index(sp) + 1)  # the port of `up` the span leaves from
-        b = port("web_a", scene.spans_in(down).index(sp) + 1)  # the port of `down` it arrives at
-        connect(up.name, f"{a}.v", sp.name, "web_a.v")
         before = scene.spans_in(up)
-        if not before or branched(up):
-            connect(up.name, f"{a}.eps", sp.name, "web_a.eps")
+        # A laminate's layer takes its strain from the span that brings its web, as a plain web after a
+        # plain roller does: stepped before it in webline's Gauss-Seidel order, not a step behind through
+        # the roller ([M6]). Where webs merge into one [R5] and at a slitter, from the roller's port.
+        if sp.layered and len(before) > 1:
+            feeds = [layer_parts(src)[j] for src, j in scene.layer_sources(sp)]
+        elif sp.layered and before:
+            feeds = layer_parts(before[0])
         else:
-            connect(before[0].name, "web_b.eps", sp.name, "web_a.eps")
-        connect(down.name, f"{b}.v", sp.name, "web_b.v")
-        if branched(down):
-            connect(sp.name, "web_b.eps", down.name, f"{b}.eps")
-        if isinstance(down, Dancer):
-            connect(down.name, "web_a.y", sp.name, "frame_b.y")
-        if isinstance(up, Dancer):
-            connect(up.name, "web_b.y", sp.name, "frame_a.y")
-        connect(sp.name, "web_a.F", up.name, f"{a}.F")
-        connect(sp.name, "web_b.F", down.name, f"{b}.F")
+            feeds = [None] * len(sp.wp2.plies)
+        for i, name in enumerate(layer_parts(sp)):
+            a = port("web_b", ports[up.name][1][(sp.name, i)])  # the port of `up` the layer leaves from
+            b = port("web_a", ports[down.name][0][(sp.name, i)])  # the port of `down` it arrives at
+            connect(up.name, f"{a}.v", name, "web_a.v")
+            if feeds[i] is not None:
+                connect(feeds[i], "web_b.eps", name, "web_a.eps")
+            elif not before or through(up):
+                connect(up.name, f"{a}.eps", name, "web_a.eps")
+            else:
+                connect(before[0].name, "web_b.eps", name, "web_a.eps")
+            connect(down.name, f"{b}.v", name, "web_b.v")
+            if through(down):
+                connect(name, "web_b.eps", down.name, f"{b}.eps")
+            if isinstance(down, Dancer):
+                connect(down.name, "web_a.y", name, "frame_b.y")
+            if isinstance(up, Dancer):
+                connect(up.name, "web_b.y", name, "frame_a.y")
+            connect(name, "web_a.F", up.name, f"{a}.F")
+            connect(name, "web_b.F", down.name, f"{b}.F")
 
+    record, sums = _record(scene)
     system = System(
         name=scene.name,
         components=rollers + spans,
@@ -300,7 +385,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
         start_time=float(at),
         stop_time=float(scene.stop_time),
         step=float(scene.step),
-        record=[(c, _record_variable(scene, c, q)) for c, q in scene.record],
+        record=record,
+        sums=sums,
     )
     if settle:
         settle_start_values(system)
@@ -309,8 +395,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
 
 def run_scene(scene, fmu_dir=None, **options) -> Result:
     """A scene compiled and run; the columns named as the scene records them ("film.T [N]")."""
-    result = Master(compile_scene(scene, fmu_dir),
-                    Options(**options)).run()
+    result = Master(compile_scene(scene, fmu_dir), Options(**options)).run()
     result.scene = scene.name
     result.columns = scene.columns()
     return result

@@ -79,7 +79,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
         from .stability import operating_lines
 
         warnings += check_step(lambda: operating_lines(scene, fmu_dir), scene.name, step or scene.step, force,
-                               lambda name: scene.component(name).type, **options)
+                               scene.part_type, **options)
         result = run_parts(scene, fmu_dir=fmu_dir, step=step, **options)
     elif engine in ("libcosim", "fmpy"):
         from .compiler import compile_scene
@@ -176,14 +176,14 @@ def run_libcosim(ssd_dir: Path, system: System, step: float | None = None) -> Re
         reads.append((index, [vr[system.record[i][1]] for i in picked]))
         order += picked
     columns = scene_columns(system)
-    rows = np.empty((n, len(columns)))
+    rows = np.empty((n, len(system.record)))
     for k in range(n):
         if not execution.step():
             raise SspError(f"{system.name}: libcosim failed at step {k} (t = {system.start_time + k * h} s)")
         rows[k, order] = [x for index, vrs in reads for x in observer.last_real_values(index, vrs)]
     wall = clock.perf_counter() - t0
     times = system.start_time + h * np.arange(1, n + 1)
-    return Result(scene=system.name, columns=columns, time=times, data=rows,
+    return Result(scene=system.name, columns=columns, time=times, data=system.combine(rows),
                   info={"method": f"libcosim, fixed step {h * 1e3:g} ms", "step": h, "steps": n, "wall_time": wall})
 
 
@@ -242,7 +242,7 @@ def run_fmpy(archive: Path, system: System, step: float | None = None) -> Result
     missing = [k for k in keys if k not in out.dtype.names]
     if missing:
         raise SspError(f"{archive}: FMPy recorded no {', '.join(missing)} (it records connectors only)")
-    data = np.column_stack([out[k].astype(float) for k in keys])
+    data = system.combine(np.column_stack([out[k].astype(float) for k in keys]))
     return Result(scene=system.name, columns=scene_columns(system), time=out["time"] + h, data=data,
                   info={"method": f"FMPy simulate_ssp, fixed step {h * 1e3:g} ms", "step": h, "steps": len(out), "wall_time": wall})
 

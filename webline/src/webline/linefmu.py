@@ -19,7 +19,7 @@ import zipfile
 from pathlib import Path
 
 from . import fmpy_log
-from .compiler import compile_scene
+from .compiler import compile_scene, layer_parts
 from .fmus import DEFAULT_FMU_DIR
 from .scene import Scene, Span
 from .system import profile_text
@@ -30,10 +30,15 @@ ROOT = Path(__file__).resolve().parents[3]
 TEMPLATE = "line"
 
 
-# A scene's recorded quantity -> the Line FMU's output of that part.
+# A scene's recorded quantity -> the Line FMU's output of that part (a laminate's T_<label>: as it is).
 OUTPUTS = {"T": "T", "eps": "eps", "L": "length", "F_a": "F_a", "F_b": "F_b",
            "v": "v", "omega": "omega", "tau": "tau", "y": "y", "y_dot": "y_dot",
            "v_web": "v_web", "slip": "slip", "traction": "traction", "mu_eff": "mu_eff", "h_air": "h_air"}
+
+
+def output(component: str, quantity: str) -> str:
+    """The Line FMU's output of a scene's recorded quantity."""
+    return f"{component}.{OUTPUTS.get(quantity, quantity)}"
 
 
 class LineFmuError(RuntimeError):
@@ -53,20 +58,25 @@ def line_spec(scene: Scene, fmu_dir=None, start: str | None = None, settle=True)
     system = compile_scene(scene, fmu_dir, settle=settle, carriages_at_equilibrium=False)
     components = {c.name: c for c in system.components}
     parts = []
+    laminates = []
     for c in scene.parts:
-        comp = components[c.name]
-        part = {"name": c.name, "start": comp.start}
-        if isinstance(c, Span):
-            part.update(model="ConvertingSpan", role="span")
-        else:
-            part.update(model="Roller", role=c.type, torque_input=scene.speed_profile(c) is None)
-            wrap = getattr(c, "wrap", None)
-            if wrap is not None:
-                part["wrap"] = float(wrap)
-        if comp.profile:
-            part["profile"] = comp.profile
-        parts.append(part)
-    return {
+        names = layer_parts(c) if isinstance(c, Span) else [c.name]
+        if isinstance(c, Span) and c.layered:  # its layers' spans, and the outputs of the laminate they make ([M6])
+            laminates.append({"name": c.name, "layers": [{"part": n, "label": x} for n, x in zip(names, c.labels)]})
+        for name in names:
+            comp = components[name]
+            part = {"name": name, "start": comp.start}
+            if isinstance(c, Span):
+                part.update(model="ConvertingSpan", role="span")
+            else:
+                part.update(model="Roller", role=c.type, torque_input=scene.speed_profile(c) is None)
+                wrap = getattr(c, "wrap", None)
+                if wrap is not None:
+                    part["wrap"] = float(wrap)
+            if comp.profile:
+                part["profile"] = comp.profile
+            parts.append(part)
+    spec = {
         "format": FORMAT,
         "name": scene.name,
         "description": scene.description,
@@ -75,6 +85,9 @@ def line_spec(scene: Scene, fmu_dir=None, start: str | None = None, settle=True)
         "parts": parts,
         "connections": [{"from": list(k.source), "to": list(k.target)} for k in system.connections],
     }
+    if laminates:
+        spec["laminates"] = laminates
+    return spec
 
 
 def spec_text(spec: dict) -> str:
@@ -170,7 +183,7 @@ def simulate(scene: Scene, path: Path, step: float | None = None, model_exchange
     from .result import Result
 
     h = step or scene.step
-    outputs = [f"{c}.{OUTPUTS[q]}" for c, q in scene.record]
+    outputs = [output(c, q) for c, q in scene.record]
     t0 = clock.perf_counter()
     with fmpy_log.collecting() as (messages, logger):
         try:

@@ -124,7 +124,7 @@ class Planner:
 
         index = len(self.structures)
         record = metric_record(scene)
-        outputs = [f"{c}.{linefmu.OUTPUTS[q]}" for c, q in record]
+        outputs = [linefmu.output(c, q) for c, q in record]
         common = dict(index=index, outputs=outputs, recorded=len(scene.record), columns=scene.columns(),
                       parts=layout(scene), stop_time=float(scene.stop_time), step=float(step))
         try:

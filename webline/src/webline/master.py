@@ -401,7 +401,7 @@ class Master:
             scene=s.name,
             columns=self.columns(),
             time=np.array(times),
-            data=np.array(rows, dtype=float).reshape(len(times), len(s.record)),
+            data=s.combine(np.array(rows, dtype=float).reshape(len(times), len(s.record))),
             info={
                 "method": f"co-simulation ({self.opt.algorithm}, {self.opt.coupling})",
                 "step": self.h,

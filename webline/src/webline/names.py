@@ -45,7 +45,10 @@ def scene_quantity(kind: str, variable: str):
 
 def scene_columns(system, variables: dict) -> list[str]:
     """A System's recorded variables named as a scene names them (`scene_quantity`); a variable no
-    scene quantity reads keeps its FMU's name. `variables`: each component's {name: FMPy variable}."""
+    scene quantity reads keeps its FMU's name. `variables`: each component's {name: FMPy variable}. Columns
+    made of several variables (a laminate's, `System.sums`) have their own names."""
+    if system.sums is not None:
+        return [name for name, _ in system.sums]
     out = []
     for comp, var in system.record:
         named = scene_quantity(system.component(comp).kind, var)

@@ -5,12 +5,15 @@ documentation (docs "The rollers around a span", the span's [1]-[10]); it
 shares nothing with the FMUs or the co-simulation master but the parsed
 scene. States:
 
-* each span's strain eps (the FMU carries the unstretched length
-  x = L/(1+eps); here the strain itself, so that the tolerance acts on the
-  quantity the tension is made of):
+* each span's strain eps, one per layer of a laminate (the FMU carries the
+  unstretched length x = L/(1+eps); here the strain itself, so that the
+  tolerance acts on the quantity the tension is made of):
       d(eps)/dt = (1+eps)/L * (dL/dt + v_b - (1+eps) * q_a),
       q_a = v_a/(1+eps_a) for v_a >= 0, v_a/(1+eps) for v_a < 0;
-  after a nip where webs i merge (docs/merge-split.md [M1]),
+  a laminate's layer i enters at its own eps_a,i: after a nip, the strain of
+  the span that brought that web there; after another roller, the strain of
+  layer i of the span before (docs/merge-split.md [M6]); after a nip where webs
+  i merge into a web of one layer ([M1]),
       q_a = v_a * sum_i (m_i/sum_j m_j)/(1+eps_i),  m_i the webs' mass per length;
   after a slitter, each lane's eps_a is the strain of the web it cuts ([S1]);
 * each roller's angular speed (roller, unwinder, winder, dancer):
@@ -26,7 +29,7 @@ scene. States:
 
 Tension: T = EA*(eps + d_r*deps/dt) (damping), or for a web record's
 stress-strain table T = A*(sigma(eps) + d_r*dsigma/deps*deps/dt); clamped at
-0 for a slack web.
+0 for a slack web; a laminate's the sum of its layers' ([M6]).
 Profiles are integrated piece by piece between their breakpoints and the
 events, where parameters change (a splice) with the state kept (strain;
 a roller's surface speed).
@@ -35,13 +38,14 @@ a roller's surface speed).
 from __future__ import annotations
 
 import time as clock
+from itertools import accumulate
 
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
 from .result import Result
-from .scene import Dancer, Prescribed, Roller, Scene, SceneError, Span, start_strain
+from .scene import Dancer, Prescribed, Roller, Scene, SceneError, Span, span_layers, start_strain
 
 RTOL = 1e-10
 
@@ -64,8 +68,14 @@ class LineODE:
         self.movers = [c for c in scene.nodes if isinstance(c, (Roller, Dancer)) and c.has_fmu]
         self.dancers = [c for c in scene.nodes if isinstance(c, Dancer)]
         self.slippers = [c for c in scene.nodes if getattr(c, "traction", None) is not None]
-        n_s, n_m, n_d = len(self.spans), len(self.movers), len(self.dancers)
-        self.i_eps = {sp.name: i for i, sp in enumerate(self.spans)}
+        # A span's strains: one per layer, from its first (i_eps) on.
+        self.layers = {sp.name: len(sp.wp2.plies) for sp in self.spans}
+        self.i_eps = dict(zip(self.layers, accumulate(self.layers.values(), initial=0)))
+        n_s, n_m, n_d = sum(self.layers.values()), len(self.movers), len(self.dancers)
+        self.n_strains = n_s
+        # Where each layer of a laminate after a nip comes from: the strain states it enters at ([M6]).
+        self.feeds = {sp.name: [self.i_eps[src.name] + i for src, i in scene.layer_sources(sp)]
+                      for sp in self.spans if sp.layered and len(scene.spans_in(scene.upstream(sp))) > 1}
         self.i_omega = {m.name: n_s + i for i, m in enumerate(self.movers)}
         self.i_y = {d.name: n_s + n_m + 2 * i for i, d in enumerate(self.dancers)}
         self.i_vw = {c.name: n_s + n_m + 2 * n_d + i for i, c in enumerate(self.slippers)}
@@ -127,36 +137,31 @@ class LineODE:
         w = v if self.stuck else {**v, **{c.name: z[i] for c, i in zip(self.slippers, self.i_vw.values())}}
         for sp in self.spans:
             up, down = self.up[sp.name], self.down[sp.name]
-            w1, w2 = self.web[sp.name]
             dancer = up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
             if dancer is not None:
                 L = z[self.i_y[dancer.name]]
                 dL = z[self.i_y[dancer.name] + 1]
             else:
                 L, dL = sp.length, 0.0
-            eps = z[self.i_eps[sp.name]]
             va, vb = w[up.name], w[down.name]
-            if va >= 0:
-                qa = va / self.entry(up, t, z)
-            else:  # web entering backwards carries the span's own strain
-                qa = va / (1.0 + eps)
-            deps = (1.0 + eps) / L * (dL + vb - (1.0 + eps) * qa)
-            dz[self.i_eps[sp.name]] = deps
-            damped = "includeDamping" in sp.effects
-            if w2.curve is None:
-                T = w2.EA * (eps + (w2.d_r * deps if damped else 0.0))
-            else:  # a record's stress-strain table, with the tangent modulus in the damping term
-                T = w2.area * (float(w2.curve.sigma(eps)) + (w2.d_r * float(w2.curve.tangent(eps)) * deps if damped else 0.0))
-            if "preventNegativeTension" in sp.effects:
-                T = max(T, 0.0)
-            x = L / (1.0 + eps)
-            if "includeMass" in sp.effects:
-                rho_in = w1.rho_l if va >= 0 else w2.rho_l
-                p = qa * (w2.rho_l * vb - rho_in * va)
-                m = w2.rho_l * x
-            else:
-                p, m = 0.0, 0.0
-            q[sp.name] = {"T": T, "eps": eps, "L": L, "F_a": T, "p": p, "m": m, "x": x, "q_a": qa}
+            first = self.i_eps[sp.name]
+            entries = self.entries(sp, t, z) if va >= 0 else None
+            layers = []
+            for i, (w1, w2) in enumerate(span_layers(*self.web[sp.name])):
+                eps = z[first + i]
+                if va >= 0:
+                    qa = va / entries[i]
+                else:  # web entering backwards carries the span's own strain
+                    qa = va / (1.0 + eps)
+                deps = (1.0 + eps) / L * (dL + vb - (1.0 + eps) * qa)
+                dz[first + i] = deps
+                layers.append(self.layer(sp, w1, w2, eps, deps, L, qa, va, vb))
+            if len(layers) == 1:
+                q[sp.name] = layers[0]
+            else:  # a laminate ([M6]): its layers in parallel, the strain weighted by their stiffness
+                q[sp.name] = {k: sum(x[k] for x in layers) for k in ("T", "p", "m")}
+                q[sp.name].update(eps=sum(x["EA"] * x["eps"] for x in layers) / sum(x["EA"] for x in layers), L=L,
+                                  F_a=q[sp.name]["T"], **{f"T_{label}": x["T"] for label, x in zip(sp.labels, layers)})
         accel = {}
         for node in self.movers:
             J, R, b = self.inertia[node.name]
@@ -195,21 +200,57 @@ class LineODE:
             dz[i + 1] = (F - d.damping * ydot - d.stiffness * (y - d.y_start)) / d.mass
         return dz, q, v
 
+    @staticmethod
+    def layer(sp, w1, w2, eps, deps, L, qa, va, vb):
+        """One layer of a span (the span itself, for a web of one layer): its tension, momentum flux and mass."""
+        damped = "includeDamping" in sp.effects
+        if w2.curve is None:
+            T = w2.EA * (eps + (w2.d_r * deps if damped else 0.0))
+        else:  # a record's stress-strain table, with the tangent modulus in the damping term
+            T = w2.area * (float(w2.curve.sigma(eps)) + (w2.d_r * float(w2.curve.tangent(eps)) * deps if damped else 0.0))
+        if "preventNegativeTension" in sp.effects:
+            T = max(T, 0.0)
+        x = L / (1.0 + eps)
+        if "includeMass" in sp.effects:
+            rho_in = w1.rho_l if va >= 0 else w2.rho_l
+            p = qa * (w2.rho_l * vb - rho_in * va)
+            m = w2.rho_l * x
+        else:
+            p, m = 0.0, 0.0
+        return {"T": T, "eps": eps, "L": L, "F_a": T, "p": p, "m": m, "x": x, "q_a": qa, "EA": w2.EA}
+
     def rhs(self, t, z):
         return self.evaluate(t, z)[0]
 
+    def entries(self, sp, t, z):
+        """1 + eps_a of each layer of span `sp` entering it forwards ([M6]): at the line's first roller its
+        strain profile; after a nip, each layer the strain of the span that brought its web there, or,
+        into a web of one layer, the merge of every web arriving ([M1]); after another roller, layer i
+        the strain of layer i of the span before (a slitter's lanes all start at it, [S1]), each layer
+        the strain of a web of one layer."""
+        node = self.up[sp.name]
+        ins = self.ins[node.name]
+        k = self.layers[sp.name]
+        if sp.name in self.feeds:
+            return [1.0 + z[i] for i in self.feeds[sp.name]]
+        if len(ins) == 1 and self.layers[ins[0].name] == k:
+            first = self.i_eps[ins[0].name]
+            return [1.0 + z[first + i] for i in range(k)]
+        return [self.entry(node, t, z)] * k
+
     def entry(self, node, t, z):
-        """1 + eps_a of the web leaving `node` forwards. At the line's first roller its strain
-        profile; after a roller, the strain of the span before it (a slitter's lanes all start
-        at it, [S1]); after a nip, 1/(1+eps_a) is the mass-weighted mean of the arriving webs'
+        """1 + eps_a of a web of one layer leaving `node` forwards. At the line's first roller its strain
+        profile; after a roller, the strain of the span before it (a slitter's lanes all start at it,
+        [S1]); after a nip, 1/(1+eps_a) is the mass-weighted mean of the arriving webs' (their layers')
         1/(1+eps_i) ([M1])."""
         ins = self.ins[node.name]
         if not ins:
             return 1.0 + self.pv(node.strain, t)
-        if len(ins) == 1:
+        if len(ins) == 1 and self.layers[ins[0].name] == 1:
             return 1.0 + z[self.i_eps[ins[0].name]]
         m = self.s.inlet_masses(node, lambda sp: self.web[sp.name][1])
-        return sum(m) / sum(mi / (1.0 + z[self.i_eps[sp.name]]) for mi, sp in zip(m, ins))
+        strains = [z[self.i_eps[sp.name] + i] for sp in ins for i in range(self.layers[sp.name])]
+        return sum(m) / sum(mi / (1.0 + e) for mi, e in zip(m, strains))
 
     def initial_state(self):
         """The start: the scene's start values, or with `"start": "equilibrium"` the steady state for
@@ -241,17 +282,20 @@ class LineODE:
         springless = [d for d in self.dancers if d.stiffness == 0.0]
         held = [self.i_y[d.name] for d in springless]  # their positions: held
         balance = [i + 1 for i in held]  # their accelerations: checked afterwards
+        # A laminate at rest is steady at any strains of its layers that pull as one: its layers move
+        # together from their start (each layer's rate is zero whatever its strain; [M6]).
+        tied = {first + i: first for first, k in self.resting_laminates(t, z0) for i in range(1, k)}
         slips = list(self.i_vw.values())
         z = z0.copy()
         if slips:
             self.stuck = True
             try:
-                z, _ = self._solve(t, z0, z, held + slips, balance + slips)
+                z, _ = self._solve(t, z0, z, held + slips, balance + slips, tied)
             finally:
                 self.stuck = False
             for c in self.slippers:
                 z[self.i_vw[c.name]] = self.speed(c, t, z)
-        z, scale = self._solve(t, z0, z, held, balance)
+        z, scale = self._solve(t, z0, z, held, balance, tied)
         off = self.unsteadiness(t, z, scale)
         rows = np.array([i for i in range(self.n) if i not in balance], dtype=int)
         if len(rows) and not np.max(off[rows]) < STEADY:
@@ -274,10 +318,11 @@ class LineODE:
                     f"difference), or {GIVEN}")
         return z
 
-    def _solve(self, t, z0, z, held, skipped):
-        """SciPy's root on the rates but `skipped`, over the states but `held`, from z; (z, scale)."""
-        free = np.array([i for i in range(self.n) if i not in held], dtype=int)
-        rows = np.array([i for i in range(self.n) if i not in skipped], dtype=int)
+    def _solve(self, t, z0, z, held, skipped, tied):
+        """SciPy's root on the rates but `skipped`, over the states but `held`, from z; a tied state
+        {i: first} moves with the state it is tied to and has no rate of its own to solve. (z, scale)."""
+        free = np.array([i for i in range(self.n) if i not in held and i not in tied], dtype=int)
+        rows = np.array([i for i in range(self.n) if i not in skipped and i not in tied], dtype=int)
         z = z.copy()
         # Scaled by the start, then again by the first answer: a strain that starts at 0 is scaled
         # by its tolerance at first, a thousand times below its steady value, and hybr stalls there.
@@ -286,15 +331,26 @@ class LineODE:
             for c in self.slippers:  # the web's speed over a roller moves on the scale of its slip
                 scale[self.i_vw[c.name]] = c.traction.v_slip
 
-            def rates(u, scale=scale):
+            def rates(u, scale=scale, z=z):
                 x = z.copy()
                 x[free] = u * scale[free]
+                for i, first in tied.items():
+                    x[i] = z[i] + x[first] - z[first]
                 return self.rhs(t, x)[rows]
 
             sol = root(rates, z[free] / scale[free], method="hybr", options={"xtol": 1e-15})
-            z[free] = sol.x * scale[free]
+            moved = sol.x * scale[free] - z[free]
+            z[free] += moved
+            for i, first in tied.items():
+                z[i] += moved[np.searchsorted(free, first)]
         self.last_root = sol
         return z, scale
+
+    def resting_laminates(self, t, z):
+        """(first strain state, layers) of each laminate span whose ends stand still at (t, z)."""
+        v = {node.name: self.speed(node, t, z) for node in self.s.nodes}
+        return [(self.i_eps[sp.name], self.layers[sp.name]) for sp in self.spans
+                if sp.layered and v[self.up[sp.name].name] == 0.0 and v[self.down[sp.name].name] == 0.0]
 
     def unsteadiness(self, t, z, scale):
         """Each rate at z relative to how much it changes when every state moves by its own size
@@ -310,8 +366,13 @@ class LineODE:
 
     def state_names(self):
         names = [""] * self.n
-        for k, i in self.i_eps.items():
-            names[i] = f"span {k!r}'s strain"
+        for sp in self.spans:
+            i = self.i_eps[sp.name]
+            if sp.layered:
+                for j, label in enumerate(sp.labels):
+                    names[i + j] = f"span {sp.name!r}'s layer {label}'s strain"
+            else:
+                names[i] = f"span {sp.name!r}'s strain"
         for k, i in self.i_omega.items():
             names[i] = f"{k!r}'s speed"
         for k, i in self.i_y.items():
@@ -331,13 +392,14 @@ class LineODE:
         for c in self.slippers:
             z[self.i_vw[c.name]] = s.initial_speed(c, t) + c.traction.slip_start
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
-            if sp.eps_start is not None:
-                eps = sp.eps_start
-            else:  # at rest between its ends' start speeds (or refused, naming why)
-                up, down = self.up[sp.name], self.down[sp.name]
-                eps_a = float(self.entry(up, t, z)) - 1.0
-                eps = start_strain(sp, up, down, s.initial_speed(up, t), s.initial_speed(down, t), eps_a)
-            z[self.i_eps[sp.name]] = eps
+            first = self.i_eps[sp.name]
+            if sp.eps_start is not None:  # every layer of a laminate at it
+                z[first:first + self.layers[sp.name]] = sp.eps_start
+                continue
+            up, down = self.up[sp.name], self.down[sp.name]
+            for i, entry in enumerate(self.entries(sp, t, z)):
+                # at rest between its ends' start speeds (or refused, naming why)
+                z[first + i] = start_strain(sp, up, down, s.initial_speed(up, t), s.initial_speed(down, t), float(entry) - 1.0)
         return z
 
     def apply_event(self, ev, z):
@@ -387,7 +449,7 @@ class LineODE:
 
 def atol_of(ode: LineODE, z0):
     a = np.empty(ode.n)
-    a[: len(ode.spans)] = 1e-15
+    a[: ode.n_strains] = 1e-15
     for name, i in ode.i_omega.items():
         a[i] = 1e-11 * max(1.0, 1.0 / ode.inertia[name][1])
     for name, i in ode.i_y.items():

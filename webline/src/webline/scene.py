@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -70,7 +71,8 @@ class Web:
     # (its own reader); the line reference evaluates the record's curve.
     record: str | None = None
     curve: records.Curve | None = field(default=None, compare=False)
-    # A laminate made by the law of mixtures: the names of its layers (docs/merge-split.md).
+    # A laminate: its layers, each a web of its own, laminates among them flattened, each layer's density
+    # carrying its share of the adhesive (docs/merge-split.md, [M6]); () for a web of one layer.
     layers: tuple = ()
 
     @property
@@ -84,6 +86,40 @@ class Web:
     @property
     def rho_l(self):
         return self.density * self.area
+
+    @property
+    def plies(self) -> tuple:
+        """The webs that carry its tension side by side: a laminate's layers, else the web itself."""
+        return self.layers or (self,)
+
+    @property
+    def layer_names(self) -> tuple:
+        return tuple(w.name for w in self.layers)
+
+
+# A layer's label names its outputs (`NAME.T_<label>`) and its span's parts in the Line FMU (`NAME.<label>`):
+# the web's name with every character but a letter, a digit or _ as _, numbered _1, _2, ... where a
+# web is a layer twice; these would shadow the laminate's own outputs.
+LABEL_TAKEN = ("T", "eps", "L", "F_a", "F_b", "length")
+
+
+def layer_labels(web: Web) -> list[str]:
+    """The labels of a web's layers, in its order (docs/merge-split.md, "Outputs")."""
+    names = [re.sub(r"[^A-Za-z0-9_]", "_", w.name) for w in web.plies]
+    names = ["_" + n if n[0].isdigit() else n for n in names]
+    seen = {}
+    out = []
+    for n in names:
+        if names.count(n) > 1:
+            seen[n] = seen.get(n, 0) + 1
+            n = f"{n}_{seen[n]}"
+        out.append(n)
+    return out
+
+
+def span_layers(wp1: Web, wp2: Web) -> list[tuple[Web, Web]]:
+    """A span's layers as (web arriving, web in the span) pairs: one pair for a plain span."""
+    return list(zip(wp1.plies, wp2.plies))
 
 
 @dataclass
@@ -129,6 +165,16 @@ class Span(Component):
     solver: str = "auto"
     tolerance: float | None = None
     substeps: int | None = None
+
+    @property
+    def layered(self) -> bool:
+        """It carries a laminate of several layers, each with its own strain ([M6])."""
+        return len(self.wp2.plies) > 1
+
+    @property
+    def labels(self) -> list[str]:
+        """Its layers' labels (its web at the start names them)."""
+        return layer_labels(self.wp2)
 
 
 @dataclass
@@ -252,6 +298,10 @@ class Scene:
     def component(self, name):
         return next(c for c in self.parts if c.name == name)
 
+    def part_type(self, name) -> str:
+        """The type of a part, named as its FMU component: a laminate's layer `NAME.<label>` is its span's."""
+        return self.component(name.split(".")[0]).type
+
     @property
     def spans(self):
         return [c for c in self.parts if isinstance(c, Span)]
@@ -276,10 +326,23 @@ class Scene:
 
     def inlet_masses(self, node, web_of=None):
         """The masses per unstretched length m_i = rho_i*A_i of the webs arriving at `node`, in port
-        order (the main line's first, then the side paths'): the weights of a merge ([M1], the Roller's
-        [R5]). Each is the web its span carries at its end (wp2), or `web_of(span)` (the reference's,
-        after an event changed it). The reference and the FMUs' compiler both take them from here."""
-        return [(web_of(sp) if web_of else sp.wp2).rho_l for sp in self.spans_in(node)]
+        order (the main line's first, then the side paths', each span's layers in its order): the
+        weights of a merge into a web of one layer ([M1], the Roller's [R5]). Each is the web its span
+        carries at its end (wp2), or `web_of(span)` (the reference's, after an event changed it). The
+        reference and the FMUs' compiler both take them from here."""
+        return [w.rho_l for sp in self.spans_in(node) for w in (web_of(sp) if web_of else sp.wp2).plies]
+
+    def layer_sources(self, span) -> list[tuple]:
+        """Where each layer of a laminate span after a nip comes from ([M6]): per layer, in the span's
+        order, (the span that brings it to the nip, its layer there). Matched by web: a web that is
+        a layer twice takes its arriving webs in port order."""
+        pool = [(sp, i, w.name) for sp in self.spans_in(self.upstream(span)) for i, w in enumerate(sp.wp2.plies)]
+        out = []
+        for w in span.wp1.plies:
+            k = next(j for j, (_, _, name) in enumerate(pool) if name == w.name)
+            sp, i, _ = pool.pop(k)
+            out.append((sp, i))
+        return out
 
     def span_before(self, node):
         return _single(self.spans_in(node), node, "merges webs")
@@ -341,7 +404,17 @@ class Scene:
 
     def columns(self):
         """The recorded columns: 'name.quantity [unit]'."""
-        return [f"{c}.{q} [{quantities_of(self.component(c))[q]}]" for c, q in self.record]
+        return [f"{c}.{q} [{quantity_unit(self.component(c), q)}]" for c, q in self.record]
+
+
+def quantity_unit(component, quantity: str):
+    """The unit of a quantity a component records; None if it records no such quantity. A span with
+    layers records each layer's tension, `T_<label>`, too; a roller the web may slip on its traction's."""
+    unit = quantities_of(component).get(quantity)
+    if unit is None and isinstance(component, Span) and component.layered and quantity.startswith("T_") \
+            and quantity[2:] in component.labels:
+        unit = "N"
+    return unit
 
 
 def start_strain(span: Span, up, down, va: float, vb: float, eps_a: float) -> float:
@@ -501,8 +574,8 @@ def _web(r: _Reader, name: str, node: Node, web_library, webs) -> Web:
         width = r.quantity(o["width"], units.LENGTH, f"{what}: width", positive=True)
         if width > base.width * (1 + WIDTH_TOLERANCE):
             raise r.err(o["width"], f"{what}: a lane of {width:g} m is wider than the web {base.name!r} it is slit from ({base.width:g} m)")
-        # The same material, narrower; a record's name would give the FMU the record's width.
-        return replace(base, name=name, width=width, record=None)
+        # The same material, narrower (a laminate's layers too); a record's name would give the FMU the record's width.
+        return replace(base, name=name, width=width, record=None, layers=tuple(replace(w, width=width) for w in base.layers))
     if isinstance(node.value, Obj) and "record" in node.value.keys():
         o = r.keys(node, what, required=("record",), optional=("description",))
         record = r.string(o["record"], f"{what}: record")
@@ -529,39 +602,45 @@ WIDTH_TOLERANCE = 1e-9
 
 
 def _laminate(r: _Reader, name: str, node: Node, webs) -> Web:
-    """A laminate by the law of mixtures (docs/merge-split.md, "The laminate's properties"):
-    thickness the layers' sum times the compression factor; E and density over that thickness
-    so that E*A and the mass per length add (the adhesive's coat weight added to the mass);
-    d_r weighted by E*A, as Kelvin–Voigt elements in parallel combine."""
+    """A laminate: its layers, laminates among them flattened to theirs, each keeping its own E, thickness,
+    d_r and strain ([M6]); the adhesive's coat weight shared among the layers' densities in proportion to
+    their mass, so that it adds mass and no stiffness. Its own values are the law of mixtures
+    (docs/merge-split.md, [M3]): thickness the webs' sum times the compression factor (what a winder's roll
+    grows by); E and density over that thickness so that E*A and the mass per length add (the adhesive's
+    coat weight added to the mass); d_r weighted by E*A, as Kelvin–Voigt elements in parallel combine."""
     what = f"web {name!r}"
     o = r.keys(node, what, required=("laminate",), optional=("compression", "adhesive", "description"))
     lst = o["laminate"]
     if not isinstance(lst.value, list) or len(lst.value) < 2:
         raise r.err(lst, f"{what}: laminate must be a list of at least two webs (its layers)")
-    layers = [_web_ref(r, webs, n, f"{what}: laminate layer") for n in lst.value]
+    webs_in = [_web_ref(r, webs, n, f"{what}: laminate layer") for n in lst.value]
+    layers = [w for web in webs_in for w in web.plies]
     for w in layers:
         if w.curve is not None:
-            raise r.err(lst, f"{what}: layer {w.name!r} has a stress-strain table; the law of mixtures needs linear "
-                             "layers (give the laminate's measured values as a web of its own)")
+            raise r.err(lst, f"{what}: layer {w.name!r} has a stress-strain table; a laminate's layers must be linear "
+                             "(give the laminate's measured values as a web of its own)")
         if abs(w.width - layers[0].width) > WIDTH_TOLERANCE * layers[0].width:
             raise r.err(lst, f"{what}: layers {layers[0].name!r} ({layers[0].width:g} m) and {w.name!r} ({w.width:g} m) "
-                             "differ in width; the law of mixtures stacks equal widths (give the laminate's measured values instead)")
+                             "differ in width; a laminate stacks equal widths (give the laminate's measured values instead)")
     compression = 1.0
     if "compression" in o:
         compression = r.quantity(o["compression"], units.DIMENSIONLESS, f"{what}: compression", positive=True)
         if compression > 1:
             raise r.err(o["compression"], f"{what}: compression {compression:g} must be in (0, 1]: the nip presses, it does not swell")
     coat = r.quantity(o["adhesive"], units.AREAL_DENSITY, f"{what}: adhesive", nonnegative=True) if "adhesive" in o else 0.0
-    h = compression * sum(w.thickness for w in layers)
-    EA = sum(w.EA for w in layers)
+    h = compression * sum(w.thickness for w in webs_in)
+    EA = sum(w.EA for w in webs_in)
+    mass = sum(w.density * w.thickness for w in webs_in)  # per width: the layers' and their own adhesives'
+    share = (mass + coat) / mass
     return Web(
         name=name,
-        E=sum(w.E * w.thickness for w in layers) / h,
+        E=sum(w.E * w.thickness for w in webs_in) / h,
         thickness=h,
         width=layers[0].width,
-        density=(sum(w.density * w.thickness for w in layers) + coat) / h,
-        d_r=sum(w.EA * w.d_r for w in layers) / EA,
-        layers=tuple(w.name for w in layers),
+        density=(mass + coat) / h,
+        d_r=sum(w.EA * w.d_r for w in webs_in) / EA,
+        # A layer's values one by one (its record's name would give the FMU the record's density).
+        layers=tuple(replace(w, density=w.density * share, record=None) for w in layers),
     )
 
 
@@ -870,6 +949,12 @@ def _event(r, node, i, scene_line, webs, stop_time) -> Event:
             changes[k] = r.quantity(v, dim, f"{what}: set.{k}", positive=strict, nonnegative=not strict)
     if "web" in changes and ("wp1" in changes or "wp2" in changes):
         raise r.err(o["set"], f"{what}: set either web or wp1/wp2")
+    for k, web in changes.items():
+        if isinstance(comp, Span) and isinstance(web, Web):
+            n = len((comp.wp1 if k == "wp1" else comp.wp2).plies)
+            if len(web.plies) != n:
+                raise r.err(o["set"], f"{what}: span {cname!r} carries {n} layer(s); web {web.name!r} has {len(web.plies)}: "
+                            "a change of web keeps the number of layers (each layer changes to the new web's)")
     return Event(time=t, component=cname, changes=changes, where=f"{r.source}:{node.line}:{node.col}")
 
 
@@ -941,6 +1026,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
                   line=line, events=[], record=[], web_library=web_library, start=start, branches=branches)
     for b in {b.node: b for b in branches}.values():  # once per nip or slitter
         (_check_merge if b.kind == "merge" else _check_split)(r, scene, b, raw)
+    _check_layers(r, scene, raw)
 
     _check_traction(r, scene, raw)
 
@@ -983,9 +1069,10 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
             comp = next((c for c in parts if c.name == cname), None)
             if comp is None:
                 raise r.err(n, f"record: no component {cname!r} in the line")
-            if q not in quantities_of(comp):
+            if quantity_unit(comp, q) is None:
+                layers = [f"T_{x}" for x in comp.labels] if isinstance(comp, Span) and comp.layered else []
                 slip = " (traction's v_web, slip, traction, mu_eff, h_air go with a \"traction\" or \"nip\")" if q in TRACTION_QUANTITIES else ""
-                raise r.err(n, f"record: {comp.type} {cname!r} records {', '.join(quantities_of(comp))}, not {q!r}{slip}")
+                raise r.err(n, f"record: {comp.type} {cname!r} records {', '.join(list(quantities_of(comp)) + layers)}, not {q!r}{slip}")
             record.append((cname, q))
     else:
         record = [(c.name, "T") for c in parts if isinstance(c, Span)] + [(c.name, "v") for c in parts if not isinstance(c, Span)]
@@ -1099,6 +1186,10 @@ def _check_split(r, scene: Scene, b: Branch, raw):
             raise r.err(raw[lane.name], f"roller {node.name!r} slits web {web.name!r}, but span {lane.name!r} starts with web "
                         f"{w.name!r}, which differs in {', '.join(differs) or 'its stress-strain table'}: a slitter cuts the web, "
                         "it does not change the material")
+        if len(w.plies) != len(web.plies):
+            raise r.err(raw[lane.name], f"roller {node.name!r} slits web {web.name!r} of {len(web.plies)} layer(s), but span "
+                        f"{lane.name!r} starts with web {w.name!r} of {len(w.plies)}: a lane of a laminate is a slit of it "
+                        f"({{\"slit\": {web.name!r}, ...}}), its layers narrowed")
     total = sum(lane.wp1.width for lane in lanes) + node.trim
     if abs(total - web.width) > WIDTH_TOLERANCE * web.width:
         parts = " + ".join(f"{lane.wp1.width:g}" for lane in lanes)
@@ -1118,11 +1209,35 @@ def _check_merge(r, scene: Scene, b: Branch, raw):
     if getattr(node, "wrap", None) is not None:
         raise r.err(raw[node.name], f"roller {node.name!r} merges webs, which arrive from different directions: one wrap "
                     "angle cannot place its load cell; put the load cell on a roller before or after the nip")
-    layers = out.wp2.layers
-    meeting = sorted(sp.wp2.name for sp in scene.spans_in(node))
+    layers = out.wp2.layer_names
+    meeting = sorted(w.name for sp in scene.spans_in(node) for w in sp.wp2.plies)
     if layers and sorted(layers) != meeting:
         raise r.err(raw[out.name], f"span {out.name!r} carries laminate {out.wp2.name!r} of {', '.join(layers)}, but the webs "
                     f"meeting at {node.name!r} are {', '.join(meeting)}")
+
+
+def _check_layers(r, scene: Scene, raw):
+    """A web keeps its layers ([M6]): a span's wp1 and wp2 have as many; at a roller that is not a nip the
+    span after it carries as many as the web arriving (layers are bonded at a nip, by a merge); the labels
+    of a laminate's layers name outputs of their own."""
+    for sp in scene.spans:
+        n1, n2 = len(sp.wp1.plies), len(sp.wp2.plies)
+        if n1 != n2:
+            raise r.err(raw[sp.name], f"span {sp.name!r} converts web {sp.wp1.name!r} of {n1} layer(s) into {sp.wp2.name!r} "
+                        f"of {n2}: a span keeps a web's layers (laminate webs at a nip, with a merge)")
+        before = scene.spans_in(scene.upstream(sp))
+        if len(before) == 1 and len(before[0].wp2.plies) != n1:
+            up, p = scene.upstream(sp), before[0]
+            raise r.err(raw[sp.name], f"span {sp.name!r} starts with web {sp.wp1.name!r} of {n1} layer(s), but span {p.name!r} "
+                        f"brings {len(p.wp2.plies)} ({p.wp2.name!r}) to {up.type} {up.name!r}: a web keeps its layers from "
+                        "span to span (laminate webs at a nip, with a merge; give a laminate's measured values as a web of its own)")
+        if sp.layered:
+            labels = sp.labels
+            clash = [x for x in labels if labels.count(x) > 1 or x in LABEL_TAKEN or (x.startswith("T_") and x[2:] in labels)]
+            if clash:
+                raise r.err(raw[sp.name], f"span {sp.name!r}: the layers of {sp.wp2.name!r} would be labelled {', '.join(labels)}; "
+                            f"{clash[0]!r} clashes with another output of the span (NAME.T, NAME.eps, NAME.T_<layer>, ...): "
+                            "rename the layer's web")
 
 
 def load_scene(path, overrides=None, fmu_dir=None) -> Scene:

@@ -138,6 +138,10 @@ def ssd_tree(system: System, sources: dict, variables: dict) -> etree._Element:
     rec = E("wl", "Record", a)
     for comp, var in system.record:
         E("wl", "Variable", rec, component=comp, name=var)
+    for name, terms in system.sums or []:  # a column made of several (a laminate's, of its layers' spans)
+        col = E("wl", "Column", rec, name=name)
+        for i, w in terms:
+            E("wl", "Term", col, variable=str(i), weight=repr(float(w)))
     exp = E("ssd", "DefaultExperiment", root, startTime=repr(float(system.start_time)), stopTime=repr(float(system.stop_time)))
     a = E("ssc", "Annotation", E("ssd", "Annotations", exp), type=OSP)
     E("osp", "FixedStepAlgorithm", E("osp", "Algorithm", a), baseStepSize=repr(float(system.step)))
@@ -168,6 +172,7 @@ def write_ssp(system: System, path) -> Path:
     names = [c.name for c in system.components]
     if len(set(names)) != len(names):
         raise SspError(f"{system.name}: two components share a name")
+
     if not (system.step > 0 and system.stop_time > system.start_time):
         raise SspError(f"{system.name}: step {system.step} and times {system.start_time}..{system.stop_time} are not an experiment")
     with tempfile.TemporaryDirectory() as tmp:
@@ -346,8 +351,10 @@ def read_ssp(path, target_dir) -> System:
             raise SspError(f"{where}: connection to {ends[1][0]}.{ends[1][1]}: a transformation (webline connects values as they are)")
         connections.append(Connection(source=ends[0], target=ends[1]))
     rec = sys_el.find(f"ssd:Annotations/ssc:Annotation[@type='{WEBLINE}']/wl:Record", NS)
+    sums = None
     if rec is not None:
         record = [(v.get("component"), v.get("name")) for v in rec.findall("wl:Variable", NS)]
+        sums = _sums(rec, len(record), where) or None
     else:  # a user's SSP: every output connector
         record = [(el.get("name"), c.get("name")) for el in sys_el.findall("ssd:Elements/ssd:Component", NS)
                   for c in el.findall("ssd:Connectors/ssd:Connector[@kind='output']", NS)]
@@ -356,4 +363,25 @@ def read_ssp(path, target_dir) -> System:
             raise SspError(f"{where}: recorded variable {comp}.{var} does not exist")
     return System(name=ssd.get("name"), components=components, connections=connections,
                   start_time=float(exp.get("startTime", 0.0)), stop_time=float(exp.get("stopTime")),
-                  step=step, record=record)
+                  step=step, record=record, sums=sums)
+
+
+def _sums(rec, n: int, where: str) -> list:
+    """The annotation's columns made of several recorded variables: (name, [(variable index, weight)])."""
+    sums = []
+    for col in rec.findall("wl:Column", NS):
+        name = col.get("name") or ""
+        terms = []
+        for term in col.findall("wl:Term", NS):
+            try:
+                i, w = int(term.get("variable", "")), float(term.get("weight", ""))
+            except ValueError:
+                i, w = -1, math.nan
+            if not (0 <= i < n and math.isfinite(w)):
+                raise SspError(f"{where}: recorded column {name!r}: a term {term.get('variable')!r} x {term.get('weight')!r} "
+                               f"(needs a recorded variable's index, 0 to {n - 1}, and a finite weight)")
+            terms.append((i, w))
+        if not name or not terms:
+            raise SspError(f"{where}: a recorded column needs a name and at least one term")
+        sums.append((name, terms))
+    return sums

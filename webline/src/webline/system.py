@@ -41,6 +41,21 @@ class System:
     stop_time: float
     step: float
     record: list = field(default_factory=list)  # (component, variable)
+    # The columns, where they are not the recorded variables one by one (a laminate's tension is the sum of
+    # its layers' spans, docs/merge-split.md [M6]): per column its name and [(record index, weight), ...].
+    sums: list | None = None
+
+    def combine(self, data):
+        """The columns from rows of the recorded variables (`sums`); the rows themselves without sums."""
+        if self.sums is None:
+            return data
+        import numpy as np
+
+        W = np.zeros((len(self.record), len(self.sums)))
+        for j, (_, terms) in enumerate(self.sums):
+            for i, w in terms:
+                W[i, j] += w
+        return np.asarray(data) @ W
 
     def component(self, name) -> Component:
         return next(c for c in self.components if c.name == name)
