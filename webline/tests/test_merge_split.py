@@ -1057,7 +1057,7 @@ def test_bad_laminates_and_lanes_are_refused(webs, words):
      ["the layers of 'PET/Al' would be labelled PET, L; 'L' clashes with another output"]),
     # a layer's tension that is not there
     (lambda d: d.__setitem__("record", ["laminate.T_PE"]),
-     ["record: a span records T, eps, L, F_a, F_b, T_PET, T_Al, not 'T_PE'"]),
+     ["record: span 'laminate' records T, eps, L, F_a, F_b, T_PET, T_Al, not 'T_PE'"]),
 ])
 def test_bad_layers_are_refused_naming_the_part(change, words):
     """A web keeps its layers from span to span and through a change of web; a laminate's layers name its

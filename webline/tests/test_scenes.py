@@ -41,6 +41,7 @@ def test_shipped_scenes_parse_and_use_only_their_effects():
         "splice": set(),
         "laminator": {"includeDamping"},
         "slitter": {"includeDamping"},
+        "idler_skid": {"includeDamping"},
     }
     found = {p.stem for p in SCENES.glob("*.json")}
     assert set(expected) <= found
@@ -109,7 +110,7 @@ def test_errors_name_the_key_and_the_position(old, new, position, words):
 
 def test_more_scene_errors():
     assert "no web 'PE'" in _error(BASE.replace('"web": "PET"}', '"web": "PE"}', 1))
-    assert "record: a span records" in _error(BASE.replace('"line": [', '"record": ["a.v"],\n  "line": [', 1))
+    assert "record: span 'a' records" in _error(BASE.replace('"line": [', '"record": ["a.v"],\n  "line": [', 1))
     assert "variableLength needs a dancer" in _error(BASE.replace('"web": "PET"}', '"web": "PET", "effects": ["variableLength"]}', 1))
     assert "time must be inside the run" in _error(
         BASE.replace('"line": [', '"events": [{"time": "5 s", "component": "a", "set": {"web": "PET"}}],\n  "line": [', 1)

@@ -285,6 +285,7 @@ def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None
     scene = load_scene(scene_path, fmu_dir=fmu_dir)
     if stop_time is not None:
         scene.stop_time = stop_time
+    refuse_traction(scene)
     exported = compile_scene(scene, fmu_dir)
     exported.step = export_step(exported)
     archive = write_ssp(exported, Path(workdir) / f"{scene.name}.ssp")
