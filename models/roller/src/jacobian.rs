@@ -175,12 +175,13 @@ impl Linearization<'_> {
             Some((f, df, ..)) => -d_r * f - r * df,
             None => d_r * (u.pull_forward(p) - u.pull_back(p)) + r * (d.u.pull_forward(p) - d.u.pull_back(p)),
         };
-        let (d_torque, d_omega_rate) = if self.speed_table {
+        // Without traction the web's speed is the surface's, and so is its rate: d(r*omega)/dt.
+        let (d_torque, d_omega_rate, d_surface_rate) = if self.speed_table {
             // tau = J*v'/r + b*omega - r*(F_b - F_a); omega' = v'/r - v*r'/r^2.
             let slope = self.slope;
             let d_torque = d_j * slope / r - j * slope * d_r / (r * r) + p.damping * d_omega - d_web_torque;
             let d_omega_rate = -slope * d_r / (r * r) - (d_v * r_rate + v * d_r_rate) / (r * r) + 2.0 * v * r_rate * d_r / r.powi(3);
-            (d_torque, d_omega_rate)
+            (d_torque, d_omega_rate, 0.0)
         } else {
             // omega' = (r*(F_b - F_a) + tau - b*omega - J'*omega)/J with J' = 2*pi*rho*w*r^3*r'.
             let d_torque = d.u.torque + p.roll_sign() * self.tension * d_r;
@@ -189,7 +190,8 @@ impl Linearization<'_> {
             let d_j_rate = if winding { k * (3.0 * r * r * d_r * r_rate + r.powi(3) * d_r_rate) } else { 0.0 };
             let omega_rate = (web_torque + self.torque - p.damping * omega - j_rate * omega) / j;
             let d_net = d_web_torque + d_torque - p.damping * d_omega - d_j_rate * omega - j_rate * d_omega;
-            (d_torque, (d_net - omega_rate * d_j) / j)
+            let d_omega_rate = (d_net - omega_rate * d_j) / j;
+            (d_torque, d_omega_rate, d_r * omega_rate + r * d_omega_rate + d_omega * r_rate + omega * d_r_rate)
         };
         // [R4] on a carriage: y'' = (F_load + load - F_a - F_b - d*y' - k*(y - y_start))/m.
         let (d_y_rate, d_y_dot_rate) = if p.carriage {
@@ -201,7 +203,7 @@ impl Linearization<'_> {
         let surface = if self.speed_table { 0.0 } else { d_v };
         let (web_speed, slip, traction_used, mu_eff, h_air, d_v_web_rate) = match along_contact {
             Some((_, _, rate, used, mu_eff, h_air)) => (d_v_web, d_v_web - surface, used, mu_eff, h_air, rate),
-            None => (surface, 0.0, 0.0, 0.0, 0.0, 0.0),
+            None => (surface, 0.0, 0.0, 0.0, 0.0, d_surface_rate),
         };
         Tangents {
             surface_speed: surface,

@@ -257,11 +257,19 @@ impl Roller {
         let v = self.surface_speed();
         let (radius_rate, inertia_rate) =
             if p.winding() { (self.roll.radius_rate(p, v), self.roll.inertia_rate(p, v)) } else { (0.0, 0.0) };
-        let omega_rate = match (self.drive(), self.table(Key::Speed)) {
-            (Drive::Speed, Some(t)) => physics::omega_rate_at_speed(self.read(t, self.time).1, v, self.roll.radius, radius_rate),
-            _ => physics::omega_rate(p, &self.roll, self.web_torque_with(friction), self.omega.value(), self.torque_at(self.time).0, inertia_rate),
+        let (omega_rate, surface_rate) = match (self.drive(), self.table(Key::Speed)) {
+            (Drive::Speed, Some(t)) => {
+                let slope = self.read(t, self.time).1;
+                (physics::omega_rate_at_speed(slope, v, self.roll.radius, radius_rate), slope)
+            }
+            _ => {
+                let omega = self.omega.value();
+                let rate = physics::omega_rate(p, &self.roll, self.web_torque_with(friction), omega, self.torque_at(self.time).0, inertia_rate);
+                (rate, self.roll.radius * rate + omega * radius_rate)
+            }
         };
-        let v_web_rate = friction.map_or(0.0, |(state, f)| contact::web_acceleration(p, &state, f).x);
+        // Without traction the fifth state is the surface's speed, so its rate is the surface's.
+        let v_web_rate = friction.map_or(surface_rate, |(state, f)| contact::web_acceleration(p, &state, f).x);
         let carriage = if p.carriage {
             [self.carriage[1], physics::carriage_acceleration(p, self.carriage, self.carriage_force(self.time).0)]
         } else {

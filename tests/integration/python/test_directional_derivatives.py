@@ -313,7 +313,7 @@ def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind,
 
 
 # ---------------------------------------------------------------- the Roller
-# The same check on the Roller: states omega, r, y, y' (ME), inputs web_a.F,
+# The same check on the Roller: states omega, r, y, y', v_web (ME), inputs web_a.F,
 # web_b.F, web_a.eps, tau_m, F_load and those of the extra inlets and outlets
 # (a merge and a split: cases with ports; elsewhere unused, their derivatives 0).
 # The outputs are polynomials in the states and inputs (degree <= 4 in r), or
@@ -321,10 +321,10 @@ def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind,
 
 ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load", "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps",
                  "web_a4.F", "web_a4.eps", "web_b2.F", "web_b3.F", "web_b4.F")
-ROLLER_STATES = ("omega", "r", "y", "y_dot")
+ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web")
 ROLLER_UNKNOWNS = ("web_a.v", "web_b.v", "web_b.eps", "omega", "r", "y", "y_dot", "tau", "web_a.x", "web_a.y",
                    "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)", "web_a2.v", "web_a4.v",
-                   "web_b2.v", "web_b2.eps", "web_b4.eps")
+                   "web_b2.v", "web_b2.eps", "web_b4.eps", "v_web", "der(v_web)")
 ROLLER_POINT = {"web_a.F": 180.0, "web_b.F": 230.0, "web_a.eps": 1e-3, "tau_m": 1.5, "F_load": 400.0,
                 "web_a2.F": 120.0, "web_a2.eps": 4e-3, "web_a3.F": 60.0, "web_a3.eps": -5e-4, "web_a4.F": 90.0,
                 "web_a4.eps": 2e-2, "web_b2.F": 70.0, "web_b3.F": 110.0, "web_b4.F": 40.0}
@@ -368,7 +368,7 @@ def roller(fmus):
     return md, extract(str(path)), {v.name: v.valueReference for v in md.modelVariables}
 
 
-def roller_jacobians(fmu, vr, unknowns, knowns):
+def roller_jacobians(fmu, vr, unknowns, knowns, step=STEP):
     u_refs = [vr[n] for n in unknowns]
     states = ROLLER_STATES
     analytic, fd, noise = {}, {}, {}
@@ -376,13 +376,13 @@ def roller_jacobians(fmu, vr, unknowns, knowns):
         column = fmu.getDirectionalDerivative(u_refs, [vr[k]], [1.0])
         x = fmu.getReal([vr[s] for s in states])
         value = x[states.index(k)] if k in states else fmu.getReal([vr[k]])[0]
-        h = STEP * max(abs(value), 1e-3 if k.endswith(".eps") or k == "r" else 1.0)
+        h = step * max(abs(value), 1e-3 if k.endswith(".eps") or k == "r" else 1.0)
 
         def put(v):
             if k in states:
                 x2 = list(x)
                 x2[states.index(k)] = v
-                fmu.setContinuousStates((fmi2Real * 4)(*x2), 4)
+                fmu.setContinuousStates((fmi2Real * len(x2))(*x2), len(x2))
             else:
                 fmu.setReal([vr[k]], [v])
 
@@ -419,14 +419,67 @@ def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
         if me:
             fmu.setTime(0.25)
             # Away from the start values: the carriage moving, the roll grown.
-            fmu.setContinuousStates((fmi2Real * 4)(33.0, 0.16, 0.52, -0.03), 4)
+            fmu.setContinuousStates((fmi2Real * 5)(33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3), 5)
         else:
             fmu.doStep(0.0, 0.25)
         knowns = ROLLER_INPUTS + (ROLLER_STATES if me else ())
-        a, f, n = roller_jacobians(fmu, vr, ROLLER_UNKNOWNS, knowns)
+        # Without traction the fifth state is the surface's speed r*omega, not a known of its own:
+        # v_web reads r*omega back, so only its rate is compared.
+        unknowns = tuple(u for u in ROLLER_UNKNOWNS if not (me and u == "v_web"))
+        a, f, n = roller_jacobians(fmu, vr, unknowns, knowns)
     finally:
         fmu.terminate()
         fmu.freeInstance()
     what = f"Roller {kind} {roller_label(case)}"
     worst = compare(what, a, f, n)
     print(f"{what}: max relative error {worst:.1e}")
+
+
+# With traction [R6]-[R8] the web's speed is a state of its own, moved by the capstan friction
+# and a nip; the slip sits where tanh is curved (2 v_slip) and the air film's friction rule
+# is on its sloping part (h between roughness and three times it), so every gradient is exercised.
+TRACTION_CASES = {"wrap": {"traction.wrap": 1.2}, "wrap-nip-air": {"traction.wrap": 0.8, "nip.mu": 0.4,
+                                                                   "air.roughness": 1e-5}}
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("label", TRACTION_CASES)
+def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind, label):
+    import json
+
+    md, unzipdir, vr = roller
+    profile = {"torque": [[0, 1.0], [10, 3.0]]}
+    if "nip.mu" in TRACTION_CASES[label]:
+        profile["nip"] = [[0, 300.0], [10, 360.0]]
+    path = tmp_path / "profile.json"
+    path.write_text(json.dumps(profile))
+    me = kind == "ModelExchange"
+    fmu = instantiate(unzipdir, md, kind)
+    try:
+        params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith(("wound.", "carriage."))}
+        values = {**params, **ROLLER_POINT, "profile": str(path), "includeTraction": True, "traction.mu": 0.3,
+                  "traction.v_slip": 1e-3, "traction.width": 0.5, "traction.slip_start": 2e-3,
+                  **TRACTION_CASES[label]}
+        start(fmu, vr, values, me=me)
+        if me:
+            fmu.setTime(0.25)
+            fmu.setContinuousStates((fmi2Real * 5)(33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3), 5)
+        else:
+            fmu.doStep(0.0, 0.25)
+        knowns = ROLLER_INPUTS[:5] + (("omega", "v_web") if me else ())
+        unknowns = ("web_a.v", "web_b.v", "v", "v_web", "slip", "traction", "mu_eff", "h_air", "tau",
+                    "der(omega)", "der(v_web)")
+        # tanh(slip/v_slip) curves over 1 mm/s: a step of 1e-6 of a speed of 5 m/s would leave a
+        # truncation error of (5e-6/1e-3)^2 ~ 2.5e-5; 1e-8 leaves 2.5e-9, rounding stays in the noise term.
+        a, f, n = roller_jacobians(fmu, vr, unknowns, knowns, step=1e-8)
+        slip, mu_eff, h_air = fmu.getReal([vr["slip"], vr["mu_eff"], vr["h_air"]])
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    what = f"Roller {kind} traction {label}"
+    worst = compare(what, a, f, n)
+    print(f"{what}: slip {slip:.2e} m/s, mu_eff {mu_eff:.4f}, h_air {h_air:.2e} m, max relative error {worst:.1e}")
+    if "air.roughness" in TRACTION_CASES[label]:
+        assert 0 < mu_eff < 0.3, "the air film must be on its sloping part"
+    if me:
+        assert a["der(v_web)", "v_web"] < 0, "friction must pull the web's speed toward the surface's"
