@@ -275,7 +275,10 @@ impl Model for Line {
         let path = resources.file(SPEC_FILE)?;
         let text = std::fs::read_to_string(&path)
             .map_err(|e| FmiError::error(format!("cannot read {}: {e} (the Line FMU's line is in resources/{SPEC_FILE})", path.display())))?;
-        Line::from_spec(&text)
+        let line = Line::from_spec(&text)?;
+        let folder = path.parent().expect("a file in resources/");
+        spec::check_resources(&line.shared.spec, folder).map_err(FmiError::error)?;
+        Ok(line)
     }
 
     fn description(&self) -> &ModelDescription {
