@@ -123,7 +123,7 @@ impl Chain {
                     row_terms.push(Term { partial: offset + k * n + outs.len() + r, from, to, len });
                 }
             }
-            plans.push(PartPlan { directions: part.directions(&knowns)?, fixed: part.tangents_fixed(), unknowns, offset });
+            plans.push(PartPlan { directions: part.directions(&knowns)?, fixed: part.tangents_fixed(&active[p]), unknowns, offset });
             offset += knowns.len() * n;
         }
         let mut terms = Vec::new();

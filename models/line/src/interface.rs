@@ -29,8 +29,23 @@ pub enum Binding {
 }
 
 /// Part parameters the line does not offer: the line solves and starts the
-/// parts itself, and its outputs are SI.
-const NOT_OFFERED: [&str; 8] = ["startAtEquilibrium", "useSensor", "toUnitV", "toUnitF", "solver", "tolerance", "substeps", "profile"];
+/// parts itself, and its outputs are SI; a roller's ports, roll and carriage and a
+/// span's variable length are the line's structure, which line.json fixes.
+const NOT_OFFERED: [&str; 13] = [
+    "startAtEquilibrium",
+    "useSensor",
+    "toUnitV",
+    "toUnitF",
+    "solver",
+    "tolerance",
+    "substeps",
+    "profile",
+    "roll",
+    "inlets",
+    "outlets",
+    "carriage",
+    "variableLength",
+];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.
 pub const DEFAULT_TOLERANCE: f64 = 1e-9;
@@ -229,7 +244,8 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
             }
         }
         for v in d.variables.iter() {
-            if v.causality == Causality::Parameter && v.kind != Kind::String && !NOT_OFFERED.contains(&&*v.name) {
+            let offered = !NOT_OFFERED.contains(&&*v.name) && (v.kind != Kind::Real || parts[p].acts(v.vr, ps.speed_driven()));
+            if v.causality == Causality::Parameter && v.kind != Kind::String && offered {
                 offer!(&v.name, &v.name, Causality::Parameter);
             }
         }
