@@ -73,7 +73,7 @@ pub struct Network {
     pub groups: Vec<MassGroup>,
     pub rates: Vec<RateLink>,
     pub states: Vec<StateRef>,
-    /// Per part: its first state in the line's vector, and its active states.
+    /// Per part: its first state in the line's vector, and its integrated states.
     pub first_state: Vec<usize>,
     pub active: Vec<Vec<usize>>,
     /// Per part: a span's forces as last computed in this evaluation (`Link::fresh`).
@@ -107,8 +107,9 @@ fn vr_of(d: &ModelDescription, name: &str, part: &str) -> Result<u32, String> {
 
 impl Network {
     /// The links of the spec, ordered; the states; the band. `parts` are
-    /// initialized (effects and drives known).
-    pub fn new(spec: &Spec, parts: &[Part]) -> Result<Network, String> {
+    /// initialized (effects and drives known); `integrated`: per part, its states the line
+    /// integrates (indices into its state vector, its active ones among them).
+    pub fn new(spec: &Spec, parts: &[Part], integrated: &[Vec<usize>]) -> Result<Network, String> {
         let n_parts = parts.len();
         let mut links = Vec::new();
         for c in &spec.connections {
@@ -209,11 +210,10 @@ impl Network {
         let mut states = Vec::new();
         let mut first_state = Vec::with_capacity(n_parts);
         let mut active = Vec::with_capacity(n_parts);
-        for (p, part) in parts.iter().enumerate() {
+        for (p, a) in integrated.iter().enumerate() {
             first_state.push(states.len());
-            let a = part.active_states();
             states.extend(a.iter().map(|&index| StateRef { part: p, index }));
-            active.push(a);
+            active.push(a.clone());
         }
         if let Some(part) = parts.iter().find(|p| p.state_count() > MAX_PART_STATES) {
             return Err(format!("a part ({}) has more than {MAX_PART_STATES} states", part.description().model_identifier));

@@ -56,12 +56,35 @@ pub fn tolerances(ode: &Ode, scratch: &mut Scratch) {
     }
 }
 
-/// Initializes the parts until they agree through the connections, joins them and, where
-/// `start_equilibrium`, solves the steady state; the warnings to pass on. `tolerance`: the
+/// The parts joined into the line's network, which integrates `integrated` (per part, indices
+/// into its state vector). A state a parameter made active outside them is refused, naming the
+/// parameter: only Model Exchange, whose description fixes the states, can meet one.
+pub fn join(spec: &Spec, parts: &[Part], integrated: &[Vec<usize>]) -> FmiResult<Network> {
+    for (p, part) in parts.iter().enumerate() {
+        let Some(&i) = part.active_states().iter().find(|i| !integrated[p].contains(i)) else { continue };
+        let (d, name) = (part.description(), &spec.parts[p].name);
+        let switch = Part::state_switch(i);
+        let value = d.variable_by_name(switch).map_or_else(String::new, |v| match v.kind {
+            fmi_core::description::Kind::Real => part.get_real(v.vr).map_or_else(|_| "?".into(), |x| x.to_string()),
+            _ => part.get_boolean(v.vr).map_or_else(|_| "?".into(), |b| b.to_string()),
+        });
+        let state = d.variable(d.states[i]).map_or("?", |v| &v.name);
+        return Err(FmiError::error(format!(
+            "{name}.{switch} = {value} makes {name}.{state} a state, which this FMU's model description does not list: in Model \
+             Exchange the description fixes the line's states (give the value in the scene and export the FMU again, or run it \
+             in Co-Simulation)"
+        )));
+    }
+    Network::new(spec, parts, integrated).map_err(FmiError::error)
+}
+
+/// Initializes the parts until they agree through the connections, joins them (`join`) and,
+/// where `start_equilibrium`, solves the steady state; the warnings to pass on. `tolerance`: the
 /// line's parameter, which the importer's tolerance overrides where it asks for more.
 pub fn initialize(
     ode: &mut Ode,
     spec: &Spec,
+    integrated: &[Vec<usize>],
     tolerance: f64,
     start_equilibrium: bool,
     experiment: &Experiment,
@@ -87,7 +110,10 @@ pub fn initialize(
                 warnings.extend(said.into_iter().map(|w| format!("part {}: {w}", ps.name)));
             }
         }
-        let n = net.get_or_insert(Network::new(spec, &ode.parts).map_err(FmiError::error)?);
+        let n = match net.as_mut() {
+            Some(n) => n,
+            None => net.insert(join(spec, &ode.parts, integrated)?),
+        };
         x.resize(n.len(), 0.0);
         n.gather(&ode.parts, &mut x)?;
         let before = connected_inputs(n, &ode.parts)?;
