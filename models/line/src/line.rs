@@ -417,7 +417,7 @@ impl Model for Line {
     }
 
     fn do_step(&mut self, h: f64) -> FmiResult {
-        stepping::step(&mut self.ode, h, self.profiled)
+        stepping::step(&mut self.ode, &self.shared.spec, h, self.profiled)
     }
 
     fn event_update(&mut self) -> EventUpdate {

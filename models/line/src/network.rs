@@ -321,6 +321,16 @@ impl Network {
         self.evaluated == Some(t) && self.evaluated_x == x
     }
 
+    /// The first connection whose value lies outside the range of the input it feeds (the
+    /// bounds its part documents and its own FMU holds when the value is set): the link and the value.
+    pub fn out_of_bounds(&self, parts: &[Part]) -> Option<(&Link, f64)> {
+        self.links.iter().find_map(|l| {
+            let value = parts[l.to].real(l.target);
+            let range = &parts[l.to].description().variable(l.input)?.range;
+            (!range.contains(value)).then_some((l, value))
+        })
+    }
+
     /// Whether setting input `vr` of part `part` moves a connection: then the line must be
     /// evaluated again before its outputs are read. Where web mass or a length's rate is
     /// coupled, an acceleration or a rate is carried by the connections: every input moves them.

@@ -224,7 +224,7 @@ fn failure(f: Failure, t: f64, end: f64) -> FmiError {
 /// failed on them (an input an importer set that they refuse) or where an
 /// evaluation depends on the one before (`Network::reads_earlier_inputs`). `profiled`: a part
 /// follows a profile (time moves the equations).
-pub fn step(ode: &mut Ode, h: f64, profiled: bool) -> FmiResult {
+pub fn step(ode: &mut Ode, spec: &Spec, h: f64, profiled: bool) -> FmiResult {
     let t0 = ode.time;
     let next_event = ode.next_event;
     let next_step = ode.integrator.as_ref().map_or(0.0, |r| r.next_step);
@@ -233,14 +233,18 @@ pub fn step(ode: &mut Ode, h: f64, profiled: bool) -> FmiResult {
     if copied {
         ode.backup.clone_from(&ode.parts);
     }
-    match advance(ode, t0 + h, profiled, &mut copied) {
+    let stepped = advance(ode, t0 + h, profiled, &mut copied).and_then(|()| {
+        // The ramped inputs end the step where their derivatives took them.
+        for &(part, vr, base, rate) in &ode.ramps {
+            ode.parts[part].set_real(vr, base + rate * h)?;
+        }
+        ode.settle()?;
+        within_bounds(ode, spec)
+    });
+    match stepped {
         Ok(()) => {
-            // The ramped inputs end the step where their derivatives took them.
-            for &(part, vr, base, rate) in &ode.ramps {
-                ode.parts[part].set_real(vr, base + rate * h)?;
-            }
             ode.ramps.clear();
-            ode.settle()
+            Ok(())
         }
         Err(e) => {
             if copied {
@@ -264,6 +268,23 @@ pub fn step(ode: &mut Ode, h: f64, profiled: bool) -> FmiResult {
             Err(e)
         }
     }
+}
+
+/// The line at the end of a step within the bounds its parts document: every connection's value
+/// in the range of the input it feeds, as the parts' own FMUs refuse one outside it when it is set
+/// (a speed beyond ±1000 m/s, a strain beyond 10). Outside them the step fails with an error.
+fn within_bounds(ode: &Ode, spec: &Spec) -> FmiResult {
+    let Some((l, value)) = ode.net.as_ref().and_then(|net| net.out_of_bounds(&ode.parts)) else { return Ok(()) };
+    let variable = |p: usize, vr: u32| ode.parts[p].description().variable(vr);
+    let name = |p: usize, vr: u32| format!("{}.{}", spec.parts[p].name, variable(p, vr).map_or("?", |v| &v.name));
+    let range = variable(l.to, l.input).map(|v| v.range.to_string()).unwrap_or_default();
+    Err(FmiError::error(format!(
+        "at t = {} s {} = {value} is outside the range of {}, {range}, which it feeds: the line left the bounds its parts \
+         hold (check its drives and inputs); the step is undone",
+        ode.time,
+        name(l.from, l.output),
+        name(l.to, l.input)
+    )))
 }
 
 /// `copied`: the parts were copied to `line.backup` before an event (see `step`).
