@@ -93,8 +93,14 @@ pub fn initialize(
     // The parts are stepped by the line, never by an importer of their own.
     let part_experiment = Experiment { model_exchange: false, ..*experiment };
     let t0 = experiment.start_time;
-    // The importer's tolerance counts where it asks for more accuracy than the parameter.
-    ode.rtol = experiment.tolerance.filter(|&t| t > 0.0 && t < tolerance).unwrap_or(tolerance);
+    // The importer's tolerance counts where it asks for more accuracy than the parameter. Its
+    // value is compared only once it is known to be given: the payload of a None is
+    // uninitialized, and the comparison that `filter` compiled to read it first (valgrind).
+    let asked = match experiment.tolerance {
+        Some(t) => t,
+        None => f64::INFINITY,
+    };
+    ode.rtol = if asked > 0.0 && asked < tolerance { asked } else { tolerance };
     let mut warnings = Vec::new();
     let mut net: Option<Network> = None;
     let mut x = Vec::new();
