@@ -76,6 +76,10 @@ pub struct Network {
     /// Per part: its first state in the line's vector, and its integrated states.
     pub first_state: Vec<usize>,
     pub active: Vec<Vec<usize>>,
+    /// Per state of the line: held by its part (a roll's radius while its web has no thickness),
+    /// its derivative zero whatever the line does. No derivative is taken along it: the
+    /// Jacobian's column of a state whose row is zero never reaches the integrator's solutions.
+    pub held: Vec<bool>,
     /// Per part: a span's forces as last computed in this evaluation (`Link::fresh`).
     outputs: Vec<Forces>,
     /// Per part: a span whose forces are computed after the last connection into it, so that
@@ -218,6 +222,7 @@ impl Network {
         if let Some(part) = parts.iter().find(|p| p.state_count() > MAX_PART_STATES) {
             return Err(format!("a part ({}) has more than {MAX_PART_STATES} states", part.description().model_identifier));
         }
+        let held = states.iter().map(|s| !parts[s.part].active_states().contains(&s.index)).collect();
         let outputs = vec![Forces::default(); n_parts];
         let evaluated_x = vec![0.0; states.len()];
         let reads_earlier_inputs = parts.iter().any(Part::reads_earlier_inputs);
@@ -236,6 +241,7 @@ impl Network {
             states,
             first_state,
             active,
+            held,
             outputs,
             rate_ready,
             evaluated: None,
@@ -250,7 +256,7 @@ impl Network {
         (net.kl, net.ku, depends) = net.band(parts);
         if net.groups.is_empty() && net.rates.is_empty() && !net.reads_earlier_inputs {
             let band = solver::band::Band::zeros(net.len(), net.kl, net.ku);
-            net.chain = Chain::new(parts, &net.links, &depends, &band, &net.first_state, &net.active);
+            net.chain = Chain::new(parts, &net.links, &depends, &band, &net.first_state, &net.active, &net.held);
         }
         Ok(net)
     }
@@ -370,7 +376,7 @@ impl Network {
         let n_parts = parts.len();
         // Per part and input vr: the global states it depends on.
         let mut input_deps: Vec<Vec<(u32, BTreeSet<usize>)>> = vec![Vec::new(); n_parts];
-        let own_states = |p: usize| -> BTreeSet<usize> { (0..self.active[p].len()).map(|k| self.first_state[p] + k).collect() };
+        let own_states = |p: usize| -> BTreeSet<usize> { (0..self.active[p].len()).map(|k| self.first_state[p] + k).filter(|&g| !self.held[g]).collect() };
         let knowns = |p: usize, on: &Option<std::borrow::Cow<'static, [u32]>>, input_deps: &Vec<Vec<(u32, BTreeSet<usize>)>>| -> BTreeSet<usize> {
             let d = parts[p].description();
             let mut set = BTreeSet::new();
@@ -381,7 +387,7 @@ impl Network {
             };
             for &vr in list {
                 if let Some(s) = d.states.iter().position(|&s| s == vr) {
-                    if let Some(g) = self.global(p, s) {
+                    if let Some(g) = self.global(p, s).filter(|&g| !self.held[g]) {
                         set.insert(g);
                     }
                 } else if let Some((_, deps)) = input_deps[p].iter().find(|(i, _)| *i == vr) {

@@ -287,10 +287,9 @@ impl Part {
     }
 
     /// Whether the part's partials along the line's knowns stay the same until an event or a
-    /// parameter changes it (a roller's `tangents_fixed`); a span's move with its strain, and a
-    /// roller's along a radius it holds (`integrated` lists it) with its speed.
-    pub fn tangents_fixed(&self, integrated: &[usize]) -> bool {
-        matches!(self, Part::Roller(r) if roller::jacobian::tangents_fixed(&r.params) && !integrated.contains(&1))
+    /// parameter changes it (a roller's `tangents_fixed`); a span's move with its strain.
+    pub fn tangents_fixed(&self) -> bool {
+        matches!(self, Part::Roller(r) if roller::jacobian::tangents_fixed(&r.params))
     }
 
     /// The part's continuous states the line integrates (indices into its
