@@ -159,6 +159,36 @@ def test_a_line_fmu_whose_resources_were_changed_is_refused(line_dir, tmp_path):
     assert any("GUID" in m for m in messages), messages
 
 
+def test_the_line_fmu_refuses_what_would_break_its_promises(line_dir, tmp_path):
+    """Each refusal with the FMU's message, where the Line FMU had taken the value: Model Exchange and a
+    parameter that adds a state (a roll's radius; it panicked inside the library, FMI 2.0 and 3.0), a step
+    that takes a speed past its bounds (fmi2DoStep answered OK at 75,000 m/s), a profile edited inside the
+    FMU (it changed the run under the same GUID)."""
+    scene = load_scene(SCENES / "splice.json", fmu_dir=line_dir)
+
+    def refused(fmu, **options):
+        with fmpy_log.collecting() as (messages, logger), pytest.raises(Exception):
+            simulate_fmu(str(fmu), stop_time=0.01, step_size=1e-3, logger=logger, **options)
+        return " ".join(messages)
+
+    for fmi3 in (False, True):
+        fmu = linefmu.export(scene, tmp_path / f"splice{int(fmi3)}.fmu", line_dir, fmi3=fmi3)
+        log = refused(fmu, fmi_type="ModelExchange", start_values={"unwind.wound.thickness": 8e-5})
+        assert "unwind.wound.thickness = 0.00008 makes unwind.r a state" in log, log
+    fmu = tmp_path / "splice0.fmu"
+    log = refused(fmu, start_values={"unwind.tau_m": 1e9})
+    assert "unwind.web_b.v = " in log and "outside the range of first.web_a.v, [-1000, 1000]" in log, log
+    edited = tmp_path / "edited.fmu"
+    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(edited, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename == "resources/profiles/unwind.json":
+                data = data.replace(b"120.0", b"180.0")  # a user edits the unwinder's tension inside the FMU
+            dst.writestr(item, data)
+    log = refused(edited)
+    assert "resources/profiles/unwind.json is not the profile line.json holds for part unwind" in log, log
+
+
 def test_a_run_with_a_logger_leaves_fmpys_logger_proxy_at_its_printer(line_dir, tmp_path, capsys):
     """FMPy's one process-wide logger proxy, pointed at a logger simulate_fmu then drops, once
     crashed a later SSP run in the same process (an FMU logging through FMPy's default

@@ -55,8 +55,9 @@ pub struct Chain {
 impl Chain {
     /// The chain for `links` (in evaluation order), each depending on the states in
     /// `depends[l]` (the band's structure) and the Jacobian's band; None where a part has no
-    /// tangent for one of its knowns or a term would leave the band.
-    pub fn new(parts: &[Part], links: &[Link], depends: &[(usize, usize)], band: &Band, first_state: &[usize], active: &[Vec<usize>]) -> Option<Chain> {
+    /// tangent for one of its knowns or a term would leave the band. A `held` state is no known
+    /// (`Network::held`).
+    pub fn new(parts: &[Part], links: &[Link], depends: &[(usize, usize)], band: &Band, first_state: &[usize], active: &[Vec<usize>], held: &[bool]) -> Option<Chain> {
         // Each connection's window in `totals`, after the unit at 0.
         let mut windows = Vec::with_capacity(links.len());
         let mut total = 1;
@@ -76,7 +77,7 @@ impl Chain {
             let d = part.description();
             let port = |vr: u32| part.port(vr);
             let (mut knowns, mut sources, mut known_vrs) = (Vec::new(), Vec::new(), Vec::new());
-            for (k, &i) in active[p].iter().enumerate() {
+            for (k, &i) in active[p].iter().enumerate().filter(|&(k, _)| !held[first_state[p] + k]) {
                 knowns.push(port(d.states[i])?);
                 sources.push(state(first_state[p] + k));
                 known_vrs.push(d.states[i]);

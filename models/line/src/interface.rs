@@ -32,9 +32,25 @@ pub enum Binding {
 }
 
 /// Part parameters the line does not offer: the line solves and starts the
-/// parts itself, and its outputs are SI.
-/// `includeTraction` decides which states a roller has: the line's structure, fixed by its scene.
-const NOT_OFFERED: [&str; 9] = ["startAtEquilibrium", "useSensor", "toUnitV", "toUnitF", "solver", "tolerance", "substeps", "profile", "includeTraction"];
+/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction and
+/// layers and a span's variable length are the line's structure, which line.json fixes.
+const NOT_OFFERED: [&str; 15] = [
+    "startAtEquilibrium",
+    "useSensor",
+    "toUnitV",
+    "toUnitF",
+    "solver",
+    "tolerance",
+    "substeps",
+    "profile",
+    "roll",
+    "inlets",
+    "outlets",
+    "carriage",
+    "includeTraction",
+    "layered",
+    "variableLength",
+];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.
 pub const DEFAULT_TOLERANCE: f64 = 1e-9;
@@ -129,6 +145,24 @@ impl Builder<'_> {
     }
 }
 
+/// Where the line carries the strain past roller `p`, from the span before it straight to the
+/// span after (as webline connects a roller of one inlet whose strain is not its own, so the
+/// roller's web_a.eps stays unset): that span's exit strain, the strain of the web leaving the
+/// roller, which the line then reads for the roller's `eps`.
+fn strain_past(spec: &Spec, parts: &[Part], p: usize) -> Option<Binding> {
+    let ps = &spec.parts[p];
+    let own = ps.profile.as_ref().is_some_and(|profile| profile.get("strain").is_some())
+        || matches!(&parts[p], Part::Roller(r) if r.params.inlets > 1)
+        || spec.connections.iter().any(|c| c.to.0 == ps.name && c.to.1 == "web_a.eps");
+    if own {
+        return None;
+    }
+    let arriving = spec.connections.iter().find(|c| c.from.0 == ps.name && c.from.1 == "web_a.v" && c.to.1 == "web_b.v")?;
+    let span = spec.part(&arriving.to.0).filter(|&s| spec.parts[s].role == Role::Span)?;
+    let vr = parts[span].description().variable_by_name("web_b.eps")?.vr;
+    Some(Binding::Real { part: span, vr, port: parts[span].port(vr)? })
+}
+
 fn offered_vr(offered: &[(u32, u32)], part_vr: u32) -> Option<u32> {
     offered.iter().find(|(pv, _)| *pv == part_vr).map(|&(_, lv)| lv)
 }
@@ -196,7 +230,11 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
                     names.extend([("y", "y"), ("y_dot", "y_dot")]);
                 }
                 for (name, label) in names {
-                    outputs.push(offer!(name, label, Causality::Output));
+                    let vr = offer!(name, label, Causality::Output);
+                    if let Some(carried) = (label == "eps").then(|| strain_past(spec, parts, p)).flatten() {
+                        b.bindings[vr as usize] = carried;
+                    }
+                    outputs.push(vr);
                 }
                 if let Some(w) = ps.wrap {
                     let vr = b.own(
@@ -219,7 +257,8 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
             }
         }
         for v in d.variables.iter() {
-            if v.causality == Causality::Parameter && v.kind != Kind::String && !NOT_OFFERED.contains(&&*v.name) {
+            let offered = !NOT_OFFERED.contains(&&*v.name) && (v.kind != Kind::Real || parts[p].acts(v.vr, ps.speed_driven()));
+            if v.causality == Causality::Parameter && v.kind != Kind::String && offered {
                 offer!(&v.name, &v.name, Causality::Parameter);
             }
         }

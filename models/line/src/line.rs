@@ -22,6 +22,12 @@ pub struct Shared {
     pub description: ModelDescription,
     pub bindings: Vec<Binding>,
     pub laminates: Vec<Laminate>,
+    /// Per part, the states the line integrates (indices into its state vector): in Model
+    /// Exchange those the description lists, in Co-Simulation every one a parameter the line
+    /// offers may switch on (`Part::possible_states`), held while it is off, so that their
+    /// number never changes.
+    pub described_states: Vec<Vec<usize>>,
+    pub possible_states: Vec<Vec<usize>>,
 }
 
 /// One line.json, one GUID: equal GUIDs, equal lines.
@@ -41,6 +47,8 @@ pub struct Line {
     start_equilibrium: bool,
     /// A part follows a profile: time moves the equations.
     profiled: bool,
+    /// The importer integrates (Model Exchange): the line's states are the description's.
+    model_exchange: bool,
 }
 
 impl Line {
@@ -64,12 +72,14 @@ impl Line {
         let start_equilibrium = spec.start == StartMode::Equilibrium;
         let Interface { description, bindings, laminates } = interface::build(&spec, &parts, &active, spec::guid(text), start_equilibrium);
         let profiled = spec.parts.iter().any(|p| p.profile.is_some());
+        let possible_states = parts.iter().zip(&spec.parts).map(|(part, ps)| part.possible_states(ps.speed_driven())).collect();
         Ok(Line {
-            shared: Arc::new(Shared { spec, description, bindings, laminates }),
+            shared: Arc::new(Shared { spec, description, bindings, laminates, described_states: active, possible_states }),
             ode: Ode::new(parts, interface::DEFAULT_TOLERANCE),
             tolerance: interface::DEFAULT_TOLERANCE,
             start_equilibrium,
             profiled,
+            model_exchange: false,
         })
     }
 
@@ -79,6 +89,15 @@ impl Line {
 
     pub fn spec(&self) -> &Spec {
         &self.shared.spec
+    }
+
+    /// Per part, the states the line integrates in the interface it was initialized for.
+    fn integrated(shared: &Shared, model_exchange: bool) -> &[Vec<usize>] {
+        if model_exchange {
+            &shared.described_states
+        } else {
+            &shared.possible_states
+        }
     }
 
     pub fn parts(&self) -> &[Part] {
@@ -101,12 +120,21 @@ impl Line {
         self.ode.integrator.as_ref()
     }
 
-    /// The line's variable `vr` of a part was set: other than an input (a parameter, which FMI
-    /// allows only before the network exists), it changes more than the states and inputs do.
+    /// The network, once initialization has joined the parts (Model Exchange's vectors are its states).
+    fn joined(&self) -> FmiResult<&Network> {
+        self.ode.net.as_ref().ok_or_else(|| FmiError::error("the line is not initialized"))
+    }
+
+    /// The line's variable `vr` of a part was set. A parameter (which FMI allows only until
+    /// initialization ends) undoes a provisional initialization (an output read in
+    /// initialization mode): the network it joined may not fit the parameters now (a roll's
+    /// radius a state or not), and an FMU state saved with it would not restore.
     fn part_set(&mut self, vr: u32) {
         let input = self.shared.description.variable(vr).is_some_and(|v| v.causality == Causality::Input);
-        if let (false, Some(net)) = (input, self.ode.net.as_mut()) {
-            net.parts_changed();
+        if !input && self.ode.net.is_some() {
+            self.ode.net = None;
+            self.ode.integrator = None;
+            self.ode.scratch = Scratch::default();
         }
     }
 
@@ -278,7 +306,10 @@ impl Model for Line {
         let path = resources.file(SPEC_FILE)?;
         let text = std::fs::read_to_string(&path)
             .map_err(|e| FmiError::error(format!("cannot read {}: {e} (the Line FMU's line is in resources/{SPEC_FILE})", path.display())))?;
-        Line::from_spec(&text)
+        let line = Line::from_spec(&text)?;
+        let folder = path.parent().expect("a file in resources/");
+        spec::check_resources(&line.shared.spec, folder).map_err(FmiError::error)?;
+        Ok(line)
     }
 
     fn description(&self) -> &ModelDescription {
@@ -290,6 +321,7 @@ impl Model for Line {
             part.save_state(out);
         }
         out.bool(self.ode.net.is_some());
+        out.bool(self.model_exchange);
         out.i32(self.ode.x.len() as i32);
         for &x in &self.ode.x {
             out.f64(x);
@@ -309,6 +341,7 @@ impl Model for Line {
             part.load_state(r)?;
         }
         let initialized = r.bool("initialized")?;
+        self.model_exchange = r.bool("interface")?;
         let n = r.i32("number of states")?;
         let mut x = Vec::new();
         for _ in 0..n.max(0) {
@@ -327,7 +360,8 @@ impl Model for Line {
             // The parameters set the network (a roll's radius is a state only while it is wound):
             // out of their ranges, say which, before the structure they break.
             fmi_core::instance::states::check_values(self, true)?;
-            let net = Network::new(&self.shared.spec, &self.ode.parts).map_err(FmiError::error)?;
+            let shared = &self.shared;
+            let net = stepping::join(&shared.spec, &self.ode.parts, Line::integrated(shared, self.model_exchange))?;
             if x.len() != net.len() {
                 return Err(FmiError::error(format!("the state holds {} line states, the line has {}", x.len(), net.len())));
             }
@@ -370,11 +404,14 @@ impl Model for Line {
     }
 
     fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
-        let spec = self.shared.clone();
-        for laminate in &spec.laminates {
-            laminate.check(&spec.spec, &self.ode.parts)?;
+        let shared = self.shared.clone();
+        for laminate in &shared.laminates {
+            laminate.check(&shared.spec, &self.ode.parts)?;
         }
-        stepping::initialize(&mut self.ode, &spec.spec, self.tolerance, self.start_equilibrium, experiment, resources)
+        let integrated = Line::integrated(&shared, experiment.model_exchange);
+        let warnings = stepping::initialize(&mut self.ode, &shared.spec, integrated, self.tolerance, self.start_equilibrium, experiment, resources)?;
+        self.model_exchange = experiment.model_exchange;
+        Ok(warnings)
     }
 
     fn set_time(&mut self, time: f64) {
@@ -386,7 +423,7 @@ impl Model for Line {
     }
 
     fn do_step(&mut self, h: f64) -> FmiResult {
-        stepping::step(&mut self.ode, h, self.profiled)
+        stepping::step(&mut self.ode, &self.shared.spec, h, self.profiled)
     }
 
     fn event_update(&mut self) -> EventUpdate {
@@ -394,11 +431,13 @@ impl Model for Line {
     }
 
     fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
+        self.joined()?;
         x.copy_from_slice(&self.ode.x);
         Ok(())
     }
 
     fn set_continuous_states(&mut self, x: &[f64]) -> FmiResult {
+        self.joined()?;
         if let Some(bad) = x.iter().position(|v| !v.is_finite()) {
             return Err(FmiError::discard(format!("state {bad} = {} is not finite", x[bad])));
         }
@@ -414,12 +453,11 @@ impl Model for Line {
     }
 
     fn get_derivatives(&self, dx: &mut [f64]) -> FmiResult {
-        let net = self.ode.net.as_ref().ok_or_else(|| FmiError::error("the line is not initialized"))?;
-        net.derivatives(&self.ode.parts, dx)
+        self.joined()?.derivatives(&self.ode.parts, dx)
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
-        let Some(net) = &self.ode.net else { return Err(FmiError::error("the line is not initialized")) };
+        let net = self.joined()?;
         let mut buffer = [0.0; 8];
         for (k, s) in net.states.iter().enumerate() {
             let part = &self.ode.parts[s.part];

@@ -73,9 +73,13 @@ pub struct Network {
     pub groups: Vec<MassGroup>,
     pub rates: Vec<RateLink>,
     pub states: Vec<StateRef>,
-    /// Per part: its first state in the line's vector, and its active states.
+    /// Per part: its first state in the line's vector, and its integrated states.
     pub first_state: Vec<usize>,
     pub active: Vec<Vec<usize>>,
+    /// Per state of the line: held by its part (a roll's radius while its web has no thickness),
+    /// its derivative zero whatever the line does. No derivative is taken along it: the
+    /// Jacobian's column of a state whose row is zero never reaches the integrator's solutions.
+    pub held: Vec<bool>,
     /// Per part: a span's forces as last computed in this evaluation (`Link::fresh`).
     outputs: Vec<Forces>,
     /// Per part: a span whose forces are computed after the last connection into it, so that
@@ -107,8 +111,9 @@ fn vr_of(d: &ModelDescription, name: &str, part: &str) -> Result<u32, String> {
 
 impl Network {
     /// The links of the spec, ordered; the states; the band. `parts` are
-    /// initialized (effects and drives known).
-    pub fn new(spec: &Spec, parts: &[Part]) -> Result<Network, String> {
+    /// initialized (effects and drives known); `integrated`: per part, its states the line
+    /// integrates (indices into its state vector, its active ones among them).
+    pub fn new(spec: &Spec, parts: &[Part], integrated: &[Vec<usize>]) -> Result<Network, String> {
         let n_parts = parts.len();
         let mut links = Vec::new();
         for c in &spec.connections {
@@ -209,15 +214,15 @@ impl Network {
         let mut states = Vec::new();
         let mut first_state = Vec::with_capacity(n_parts);
         let mut active = Vec::with_capacity(n_parts);
-        for (p, part) in parts.iter().enumerate() {
+        for (p, a) in integrated.iter().enumerate() {
             first_state.push(states.len());
-            let a = part.active_states();
             states.extend(a.iter().map(|&index| StateRef { part: p, index }));
-            active.push(a);
+            active.push(a.clone());
         }
         if let Some(part) = parts.iter().find(|p| p.state_count() > MAX_PART_STATES) {
             return Err(format!("a part ({}) has more than {MAX_PART_STATES} states", part.description().model_identifier));
         }
+        let held = states.iter().map(|s| !parts[s.part].active_states().contains(&s.index)).collect();
         let outputs = vec![Forces::default(); n_parts];
         let evaluated_x = vec![0.0; states.len()];
         let reads_earlier_inputs = parts.iter().any(Part::reads_earlier_inputs);
@@ -236,6 +241,7 @@ impl Network {
             states,
             first_state,
             active,
+            held,
             outputs,
             rate_ready,
             evaluated: None,
@@ -250,7 +256,7 @@ impl Network {
         (net.kl, net.ku, depends) = net.band(parts);
         if net.groups.is_empty() && net.rates.is_empty() && !net.reads_earlier_inputs {
             let band = solver::band::Band::zeros(net.len(), net.kl, net.ku);
-            net.chain = Chain::new(parts, &net.links, &depends, &band, &net.first_state, &net.active);
+            net.chain = Chain::new(parts, &net.links, &depends, &band, &net.first_state, &net.active, &net.held);
         }
         Ok(net)
     }
@@ -321,6 +327,16 @@ impl Network {
         self.evaluated == Some(t) && self.evaluated_x == x
     }
 
+    /// The first connection whose value lies outside the range of the input it feeds (the
+    /// bounds its part documents and its own FMU holds when the value is set): the link and the value.
+    pub fn out_of_bounds(&self, parts: &[Part]) -> Option<(&Link, f64)> {
+        self.links.iter().find_map(|l| {
+            let value = parts[l.to].real(l.target);
+            let range = &parts[l.to].description().variable(l.input)?.range;
+            (!range.contains(value)).then_some((l, value))
+        })
+    }
+
     /// Whether setting input `vr` of part `part` moves a connection: then the line must be
     /// evaluated again before its outputs are read. Where web mass or a length's rate is
     /// coupled, an acceleration or a rate is carried by the connections: every input moves them.
@@ -360,7 +376,7 @@ impl Network {
         let n_parts = parts.len();
         // Per part and input vr: the global states it depends on.
         let mut input_deps: Vec<Vec<(u32, BTreeSet<usize>)>> = vec![Vec::new(); n_parts];
-        let own_states = |p: usize| -> BTreeSet<usize> { (0..self.active[p].len()).map(|k| self.first_state[p] + k).collect() };
+        let own_states = |p: usize| -> BTreeSet<usize> { (0..self.active[p].len()).map(|k| self.first_state[p] + k).filter(|&g| !self.held[g]).collect() };
         let knowns = |p: usize, on: &Option<std::borrow::Cow<'static, [u32]>>, input_deps: &Vec<Vec<(u32, BTreeSet<usize>)>>| -> BTreeSet<usize> {
             let d = parts[p].description();
             let mut set = BTreeSet::new();
@@ -371,7 +387,7 @@ impl Network {
             };
             for &vr in list {
                 if let Some(s) = d.states.iter().position(|&s| s == vr) {
-                    if let Some(g) = self.global(p, s) {
+                    if let Some(g) = self.global(p, s).filter(|&g| !self.held[g]) {
                         set.insert(g);
                     }
                 } else if let Some((_, deps)) = input_deps[p].iter().find(|(i, _)| *i == vr) {

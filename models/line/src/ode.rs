@@ -148,7 +148,10 @@ impl System for LineSystem<'_> {
             self.y.copy_from_slice(y);
             let mut j = group;
             while j < n {
-                self.y[j] += delta(y[j]);
+                // No derivative along a held state (`Network::held`): its column stays zero.
+                if !self.net.held[j] {
+                    self.y[j] += delta(y[j]);
+                }
                 j += width;
             }
             let (yp, f1) = (std::mem::take(&mut self.y), std::mem::take(&mut self.f1));
@@ -159,8 +162,10 @@ impl System for LineSystem<'_> {
             let mut j = group;
             while j < n {
                 let d = self.y[j] - y[j];
-                for i in j.saturating_sub(jac.upper())..(j + jac.lower() + 1).min(n) {
-                    jac.set(i, j, (self.f1[i] - f0[i]) / d);
+                if !self.net.held[j] {
+                    for i in j.saturating_sub(jac.upper())..(j + jac.lower() + 1).min(n) {
+                        jac.set(i, j, (self.f1[i] - f0[i]) / d);
+                    }
                 }
                 j += width;
             }

@@ -323,6 +323,64 @@ impl Part {
         }
     }
 
+    /// The part's states a line integrates whatever the values of the parameters it offers
+    /// (Co-Simulation's states, which keep their number): its active states, and a roll's radius
+    /// wherever `wound.thickness` may make it one (a roll not driven at a prescribed speed,
+    /// `speed_driven`), held while it is not.
+    pub fn possible_states(&self, speed_driven: bool) -> Vec<usize> {
+        let mut states = self.active_states();
+        if let Part::Roller(r) = self {
+            if r.params.roll != 0 && !speed_driven && !states.contains(&1) {
+                states.insert(1, 1);
+            }
+        }
+        states
+    }
+
+    /// The parameter that makes a roller's state `index` one the line integrates (a span's
+    /// state always is one).
+    pub fn state_switch(index: usize) -> &'static str {
+        if index == 1 {
+            "wound.thickness"
+        } else {
+            "carriage"
+        }
+    }
+
+    /// Whether the part's Real parameter `vr` acts on the line (`speed_driven`: a profile prescribes
+    /// its surface speed). The line offers only those: a dancer's span takes its length from the
+    /// dancer; a surface that follows its speed table has no inertia, radius, damping, start
+    /// speed or roll build-up that the line sees; only a roll builds up, only a dancer has a
+    /// carriage, and the arriving webs' masses weigh only where several merge [R5].
+    pub fn acts(&self, vr: u32, speed_driven: bool) -> bool {
+        use converting_span::description::Real as S;
+        use roller::description::Real as R;
+        match (self, self.port(vr)) {
+            (Part::Span(s), Some(Port::Span(S::L))) => !s.params.effects.variable_length,
+            (Part::Roller(r), Some(Port::Roller(var))) => {
+                let (p, inlets) = (&r.params, r.params.inlets);
+                match var {
+                    R::J | R::R | R::b | R::v_start => !speed_driven,
+                    R::wound_thickness | R::wound_density | R::wound_width => p.roll != 0 && !speed_driven,
+                    R::carriage_m | R::carriage_d | R::carriage_k | R::carriage_y_start => p.carriage,
+                    R::web_a_m | R::web_a2_m => inlets >= 2,
+                    R::web_a3_m => inlets >= 3,
+                    R::web_a4_m => inlets >= 4,
+                    R::traction_mu
+                    | R::traction_wrap
+                    | R::traction_v_slip
+                    | R::traction_width
+                    | R::traction_slip_start
+                    | R::nip_mu
+                    | R::air_roughness
+                    | R::air_viscosity => p.traction,
+                    _ => true,
+                }
+            }
+            _ => true,
+        }
+    }
+
     /// Length of the part's Model Exchange state vector.
     pub fn state_count(&self) -> usize {
         self.description().states.len()

@@ -6,6 +6,7 @@
 
 use serde::Deserialize;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// Where a line's spec sits in the FMU (resources/).
 pub const SPEC_FILE: &str = "line.json";
@@ -137,6 +138,13 @@ pub struct PartSpec {
     pub wrap: Option<f64>,
 }
 
+impl PartSpec {
+    /// Its profile prescribes its surface speed (a table `speed`).
+    pub fn speed_driven(&self) -> bool {
+        self.profile.as_ref().is_some_and(|p| p.get("speed").is_some())
+    }
+}
+
 /// `from` (part, output) feeds `to` (part, input).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -227,6 +235,34 @@ impl Spec {
     pub fn part(&self, name: &str) -> Option<usize> {
         self.parts.iter().position(|p| p.name == name)
     }
+}
+
+/// What the parts read in the FMU's resources/ `folder` beside line.json, which the GUID
+/// covers, checked against it: each part's profile is the one line.json holds for it (an edited
+/// profile would change the run under the same GUID), and a part without one finds no file it
+/// would take as its own (resources/<part>.json, resources/profile.json).
+pub fn check_resources(spec: &Spec, folder: &Path) -> Result<(), String> {
+    let changed = "the FMU's resources were changed after export (its GUID is the hash of line.json, which holds every \
+                   profile): export the scene again";
+    for p in &spec.parts {
+        match &p.profile {
+            Some(profile) => {
+                let file = format!("{PROFILE_FOLDER}/{}.json", p.name);
+                let text = std::fs::read_to_string(folder.join(&file)).map_err(|e| format!("cannot read resources/{file}, part {}'s profile: {e}", p.name))?;
+                let found: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("resources/{file}: {e}; {changed}"))?;
+                if &found != profile {
+                    return Err(format!("resources/{file} is not the profile line.json holds for part {}: {changed}", p.name));
+                }
+            }
+            None => {
+                if let Some(path) = profiles::locate("", Ok(folder), &p.name, &[])?.path {
+                    let file = path.strip_prefix(folder).unwrap_or(&path).display().to_string();
+                    return Err(format!("resources/{file} would be part {}'s profile, which line.json does not give it: {changed}", p.name));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// FNV-1a over the bytes, 64 bit, twice with different offsets: the

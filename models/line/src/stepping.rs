@@ -56,12 +56,35 @@ pub fn tolerances(ode: &Ode, scratch: &mut Scratch) {
     }
 }
 
-/// Initializes the parts until they agree through the connections, joins them and, where
-/// `start_equilibrium`, solves the steady state; the warnings to pass on. `tolerance`: the
+/// The parts joined into the line's network, which integrates `integrated` (per part, indices
+/// into its state vector). A state a parameter made active outside them is refused, naming the
+/// parameter: only Model Exchange, whose description fixes the states, can meet one.
+pub fn join(spec: &Spec, parts: &[Part], integrated: &[Vec<usize>]) -> FmiResult<Network> {
+    for (p, part) in parts.iter().enumerate() {
+        let Some(&i) = part.active_states().iter().find(|i| !integrated[p].contains(i)) else { continue };
+        let (d, name) = (part.description(), &spec.parts[p].name);
+        let switch = Part::state_switch(i);
+        let value = d.variable_by_name(switch).map_or_else(String::new, |v| match v.kind {
+            fmi_core::description::Kind::Real => part.get_real(v.vr).map_or_else(|_| "?".into(), |x| x.to_string()),
+            _ => part.get_boolean(v.vr).map_or_else(|_| "?".into(), |b| b.to_string()),
+        });
+        let state = d.variable(d.states[i]).map_or("?", |v| &v.name);
+        return Err(FmiError::error(format!(
+            "{name}.{switch} = {value} makes {name}.{state} a state, which this FMU's model description does not list: in Model \
+             Exchange the description fixes the line's states (give the value in the scene and export the FMU again, or run it \
+             in Co-Simulation)"
+        )));
+    }
+    Network::new(spec, parts, integrated).map_err(FmiError::error)
+}
+
+/// Initializes the parts until they agree through the connections, joins them (`join`) and,
+/// where `start_equilibrium`, solves the steady state; the warnings to pass on. `tolerance`: the
 /// line's parameter, which the importer's tolerance overrides where it asks for more.
 pub fn initialize(
     ode: &mut Ode,
     spec: &Spec,
+    integrated: &[Vec<usize>],
     tolerance: f64,
     start_equilibrium: bool,
     experiment: &Experiment,
@@ -70,8 +93,14 @@ pub fn initialize(
     // The parts are stepped by the line, never by an importer of their own.
     let part_experiment = Experiment { model_exchange: false, ..*experiment };
     let t0 = experiment.start_time;
-    // The importer's tolerance counts where it asks for more accuracy than the parameter.
-    ode.rtol = experiment.tolerance.filter(|&t| t > 0.0 && t < tolerance).unwrap_or(tolerance);
+    // The importer's tolerance counts where it asks for more accuracy than the parameter. Its
+    // value is compared only once it is known to be given: the payload of a None is
+    // uninitialized, and the comparison that `filter` compiled to read it first (valgrind).
+    let asked = match experiment.tolerance {
+        Some(t) => t,
+        None => f64::INFINITY,
+    };
+    ode.rtol = if asked > 0.0 && asked < tolerance { asked } else { tolerance };
     let mut warnings = Vec::new();
     let mut net: Option<Network> = None;
     let mut x = Vec::new();
@@ -87,7 +116,10 @@ pub fn initialize(
                 warnings.extend(said.into_iter().map(|w| format!("part {}: {w}", ps.name)));
             }
         }
-        let n = net.get_or_insert(Network::new(spec, &ode.parts).map_err(FmiError::error)?);
+        let n = match net.as_mut() {
+            Some(n) => n,
+            None => net.insert(join(spec, &ode.parts, integrated)?),
+        };
         x.resize(n.len(), 0.0);
         n.gather(&ode.parts, &mut x)?;
         let before = connected_inputs(n, &ode.parts)?;
@@ -198,7 +230,7 @@ fn failure(f: Failure, t: f64, end: f64) -> FmiError {
 /// failed on them (an input an importer set that they refuse) or where an
 /// evaluation depends on the one before (`Network::reads_earlier_inputs`). `profiled`: a part
 /// follows a profile (time moves the equations).
-pub fn step(ode: &mut Ode, h: f64, profiled: bool) -> FmiResult {
+pub fn step(ode: &mut Ode, spec: &Spec, h: f64, profiled: bool) -> FmiResult {
     let t0 = ode.time;
     let next_event = ode.next_event;
     let next_step = ode.integrator.as_ref().map_or(0.0, |r| r.next_step);
@@ -207,14 +239,18 @@ pub fn step(ode: &mut Ode, h: f64, profiled: bool) -> FmiResult {
     if copied {
         ode.backup.clone_from(&ode.parts);
     }
-    match advance(ode, t0 + h, profiled, &mut copied) {
+    let stepped = advance(ode, t0 + h, profiled, &mut copied).and_then(|()| {
+        // The ramped inputs end the step where their derivatives took them.
+        for &(part, vr, base, rate) in &ode.ramps {
+            ode.parts[part].set_real(vr, base + rate * h)?;
+        }
+        ode.settle()?;
+        within_bounds(ode, spec)
+    });
+    match stepped {
         Ok(()) => {
-            // The ramped inputs end the step where their derivatives took them.
-            for &(part, vr, base, rate) in &ode.ramps {
-                ode.parts[part].set_real(vr, base + rate * h)?;
-            }
             ode.ramps.clear();
-            ode.settle()
+            Ok(())
         }
         Err(e) => {
             if copied {
@@ -238,6 +274,23 @@ pub fn step(ode: &mut Ode, h: f64, profiled: bool) -> FmiResult {
             Err(e)
         }
     }
+}
+
+/// The line at the end of a step within the bounds its parts document: every connection's value
+/// in the range of the input it feeds, as the parts' own FMUs refuse one outside it when it is set
+/// (a speed beyond ±1000 m/s, a strain beyond 10). Outside them the step fails with an error.
+fn within_bounds(ode: &Ode, spec: &Spec) -> FmiResult {
+    let Some((l, value)) = ode.net.as_ref().and_then(|net| net.out_of_bounds(&ode.parts)) else { return Ok(()) };
+    let variable = |p: usize, vr: u32| ode.parts[p].description().variable(vr);
+    let name = |p: usize, vr: u32| format!("{}.{}", spec.parts[p].name, variable(p, vr).map_or("?", |v| &v.name));
+    let range = variable(l.to, l.input).map(|v| v.range.to_string()).unwrap_or_default();
+    Err(FmiError::error(format!(
+        "at t = {} s {} = {value} is outside the range of {}, {range}, which it feeds: the line left the bounds its parts \
+         hold (check its drives and inputs); the step is undone",
+        ode.time,
+        name(l.from, l.output),
+        name(l.to, l.input)
+    )))
 }
 
 /// `copied`: the parts were copied to `line.backup` before an event (see `step`).

@@ -7,12 +7,5 @@
 
 mod common;
 use common::TestedLine;
-use fmi_testkit::conformance::Hints;
 
-/// The dancer's load comes from a profile table, which only a roller on a
-/// carriage can take: perturbing `dancer.carriage` is refused for that reason.
-fn hints() -> Hints {
-    Hints { refusals: vec!["a load table needs carriage = true"], ..Hints::default() }
-}
-
-fmi_testkit::conformance_tests!(TestedLine, hints = hints);
+fmi_testkit::conformance_tests!(TestedLine);

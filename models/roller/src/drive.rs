@@ -64,6 +64,23 @@ pub fn load(p: &Parameters, resources: &Resources) -> FmiResult<Result<Loaded, O
 
 /// Parses and checks a profile against the roller's parameters.
 pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
+    let loaded = read(text)?;
+    if loaded.drive == Drive::Tension && p.roll_sign() == 0.0 {
+        return Err(format!("a tension drive needs roll = 1 (unwinder) or 2 (winder), roll is {}", p.roll));
+    }
+    if loaded.table(Key::Load).is_some() && !p.carriage {
+        return Err("a load table needs carriage = true".into());
+    }
+    if loaded.table(Key::Nip).is_some() && !p.traction {
+        return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
+    }
+    Ok(loaded)
+}
+
+/// Parses and checks a profile by its own rules, not against the parameters: an FMU state
+/// restores the profile it holds, which a parameter set after a provisional initialization
+/// may no longer fit until initialization, which `parse`s it again, ends.
+pub fn read(text: &str) -> Result<Loaded, String> {
     let profile = Profile::parse(text, &TABLES)?;
     let drives: Vec<&str> = ["speed", "torque", "tension"].into_iter().filter(|k| profile.table(k).is_some()).collect();
     let drive = match drives.as_slice() {
@@ -73,16 +90,7 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
         ["tension"] => Drive::Tension,
         _ => return Err(format!("{} tables: a roller has at most one drive (speed, torque or tension)", drives.join(" and "))),
     };
-    if drive == Drive::Tension && p.roll_sign() == 0.0 {
-        return Err(format!("a tension drive needs roll = 1 (unwinder) or 2 (winder), roll is {}", p.roll));
-    }
-    if profile.table("load").is_some() && !p.carriage {
-        return Err("a load table needs carriage = true".into());
-    }
     if let Some(nip) = profile.table("nip") {
-        if !p.traction {
-            return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
-        }
         if let Some(&[t, n]) = nip.points().iter().find(|&&[_, n]| !(n >= 0.0 && n.is_finite())) {
             return Err(format!("nip: the load at {t} s is {n} N; a nip presses with a load >= 0"));
         }

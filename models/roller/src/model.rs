@@ -496,7 +496,7 @@ impl Model for Roller {
         let text = r.string("profile")?;
         self.profile = match text {
             "" => None,
-            text => Some(drive::parse(&self.params, text).map_err(|e| FmiError::error(format!("profile in the FMU state: {e}")))?),
+            text => Some(drive::read(text).map_err(|e| FmiError::error(format!("profile in the FMU state: {e}")))?),
         };
         let events = self.profile.as_ref().map_or(0, |l| l.profile.events.len());
         if !(0..=events as i64).contains(&(next as i64)) || !(self.roll.radius > 0.0 && self.roll.inertia > 0.0) {

@@ -266,3 +266,18 @@ fn an_event_a_few_ulps_from_a_communication_point_falls_on_it() {
         assert_eq!(get(&exact, Real::J), get(&summed, Real::J), "after step {k}");
     }
 }
+
+/// A roller holds its profile from a provisional initialization (an output read in
+/// initialization mode) while a parameter it was checked against changes: the FMU state then
+/// saved restores as it was. Initialization checks the profile again when it ends.
+#[test]
+fn a_state_saved_after_a_parameter_changed_under_a_provisional_profile_restores() {
+    let text = r#"{"load": [[0, 400]]}"#;
+    let mut m = roller(&[], Some(text), |m| m.set_boolean(Boolean::carriage.vr(), true).unwrap()).unwrap();
+    m.set_boolean(Boolean::carriage.vr(), false).unwrap();
+    let snapshot = Snapshot { phase: Phase::InitializationMode, time: 0.0, experiment: Default::default(), model: m.clone() };
+    let back = Snapshot::<Roller>::from_bytes(&snapshot.to_bytes(), &Roller::at_start_values()).unwrap_or_else(|e| panic!("{}", e.message));
+    assert_eq!(back.model, m);
+    let e = back.model.clone().initialize(&Experiment::default(), &Resources::default()).unwrap_err().into_message();
+    assert!(e.contains("a load table needs carriage = true"), "{e}");
+}

@@ -111,6 +111,7 @@ macro_rules! conformance_tests {
             fmu_state_round_trip_continues_bit_identically,
             serialized_state_continues_bit_identically_in_any_instance,
             fmu_state_saved_in_initialization_mode_keeps_the_experiment,
+            state_saved_after_a_parameter_changed_in_initialization_mode_restores,
             state_of_the_other_interface_is_refused,
             serialize_checks_the_buffer_size,
             deserialize_refuses_truncated_padded_and_corrupted_bytes,
