@@ -79,7 +79,11 @@ class LineODE:
         self.i_omega = {m.name: n_s + i for i, m in enumerate(self.movers)}
         self.i_y = {d.name: n_s + n_m + 2 * i for i, d in enumerate(self.dancers)}
         self.i_vw = {c.name: n_s + n_m + 2 * n_d + i for i, c in enumerate(self.slippers)}
-        self.n = n_s + n_m + 2 * n_d + len(self.slippers)
+        # A roll whose web winds off or on: its radius is a state [R3].
+        self.rolls = [m for m in self.movers if getattr(m, "wound", None) is not None]
+        first_roll = n_s + n_m + 2 * n_d + len(self.slippers)
+        self.i_r = {m.name: first_roll + i for i, m in enumerate(self.rolls)}
+        self.n = first_roll + len(self.rolls)
         # The line's shape, once: each span's rollers, each roller's spans in and out.
         self.up = {sp.name: scene.upstream(sp) for sp in self.spans}
         self.down = {sp.name: scene.downstream(sp) for sp in self.spans}
@@ -99,14 +103,25 @@ class LineODE:
     def pslope(self, profile):
         return profile.slope(self.segment[0])
 
-    def torque(self, node, t):
+    def radius(self, node, z):
+        """The roller's radius: a roll's state where its web winds [R3], else its R."""
+        i = self.i_r.get(node.name)
+        return z[i] if i is not None else self.inertia[node.name][1]
+
+    def roll_inertia(self, node, r):
+        """J(r) = J_0 + (pi/2) rho w (r^4 - r_0^4) [R3], J_0 and r_0 the roll's at the start."""
+        J, R, _ = self.inertia[node.name]
+        w = node.wound
+        return J + 0.5 * np.pi * w.density * w.width * (r**4 - R**4)
+
+    def torque(self, node, t, z):
         d = getattr(node, "drive", None)
         if d is None:  # a dancer's roller is an idler
             return 0.0
         if d.kind == "torque":
             return self.pv(d.profile, t)
         if d.kind == "tension":
-            R = self.inertia[node.name][1]
+            R = self.radius(node, z)
             return (-R if node.type == "unwinder" else R) * self.pv(d.profile, t)
         return 0.0
 
@@ -115,8 +130,7 @@ class LineODE:
             return self.pv(node.speed, t)
         if isinstance(node, Roller) and node.drive.kind == "speed":
             return self.pv(node.drive.profile, t)
-        J, R, b = self.inertia[node.name]
-        return R * z[self.i_omega[node.name]]
+        return self.radius(node, z) * z[self.i_omega[node.name]]
 
     def contact(self, node, t, z, v, q):
         """Where the web may slip on `node`: its friction on the web and what it reports, at (t, z)."""
@@ -166,6 +180,15 @@ class LineODE:
         for node in self.movers:
             J, R, b = self.inertia[node.name]
             omega = z[self.i_omega[node.name]]
+            J_rate = 0.0
+            if node.name in self.i_r:  # [R3]: d(r^2)/dt = s h v/pi, J(r); [R1] balances d(J omega)/dt
+                R = z[self.i_r[node.name]]
+                J = self.roll_inertia(node, R)
+                w = node.wound
+                sign = -1.0 if node.type == "unwinder" else 1.0
+                r_rate = sign * w.thickness * omega / (2.0 * np.pi)  # s h v/(2 pi r), v = r omega
+                dz[self.i_r[node.name]] = r_rate
+                J_rate = 2.0 * np.pi * w.density * w.width * R**3 * r_rate
             # Every web leaving pulls forward, every web arriving pulls back (a nip, a slitter: several).
             F_down = sum(q[sp.name]["T"] for sp in self.outs[node.name])
             F_up = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[node.name])
@@ -173,10 +196,10 @@ class LineODE:
             if node.name in self.i_vw and not self.stuck:  # the web pulls the roller through its friction only [R6]
                 contact = self.contact(node, t, z, v, q)
                 F_down, F_up = -contact["f"], 0.0
-            num = R * (F_down - F_up) + self.torque(node, t) - b * omega
+            num = R * (F_down - F_up) + self.torque(node, t, z) - b * omega - J_rate * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
-            accel[node.name] = R * domega
+            accel[node.name] = R * domega + omega * dz[self.i_r[node.name]] if node.name in self.i_r else R * domega
         for sp in self.spans:
             down = self.down[sp.name]
             if down.name in accel:
@@ -282,6 +305,9 @@ class LineODE:
         springless = [d for d in self.dancers if d.stiffness == 0.0]
         held = [self.i_y[d.name] for d in springless]  # their positions: held
         balance = [i + 1 for i in held]  # their accelerations: checked afterwards
+        # A roll's radius is never steady while web winds: held at its start, its rate not solved for.
+        rolls = list(self.i_r.values())
+        held, balance = held + rolls, balance + rolls
         # A laminate at rest is steady at any strains of its layers that pull as one: its layers move
         # together from their start (each layer's rate is zero whatever its strain; [M6]).
         tied = {first + i: first for first, k in self.resting_laminates(t, z0) for i in range(1, k)}
@@ -379,6 +405,8 @@ class LineODE:
             names[i], names[i + 1] = f"dancer {k!r}'s position", f"dancer {k!r}'s carriage speed"
         for k, i in self.i_vw.items():
             names[i] = f"the web's speed over {k!r}"
+        for k, i in self.i_r.items():
+            names[i] = f"roll {k!r}'s radius"
         return names
 
     def given_state(self, t=0.0):
@@ -387,6 +415,8 @@ class LineODE:
         z = np.zeros(self.n)
         for node in self.movers:
             z[self.i_omega[node.name]] = s.initial_speed(node, t) / node.R
+        for node in self.rolls:
+            z[self.i_r[node.name]] = node.R
         for d in self.dancers:
             z[self.i_y[d.name]] = d.y_start
         for c in self.slippers:
@@ -439,7 +469,9 @@ class LineODE:
             elif quantity == "omega":
                 row.append(z[self.i_omega[cname]])
             elif quantity == "tau":
-                row.append(self.torque(c, t))
+                row.append(self.torque(c, t, z))
+            elif quantity == "r":
+                row.append(self.radius(c, z))
             elif quantity == "y":
                 row.append(z[self.i_y[cname]])
             elif quantity == "y_dot":
@@ -457,6 +489,8 @@ def atol_of(ode: LineODE, z0):
         a[i + 1] = 1e-12
     for name, i in ode.i_vw.items():
         a[i] = 1e-11
+    for name, i in ode.i_r.items():
+        a[i] = 1e-13
     return a
 
 
