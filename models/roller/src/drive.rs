@@ -8,7 +8,7 @@ use profiles::{Profile, Table, Value};
 use std::sync::Arc;
 
 /// The table keys a roller's profile may have.
-pub const TABLES: [&str; 6] = ["speed", "torque", "tension", "strain", "load", "nip"];
+pub const TABLES: [&str; 8] = ["speed", "torque", "tension", "strain", "load", "nip", "set", "reference"];
 
 /// A table of `TABLES` by position: looked up on every evaluation, so by index, not by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -20,6 +20,10 @@ pub enum Key {
     Load,
     /// A nip's load N [R7].
     Nip,
+    /// A force loop's set point [R10].
+    Set,
+    /// A loop's reference speed: a speed loop's set point, the inertia feed-forward's speed [R10].
+    Reference,
 }
 
 /// How the roller is driven: at most one of the profile's drive tables.
@@ -43,7 +47,7 @@ pub struct Loaded {
     pub text: Arc<str>,
     pub drive: Drive,
     /// The profile's tables in the order of `TABLES`, found once.
-    pub tables: Arc<[Option<Table>; 6]>,
+    pub tables: Arc<[Option<Table>; 8]>,
 }
 
 impl Loaded {
@@ -73,6 +77,16 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
     }
     if loaded.table(Key::Nip).is_some() && !p.traction {
         return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
+    }
+    let kind = crate::control::Kind::of(p);
+    if kind != crate::control::Kind::None && !matches!(loaded.drive, Drive::Torque | Drive::TorqueTable) {
+        return Err(format!("loop.kind = {}: a loop drives by torque; the profile's speed or tension table would override it", p.loop_kind));
+    }
+    if loaded.table(Key::Set).is_some() && kind != crate::control::Kind::Force {
+        return Err("a set table needs loop.kind = 1 (a force loop)".into());
+    }
+    if loaded.table(Key::Reference).is_some() && !(kind == crate::control::Kind::Speed || (kind != crate::control::Kind::None && p.loop_feedforward)) {
+        return Err("a reference table needs loop.kind = 2 (a speed loop) or a loop with loop.feedforward = true".into());
     }
     Ok(loaded)
 }
