@@ -33,8 +33,9 @@ pub enum Binding {
 
 /// Part parameters the line does not offer: the line solves and starts the
 /// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction and
-/// layers and a span's variable length are the line's structure, which line.json fixes.
-const NOT_OFFERED: [&str; 15] = [
+/// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
+/// measures) and a span's variable length are the line's structure, which line.json fixes.
+const NOT_OFFERED: [&str; 19] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",
@@ -50,6 +51,10 @@ const NOT_OFFERED: [&str; 15] = [
     "includeTraction",
     "layered",
     "variableLength",
+    "loop.kind",
+    "loop.sign",
+    "loop.feedforward",
+    "motor.lag",
 ];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.

@@ -310,6 +310,13 @@ impl Part {
                 if r.params.traction {
                     states.push(4);
                 }
+                // A drive's loop: its integrator, and its motor's torque where it lags [R10]-[R11].
+                if r.params.loop_kind != 0 {
+                    states.push(5);
+                    if r.params.motor_lag > 0.0 {
+                        states.push(6);
+                    }
+                }
                 states
             }
         }
@@ -374,6 +381,7 @@ impl Part {
                     | R::nip_mu
                     | R::air_roughness
                     | R::air_viscosity => p.traction,
+                    R::loop_set | R::loop_kp | R::loop_ki | R::motor_limit => p.loop_kind != 0,
                     _ => true,
                 }
             }
