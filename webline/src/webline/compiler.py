@@ -81,6 +81,12 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     drive = getattr(node, "drive", None)
     if drive is not None and drive.kind in ("torque", "tension"):
         profile[drive.kind] = table(drive.profile)
+    if drive is not None and drive.loop is not None:
+        start.update(loop_values(drive.loop))
+        if not drive.loop.set.is_constant():
+            profile["set"] = table(drive.loop.set)
+        if drive.loop.feedforward:
+            profile["reference"] = table(scene.speed_reference())
     strain = getattr(node, "strain", None)
     if strain is not None:
         if strain.is_constant():
@@ -108,6 +114,21 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if sets:
         profile["set"] = sets
     return Component(node.name, "roller", fmu, start, profile or None)
+
+
+def loop_values(loop) -> dict:
+    """The Roller's parameters of a drive's loop [R10]-[R11]: a force loop on loop.measured, which the
+    line wires from the span it names (`compile_scene`)."""
+    return {
+        "loop.kind": 1,
+        "loop.sign": float(loop.sign),
+        "loop.set": float(loop.set.value(0.0)),
+        "loop.kp": float(loop.kp),
+        "loop.ki": float(loop.ki),
+        "loop.feedforward": bool(loop.feedforward),
+        "motor.limit": float(loop.limit),
+        "motor.lag": float(loop.lag),
+    }
 
 
 def traction_values(scene: Scene, node) -> dict:
@@ -376,6 +397,11 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
                 connect(up.name, "web_b.y", name, "frame_a.y")
             connect(name, "web_a.F", up.name, f"{a}.F")
             connect(name, "web_b.F", down.name, f"{b}.F")
+
+    for n in scene.nodes:  # a drive's loop reads the tension it holds
+        loop = getattr(getattr(n, "drive", None), "loop", None)
+        if loop is not None and loop.measure[1] == "T":
+            connect(loop.measure[0], "summary_Tension", n.name, "loop.measured")
 
     record, sums = _record(scene)
     system = System(

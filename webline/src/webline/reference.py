@@ -23,6 +23,8 @@ scene. States:
   before it (with includeMass) adds m_up*R^2: F_b = T + p + m*dv_b/dt and
   v_b = R*omega;
 * each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0);
+* each drive's loop (docs/physics.md [R10]-[R11]): its integrator I, and its motor's torque tau_m where
+  it lags (`loop_torque`);
 * where the web may slip on a roller or dancer (docs/physics.md, "Rollers that slip"), the web's
   speed over it v_w: m_w dv_w/dt = T_b - T_a + f, the spans on both sides see v_w, and the roller
   turns by -R*f instead of R*(T_b - T_a) (`friction`).
@@ -79,7 +81,14 @@ class LineODE:
         self.i_omega = {m.name: n_s + i for i, m in enumerate(self.movers)}
         self.i_y = {d.name: n_s + n_m + 2 * i for i, d in enumerate(self.dancers)}
         self.i_vw = {c.name: n_s + n_m + 2 * n_d + i for i, c in enumerate(self.slippers)}
-        self.n = n_s + n_m + 2 * n_d + len(self.slippers)
+        # A drive's loop: its integrator, then its motor's torque where it lags.
+        self.loops = [c for c in self.movers if getattr(getattr(c, "drive", None), "loop", None) is not None]
+        first = n_s + n_m + 2 * n_d + len(self.slippers)
+        self.i_loop = {}
+        for c in self.loops:
+            self.i_loop[c.name] = (first, first + 1 if c.drive.loop.lag > 0 else None)
+            first += 1 + (c.drive.loop.lag > 0)
+        self.n = first
         # The line's shape, once: each span's rollers, each roller's spans in and out.
         self.up = {sp.name: scene.upstream(sp) for sp in self.spans}
         self.down = {sp.name: scene.downstream(sp) for sp in self.spans}
@@ -109,6 +118,38 @@ class LineODE:
             R = self.inertia[node.name][1]
             return (-R if node.type == "unwinder" else R) * self.pv(d.profile, t)
         return 0.0
+
+    def loop_torque(self, node, t, z, q, dz):
+        """A drive's PI loop [R10] and its motor [R11] at (t, z): its torque, its rates into dz.
+        e = sign*(set - measured); u = kp*e + I + ff; I' = ki*e + (limit(u) - u)*ki/kp; the motor's torque
+        limit(u), or with a lag tau_m' = (limit(u) - tau_m)/lag. The limit is the identity up to 95 % of
+        it and bends exponentially into it over the last 5 %; ff = J*a_ref/R, the inertia torque of the
+        line's speed reference (a scene's roll keeps its radius)."""
+        lp = node.drive.loop
+        part, quantity = lp.measure
+        if quantity == "T":
+            measured = q[part]["T"]
+        else:  # a load cell: the resultant of the tensions on its bearings, at its wrap
+            back = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[part])
+            forward = sum(q[sp.name]["T"] for sp in self.outs[part])
+            cos = np.cos(np.radians(self.s.component(part).wrap))
+            measured = np.sqrt(max(back * back + forward * forward - 2.0 * back * forward * cos, 0.0))
+        e = lp.sign * (self.pv(lp.set, t) - measured)
+        J, R, b = self.inertia[node.name]
+        ff = J * self.pslope(self.s.speed_reference()) / R if lp.feedforward else 0.0
+        i_int, i_motor = self.i_loop[node.name]
+        u = lp.kp * e + z[i_int] + ff
+        limited = u
+        if lp.limit > 0.0:
+            knee = 0.95 * lp.limit
+            if abs(u) > knee:
+                limited = np.sign(u) * (lp.limit - 0.05 * lp.limit * np.exp(-(abs(u) - knee) / (0.05 * lp.limit)))
+        tracking = lp.ki / lp.kp if lp.kp > 0.0 and lp.ki > 0.0 else 1.0
+        dz[i_int] = lp.ki * e + (limited - u) * tracking
+        if i_motor is None:
+            return limited
+        dz[i_motor] = (limited - z[i_motor]) / lp.lag
+        return z[i_motor]
 
     def speed(self, node, t, z):
         if isinstance(node, Prescribed):
@@ -173,7 +214,11 @@ class LineODE:
             if node.name in self.i_vw and not self.stuck:  # the web pulls the roller through its friction only [R6]
                 contact = self.contact(node, t, z, v, q)
                 F_down, F_up = -contact["f"], 0.0
-            num = R * (F_down - F_up) + self.torque(node, t) - b * omega
+            tau = self.torque(node, t)
+            if node.name in self.i_loop:
+                q[node.name] = {"tau": tau + self.loop_torque(node, t, z, q, dz)}
+                tau = q[node.name]["tau"]
+            num = R * (F_down - F_up) + tau - b * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
             accel[node.name] = R * domega
@@ -379,6 +424,10 @@ class LineODE:
             names[i], names[i + 1] = f"dancer {k!r}'s position", f"dancer {k!r}'s carriage speed"
         for k, i in self.i_vw.items():
             names[i] = f"the web's speed over {k!r}"
+        for k, (i, m) in self.i_loop.items():
+            names[i] = f"{k!r}'s loop integrator"
+            if m is not None:
+                names[m] = f"{k!r}'s motor torque"
         return names
 
     def given_state(self, t=0.0):
@@ -439,7 +488,7 @@ class LineODE:
             elif quantity == "omega":
                 row.append(z[self.i_omega[cname]])
             elif quantity == "tau":
-                row.append(self.torque(c, t))
+                row.append(q[cname]["tau"] if cname in self.i_loop else self.torque(c, t))
             elif quantity == "y":
                 row.append(z[self.i_y[cname]])
             elif quantity == "y_dot":
@@ -457,6 +506,10 @@ def atol_of(ode: LineODE, z0):
         a[i + 1] = 1e-12
     for name, i in ode.i_vw.items():
         a[i] = 1e-11
+    for name, (i, m) in ode.i_loop.items():  # torques
+        a[i] = 1e-10
+        if m is not None:
+            a[m] = 1e-10
     return a
 
 

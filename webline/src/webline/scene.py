@@ -123,14 +123,32 @@ def span_layers(wp1: Web, wp2: Web) -> list[tuple[Web, Web]]:
 
 
 @dataclass
+class Loop:
+    """A PI loop in a drive ([R10]-[R11] of the physics docs): the torque that holds a span's tension
+    (`measure` = (span, "T")) or a load cell's reading ((roller, "F")) at `set`; gains in SI (N.m per N,
+    N.m per N.s); the motor's torque `limit` (N.m, 0: none) and `lag` (s, 0: none); with
+    `feedforward` the torque d(J*v_ref/R)/dt of the line's speed reference (its first speed drive)."""
+
+    measure: tuple
+    set: Profile
+    kp: float
+    ki: float
+    limit: float = 0.0
+    lag: float = 0.0
+    feedforward: bool = False
+    sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
+
+
+@dataclass
 class Drive:
     """How a roller is driven: 'idler' (no torque), 'torque', 'tension' (an
     end roller's motor holds a tension: tau = -R*T at an unwinder, +R*T at a
-    winder) or 'speed' (an ideal speed drive: the surface speed follows the
-    profile; no Roller FMU)."""
+    winder), 'speed' (an ideal speed drive: the surface speed follows the
+    profile; no Roller FMU) or 'pi' (a tension loop, `loop`)."""
 
     kind: str
     profile: Profile | None = None
+    loop: Loop | None = None
 
 
 @dataclass
@@ -383,6 +401,10 @@ class Scene:
         picked = [0.0, knots[total.index(min(total))], knots[total.index(max(total))]]
         return sorted(set(picked))
 
+    def speed_reference(self):
+        """The line's speed reference: the profile of its first speed-driven part (None: it has none)."""
+        return next((p for p in map(self.speed_profile, self.nodes) if p is not None), None)
+
     def torque_profile(self, node):
         """The motor torque of a Roller-FMU node as a profile (N m)."""
         d = getattr(node, "drive", Drive("idler"))
@@ -458,6 +480,8 @@ def profiles_of(c):
     d = getattr(c, "drive", None)
     if d is not None and d.profile is not None:
         out.append(d.profile)
+    if d is not None and d.loop is not None:
+        out.append(d.loop.set)
     t = getattr(c, "traction", None)
     if t is not None and t.nip_load is not None:
         out.append(t.nip_load)
@@ -707,8 +731,36 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
     if len(o.items) != 1 or next(iter(o.keys())) not in kinds:
         raise r.err(node, f"{what} must be an object with one key of {', '.join(kinds)}")
     kind, body = next(iter(o.items.items()))
+    if kind == "pi":
+        return Drive("pi", None, _loop(r, body, f"{what}.pi"))
     dim = {"torque": units.TORQUE, "tension": units.FORCE, "speed": units.SPEED}[kind]
     return Drive(kind, r.profile(body, dim, f"{what}.{kind}"))
+
+
+def _loop(r: _Reader, node: Node, what: str) -> Loop:
+    """A drive's "pi": {"measure": "SPAN.T" or "ROLLER.F", "set", "kp", "ki", "limit", "lag", "feedforward"}.
+    Which parts it names is checked once the line is read (`_check_loops`)."""
+    o = r.keys(node, what, required=("measure", "set", "kp", "ki"), optional=("limit", "lag", "feedforward"))
+    measure = r.string(o["measure"], f"{what}.measure")
+    part, _, quantity = measure.rpartition(".")
+    if not part or quantity not in ("T", "F"):
+        raise r.err(o["measure"], f"{what}.measure must be \"SPAN.T\" (a span's tension) or \"ROLLER.F\" (a load cell), found {measure!r}")
+    loop = Loop(
+        measure=(part, quantity),
+        set=r.profile(o["set"], units.FORCE, f"{what}.set"),
+        kp=r.quantity(o["kp"], units.DIMENSIONLESS, f"{what}.kp (N.m per N)", nonnegative=True),
+        ki=r.quantity(o["ki"], units.DIMENSIONLESS, f"{what}.ki (N.m per N.s)", nonnegative=True),
+    )
+    if "limit" in o:
+        loop.limit = r.quantity(o["limit"], units.TORQUE, f"{what}.limit", positive=True)
+    if "lag" in o:
+        loop.lag = r.quantity(o["lag"], units.TIME, f"{what}.lag", nonnegative=True)
+    if "feedforward" in o:
+        ff = r.string(o["feedforward"], f"{what}.feedforward")
+        if ff != "inertia":
+            raise r.err(o["feedforward"], f"{what}.feedforward: the one feed-forward is \"inertia\", found {ff!r}")
+        loop.feedforward = True
+    return loop
 
 
 def _span(r, o_node, name, webs) -> Span:
@@ -781,7 +833,8 @@ def _roller(r, o_node, name, kind) -> Roller:
         required.append("strain")
     o = r.keys(o_node, what, required=required, optional=optional)
     c = Roller(name=name, type=kind, where=f"{r.source}:{o_node.line}:{o_node.col}")
-    drives = {"roller": ("torque", "speed"), "unwinder": ("torque", "tension", "speed"), "winder": ("torque", "tension", "speed")}
+    drives = {"roller": ("torque", "speed", "pi"), "unwinder": ("torque", "tension", "speed", "pi"),
+              "winder": ("torque", "tension", "speed", "pi")}
     if "drive" in o:
         c.drive = _drive(r, o["drive"], f"{what}: drive", drives[kind])
     slips = "traction" in o or "nip" in o
@@ -813,6 +866,9 @@ def _roller(r, o_node, name, kind) -> Roller:
         if "split" not in o:
             raise r.err(r.key_pos(o["trim"]), f"{what}: trim goes with split (the width a slitter cuts off)")
         c.trim = r.quantity(o["trim"], units.LENGTH, f"{what}: trim", nonnegative=True)
+    if slips and c.drive.kind == "pi":
+        raise r.err(r.key_pos(o["traction" if "traction" in o else "nip"]),
+                    f"{what}: traction or a nip on a roller whose drive has a loop is not modelled")
     if slips:
         for k, why in (("merge", "a laminating nip"), ("split", "a slitter")):
             if k in o:
@@ -1029,6 +1085,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     _check_layers(r, scene, raw)
 
     _check_traction(r, scene, raw)
+    _check_loops(r, scene, raw)
 
     # Spans next to a dancer take their length from it; no other span may.
     for c in scene.spans:
@@ -1171,6 +1228,48 @@ def _check_traction(r, scene: Scene, raw):
                                           "moves between the two spans, and their damping is what damps it")
             if "includeMass" in sp.effects:
                 raise r.err(raw[sp.name], f"span {sp.name!r} next to {what}, which has traction: includeMass there is not modelled")
+
+
+def _downstream_of(scene: Scene, node) -> set:
+    """The names of every part the web reaches after `node`."""
+    seen, todo = set(), list(scene.spans_out(node))
+    while todo:
+        sp = todo.pop()
+        if sp.name in seen:
+            continue
+        seen.add(sp.name)
+        down = scene.downstream(sp)
+        seen.add(down.name)
+        todo += scene.spans_out(down)
+    return seen
+
+
+def _check_loops(r, scene: Scene, raw):
+    """A drive's loop measures a span's tension or a load cell (a roller with a wrap) of this line; its
+    sign follows from where that is: downstream of the drive more torque lowers it (-1), upstream it
+    raises it (+1). A feed-forward needs a speed drive whose profile is the line's speed reference."""
+    for node in scene.nodes:
+        loop = getattr(getattr(node, "drive", None), "loop", None)
+        if loop is None:
+            continue
+        what = f"{node.type} {node.name!r}: drive.pi.measure"
+        part, quantity = loop.measure
+        names = {c.name: c for c in scene.parts}
+        c = names.get(part)
+        if c is None:
+            raise r.err(raw[node.name], f"{what}: no part {part!r} in the line")
+        if quantity == "T" and not isinstance(c, Span):
+            raise r.err(raw[node.name], f"{what}: {part!r} is a {c.type}, not a span: measure its load cell as \"{part}.F\"")
+        if quantity == "F" and getattr(c, "wrap", None) is None:
+            raise r.err(raw[node.name], f"{what}: {c.type} {part!r} has no load cell (give it a \"wrap\")")
+        if part == node.name:
+            raise r.err(raw[node.name], f"{what}: a drive's loop measures another part than its own roller")
+        if quantity == "T" and c.layered:
+            raise r.err(raw[node.name], f"{what}: a loop on a laminate's tension is not modelled (measure a plain span)")
+        loop.sign = -1.0 if part in _downstream_of(scene, node) else 1.0
+        if loop.feedforward and not any(scene.speed_profile(n) is not None for n in scene.nodes):
+            raise r.err(raw[node.name], f"{node.type} {node.name!r}: drive.pi.feedforward needs the line's speed reference, "
+                                        "a speed-driven part (its first)")
 
 
 def _check_split(r, scene: Scene, b: Branch, raw):
