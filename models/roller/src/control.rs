@@ -15,7 +15,7 @@ use std::f64::consts::PI;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
     None,
-    /// A force (a span's tension, a load cell) at `loop.set` or the profile's set table.
+    /// A force (a span's tension, a load cell) at `loop.set` or the profile's setpoint table.
     Force,
     /// The surface speed at the profile's reference table.
     Speed,

@@ -8,7 +8,7 @@ use profiles::{Profile, Table, Value};
 use std::sync::Arc;
 
 /// The table keys a roller's profile may have.
-pub const TABLES: [&str; 8] = ["speed", "torque", "tension", "strain", "load", "nip", "set", "reference"];
+pub const TABLES: [&str; 8] = ["speed", "torque", "tension", "strain", "load", "nip", "setpoint", "reference"];
 
 /// A table of `TABLES` by position: looked up on every evaluation, so by index, not by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,7 +83,7 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
         return Err(format!("loop.kind = {}: a loop drives by torque; the profile's speed or tension table would override it", p.loop_kind));
     }
     if loaded.table(Key::Set).is_some() && kind != crate::control::Kind::Force {
-        return Err("a set table needs loop.kind = 1 (a force loop)".into());
+        return Err("a setpoint table needs loop.kind = 1 (a force loop)".into());
     }
     if loaded.table(Key::Reference).is_some() && !(kind == crate::control::Kind::Speed || (kind != crate::control::Kind::None && p.loop_feedforward)) {
         return Err("a reference table needs loop.kind = 2 (a speed loop) or a loop with loop.feedforward = true".into());

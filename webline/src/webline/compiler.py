@@ -84,7 +84,7 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if drive is not None and drive.loop is not None:
         start.update(loop_values(drive.loop))
         if not drive.loop.set.is_constant():
-            profile["set"] = table(drive.loop.set)
+            profile["setpoint"] = table(drive.loop.set)
         if drive.loop.feedforward:
             profile["reference"] = table(scene.speed_reference())
     strain = getattr(node, "strain", None)
