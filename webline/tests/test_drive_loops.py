@@ -112,7 +112,7 @@ def test_loop_keys_are_checked_and_the_parts_refuse_loops(fmus):
         looped({**good, "measure": "nowhere.T"}, "10 m/s", "1 s")
     with pytest.raises(SceneError, match="not a span"):
         looped({**good, "measure": "pull.T"}, "10 m/s", "1 s")
-    with pytest.raises(SceneError, match="has no load cell"):
+    with pytest.raises(SceneError, match="not modelled yet"):
         looped({**good, "measure": "pull.F"}, "10 m/s", "1 s")
     with pytest.raises(SceneError, match="feedforward"):
         looped({**good, "feedforward": "magic"}, "10 m/s", "1 s")
@@ -121,3 +121,51 @@ def test_loop_keys_are_checked_and_the_parts_refuse_loops(fmus):
     for engine in ("parts", "libcosim"):
         with pytest.raises(SceneError, match="has a loop in its drive"):
             run_scene(scene, engine, fmu_dir=fmus)
+
+
+def fmpy_run(fmu, changes, stop=2.0, h=0.01):
+    """entry.T at every step of the Line FMU in FMPy, `changes` {time: {name: value}} set between steps."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmu)), modelIdentifier="Line", instanceName="line")
+    slave.instantiate()
+    try:
+        slave.setupExperiment(startTime=0.0, stopTime=stop)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        t, rows = 0.0, []
+        for k in range(int(round(stop / h))):
+            for name, value in changes.get(k, {}).items():
+                slave.setReal([vr[name]], [value])
+            slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            t += h
+            rows.append(slave.getReal([vr["entry.T"]])[0])
+        return np.array(rows), md
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+
+
+def test_a_set_point_input_and_a_tunable_gain_from_fmpy(fmus, tmp_path):
+    """The scene's switch "set": {"input": ...} makes the loop's set point the Line FMU's input
+    unwind.T_set: set from FMPy, it moves the line to it. The loop's gains are tunable parameters: kp
+    set between steps gives another response than the same run with its start value, while a fixed
+    parameter (the roll's J) set between steps is refused."""
+    from fmpy.fmi1 import FMICallException
+
+    scene = looped({"set": {"input": "400 N"}, "kp": 0.2, "ki": 2.0}, "10 m/s", "3 s")
+    fmu = linefmu.export(scene, tmp_path / "loop.fmu", fmus)
+    still, md = fmpy_run(fmu, {}, stop=3.0)
+    variables = {v.name: v for v in md.modelVariables}
+    assert variables["unwind.T_set"].causality == "input" and "unwind.loop.set" not in variables
+    assert variables["unwind.loop.kp"].variability == "tunable" and variables["unwind.J"].variability == "fixed"
+    assert np.max(np.abs(still - 400.0)) < 1e-6, "held at its start value, the line stays put"
+    moved, _ = fmpy_run(fmu, {10: {"unwind.T_set": 450.0}}, stop=3.0)
+    assert abs(moved[-1] - 450.0) < 1.0 and np.max(moved) > 440.0, f"entry.T {moved[-1]} after T_set = 450 N"
+    retuned, _ = fmpy_run(fmu, {10: {"unwind.T_set": 450.0, "unwind.loop.kp": 0.6}}, stop=3.0)
+    assert np.max(np.abs(retuned - moved)) > 1.0, "another gain between steps, another response"
+    with pytest.raises(FMICallException):
+        fmpy_run(fmu, {10: {"unwind.J": 9.0}}, stop=0.2)

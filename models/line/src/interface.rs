@@ -94,6 +94,8 @@ impl Builder<'_> {
             _ => Start::None,
         };
         let (variability, initial) = match causality {
+            // A part's tunable parameter (a loop's gains, set point, limit) stays tunable in the line.
+            Causality::Parameter if v.variability == Variability::Tunable => (Variability::Tunable, Initial::Exact),
             Causality::Parameter => (Variability::Fixed, Initial::Exact),
             Causality::Input => (Variability::Continuous, Initial::None),
             _ => (v.variability, if v.initial == Initial::None { Initial::Calculated } else { v.initial }),
@@ -256,13 +258,18 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
                 if ps.torque_input {
                     offer!("tau_m", "tau_m", Causality::Input);
                 }
+                if ps.set_input {
+                    offer!("loop.set", "T_set", Causality::Input);
+                }
                 if role == Role::Dancer {
                     offer!("F_load", "F_load", Causality::Input);
                 }
             }
         }
         for v in d.variables.iter() {
-            let offered = !NOT_OFFERED.contains(&&*v.name) && (v.kind != Kind::Real || parts[p].acts(v.vr, ps.speed_driven()));
+            let offered = !NOT_OFFERED.contains(&&*v.name)
+                && (v.kind != Kind::Real || parts[p].acts(v.vr, ps.speed_driven()))
+                && !(ps.set_input && v.name == "loop.set");
             if v.causality == Causality::Parameter && v.kind != Kind::String && offered {
                 offer!(&v.name, &v.name, Causality::Parameter);
             }

@@ -132,6 +132,11 @@ pub struct PartSpec {
     /// (its speed is not prescribed).
     #[serde(default)]
     pub torque_input: bool,
+    /// Whether the Line FMU gives its loop's set point as an input `<name>.T_set` (N) instead of
+    /// the tunable parameter `<name>.loop.set`: the scene decides, as an FMU cannot see whether
+    /// an input is connected.
+    #[serde(default)]
+    pub set_input: bool,
     /// A load cell: the wrap angle of the web on the roller, degrees; the
     /// output `<name>.F` is the resultant of the two web forces on its bearings.
     #[serde(default)]

@@ -700,3 +700,31 @@ fn a_pi_loop_holds_its_set_point_against_bearing_friction() {
         assert!((get(&line, "unwind.tau") - needed).abs() < 1e-6, "lag {lag}: tau {} vs {needed}", get(&line, "unwind.tau"));
     }
 }
+
+/// A loop's set point as the line's input `unwind.T_set` (the scene's switch): the line moves to it;
+/// and a tunable gain set between steps changes the response (the same step with another kp).
+#[test]
+fn a_set_point_input_moves_the_line_and_a_tunable_gain_changes_its_response() {
+    let mut spec = looped_line(json!([[0.0, 10.0]]), 0.0, 0.0);
+    spec["parts"][0]["set_input"] = json!(true);
+    let runs: Vec<Vec<f64>> = [0.2, 0.6]
+        .iter()
+        .map(|&kp| {
+            let mut line = initialized(&spec);
+            assert!(line.description().variable_by_name("unwind.loop.set").is_none(), "the set point is the input");
+            line.do_step(0.1).unwrap();
+            line.set_real(vr(&line, "unwind.loop.kp"), kp).unwrap();
+            line.set_real(vr(&line, "unwind.T_set"), 450.0).unwrap();
+            (0..600).map(|_| {
+                line.do_step(0.01).unwrap();
+                get(&line, "entry.T")
+            })
+            .collect()
+        })
+        .collect();
+    for (kp, run) in [0.2, 0.6].iter().zip(&runs) {
+        assert!((run[run.len() - 1] - 450.0).abs() < 1e-2, "kp {kp}: the line settles at the new set point ({})", run[run.len() - 1]);
+    }
+    let apart = runs[0].iter().zip(&runs[1]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(apart > 1.0, "another gain must give another response (they differ by {apart} N at most)");
+}

@@ -55,10 +55,10 @@ impl Tangents {
 /// every state, input and time, for as long as the parameters and the roll stay: [R1], [R2]
 /// and [R4] are then linear with coefficients made of parameters. So for a roller that winds
 /// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on, and so do
-/// layers [R9], each its own). Not where the web may slip: [R7] is nonlinear; nor where a loop's
-/// motor has a limit [R11].
+/// layers [R9], each its own). Not where the web may slip: [R7] is nonlinear; nor where a drive has a
+/// loop: its limit [R11] is nonlinear, and its gains and limit are tunable.
 pub fn tangents_fixed(p: &Parameters) -> bool {
-    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && (control::Kind::of(p) == control::Kind::None || p.motor_limit == 0.0)
+    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && control::Kind::of(p) == control::Kind::None
 }
 
 /// What the tangents read besides the direction: the roller now, its drive's tables read at

@@ -126,15 +126,7 @@ class LineODE:
         it and bends exponentially into it over the last 5 %; ff = J*a_ref/R, the inertia torque of the
         line's speed reference (a scene's roll keeps its radius)."""
         lp = node.drive.loop
-        part, quantity = lp.measure
-        if quantity == "T":
-            measured = q[part]["T"]
-        else:  # a load cell: the resultant of the tensions on its bearings, at its wrap
-            back = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[part])
-            forward = sum(q[sp.name]["T"] for sp in self.outs[part])
-            cos = np.cos(np.radians(self.s.component(part).wrap))
-            measured = np.sqrt(max(back * back + forward * forward - 2.0 * back * forward * cos, 0.0))
-        e = lp.sign * (self.pv(lp.set, t) - measured)
+        e = lp.sign * (self.pv(lp.set, t) - q[lp.measure[0]]["T"])  # a span's tension (scenes refuse a load cell's)
         J, R, b = self.inertia[node.name]
         ff = J * self.pslope(self.s.speed_reference()) / R if lp.feedforward else 0.0
         i_int, i_motor = self.i_loop[node.name]

@@ -125,7 +125,7 @@ def span_layers(wp1: Web, wp2: Web) -> list[tuple[Web, Web]]:
 @dataclass
 class Loop:
     """A PI loop in a drive ([R10]-[R11] of the physics docs): the torque that holds a span's tension
-    (`measure` = (span, "T")) or a load cell's reading ((roller, "F")) at `set`; gains in SI (N.m per N,
+    (`measure` = (span, "T"); a load cell's, (roller, "F"), is refused: not wired yet) at `set`; gains in SI (N.m per N,
     N.m per N.s); the motor's torque `limit` (N.m, 0: none) and `lag` (s, 0: none); with
     `feedforward` the torque d(J*v_ref/R)/dt of the line's speed reference (its first speed drive)."""
 
@@ -137,6 +137,7 @@ class Loop:
     lag: float = 0.0
     feedforward: bool = False
     sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
+    set_input: bool = False  # the set point is the Line FMU's input <name>.T_set, starting at `set`
 
 
 @dataclass
@@ -745,9 +746,14 @@ def _loop(r: _Reader, node: Node, what: str) -> Loop:
     part, _, quantity = measure.rpartition(".")
     if not part or quantity not in ("T", "F"):
         raise r.err(o["measure"], f"{what}.measure must be \"SPAN.T\" (a span's tension) or \"ROLLER.F\" (a load cell), found {measure!r}")
+    set_node, set_input = o["set"], False
+    if isinstance(set_node.value, Obj) and "input" in set_node.value:  # the Line FMU's input <name>.T_set
+        set_node, set_input = r.keys(set_node, f"{what}.set", required=("input",))["input"], True
     loop = Loop(
         measure=(part, quantity),
-        set=r.profile(o["set"], units.FORCE, f"{what}.set"),
+        set=Profile.constant(r.quantity(set_node, units.FORCE, f"{what}.set.input")) if set_input
+        else r.profile(set_node, units.FORCE, f"{what}.set"),
+        set_input=set_input,
         kp=r.quantity(o["kp"], units.DIMENSIONLESS, f"{what}.kp (N.m per N)", nonnegative=True),
         ki=r.quantity(o["ki"], units.DIMENSIONLESS, f"{what}.ki (N.m per N.s)", nonnegative=True),
     )
@@ -1245,7 +1251,7 @@ def _downstream_of(scene: Scene, node) -> set:
 
 
 def _check_loops(r, scene: Scene, raw):
-    """A drive's loop measures a span's tension or a load cell (a roller with a wrap) of this line; its
+    """A drive's loop measures a span's tension of this line (a load cell's reading is refused); its
     sign follows from where that is: downstream of the drive more torque lowers it (-1), upstream it
     raises it (+1). A feed-forward needs a speed drive whose profile is the line's speed reference."""
     for node in scene.nodes:
@@ -1260,8 +1266,9 @@ def _check_loops(r, scene: Scene, raw):
             raise r.err(raw[node.name], f"{what}: no part {part!r} in the line")
         if quantity == "T" and not isinstance(c, Span):
             raise r.err(raw[node.name], f"{what}: {part!r} is a {c.type}, not a span: measure its load cell as \"{part}.F\"")
-        if quantity == "F" and getattr(c, "wrap", None) is None:
-            raise r.err(raw[node.name], f"{what}: {c.type} {part!r} has no load cell (give it a \"wrap\")")
+        if quantity == "F":
+            raise r.err(raw[node.name], f"{what}: a loop on a load cell (\"{part}.F\") is not modelled yet: the line does not "
+                                        "wire a load cell's reading into a drive; measure the tension of the span next to it (\"SPAN.T\")")
         if part == node.name:
             raise r.err(raw[node.name], f"{what}: a drive's loop measures another part than its own roller")
         if quantity == "T" and c.layered:
