@@ -169,3 +169,40 @@ def test_a_set_point_input_and_a_tunable_gain_from_fmpy(fmus, tmp_path):
     assert np.max(np.abs(retuned - moved)) > 1.0, "another gain between steps, another response"
     with pytest.raises(FMICallException):
         fmpy_run(fmu, {10: {"unwind.J": 9.0}}, stop=0.2)
+
+
+def speed_looped(feedforward):
+    """A pull roll on a real motor (J = 5 kg.m2) whose speed loop follows a 5 -> 7 m/s ramp, between a
+    tension-driven unwinder and winder on light rolls (their acceleration moves the tensions little)."""
+    drive = {"speed": {"ramp": {"start": "0.5 s", "duration": "1 s", "from": "5 m/s", "to": "7 m/s"}},
+             "loop": {"kp": 250.0, "ki": 625.0}}
+    if feedforward:
+        drive["feedforward"] = "inertia"
+    return parse_scene(json.dumps({
+        "name": "speed_loop", "stop_time": "8 s", "step": "10 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
+            {"type": "unwinder", "name": "unwind", "J": "0.05 kg.m2", "R": "0.3 m", "b": "0.01 N.m.s", "strain": 0.0,
+             "drive": {"tension": "300 N"}},
+            {"type": "span", "name": "a", "L": "1 m", **DAMPED},
+            {"type": "roller", "name": "pull", "J": "5 kg.m2", "R": "0.2 m", "b": "0.05 N.m.s", "drive": drive},
+            {"type": "span", "name": "b", "L": "1 m", **DAMPED},
+            {"type": "winder", "name": "rewind", "J": "0.05 kg.m2", "R": "0.3 m", "b": "0.01 N.m.s", "drive": {"tension": "300 N"}},
+        ],
+        "record": ["pull.v", "pull.tau", "a.T"]}), "speed_loop.json")
+
+
+def test_a_speed_loop_follows_its_ramp_and_its_feedforward_cuts_the_error_tenfold(fmus):
+    """A speed loop on a real motor ("speed" with "loop"): the roll takes J, and the loop's torque moves
+    it. Its integral holds the reference exactly once the ramp is over (against its bearing friction);
+    with the inertia fed forward (J*a_ref/R = 50 N.m through the ramp) its speed error through the ramp
+    is at least ten times smaller than without (measured: 0.0016 m/s against 0.148 m/s, 92x)."""
+    bands = {}
+    for ff in (True, False):
+        scene = speed_looped(ff)
+        for result in both(scene, fmus):
+            t, v = result.time, result.column("pull.v [m/s]")
+            reference = np.interp(t, [0.0, 0.5, 1.5, 8.0], [5.0, 5.0, 7.0, 7.0])
+            assert abs(v[-1] - 7.0) < 1e-6, f"feed-forward {ff}: {v[-1]} m/s at the end"
+            bands[ff] = np.max(np.abs(v - reference))
+    print(f"pull.v off its ramp: {bands[True]:.3g} m/s with the feed-forward, {bands[False]:.3g} without")
+    assert bands[False] >= 10.0 * bands[True]

@@ -83,10 +83,12 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
         profile[drive.kind] = table(drive.profile)
     if drive is not None and drive.loop is not None:
         start.update(loop_values(drive.loop))
-        if not drive.loop.set.is_constant():
-            profile["setpoint"] = table(drive.loop.set)
-        if drive.loop.feedforward:
+        if drive.loop.speed:  # its reference: the speed it holds, and the one it feeds forward
+            profile["reference"] = table(drive.loop.set)
+        elif drive.loop.feedforward:
             profile["reference"] = table(scene.speed_reference())
+        if not drive.loop.speed and not drive.loop.set.is_constant():
+            profile["setpoint"] = table(drive.loop.set)
     strain = getattr(node, "strain", None)
     if strain is not None:
         if strain.is_constant():
@@ -118,9 +120,9 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
 
 def loop_values(loop) -> dict:
     """The Roller's parameters of a drive's loop [R10]-[R11]: a force loop on loop.measured, which the
-    line wires from the span it names (`compile_scene`)."""
+    line wires from the span it names (`compile_scene`), or a speed loop on its own surface speed."""
     return {
-        "loop.kind": 1,
+        "loop.kind": 2 if loop.speed else 1,
         "loop.sign": float(loop.sign),
         "loop.set": float(loop.set.value(0.0)),
         "loop.kp": float(loop.kp),
@@ -400,7 +402,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
 
     for n in scene.nodes:  # a drive's loop reads the tension it holds
         loop = getattr(getattr(n, "drive", None), "loop", None)
-        if loop is not None and loop.measure[1] == "T":
+        if loop is not None and not loop.speed:
             connect(loop.measure[0], "summary_Tension", n.name, "loop.measured")
 
     record, sums = _record(scene)

@@ -121,14 +121,18 @@ class LineODE:
 
     def loop_torque(self, node, t, z, q, dz):
         """A drive's PI loop [R10] and its motor [R11] at (t, z): its torque, its rates into dz.
-        e = sign*(set - measured); u = kp*e + I + ff; I' = ki*e + (limit(u) - u)*ki/kp; the motor's torque
+        e = sign*(set - measured), or v_ref - R*omega for a speed loop; u = kp*e + I + ff; I' = ki*e + (limit(u) - u)*ki/kp; the motor's torque
         limit(u), or with a lag tau_m' = (limit(u) - tau_m)/lag. The limit is the identity up to 95 % of
         it and bends exponentially into it over the last 5 %; ff = J*a_ref/R, the inertia torque of the
         line's speed reference (a scene's roll keeps its radius)."""
         lp = node.drive.loop
-        e = lp.sign * (self.pv(lp.set, t) - q[lp.measure[0]]["T"])  # a span's tension (scenes refuse a load cell's)
         J, R, b = self.inertia[node.name]
-        ff = J * self.pslope(self.s.speed_reference()) / R if lp.feedforward else 0.0
+        if lp.speed:  # a speed loop on its own surface speed, its reference fed forward
+            e = self.pv(lp.set, t) - R * z[self.i_omega[node.name]]
+            ff = J * self.pslope(lp.set) / R if lp.feedforward else 0.0
+        else:  # a span's tension (scenes refuse a load cell's)
+            e = lp.sign * (self.pv(lp.set, t) - q[lp.measure[0]]["T"])
+            ff = J * self.pslope(self.s.speed_reference()) / R if lp.feedforward else 0.0
         i_int, i_motor = self.i_loop[node.name]
         u = lp.kp * e + z[i_int] + ff
         limited = u

@@ -129,8 +129,8 @@ class Loop:
     N.m per N.s); the motor's torque `limit` (N.m, 0: none) and `lag` (s, 0: none); with
     `feedforward` the torque d(J*v_ref/R)/dt of the line's speed reference (its first speed drive)."""
 
-    measure: tuple
-    set: Profile
+    measure: tuple | None  # None: a speed loop, on the roller's own surface speed
+    set: Profile  # a force, or a speed loop's reference speed
     kp: float
     ki: float
     limit: float = 0.0
@@ -138,6 +138,11 @@ class Loop:
     feedforward: bool = False
     sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
     set_input: bool = False  # the set point is the Line FMU's input <name>.T_set, starting at `set`
+
+    @property
+    def speed(self) -> bool:
+        """A speed loop: a real motor holds the surface speed at `set` (N.m per m/s, N.m per m)."""
+        return self.measure is None
 
 
 @dataclass
@@ -386,8 +391,8 @@ class Scene:
             return profile.value(t)
         if node.v_start is not None and t == 0.0:
             return node.v_start
-        for other in self.nodes:
-            p = self.speed_profile(other)
+        for other in [node] + self.nodes:  # a speed loop starts at its reference
+            p = self.speed_or_reference(other)
             if p is not None:
                 return p.value(t)
         return node.v_start or 0.0
@@ -403,8 +408,14 @@ class Scene:
         return sorted(set(picked))
 
     def speed_reference(self):
-        """The line's speed reference: the profile of its first speed-driven part (None: it has none)."""
-        return next((p for p in map(self.speed_profile, self.nodes) if p is not None), None)
+        """The line's speed reference: the profile of its first speed-driven part or speed loop (None: it
+        has none)."""
+        return next((p for p in map(self.speed_or_reference, self.nodes) if p is not None), None)
+
+    def speed_or_reference(self, node):
+        """The speed a node follows: prescribed, or its speed loop's reference (None: neither)."""
+        loop = getattr(getattr(node, "drive", None), "loop", None)
+        return loop.set if loop is not None and loop.speed else self.speed_profile(node)
 
     def torque_profile(self, node):
         """The motor torque of a Roller-FMU node as a profile (N m)."""
@@ -729,6 +740,16 @@ def _web_ref(r: _Reader, webs: dict, node: Node, what: str) -> Web:
 
 def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
     o = r.obj(node, what)
+    if "speed" in kinds and "speed" in o and "loop" in o:  # a speed loop on a real motor
+        o = r.keys(node, what, required=("speed", "loop"), optional=("feedforward",))
+        g = r.keys(o["loop"], f"{what}.loop", required=("kp", "ki"), optional=("limit", "lag"))
+        loop = Loop(measure=None, set=r.profile(o["speed"], units.SPEED, f"{what}.speed"),
+                    kp=r.quantity(g["kp"], units.DIMENSIONLESS, f"{what}.loop.kp (N.m per m/s)", nonnegative=True),
+                    ki=r.quantity(g["ki"], units.DIMENSIONLESS, f"{what}.loop.ki (N.m per m)", nonnegative=True))
+        _motor(r, g, f"{what}.loop", loop)
+        if "feedforward" in o:
+            _feedforward(r, o["feedforward"], f"{what}.feedforward", loop)
+        return Drive("speed loop", None, loop)
     if len(o.items) != 1 or next(iter(o.keys())) not in kinds:
         raise r.err(node, f"{what} must be an object with one key of {', '.join(kinds)}")
     kind, body = next(iter(o.items.items()))
@@ -757,16 +778,25 @@ def _loop(r: _Reader, node: Node, what: str) -> Loop:
         kp=r.quantity(o["kp"], units.DIMENSIONLESS, f"{what}.kp (N.m per N)", nonnegative=True),
         ki=r.quantity(o["ki"], units.DIMENSIONLESS, f"{what}.ki (N.m per N.s)", nonnegative=True),
     )
+    _motor(r, o, what, loop)
+    if "feedforward" in o:
+        _feedforward(r, o["feedforward"], f"{what}.feedforward", loop)
+    return loop
+
+
+def _motor(r: _Reader, o, what: str, loop: Loop):
+    """A loop's motor: its torque "limit" and "lag"."""
     if "limit" in o:
         loop.limit = r.quantity(o["limit"], units.TORQUE, f"{what}.limit", positive=True)
     if "lag" in o:
         loop.lag = r.quantity(o["lag"], units.TIME, f"{what}.lag", nonnegative=True)
-    if "feedforward" in o:
-        ff = r.string(o["feedforward"], f"{what}.feedforward")
-        if ff != "inertia":
-            raise r.err(o["feedforward"], f"{what}.feedforward: the one feed-forward is \"inertia\", found {ff!r}")
-        loop.feedforward = True
-    return loop
+
+
+def _feedforward(r: _Reader, node: Node, what: str, loop: Loop):
+    ff = r.string(node, what)
+    if ff != "inertia":
+        raise r.err(node, f"{what}: the one feed-forward is \"inertia\", found {ff!r}")
+    loop.feedforward = True
 
 
 def _span(r, o_node, name, webs) -> Span:
@@ -872,7 +902,7 @@ def _roller(r, o_node, name, kind) -> Roller:
         if "split" not in o:
             raise r.err(r.key_pos(o["trim"]), f"{what}: trim goes with split (the width a slitter cuts off)")
         c.trim = r.quantity(o["trim"], units.LENGTH, f"{what}: trim", nonnegative=True)
-    if slips and c.drive.kind == "pi":
+    if slips and c.drive.loop is not None:
         raise r.err(r.key_pos(o["traction" if "traction" in o else "nip"]),
                     f"{what}: traction or a nip on a roller whose drive has a loop is not modelled")
     if slips:
@@ -1256,7 +1286,7 @@ def _check_loops(r, scene: Scene, raw):
     raises it (+1). A feed-forward needs a speed drive whose profile is the line's speed reference."""
     for node in scene.nodes:
         loop = getattr(getattr(node, "drive", None), "loop", None)
-        if loop is None:
+        if loop is None or loop.speed:
             continue
         what = f"{node.type} {node.name!r}: drive.pi.measure"
         part, quantity = loop.measure
@@ -1274,7 +1304,7 @@ def _check_loops(r, scene: Scene, raw):
         if quantity == "T" and c.layered:
             raise r.err(raw[node.name], f"{what}: a loop on a laminate's tension is not modelled (measure a plain span)")
         loop.sign = -1.0 if part in _downstream_of(scene, node) else 1.0
-        if loop.feedforward and not any(scene.speed_profile(n) is not None for n in scene.nodes):
+        if loop.feedforward and scene.speed_reference() is None:
             raise r.err(raw[node.name], f"{node.type} {node.name!r}: drive.pi.feedforward needs the line's speed reference, "
                                         "a speed-driven part (its first)")
 
