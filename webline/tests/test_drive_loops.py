@@ -123,8 +123,8 @@ def test_loop_keys_are_checked_and_the_parts_refuse_loops(fmus):
             run_scene(scene, engine, fmu_dir=fmus)
 
 
-def fmpy_run(fmu, changes, stop=2.0, h=0.01):
-    """entry.T at every step of the Line FMU in FMPy, `changes` {time: {name: value}} set between steps."""
+def fmpy_run(fmu, changes, stop=2.0, h=0.01, output="entry.T"):
+    """`output` at every step of the Line FMU in FMPy, `changes` {step: {name: value}} set before that step."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
@@ -142,10 +142,10 @@ def fmpy_run(fmu, changes, stop=2.0, h=0.01):
                 slave.setReal([vr[name]], [value])
             slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
             t += h
-            rows.append(slave.getReal([vr["entry.T"]])[0])
-        return np.array(rows), md
-    finally:
+            rows.append(slave.getReal([vr[output]])[0])
         slave.terminate()
+        return np.array(rows), md
+    finally:  # an instance in the error state is only freed
         slave.freeInstance()
 
 
@@ -171,10 +171,10 @@ def test_a_set_point_input_and_a_tunable_gain_from_fmpy(fmus, tmp_path):
         fmpy_run(fmu, {10: {"unwind.J": 9.0}}, stop=0.2)
 
 
-def speed_looped(feedforward):
+def speed_looped(feedforward, speed=None):
     """A pull roll on a real motor (J = 5 kg.m2) whose speed loop follows a 5 -> 7 m/s ramp, between a
     tension-driven unwinder and winder on light rolls (their acceleration moves the tensions little)."""
-    drive = {"speed": {"ramp": {"start": "0.5 s", "duration": "1 s", "from": "5 m/s", "to": "7 m/s"}},
+    drive = {"speed": speed or {"ramp": {"start": "0.5 s", "duration": "1 s", "from": "5 m/s", "to": "7 m/s"}},
              "loop": {"kp": 250.0, "ki": 625.0}}
     if feedforward:
         drive["feedforward"] = "inertia"
@@ -206,3 +206,21 @@ def test_a_speed_loop_follows_its_ramp_and_its_feedforward_cuts_the_error_tenfol
             bands[ff] = np.max(np.abs(v - reference))
     print(f"pull.v off its ramp: {bands[True]:.3g} m/s with the feed-forward, {bands[False]:.3g} without")
     assert bands[False] >= 10.0 * bands[True]
+
+
+def test_a_speed_input_from_fmpy_moves_the_line(fmus, tmp_path):
+    """"speed": {"input": "5 m/s"} on a speed loop makes its reference the Line FMU's input pull.v_ref:
+    set to 6 m/s from FMPy between steps, the pull roll follows it (to 1e-4 m/s 2.9 s later), and the
+    line with it; an ideal speed drive's reference as an input is refused by name."""
+    scene = speed_looped(False, speed={"input": "5 m/s"})
+    fmu = linefmu.export(scene, tmp_path / "speed.fmu", fmus)
+    held, md = fmpy_run(fmu, {}, stop=1.0, output="pull.v")
+    assert next(v for v in md.modelVariables if v.name == "pull.v_ref").causality == "input"
+    assert np.max(np.abs(held - 5.0)) < 1e-9
+    moved, _ = fmpy_run(fmu, {10: {"pull.v_ref": 6.0}}, stop=3.0, output="pull.v")
+    assert abs(moved[-1] - 6.0) < 1e-4 and moved[5] == held[5], f"pull.v {moved[-1]} after v_ref = 6 m/s"
+    with pytest.raises(SceneError, match="speed input drives a speed loop"):
+        parse_scene(json.dumps({"name": "x", "stop_time": "1 s", "step": "1 ms", "webs": {"PET": PET}, "line": [
+            {"type": "source", "name": "src", "speed": "5 m/s", "strain": 0.0},
+            {"type": "span", "name": "a", "L": "1 m", "web": "PET"},
+            {"type": "winder", "name": "w", "J": "1 kg.m2", "R": "0.2 m", "drive": {"speed": {"input": "5 m/s"}}}]}), "x.json")

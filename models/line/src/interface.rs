@@ -261,6 +261,9 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
                 if ps.set_input {
                     offer!("loop.set", "T_set", Causality::Input);
                 }
+                if ps.speed_input {
+                    offer!("loop.speed", "v_ref", Causality::Input);
+                }
                 if role == Role::Dancer {
                     offer!("F_load", "F_load", Causality::Input);
                 }
@@ -269,7 +272,8 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
         for v in d.variables.iter() {
             let offered = !NOT_OFFERED.contains(&&*v.name)
                 && (v.kind != Kind::Real || parts[p].acts(v.vr, ps.speed_driven()))
-                && !(ps.set_input && v.name == "loop.set");
+                && !(ps.set_input && v.name == "loop.set")
+                && !(ps.speed_input && v.name == "loop.speed");
             if v.causality == Causality::Parameter && v.kind != Kind::String && offered {
                 offer!(&v.name, &v.name, Causality::Parameter);
             }

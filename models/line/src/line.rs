@@ -67,6 +67,9 @@ impl Line {
             if ps.set_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 1) {
                 return Err(FmiError::error(format!("line.json: part {}: set_input needs a roller whose drive has a force loop (loop.kind = 1)", ps.name)));
             }
+            if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 2) {
+                return Err(FmiError::error(format!("line.json: part {}: speed_input needs a roller whose drive has a speed loop (loop.kind = 2)", ps.name)));
+            }
             if ps.profile.is_some() {
                 let vr = part.description().variable_by_name("profile").expect("parts have a profile").vr;
                 part.set_string(vr, &format!("{PROFILE_FOLDER}/{}.json", ps.name))?;

@@ -381,7 +381,9 @@ impl Part {
                     | R::nip_mu
                     | R::air_roughness
                     | R::air_viscosity => p.traction,
-                    R::loop_set | R::loop_kp | R::loop_ki | R::motor_limit => p.loop_kind != 0,
+                    R::loop_set => p.loop_kind == 1,
+                    R::loop_speed => p.loop_kind == 2,
+                    R::loop_kp | R::loop_ki | R::motor_limit => p.loop_kind != 0,
                     _ => true,
                 }
             }

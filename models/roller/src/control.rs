@@ -2,7 +2,7 @@
 //! whose integrator is a state, a smooth torque limit with back-calculation
 //! anti-windup, an inertia feed-forward and a first-order torque lag.
 //!
-//! [R10] e = s*(set - F_measured) (force loop), e = v_ref - v (speed loop);
+//! [R10] e = s*(set - F_measured) (force loop), e = v_ref - v (speed loop; v_ref: the reference table, else loop.speed);
 //!       u = kp*e + I + tau_ff;   dI/dt = ki*e + (sat(u) - u)/T_t,  T_t = kp/ki (1 s if a gain is 0);
 //!       tau_ff = d(J*v_ref/r)/dt = J*a_ref/r + (J' - J*r'/r)*v_ref/r   (r', J' of [R3] at v_ref)
 //! [R11] motor.torque = sat(u) (no lag), or d(motor.torque)/dt = (sat(u) - motor.torque)/T_m;

@@ -258,7 +258,7 @@ impl Roller {
                 let set = self.table(Key::Set).map_or(p.loop_set, |t| self.read(t, self.time).0);
                 (p.loop_sign * (set - self.inputs.measured), [-p.loop_sign, 0.0, 0.0])
             }
-            _ => (reference.map_or(0.0, |(v, _)| v) - r * omega, [0.0, -r, -omega]),
+            _ => (reference.map_or(p.loop_speed, |(v, _)| v) - r * omega, [0.0, -r, -omega]),
         };
         let (ff, dff_r) = match reference {
             Some((v, a)) if p.loop_feedforward => control::feedforward(p, r, self.roll.inertia, v, a),

@@ -44,6 +44,8 @@ pub struct Parameters {
     /// The drive's loop [R10]: 0 none, 1 force, 2 speed (`control::Kind`).
     pub loop_kind: i32,
     pub loop_set: f64,
+    /// A speed loop's reference where the profile has no reference table.
+    pub loop_speed: f64,
     pub loop_kp: f64,
     pub loop_ki: f64,
     pub loop_sign: f64,

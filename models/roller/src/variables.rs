@@ -85,6 +85,7 @@ fmi_core::bind_variables! {
         traction_slip_start: param(params.traction_slip_start),
         loop_measured: input(measured),
         loop_set: param(params.loop_set),
+        loop_speed: param(params.loop_speed),
         loop_kp: param(params.loop_kp),
         loop_ki: param(params.loop_ki),
         loop_sign: param(params.loop_sign),

@@ -83,7 +83,9 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
         profile[drive.kind] = table(drive.profile)
     if drive is not None and drive.loop is not None:
         start.update(loop_values(drive.loop))
-        if drive.loop.speed:  # its reference: the speed it holds, and the one it feeds forward
+        if drive.loop.speed and drive.loop.set_input:  # the Line FMU's input v_ref, starting there
+            start["loop.speed"] = float(drive.loop.set.value(0.0))
+        elif drive.loop.speed:  # its reference: the speed it holds, and the one it feeds forward
             profile["reference"] = table(drive.loop.set)
         elif drive.loop.feedforward:
             profile["reference"] = table(scene.speed_reference())

@@ -137,7 +137,7 @@ class Loop:
     lag: float = 0.0
     feedforward: bool = False
     sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
-    set_input: bool = False  # the set point is the Line FMU's input <name>.T_set, starting at `set`
+    set_input: bool = False  # the set point is the Line FMU's input <name>.T_set (<name>.v_ref), starting at `set`
 
     @property
     def speed(self) -> bool:
@@ -740,10 +740,22 @@ def _web_ref(r: _Reader, webs: dict, node: Node, what: str) -> Web:
 
 def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
     o = r.obj(node, what)
+    if "speed" in kinds and "speed" in o and isinstance(o["speed"].value, Obj) and "input" in o["speed"].value \
+            and "loop" not in o:
+        raise r.err(o["speed"], f"{what}.speed: a speed input drives a speed loop (a real motor): give the drive a "
+                                "\"loop\" ({\"kp\", \"ki\"}); an ideal speed drive's reference as an input is not modelled yet")
     if "speed" in kinds and "speed" in o and "loop" in o:  # a speed loop on a real motor
         o = r.keys(node, what, required=("speed", "loop"), optional=("feedforward",))
         g = r.keys(o["loop"], f"{what}.loop", required=("kp", "ki"), optional=("limit", "lag"))
-        loop = Loop(measure=None, set=r.profile(o["speed"], units.SPEED, f"{what}.speed"),
+        speed_node, speed_input = o["speed"], False
+        if isinstance(speed_node.value, Obj) and "input" in speed_node.value:  # the Line FMU's input <name>.v_ref
+            speed_node, speed_input = r.keys(speed_node, f"{what}.speed", required=("input",))["input"], True
+            if "feedforward" in o:
+                raise r.err(r.key_pos(o["feedforward"]), f"{what}: a speed loop fed by an input has no reference "
+                                                         "acceleration to feed forward")
+        loop = Loop(measure=None, set_input=speed_input,
+                    set=Profile.constant(r.quantity(speed_node, units.SPEED, f"{what}.speed.input")) if speed_input
+                    else r.profile(speed_node, units.SPEED, f"{what}.speed"),
                     kp=r.quantity(g["kp"], units.DIMENSIONLESS, f"{what}.loop.kp (N.m per m/s)", nonnegative=True),
                     ki=r.quantity(g["ki"], units.DIMENSIONLESS, f"{what}.loop.ki (N.m per m)", nonnegative=True))
         _motor(r, g, f"{what}.loop", loop)
