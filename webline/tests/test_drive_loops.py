@@ -224,3 +224,26 @@ def test_a_speed_input_from_fmpy_moves_the_line(fmus, tmp_path):
             {"type": "source", "name": "src", "speed": "5 m/s", "strain": 0.0},
             {"type": "span", "name": "a", "L": "1 m", "web": "PET"},
             {"type": "winder", "name": "w", "J": "1 kg.m2", "R": "0.2 m", "drive": {"speed": {"input": "5 m/s"}}}]}), "x.json")
+
+
+def test_a_powder_brake_holds_the_closed_form_tension_and_starts_from_rest(fmus):
+    """An unwinder braked by a powder brake of 200 N.m ("brake": its torque -B*tanh(v/v_slip) opposes
+    the motion, [R12]) fed into a pull roll that ramps from rest to 10 m/s: at rest the brake gives
+    nothing (the line starts there, steady), and running it holds T = (B + b*omega)/R = 404 N at
+    10 m/s (tanh(1000) = 1), in both engines."""
+    scene = parse_scene(json.dumps({
+        "name": "brake", "stop_time": "3 s", "step": "10 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
+            {"type": "unwinder", "name": "unwind", "J": "0.5 kg.m2", "R": "0.5 m", "b": "0.1 N.m.s", "strain": 0.0,
+             "v_start": "0 m/s", "drive": {"brake": "200 N.m"}},
+            {"type": "span", "name": "entry", "L": "2 m", **DAMPED},
+            {"type": "sink", "name": "pull", "speed": {"ramp": {"start": "0.2 s", "duration": "1 s", "from": "0 m/s",
+                                                                 "to": "10 m/s"}}},
+        ],
+        "record": ["entry.T", "unwind.v", "unwind.tau"]}), "brake.json")
+    for result in both(scene, fmus):
+        T, v = result.column("entry.T [N]"), result.column("unwind.v [m/s]")
+        assert abs(T[0]) < 1e-9 and abs(v[0]) < 1e-12, "at rest the brake holds nothing"
+        expected = (200.0 + 0.1 * v[-1] / 0.5) / 0.5
+        assert abs(T[-1] - expected) < 1e-6 * expected, f"{T[-1]} N vs {expected} N"
+        assert abs(result.column("unwind.tau [N.m]")[-1] + 200.0) < 1e-9

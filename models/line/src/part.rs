@@ -289,7 +289,7 @@ impl Part {
     /// Whether the part's partials along the line's knowns stay the same until an event or a
     /// parameter changes it (a roller's `tangents_fixed`); a span's move with its strain.
     pub fn tangents_fixed(&self) -> bool {
-        matches!(self, Part::Roller(r) if roller::jacobian::tangents_fixed(&r.params))
+        matches!(self, Part::Roller(r) if r.tangents_fixed())
     }
 
     /// The part's continuous states the line integrates (indices into its

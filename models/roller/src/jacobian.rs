@@ -82,6 +82,8 @@ pub struct Point<'a> {
     pub contact: Option<contact::State>,
     /// The drive's loop [R10]-[R11].
     pub control: Option<control::Point>,
+    /// d(a powder brake's torque)/d(surface speed) [R12] (0 without one).
+    pub brake_slope: f64,
 }
 
 impl<'a> Point<'a> {
@@ -113,6 +115,7 @@ impl<'a> Point<'a> {
             strain_table: self.strain_table,
             slip,
             control: self.control,
+            brake_slope: self.brake_slope,
         }
     }
 }
@@ -151,6 +154,7 @@ pub struct Linearization<'a> {
     strain_table: bool,
     slip: Option<Slip>,
     control: Option<control::Point>,
+    brake_slope: f64,
 }
 
 /// Where the web may slip on the roller: the contact [R6]-[R8] and what it moves, with gradients.
@@ -197,7 +201,7 @@ impl Linearization<'_> {
             (d_torque, d_omega_rate, 0.0)
         } else {
             // omega' = (r*(F_b - F_a) + tau - b*omega - J'*omega)/J with J' = 2*pi*rho*w*r^3*r'.
-            let d_torque = d.u.torque + p.roll_sign() * self.tension * d_r + d_motor_torque;
+            let d_torque = d.u.torque + p.roll_sign() * self.tension * d_r + d_motor_torque + self.brake_slope * d_v;
             let k = 2.0 * PI * p.wound_density * p.wound_width;
             let j_rate = if winding { k * r.powi(3) * r_rate } else { 0.0 };
             let d_j_rate = if winding { k * (3.0 * r * r * d_r * r_rate + r.powi(3) * d_r_rate) } else { 0.0 };

@@ -224,7 +224,22 @@ impl Roller {
     pub fn drive_torque(&self) -> f64 {
         match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => physics::speed_drive_torque(&self.params, &self.roll, self.web_torque(), self.omega.value(), self.read(t, self.time).1),
-            _ => self.torque_at(self.time).0 + self.motor_torque(),
+            _ => self.torque_at(self.time).0 + self.motor_torque() + self.brake().0,
+        }
+    }
+
+    /// Whether the tangents along omega, the carriage and the inputs stay as they are until an event or
+    /// a parameter changes them (`jacobian::tangents_fixed`; a brake [R12] is nonlinear in omega).
+    pub fn tangents_fixed(&self) -> bool {
+        crate::jacobian::tangents_fixed(&self.params) && self.table(Key::Brake).is_none()
+    }
+
+    /// A powder brake's torque now and its slope in the surface speed [R12] (0 without a brake table).
+    #[inline]
+    fn brake(&self) -> (f64, f64) {
+        match self.table(Key::Brake) {
+            Some(table) => physics::brake_torque(self.read(table, self.time).0, physics::surface_speed(self.roll.radius, self.omega.value()), self.params.brake_v_slip),
+            None => (0.0, 0.0),
         }
     }
 
@@ -308,7 +323,7 @@ impl Roller {
             }
             _ => {
                 let omega = self.omega.value();
-                let torque = self.torque_at(self.time).0 + control.map_or(0.0, |c| c.law.torque);
+                let torque = self.torque_at(self.time).0 + control.map_or(0.0, |c| c.law.torque) + self.brake().0;
                 let rate = physics::omega_rate(p, &self.roll, self.web_torque_with(friction), omega, torque, inertia_rate);
                 (rate, self.roll.radius * rate + omega * radius_rate)
             }
@@ -367,6 +382,7 @@ impl Roller {
             strain_table: self.table(Key::Strain).is_some(),
             contact: self.params.traction.then(|| self.contact_state()),
             control: self.control(),
+            brake_slope: self.brake().1,
         };
         point.linearize()
     }
@@ -404,9 +420,9 @@ impl Roller {
         let r = self.roll.radius;
         let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
         let mut v_web = self.v_web;
-        if Kind::of(p) != Kind::None {
-            // A loop [R10]-[R11] (no speed table, no slip: refused): its integrator, its motor and the
-            // roll's own (omega, r), with J moving with r, by the same L-stable method.
+        if Kind::of(p) != Kind::None || self.table(Key::Brake).is_some() {
+            // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused): the loop's integrator,
+            // its motor and the roll's own (omega, r), with J moving with r, by the same L-stable method.
             let y = self.controlled_step(t, h)?;
             let carriage = if p.carriage {
                 let (g0, g1) = self.carriage_force(t);

@@ -53,6 +53,8 @@ pub struct Parameters {
     /// The loop's motor [R11]: its torque limit (0: none) and lag (0: none).
     pub motor_limit: f64,
     pub motor_lag: f64,
+    /// A powder brake's speed scale [R12].
+    pub brake_v_slip: f64,
 }
 
 /// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque).

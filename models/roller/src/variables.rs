@@ -86,6 +86,7 @@ fmi_core::bind_variables! {
         loop_measured: input(measured),
         loop_set: param(params.loop_set),
         loop_speed: param(params.loop_speed),
+        brake_v_slip: param(params.brake_v_slip),
         loop_kp: param(params.loop_kp),
         loop_ki: param(params.loop_ki),
         loop_sign: param(params.loop_sign),

@@ -529,3 +529,31 @@ def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, l
     if me and label == "force-ff-limit-lag":
         slope = a["der(motor.torque)", "loop.I"] * 0.02
         assert 0.0 < slope < 0.9, f"the command must sit in the limit's bend (its slope {slope})"
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_roller_with_a_brake_matches_finite_differences(roller, tmp_path, kind):
+    """A powder brake [R12] near rest (v = 4 mm/s, where tanh(v/v_slip) bends) on a roll being wound."""
+    import json
+
+    md, unzipdir, vr = roller
+    path = tmp_path / "profile.json"
+    path.write_text(json.dumps({"brake": [[0, 2.0], [10, 3.0]]}))
+    me = kind == "ModelExchange"
+    fmu = instantiate(unzipdir, md, kind)
+    try:
+        params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
+        values = {**params, **ROLLER_POINT, "web_b.F": 180.0, "roll": 1, "profile": str(path), "v_start": 0.004}
+        start(fmu, vr, values, me=me)
+        if me:
+            fmu.setTime(0.25)
+            fmu.setContinuousStates((fmi2Real * 7)(0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0), 7)
+        else:
+            fmu.doStep(0.0, 0.01)
+        knowns = ROLLER_INPUTS[:5] + (("omega", "r") if me else ())
+        a, f, n = roller_jacobians(fmu, vr, ("tau", "der(omega)", "der(r)"), knowns)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    what = f"Roller {kind} brake"
+    print(f"{what}: max relative error {compare(what, a, f, n):.1e}")

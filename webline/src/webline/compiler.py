@@ -33,7 +33,7 @@ from .master import Master, Options, settle_start_values
 from .profiles import Profile
 from .result import Result
 from .names import ROLLER_VARIABLES, SPAN_VARIABLES
-from .scene import Dancer, Scene, SceneError, Span
+from .scene import BRAKE_V_SLIP, Dancer, Scene, SceneError, Span
 from .system import Component, Connection, System
 
 # A roller whose surface speed is prescribed (source, sink, speed drive) needs
@@ -79,8 +79,10 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if node.type in ROLL:
         start["roll"] = ROLL[node.type]
     drive = getattr(node, "drive", None)
-    if drive is not None and drive.kind in ("torque", "tension"):
+    if drive is not None and drive.kind in ("torque", "tension", "brake"):
         profile[drive.kind] = table(drive.profile)
+    if drive is not None and drive.kind == "brake":
+        start["brake.v_slip"] = BRAKE_V_SLIP
     if drive is not None and drive.loop is not None:
         start.update(loop_values(drive.loop))
         if drive.loop.speed and drive.loop.set_input:  # the Line FMU's input v_ref, starting there

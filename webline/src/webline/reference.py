@@ -47,7 +47,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
 from .result import Result
-from .scene import Dancer, Prescribed, Roller, Scene, SceneError, Span, span_layers, start_strain
+from .scene import BRAKE_V_SLIP, Dancer, Prescribed, Roller, Scene, SceneError, Span, span_layers, start_strain
 
 RTOL = 1e-10
 
@@ -108,7 +108,7 @@ class LineODE:
     def pslope(self, profile):
         return profile.slope(self.segment[0])
 
-    def torque(self, node, t):
+    def torque(self, node, t, z):
         d = getattr(node, "drive", None)
         if d is None:  # a dancer's roller is an idler
             return 0.0
@@ -117,6 +117,9 @@ class LineODE:
         if d.kind == "tension":
             R = self.inertia[node.name][1]
             return (-R if node.type == "unwinder" else R) * self.pv(d.profile, t)
+        if d.kind == "brake":  # a powder brake opposes the surface's motion, through 0 at rest [R12]
+            J, R, b = self.inertia[node.name]
+            return -self.pv(d.profile, t) * np.tanh(R * z[self.i_omega[node.name]] / BRAKE_V_SLIP)
         return 0.0
 
     def loop_torque(self, node, t, z, q, dz):
@@ -210,7 +213,7 @@ class LineODE:
             if node.name in self.i_vw and not self.stuck:  # the web pulls the roller through its friction only [R6]
                 contact = self.contact(node, t, z, v, q)
                 F_down, F_up = -contact["f"], 0.0
-            tau = self.torque(node, t)
+            tau = self.torque(node, t, z)
             if node.name in self.i_loop:
                 q[node.name] = {"tau": tau + self.loop_torque(node, t, z, q, dz)}
                 tau = q[node.name]["tau"]
@@ -484,7 +487,7 @@ class LineODE:
             elif quantity == "omega":
                 row.append(z[self.i_omega[cname]])
             elif quantity == "tau":
-                row.append(q[cname]["tau"] if cname in self.i_loop else self.torque(c, t))
+                row.append(q[cname]["tau"] if cname in self.i_loop else self.torque(c, t, z))
             elif quantity == "y":
                 row.append(z[self.i_y[cname]])
             elif quantity == "y_dot":

@@ -122,6 +122,10 @@ def span_layers(wp1: Web, wp2: Web) -> list[tuple[Web, Web]]:
     return list(zip(wp1.plies, wp2.plies))
 
 
+# A powder brake's speed scale [R12]: its torque passes through 0 at rest over about this surface speed.
+BRAKE_V_SLIP = 0.01  # m/s
+
+
 @dataclass
 class Loop:
     """A PI loop in a drive ([R10]-[R11] of the physics docs): the torque that holds a span's tension
@@ -150,7 +154,8 @@ class Drive:
     """How a roller is driven: 'idler' (no torque), 'torque', 'tension' (an
     end roller's motor holds a tension: tau = -R*T at an unwinder, +R*T at a
     winder), 'speed' (an ideal speed drive: the surface speed follows the
-    profile; no Roller FMU) or 'pi' (a tension loop, `loop`)."""
+    profile; no Roller FMU), 'pi' (a tension loop, `loop`), 'speed loop' (a real motor's, `loop`)
+    or 'brake' (a powder brake: -B*tanh(v/BRAKE_V_SLIP), B the profile, [R12])."""
 
     kind: str
     profile: Profile | None = None
@@ -767,7 +772,7 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
     kind, body = next(iter(o.items.items()))
     if kind == "pi":
         return Drive("pi", None, _loop(r, body, f"{what}.pi"))
-    dim = {"torque": units.TORQUE, "tension": units.FORCE, "speed": units.SPEED}[kind]
+    dim = {"torque": units.TORQUE, "tension": units.FORCE, "speed": units.SPEED, "brake": units.TORQUE}[kind]
     return Drive(kind, r.profile(body, dim, f"{what}.{kind}"))
 
 
@@ -881,8 +886,8 @@ def _roller(r, o_node, name, kind) -> Roller:
         required.append("strain")
     o = r.keys(o_node, what, required=required, optional=optional)
     c = Roller(name=name, type=kind, where=f"{r.source}:{o_node.line}:{o_node.col}")
-    drives = {"roller": ("torque", "speed", "pi"), "unwinder": ("torque", "tension", "speed", "pi"),
-              "winder": ("torque", "tension", "speed", "pi")}
+    drives = {"roller": ("torque", "speed", "pi", "brake"), "unwinder": ("torque", "tension", "speed", "pi", "brake"),
+              "winder": ("torque", "tension", "speed", "pi", "brake")}
     if "drive" in o:
         c.drive = _drive(r, o["drive"], f"{what}: drive", drives[kind])
     slips = "traction" in o or "nip" in o
@@ -914,9 +919,9 @@ def _roller(r, o_node, name, kind) -> Roller:
         if "split" not in o:
             raise r.err(r.key_pos(o["trim"]), f"{what}: trim goes with split (the width a slitter cuts off)")
         c.trim = r.quantity(o["trim"], units.LENGTH, f"{what}: trim", nonnegative=True)
-    if slips and c.drive.loop is not None:
+    if slips and (c.drive.loop is not None or c.drive.kind == "brake"):
         raise r.err(r.key_pos(o["traction" if "traction" in o else "nip"]),
-                    f"{what}: traction or a nip on a roller whose drive has a loop is not modelled")
+                    f"{what}: traction or a nip on a roller whose drive has a loop or a brake is not modelled")
     if slips:
         for k, why in (("merge", "a laminating nip"), ("split", "a slitter")):
             if k in o:
