@@ -247,3 +247,25 @@ def test_a_powder_brake_holds_the_closed_form_tension_and_starts_from_rest(fmus)
         expected = (200.0 + 0.1 * v[-1] / 0.5) / 0.5
         assert abs(T[-1] - expected) < 1e-6 * expected, f"{T[-1]} N vs {expected} N"
         assert abs(result.column("unwind.tau [N.m]")[-1] + 200.0) < 1e-9
+
+
+def test_a_loop_on_a_wound_roll_feeds_its_changing_inertia_forward(fmus):
+    """A tension loop with its feed-forward on an unwinder whose 1 mm board winds off ("wound"): its
+    radius and inertia move [R3], and the feed-forward d(J*v_ref/r)/dt keeps all three terms. The Line
+    FMU (the Roller's own feed-forward) and the reference (its own) agree to 1e-6 through a ramp."""
+    board = {"E": "3 GPa", "thickness": "1 mm", "width": "1 m", "density": "700 kg/m3", "d_r": "10 ms"}
+    scene = parse_scene(json.dumps({
+        "name": "wound_loop", "stop_time": "1.5 s", "step": "10 ms", "start": "equilibrium", "webs": {"board": board},
+        "line": [
+            {"type": "unwinder", "name": "unwind", "J": "8 kg.m2", "R": "0.4 m", "b": "0.1 N.m.s", "strain": 0.0,
+             "wound": {"thickness": "1 mm"},
+             "drive": {"pi": {"measure": "entry.T", "set": "300 N", "kp": 2.0, "ki": 5.0, "feedforward": "inertia"}}},
+            {"type": "span", "name": "entry", "L": "2 m", "web": "board", "effects": ["includeDamping"]},
+            {"type": "sink", "name": "pull", "speed": {"ramp": {"start": "0.2 s", "duration": "1 s", "from": "5 m/s",
+                                                                 "to": "6 m/s"}}},
+        ],
+        "record": ["entry.T", "unwind.r", "unwind.tau"]}), "wound_loop.json")
+    line, _ = both(scene, fmus)
+    r = line.column("unwind.r [m]")
+    assert r[-1] < r[0] - 1e-3, "the roll winds off"
+    assert np.max(np.abs(line.column("entry.T [N]") - 300.0)) < 5.0

@@ -97,9 +97,9 @@ def test_fmi_sim_gives_fmpys_tension(fmu_path, fmpy_result, tmp_path):
 
 
 def test_fmi_sim_cannot_read_our_fmi3_description_and_says_why(fmu_path):
-    """The README's importers table says fmi-sim 0.7.0 reads FMI 2.0 only: it
+    """The README's importers paragraph says fmi-sim 0.7.0 reads FMI 2.0 only: it
     refuses FMI 3.0's `unit` on a Float64 (legal in FMI 3.0). If a new fmi-sim
-    reads it, this fails, and the table must change."""
+    reads it, this fails, and the paragraph must change."""
     fmi_sim = shutil.which("fmi-sim")
     assert fmi_sim, "fmi-sim is not on PATH: tests/run.sh installs it (tests/tools.sh)"
     fmu3 = fmu_path.parent / "fmi3" / fmu_path.name

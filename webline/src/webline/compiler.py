@@ -78,6 +78,10 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     start["v_start"] = float(scene.initial_speed(node))
     if node.type in ROLL:
         start["roll"] = ROLL[node.type]
+    wound = getattr(node, "wound", None)
+    if wound is not None:
+        start.update({"wound.thickness": float(wound.thickness), "wound.density": float(wound.density),
+                      "wound.width": float(wound.width)})
     drive = getattr(node, "drive", None)
     if drive is not None and drive.kind in ("torque", "tension", "brake"):
         profile[drive.kind] = table(drive.profile)

@@ -232,9 +232,17 @@ def linearize(system, method: str = "auto", settle_passes: int | None = None) ->
                 use = "derivatives" if inst.provides_directional_derivative() else "differences"
             J = inst.jacobians_by_derivatives(ins, outs) if use == "derivatives" else inst.jacobians_by_differences(ins, outs)
             n = inst.n
+            states = [v.name for v in inst.state_vars]
+            # A roll's radius is held: it moves over the roll's life, and its slow drift (an unwinder
+            # turns faster as it empties, a mode growing at h*v/(2*pi*r^2)) is the line's, not the coupling's.
+            keep = [i for i, name in enumerate(states) if not (c.kind == "roller" and name == "r")]
+            rows = keep + list(range(n, J.shape[0]))
+            cols = keep + list(range(n, J.shape[1]))
+            J = J[np.ix_(rows, cols)]
+            n = len(keep)
             blocks.append(Block(
                 name=c.name, A=J[:n, :n], B=J[:n, n:], C=J[n:, :n], D=J[n:, n:],
-                states=[v.name for v in inst.state_vars], inputs=ins, outputs=outs,
+                states=[states[i] for i in keep], inputs=ins, outputs=outs,
                 interpolates=interpolates(c, inst.md), method=use,
             ))
             sources.append([(index[conn.source[0]], outputs[conn.source[0]].index(conn.source[1])) for conn in inputs[c.name]])

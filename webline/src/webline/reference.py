@@ -81,9 +81,13 @@ class LineODE:
         self.i_omega = {m.name: n_s + i for i, m in enumerate(self.movers)}
         self.i_y = {d.name: n_s + n_m + 2 * i for i, d in enumerate(self.dancers)}
         self.i_vw = {c.name: n_s + n_m + 2 * n_d + i for i, c in enumerate(self.slippers)}
+        # A roll whose web winds off or on: its radius is a state [R3].
+        self.rolls = [m for m in self.movers if getattr(m, "wound", None) is not None]
+        first_roll = n_s + n_m + 2 * n_d + len(self.slippers)
+        self.i_r = {m.name: first_roll + i for i, m in enumerate(self.rolls)}
         # A drive's loop: its integrator, then its motor's torque where it lags.
         self.loops = [c for c in self.movers if getattr(getattr(c, "drive", None), "loop", None) is not None]
-        first = n_s + n_m + 2 * n_d + len(self.slippers)
+        first = first_roll + len(self.rolls)
         self.i_loop = {}
         for c in self.loops:
             self.i_loop[c.name] = (first, first + 1 if c.drive.loop.lag > 0 else None)
@@ -108,6 +112,17 @@ class LineODE:
     def pslope(self, profile):
         return profile.slope(self.segment[0])
 
+    def radius(self, node, z):
+        """The roller's radius: a roll's state where its web winds [R3], else its R."""
+        i = self.i_r.get(node.name)
+        return z[i] if i is not None else self.inertia[node.name][1]
+
+    def roll_inertia(self, node, r):
+        """J(r) = J_0 + (pi/2) rho w (r^4 - r_0^4) [R3], J_0 and r_0 the roll's at the start."""
+        J, R, _ = self.inertia[node.name]
+        w = node.wound
+        return J + 0.5 * np.pi * w.density * w.width * (r**4 - R**4)
+
     def torque(self, node, t, z):
         d = getattr(node, "drive", None)
         if d is None:  # a dancer's roller is an idler
@@ -115,27 +130,36 @@ class LineODE:
         if d.kind == "torque":
             return self.pv(d.profile, t)
         if d.kind == "tension":
-            R = self.inertia[node.name][1]
+            R = self.radius(node, z)
             return (-R if node.type == "unwinder" else R) * self.pv(d.profile, t)
         if d.kind == "brake":  # a powder brake opposes the surface's motion, through 0 at rest [R12]
-            J, R, b = self.inertia[node.name]
-            return -self.pv(d.profile, t) * np.tanh(R * z[self.i_omega[node.name]] / BRAKE_V_SLIP)
+            return -self.pv(d.profile, t) * np.tanh(self.speed(node, t, z) / BRAKE_V_SLIP)
         return 0.0
 
     def loop_torque(self, node, t, z, q, dz):
         """A drive's PI loop [R10] and its motor [R11] at (t, z): its torque, its rates into dz.
         e = sign*(set - measured), or v_ref - R*omega for a speed loop; u = kp*e + I + ff; I' = ki*e + (limit(u) - u)*ki/kp; the motor's torque
         limit(u), or with a lag tau_m' = (limit(u) - tau_m)/lag. The limit is the identity up to 95 % of
-        it and bends exponentially into it over the last 5 %; ff = J*a_ref/R, the inertia torque of the
-        line's speed reference (a scene's roll keeps its radius)."""
+        it and bends exponentially into it over the last 5 %; ff = d(J*v_ref/R)/dt, the inertia torque of
+        the speed reference (its own for a speed loop, else the line's): J*a_ref/R, and on a roll being
+        wound (J_rate - J*R_rate/R)*v_ref/R with R_rate, J_rate of [R3] at v_ref."""
         lp = node.drive.loop
-        J, R, b = self.inertia[node.name]
-        if lp.speed:  # a speed loop on its own surface speed, its reference fed forward
+        R = self.radius(node, z)
+        J = self.roll_inertia(node, R) if node.name in self.i_r else self.inertia[node.name][0]
+        if lp.speed:  # a speed loop on its own surface speed
             e = self.pv(lp.set, t) - R * z[self.i_omega[node.name]]
-            ff = J * self.pslope(lp.set) / R if lp.feedforward else 0.0
         else:  # a span's tension (scenes refuse a load cell's)
             e = lp.sign * (self.pv(lp.set, t) - q[lp.measure[0]]["T"])
-            ff = J * self.pslope(self.s.speed_reference()) / R if lp.feedforward else 0.0
+        ff = 0.0
+        if lp.feedforward:
+            reference = lp.set if lp.speed else self.s.speed_reference()
+            v_ref, a_ref = self.pv(reference, t), self.pslope(reference)
+            ff = J * a_ref / R
+            if node.name in self.i_r:
+                w = node.wound
+                R_rate = (-1.0 if node.type == "unwinder" else 1.0) * w.thickness * v_ref / (2.0 * np.pi * R)
+                J_rate = 2.0 * np.pi * w.density * w.width * R**3 * R_rate
+                ff += (J_rate - J * R_rate / R) * v_ref / R
         i_int, i_motor = self.i_loop[node.name]
         u = lp.kp * e + z[i_int] + ff
         limited = u
@@ -155,8 +179,7 @@ class LineODE:
             return self.pv(node.speed, t)
         if isinstance(node, Roller) and node.drive.kind == "speed":
             return self.pv(node.drive.profile, t)
-        J, R, b = self.inertia[node.name]
-        return R * z[self.i_omega[node.name]]
+        return self.radius(node, z) * z[self.i_omega[node.name]]
 
     def contact(self, node, t, z, v, q):
         """Where the web may slip on `node`: its friction on the web and what it reports, at (t, z)."""
@@ -206,6 +229,15 @@ class LineODE:
         for node in self.movers:
             J, R, b = self.inertia[node.name]
             omega = z[self.i_omega[node.name]]
+            J_rate = 0.0
+            if node.name in self.i_r:  # [R3]: d(r^2)/dt = s h v/pi, J(r); [R1] balances d(J omega)/dt
+                R = z[self.i_r[node.name]]
+                J = self.roll_inertia(node, R)
+                w = node.wound
+                sign = -1.0 if node.type == "unwinder" else 1.0
+                r_rate = sign * w.thickness * omega / (2.0 * np.pi)  # s h v/(2 pi r), v = r omega
+                dz[self.i_r[node.name]] = r_rate
+                J_rate = 2.0 * np.pi * w.density * w.width * R**3 * r_rate
             # Every web leaving pulls forward, every web arriving pulls back (a nip, a slitter: several).
             F_down = sum(q[sp.name]["T"] for sp in self.outs[node.name])
             F_up = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[node.name])
@@ -217,10 +249,10 @@ class LineODE:
             if node.name in self.i_loop:
                 q[node.name] = {"tau": tau + self.loop_torque(node, t, z, q, dz)}
                 tau = q[node.name]["tau"]
-            num = R * (F_down - F_up) + tau - b * omega
+            num = R * (F_down - F_up) + tau - b * omega - J_rate * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
-            accel[node.name] = R * domega
+            accel[node.name] = R * domega + omega * dz[self.i_r[node.name]] if node.name in self.i_r else R * domega
         for sp in self.spans:
             down = self.down[sp.name]
             if down.name in accel:
@@ -326,6 +358,9 @@ class LineODE:
         springless = [d for d in self.dancers if d.stiffness == 0.0]
         held = [self.i_y[d.name] for d in springless]  # their positions: held
         balance = [i + 1 for i in held]  # their accelerations: checked afterwards
+        # A roll's radius is never steady while web winds: held at its start, its rate not solved for.
+        rolls = list(self.i_r.values())
+        held, balance = held + rolls, balance + rolls
         # A laminate at rest is steady at any strains of its layers that pull as one: its layers move
         # together from their start (each layer's rate is zero whatever its strain; [M6]).
         tied = {first + i: first for first, k in self.resting_laminates(t, z0) for i in range(1, k)}
@@ -423,6 +458,8 @@ class LineODE:
             names[i], names[i + 1] = f"dancer {k!r}'s position", f"dancer {k!r}'s carriage speed"
         for k, i in self.i_vw.items():
             names[i] = f"the web's speed over {k!r}"
+        for k, i in self.i_r.items():
+            names[i] = f"roll {k!r}'s radius"
         for k, (i, m) in self.i_loop.items():
             names[i] = f"{k!r}'s loop integrator"
             if m is not None:
@@ -435,6 +472,8 @@ class LineODE:
         z = np.zeros(self.n)
         for node in self.movers:
             z[self.i_omega[node.name]] = s.initial_speed(node, t) / node.R
+        for node in self.rolls:
+            z[self.i_r[node.name]] = node.R
         for d in self.dancers:
             z[self.i_y[d.name]] = d.y_start
         for c in self.slippers:
@@ -488,6 +527,8 @@ class LineODE:
                 row.append(z[self.i_omega[cname]])
             elif quantity == "tau":
                 row.append(q[cname]["tau"] if cname in self.i_loop else self.torque(c, t, z))
+            elif quantity == "r":
+                row.append(self.radius(c, z))
             elif quantity == "y":
                 row.append(z[self.i_y[cname]])
             elif quantity == "y_dot":
@@ -505,6 +546,8 @@ def atol_of(ode: LineODE, z0):
         a[i + 1] = 1e-12
     for name, i in ode.i_vw.items():
         a[i] = 1e-11
+    for name, i in ode.i_r.items():
+        a[i] = 1e-13
     for name, (i, m) in ode.i_loop.items():  # torques
         a[i] = 1e-10
         if m is not None:

@@ -39,8 +39,8 @@ QUANTITIES = {
     "source": {"v": "m/s", "eps": "1"},
     "sink": {"v": "m/s"},
     "roller": {"v": "m/s", "omega": "rad/s", "tau": "N.m"},
-    "unwinder": {"v": "m/s", "omega": "rad/s", "tau": "N.m"},
-    "winder": {"v": "m/s", "omega": "rad/s", "tau": "N.m"},
+    "unwinder": {"v": "m/s", "omega": "rad/s", "tau": "N.m", "r": "m"},
+    "winder": {"v": "m/s", "omega": "rad/s", "tau": "N.m", "r": "m"},
     "dancer": {"v": "m/s", "omega": "rad/s", "y": "m", "y_dot": "m/s"},
 }
 # What a roller or dancer the web may slip on records besides (docs/physics.md, "Rollers that slip").
@@ -177,6 +177,17 @@ class Traction:
 
 
 @dataclass
+class Wound:
+    """The web an unwinder's roll loses or a winder's gains [R3]: the roll's radius and inertia move
+    with it. thickness is the build-up per turn (the web's caliper plus the air wound in with it);
+    density and width default to the roll's web (None until the line is read)."""
+
+    thickness: float
+    density: float | None = None
+    width: float | None = None
+
+
+@dataclass
 class Component:
     name: str
     type: str
@@ -228,6 +239,7 @@ class Roller(Component):
     wrap: float | None = None  # degrees: a load cell on its bearings (Line FMU output <name>.F), the wrap traction acts on
     trim: float = 0.0  # a slitter: the width cut off as trim (m), which leaves without tension
     traction: Traction | None = None  # the web may slip on it
+    wound: Wound | None = None  # an unwinder's or winder's roll that changes as web winds off or on
 
     @property
     def has_fmu(self):
@@ -878,7 +890,7 @@ def _span(r, o_node, name, webs) -> Span:
 
 def _roller(r, o_node, name, kind) -> Roller:
     what = f"{kind} {name!r}"
-    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip"]
+    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip", "wound"]
     if kind == "roller":
         optional += ["merge", "split", "trim"]  # side paths: read by _branch
     required = ["type", "name"]
@@ -931,7 +943,34 @@ def _roller(r, o_node, name, kind) -> Roller:
             raise r.err(r.key_pos(o["traction" if "traction" in o else "nip"]),
                         f"{what}: traction or a nip on an {kind} is not modelled (its roll's radius changes): put it on a roller or a dancer")
         c.traction = _traction(r, o, what, c.wrap)
+    if "wound" in o:
+        if kind == "roller":
+            raise r.err(r.key_pos(o["wound"]), f"{what}: wound is a roll's: put it on an unwinder or a winder")
+        if c.drive.kind == "speed":
+            raise r.err(r.key_pos(o["wound"]), f"{what}: wound moves a roll's radius and inertia, which a speed-driven "
+                                               "roll does not use (its surface follows its speed profile): drive it by torque or tension")
+        w = r.keys(o["wound"], f"{what}: wound", required=("thickness",), optional=("density", "width"))
+        c.wound = Wound(thickness=r.quantity(w["thickness"], units.LENGTH, f"{what}: wound: thickness", positive=True))
+        if "density" in w:
+            c.wound.density = r.quantity(w["density"], units.DENSITY, f"{what}: wound: density", positive=True)
+        if "width" in w:
+            c.wound.width = r.quantity(w["width"], units.LENGTH, f"{what}: wound: width", positive=True)
     return c
+
+
+def _fill_wound(scene):
+    """A roll's wound density and width, where the scene leaves them out: its web's (the span it
+    feeds or the span that feeds it), a laminate's mean density over its layers."""
+    for c in scene.parts:
+        w = getattr(c, "wound", None)
+        if w is None:
+            continue
+        span = scene.spans_out(c)[0] if c.type == "unwinder" else scene.spans_in(c)[0]
+        web = span.wp2
+        if w.density is None:
+            w.density = web.rho_l / web.area
+        if w.width is None:
+            w.width = web.width
 
 
 def _traction(r, o, what, wrap) -> Traction:
@@ -1042,6 +1081,8 @@ def _event(r, node, i, scene_line, webs, stop_time) -> Event:
     changes = {}
     if isinstance(comp, Span):
         allowed = ("web", "wp1", "wp2")
+    elif getattr(comp, "wound", None) is not None:
+        allowed = ("b",)  # J and R move with the roll's web [R3]
     elif isinstance(comp, (Roller, Dancer)) and comp.has_fmu:
         allowed = ("J", "R", "b")
     else:
@@ -1139,6 +1180,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
 
     _check_traction(r, scene, raw)
     _check_loops(r, scene, raw)
+    _fill_wound(scene)
 
     # Spans next to a dancer take their length from it; no other span may.
     for c in scene.spans:
