@@ -69,7 +69,8 @@ def test_the_torque_limit_holds_and_the_loop_recovers_without_windup(fmus):
     the set point comes back to 400 N. The back-calculation kept the integrator at the limit, so 0.25 s
     later the tension is within 10 % of the 300 N step of its set point, and it never passes it by more
     than that. (The same loop without the back-calculation, its integrator wound up by the second of
-    error, is still 82 N above 400 N then: 27 % of the step.) A web with a retardation time of 10 ms
+    error, was still 82 N above 400 N then, 27 % of the step, in the reference with its tracking term
+    removed by hand: what this test catches.) A web with a retardation time of 10 ms
     damps the loop's mode (its P acts on the tension, which the web's damping makes partly a speed)."""
     pi = {"set": {"table": [["0 s", "400 N"], ["0.5 s", "400 N"], ["0.5 s", "700 N"], ["1.5 s", "700 N"], ["1.5 s", "400 N"]]},
           "kp": 2.0, "ki": 10.0, "limit": "320 N.m"}
