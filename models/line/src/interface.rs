@@ -33,8 +33,9 @@ pub enum Binding {
 
 /// Part parameters the line does not offer: the line solves and starts the
 /// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction and
-/// layers and a span's variable length are the line's structure, which line.json fixes.
-const NOT_OFFERED: [&str; 15] = [
+/// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
+/// measures) and a span's variable length are the line's structure, which line.json fixes.
+const NOT_OFFERED: [&str; 19] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",
@@ -50,6 +51,10 @@ const NOT_OFFERED: [&str; 15] = [
     "includeTraction",
     "layered",
     "variableLength",
+    "loop.kind",
+    "loop.sign",
+    "loop.feedforward",
+    "motor.lag",
 ];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.
@@ -89,6 +94,8 @@ impl Builder<'_> {
             _ => Start::None,
         };
         let (variability, initial) = match causality {
+            // A part's tunable parameter (a loop's gains, set point, limit) stays tunable in the line.
+            Causality::Parameter if v.variability == Variability::Tunable => (Variability::Tunable, Initial::Exact),
             Causality::Parameter => (Variability::Fixed, Initial::Exact),
             Causality::Input => (Variability::Continuous, Initial::None),
             _ => (v.variability, if v.initial == Initial::None { Initial::Calculated } else { v.initial }),
@@ -251,13 +258,23 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
                 if ps.torque_input {
                     offer!("tau_m", "tau_m", Causality::Input);
                 }
+                if ps.set_input {
+                    offer!("loop.set", "T_set", Causality::Input);
+                }
+                if ps.speed_input {
+                    offer!("loop.speed", "v_ref", Causality::Input);
+                }
                 if role == Role::Dancer {
                     offer!("F_load", "F_load", Causality::Input);
                 }
             }
         }
         for v in d.variables.iter() {
-            let offered = !NOT_OFFERED.contains(&&*v.name) && (v.kind != Kind::Real || parts[p].acts(v.vr, ps.speed_driven()));
+            let offered = !NOT_OFFERED.contains(&&*v.name)
+                && (v.kind != Kind::Real || parts[p].acts(v.vr, ps.speed_driven()))
+                && !(ps.set_input && v.name == "loop.set")
+                && !(ps.speed_input && v.name == "loop.speed")
+                && !(v.name == "brake.v_slip" && !ps.profile.as_ref().is_some_and(|p| p.get("brake").is_some()));
             if v.causality == Causality::Parameter && v.kind != Kind::String && offered {
                 offer!(&v.name, &v.name, Causality::Parameter);
             }

@@ -10,7 +10,7 @@ use crate::ode::{Ode, Scratch};
 use crate::part::Part;
 use crate::spec::{self, ModelKind, Spec, StartMode, PROFILE_FOLDER, SPEC_FILE};
 use crate::stepping;
-use fmi_core::description::{Causality, ModelDescription};
+use fmi_core::description::{Causality, ModelDescription, Variability};
 use fmi_core::{EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
 use solver::stiff::Rosenbrock;
 use std::sync::Arc;
@@ -49,6 +49,8 @@ pub struct Line {
     profiled: bool,
     /// The importer integrates (Model Exchange): the line's states are the description's.
     model_exchange: bool,
+    /// Initialization ended: a tunable parameter set now keeps the network.
+    initialized: bool,
 }
 
 impl Line {
@@ -62,6 +64,12 @@ impl Line {
                 ModelKind::Roller => Part::roller(),
             };
             apply_start(&mut part, ps).map_err(|e| FmiError::error(format!("line.json: part {}: {e}", ps.name)))?;
+            if ps.set_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 1) {
+                return Err(FmiError::error(format!("line.json: part {}: set_input needs a roller whose drive has a force loop (loop.kind = 1)", ps.name)));
+            }
+            if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 2) {
+                return Err(FmiError::error(format!("line.json: part {}: speed_input needs a roller whose drive has a speed loop (loop.kind = 2)", ps.name)));
+            }
             if ps.profile.is_some() {
                 let vr = part.description().variable_by_name("profile").expect("parts have a profile").vr;
                 part.set_string(vr, &format!("{PROFILE_FOLDER}/{}.json", ps.name))?;
@@ -80,6 +88,7 @@ impl Line {
             start_equilibrium,
             profiled,
             model_exchange: false,
+            initialized: false,
         })
     }
 
@@ -131,6 +140,15 @@ impl Line {
     /// radius a state or not), and an FMU state saved with it would not restore.
     fn part_set(&mut self, vr: u32) {
         let input = self.shared.description.variable(vr).is_some_and(|v| v.causality == Causality::Input);
+        let tunable = self.shared.description.variable(vr).is_some_and(|v| v.variability == Variability::Tunable);
+        // A tunable parameter set between steps (a loop's gain) keeps the line's structure: what was
+        // computed from the parts' values is formed again.
+        if tunable && self.initialized {
+            if let Some(net) = self.ode.net.as_mut() {
+                net.parts_changed();
+            }
+            return;
+        }
         if !input && self.ode.net.is_some() {
             self.ode.net = None;
             self.ode.integrator = None;
@@ -411,6 +429,7 @@ impl Model for Line {
         let integrated = Line::integrated(&shared, experiment.model_exchange);
         let warnings = stepping::initialize(&mut self.ode, &shared.spec, integrated, self.tolerance, self.start_equilibrium, experiment, resources)?;
         self.model_exchange = experiment.model_exchange;
+        self.initialized = true;
         Ok(warnings)
     }
 

@@ -289,7 +289,7 @@ impl Part {
     /// Whether the part's partials along the line's knowns stay the same until an event or a
     /// parameter changes it (a roller's `tangents_fixed`); a span's move with its strain.
     pub fn tangents_fixed(&self) -> bool {
-        matches!(self, Part::Roller(r) if roller::jacobian::tangents_fixed(&r.params))
+        matches!(self, Part::Roller(r) if r.tangents_fixed())
     }
 
     /// The part's continuous states the line integrates (indices into its
@@ -309,6 +309,13 @@ impl Part {
                 }
                 if r.params.traction {
                     states.push(4);
+                }
+                // A drive's loop: its integrator, and its motor's torque where it lags [R10]-[R11].
+                if r.params.loop_kind != 0 {
+                    states.push(5);
+                    if r.params.motor_lag > 0.0 {
+                        states.push(6);
+                    }
                 }
                 states
             }
@@ -374,6 +381,9 @@ impl Part {
                     | R::nip_mu
                     | R::air_roughness
                     | R::air_viscosity => p.traction,
+                    R::loop_set => p.loop_kind == 1,
+                    R::loop_speed => p.loop_kind == 2,
+                    R::loop_kp | R::loop_ki | R::motor_limit => p.loop_kind != 0,
                     _ => true,
                 }
             }

@@ -132,6 +132,15 @@ pub struct PartSpec {
     /// (its speed is not prescribed).
     #[serde(default)]
     pub torque_input: bool,
+    /// Whether the Line FMU gives its loop's set point as an input `<name>.T_set` (N) instead of
+    /// the tunable parameter `<name>.loop.set`: the scene decides, as an FMU cannot see whether
+    /// an input is connected.
+    #[serde(default)]
+    pub set_input: bool,
+    /// Whether the Line FMU gives its speed loop's reference as an input `<name>.v_ref` (m/s) instead
+    /// of the tunable parameter `<name>.loop.speed`.
+    #[serde(default)]
+    pub speed_input: bool,
     /// A load cell: the wrap angle of the web on the roller, degrees; the
     /// output `<name>.F` is the resultant of the two web forces on its bearings.
     #[serde(default)]

@@ -658,3 +658,73 @@ fn bad_laminates_are_refused_with_the_reason() {
         assert!(err.message.contains(expected), "expected {expected:?} in: {}", err.message);
     }
 }
+
+/// The paper line with its unwinder's tension held by a PI loop on the entry span [R10] (no tension
+/// table): `gains` (kp, ki), `limit` and `lag` of its motor [R11]; the pull roll's speed `pull`.
+fn looped_line(pull: Value, limit: f64, lag: f64) -> Value {
+    let mut spec = paper_line("equilibrium");
+    spec["parts"][0] = roller(
+        "unwind",
+        "unwinder",
+        json!({"J": 8.0, "R": 0.5, "b": 0.1, "v_start": 10.0, "roll": 1, "loop.kind": 1, "loop.sign": -1.0, "loop.set": 400.0,
+               "loop.kp": 0.2, "loop.ki": 2.0, "motor.limit": limit, "motor.lag": lag}),
+        None,
+    );
+    spec["parts"][4]["profile"]["speed"] = pull;
+    spec["connections"].as_array_mut().unwrap().push(connect("entry", "summary_Tension", "unwind", "loop.measured"));
+    spec
+}
+
+/// A PI loop holds its set point against the bearing friction: the equilibrium start puts the
+/// torque the drive needs, -r*T_set + b*omega, in the integrator (no error to begin with), and after
+/// the pull roll speeds up 10 -> 11 m/s (b*omega grows by 0.2 N.m) the integral takes the friction's
+/// change up: the tension is back at 400 N to 1e-6 N (the loop rings lightly: the span's transport
+/// damps it, at v/L), where the integrator held at its start would leave b*d(omega)/(r + kp) = 0.29 N.
+#[test]
+fn a_pi_loop_holds_its_set_point_against_bearing_friction() {
+    for lag in [0.0, 0.002] {
+        let mut line = initialized(&looped_line(json!([[0.0, 10.0], [0.5, 10.0], [1.5, 11.0]]), 0.0, lag));
+        assert!((get(&line, "entry.T") - 400.0).abs() < 1e-8, "lag {lag}: starts at {}", get(&line, "entry.T"));
+        let omega = get(&line, "unwind.omega");
+        let needed = -0.5 * 400.0 + 0.1 * omega;
+        assert!((get(&line, "unwind.loop.I") - needed).abs() < 1e-8, "lag {lag}: loop.I = {} vs {needed}", get(&line, "unwind.loop.I"));
+        let mut worst: f64 = 0.0;
+        for _ in 0..3000 {
+            line.do_step(0.01).unwrap();
+            worst = worst.max((get(&line, "entry.T") - 400.0).abs());
+        }
+        assert!(worst > 0.1, "lag {lag}: the ramp must move the tension (worst {worst} N)");
+        let error = get(&line, "entry.T") - 400.0;
+        assert!(error.abs() < 1e-6, "lag {lag}: {error} N off after 30 s");
+        let needed = -0.5 * 400.0 + 0.1 * get(&line, "unwind.omega");
+        assert!((get(&line, "unwind.tau") - needed).abs() < 1e-6, "lag {lag}: tau {} vs {needed}", get(&line, "unwind.tau"));
+    }
+}
+
+/// A loop's set point as the line's input `unwind.T_set` (the scene's switch): the line moves to it;
+/// and a tunable gain set between steps changes the response (the same step with another kp).
+#[test]
+fn a_set_point_input_moves_the_line_and_a_tunable_gain_changes_its_response() {
+    let mut spec = looped_line(json!([[0.0, 10.0]]), 0.0, 0.0);
+    spec["parts"][0]["set_input"] = json!(true);
+    let runs: Vec<Vec<f64>> = [0.2, 0.6]
+        .iter()
+        .map(|&kp| {
+            let mut line = initialized(&spec);
+            assert!(line.description().variable_by_name("unwind.loop.set").is_none(), "the set point is the input");
+            line.do_step(0.1).unwrap();
+            line.set_real(vr(&line, "unwind.loop.kp"), kp).unwrap();
+            line.set_real(vr(&line, "unwind.T_set"), 450.0).unwrap();
+            (0..600).map(|_| {
+                line.do_step(0.01).unwrap();
+                get(&line, "entry.T")
+            })
+            .collect()
+        })
+        .collect();
+    for (kp, run) in [0.2, 0.6].iter().zip(&runs) {
+        assert!((run[run.len() - 1] - 450.0).abs() < 1e-2, "kp {kp}: the line settles at the new set point ({})", run[run.len() - 1]);
+    }
+    let apart = runs[0].iter().zip(&runs[1]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(apart > 1.0, "another gain must give another response (they differ by {apart} N at most)");
+}

@@ -8,7 +8,7 @@ use profiles::{Profile, Table, Value};
 use std::sync::Arc;
 
 /// The table keys a roller's profile may have.
-pub const TABLES: [&str; 6] = ["speed", "torque", "tension", "strain", "load", "nip"];
+pub const TABLES: [&str; 9] = ["speed", "torque", "tension", "strain", "load", "nip", "setpoint", "reference", "brake"];
 
 /// A table of `TABLES` by position: looked up on every evaluation, so by index, not by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -20,6 +20,12 @@ pub enum Key {
     Load,
     /// A nip's load N [R7].
     Nip,
+    /// A force loop's set point [R10].
+    Set,
+    /// A loop's reference speed: a speed loop's set point, the inertia feed-forward's speed [R10].
+    Reference,
+    /// A powder brake's torque, N m >= 0 [R12].
+    Brake,
 }
 
 /// How the roller is driven: at most one of the profile's drive tables.
@@ -43,7 +49,7 @@ pub struct Loaded {
     pub text: Arc<str>,
     pub drive: Drive,
     /// The profile's tables in the order of `TABLES`, found once.
-    pub tables: Arc<[Option<Table>; 6]>,
+    pub tables: Arc<[Option<Table>; 9]>,
 }
 
 impl Loaded {
@@ -71,8 +77,21 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
     if loaded.table(Key::Load).is_some() && !p.carriage {
         return Err("a load table needs carriage = true".into());
     }
+    if loaded.table(Key::Brake).is_some() && p.traction {
+        return Err("a brake table with includeTraction = true: a brake on a roller where the web may slip is not modelled".into());
+    }
     if loaded.table(Key::Nip).is_some() && !p.traction {
         return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
+    }
+    let kind = crate::control::Kind::of(p);
+    if kind != crate::control::Kind::None && !matches!(loaded.drive, Drive::Torque | Drive::TorqueTable) {
+        return Err(format!("loop.kind = {}: a loop drives by torque; the profile's speed or tension table would override it", p.loop_kind));
+    }
+    if loaded.table(Key::Set).is_some() && kind != crate::control::Kind::Force {
+        return Err("a setpoint table needs loop.kind = 1 (a force loop)".into());
+    }
+    if loaded.table(Key::Reference).is_some() && !(kind == crate::control::Kind::Speed || (kind != crate::control::Kind::None && p.loop_feedforward)) {
+        return Err("a reference table needs loop.kind = 2 (a speed loop) or a loop with loop.feedforward = true".into());
     }
     Ok(loaded)
 }
@@ -90,6 +109,14 @@ pub fn read(text: &str) -> Result<Loaded, String> {
         ["tension"] => Drive::Tension,
         _ => return Err(format!("{} tables: a roller has at most one drive (speed, torque or tension)", drives.join(" and "))),
     };
+    if let Some(brake) = profile.table("brake") {
+        if drive == Drive::Speed {
+            return Err("brake and speed tables: a brake acts on a roller whose speed is free".into());
+        }
+        if let Some(&[t, b]) = brake.points().iter().find(|&&[_, b]| !(b >= 0.0 && b.is_finite())) {
+            return Err(format!("brake: the torque at {t} s is {b} N.m; a brake's torque is >= 0 (it opposes the motion)"));
+        }
+    }
     if let Some(nip) = profile.table("nip") {
         if let Some(&[t, n]) = nip.points().iter().find(|&&[_, n]| !(n >= 0.0 && n.is_finite())) {
             return Err(format!("nip: the load at {t} s is {n} N; a nip presses with a load >= 0"));

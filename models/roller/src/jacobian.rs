@@ -4,11 +4,12 @@
 //! time only, so they and their slopes are held.
 
 use crate::contact::{self, Contact, Dual};
+use crate::control;
 use crate::parameters::{Inputs, Parameters, PORTS, STATES};
 use crate::physics::{self, Roll};
 use std::f64::consts::PI;
 
-/// A direction in the knowns: d(omega, r, y, y', v_web) and d(inputs).
+/// A direction in the knowns: d(omega, r, y, y', v_web, loop.I, motor.torque) and d(inputs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Direction {
     pub state: [f64; STATES],
@@ -29,7 +30,9 @@ pub struct Tangents {
     /// The strain leaving at each outlet (`strain_leaving`).
     pub outlet_strains: [f64; PORTS],
     pub drive_torque: f64,
-    /// d of (omega, r, y, y', v_web)/dt.
+    pub loop_integrator: f64,
+    pub motor_state: f64,
+    /// d of (omega, r, y, y', v_web, loop.I, motor.torque)/dt.
     pub derivatives: [f64; STATES],
     pub omega: f64,
     pub radius: f64,
@@ -52,9 +55,10 @@ impl Tangents {
 /// every state, input and time, for as long as the parameters and the roll stay: [R1], [R2]
 /// and [R4] are then linear with coefficients made of parameters. So for a roller that winds
 /// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on, and so do
-/// layers [R9], each its own). Not where the web may slip: [R7] is nonlinear.
+/// layers [R9], each its own). Not where the web may slip: [R7] is nonlinear; nor where a drive has a
+/// loop: its limit [R11] is nonlinear, and its gains and limit are tunable.
 pub fn tangents_fixed(p: &Parameters) -> bool {
-    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction
+    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && control::Kind::of(p) == control::Kind::None
 }
 
 /// What the tangents read besides the direction: the roller now, its drive's tables read at
@@ -76,6 +80,10 @@ pub struct Point<'a> {
     pub strain_table: bool,
     /// Where the web may slip: the contact [R6]–[R8] now (its differentials zero).
     pub contact: Option<contact::State>,
+    /// The drive's loop [R10]-[R11].
+    pub control: Option<control::Point>,
+    /// d(a powder brake's torque)/d(surface speed) [R12] (0 without one).
+    pub brake_slope: f64,
 }
 
 impl<'a> Point<'a> {
@@ -106,6 +114,8 @@ impl<'a> Point<'a> {
             torque: self.torque,
             strain_table: self.strain_table,
             slip,
+            control: self.control,
+            brake_slope: self.brake_slope,
         }
     }
 }
@@ -143,6 +153,8 @@ pub struct Linearization<'a> {
     torque: f64,
     strain_table: bool,
     slip: Option<Slip>,
+    control: Option<control::Point>,
+    brake_slope: f64,
 }
 
 /// Where the web may slip on the roller: the contact [R6]-[R8] and what it moves, with gradients.
@@ -157,7 +169,7 @@ impl Linearization<'_> {
     #[inline]
     pub fn along(&self, d: &Direction) -> Tangents {
         let (p, u) = (self.params, self.inputs);
-        let [d_omega, d_r, d_y, d_y_dot, d_v_web] = d.state;
+        let [d_omega, d_r, d_y, d_y_dot, d_v_web, d_integrator, d_motor] = d.state;
         let (omega, r, j, v, c, r_rate) = (self.omega, self.r, self.inertia, self.v, self.c, self.r_rate);
         let winding = p.winding();
         // [R3]: J(r), and with v = r*omega (or a speed table) r' = s*h_w*v/(2*pi*r).
@@ -175,6 +187,11 @@ impl Linearization<'_> {
             Some((f, df, ..)) => -d_r * f - r * df,
             None => d_r * (u.pull_forward(p) - u.pull_back(p)) + r * (d.u.pull_forward(p) - d.u.pull_back(p)),
         };
+        // The loop [R10]-[R11]: its rates and its motor's torque along d.
+        let (d_loop_rates, d_motor_torque) = self.control.map_or(([0.0; 2], 0.0), |c| {
+            let de = c.de[0] * d.u.measured + c.de[1] * d_omega + c.de[2] * d_r;
+            c.law.along(de, c.dff_r * d_r, d_integrator, d_motor)
+        });
         // Without traction the web's speed is the surface's, and so is its rate: d(r*omega)/dt.
         let (d_torque, d_omega_rate, d_surface_rate) = if self.speed_table {
             // tau = J*v'/r + b*omega - r*(F_b - F_a); omega' = v'/r - v*r'/r^2.
@@ -184,7 +201,7 @@ impl Linearization<'_> {
             (d_torque, d_omega_rate, 0.0)
         } else {
             // omega' = (r*(F_b - F_a) + tau - b*omega - J'*omega)/J with J' = 2*pi*rho*w*r^3*r'.
-            let d_torque = d.u.torque + p.roll_sign() * self.tension * d_r;
+            let d_torque = d.u.torque + p.roll_sign() * self.tension * d_r + d_motor_torque + self.brake_slope * d_v;
             let k = 2.0 * PI * p.wound_density * p.wound_width;
             let j_rate = if winding { k * r.powi(3) * r_rate } else { 0.0 };
             let d_j_rate = if winding { k * (3.0 * r * r * d_r * r_rate + r.powi(3) * d_r_rate) } else { 0.0 };
@@ -214,7 +231,9 @@ impl Linearization<'_> {
             h_air,
             outlet_strains: if self.strain_table { [0.0; PORTS] } else { strain_leaving_tangent(p, u, &d.u) },
             drive_torque: d_torque,
-            derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate, d_v_web_rate],
+            derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate, d_v_web_rate, d_loop_rates[0], d_loop_rates[1]],
+            loop_integrator: d_integrator,
+            motor_state: d_motor,
             omega: d_omega,
             radius: d_r,
             carriage: [d_y, d_y_dot],

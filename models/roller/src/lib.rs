@@ -6,6 +6,7 @@
 //! * `parameters` — what the user sets and the inputs, in SI units;
 //! * `physics` — the equations [R1]–[R5], [R9] and their exact steps;
 //! * `contact` — where the web may slip: its speed over the roller, friction, air film [R6]–[R8];
+//! * `control` — the drive's loop and its motor [R10]–[R11];
 //! * `drive` — the profile: the drive and the tables of time it follows;
 //! * `jacobian` — the partial derivatives of the outputs and state derivatives;
 //! * `variables` — each variable of modelDescription.xml bound to its field;
@@ -15,6 +16,7 @@
 #![deny(unsafe_code)]
 
 pub mod contact;
+pub mod control;
 pub mod description;
 pub mod drive;
 pub mod jacobian;

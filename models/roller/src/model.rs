@@ -3,6 +3,7 @@
 //! are in `physics`, its drive and tables in `drive`.
 
 use crate::contact;
+use crate::control::{self, Kind};
 use crate::description::{Real, DESCRIPTION};
 use crate::drive::{self, Drive, Key, Loaded};
 use crate::jacobian::{Direction, Linearization, Point, Tangents};
@@ -30,6 +31,9 @@ pub struct Roller {
     events_at: f64,
     /// The profile's next `set` event not yet applied.
     next_event: usize,
+    /// The loop's integrator and its motor's lagged torque [R10]-[R11] (0 without a loop).
+    integrator: f64,
+    motor: f64,
     profile: Option<Loaded>,
 }
 
@@ -220,8 +224,62 @@ impl Roller {
     pub fn drive_torque(&self) -> f64 {
         match (self.drive(), self.table(Key::Speed)) {
             (Drive::Speed, Some(t)) => physics::speed_drive_torque(&self.params, &self.roll, self.web_torque(), self.omega.value(), self.read(t, self.time).1),
-            _ => self.torque_at(self.time).0,
+            _ => self.torque_at(self.time).0 + self.motor_torque() + self.brake().0,
         }
+    }
+
+    /// Whether the tangents along omega, the carriage and the inputs stay as they are until an event or
+    /// a parameter changes them (`jacobian::tangents_fixed`; a brake [R12] is nonlinear in omega).
+    pub fn tangents_fixed(&self) -> bool {
+        crate::jacobian::tangents_fixed(&self.params) && self.table(Key::Brake).is_none()
+    }
+
+    /// A powder brake's torque now and its slope in the surface speed [R12] (0 without a brake table).
+    #[inline]
+    fn brake(&self) -> (f64, f64) {
+        match self.table(Key::Brake) {
+            Some(table) => physics::brake_torque(self.read(table, self.time).0, physics::surface_speed(self.roll.radius, self.omega.value()), self.params.brake_v_slip),
+            None => (0.0, 0.0),
+        }
+    }
+
+    /// The loop's integrator [R10] (0 without a loop).
+    pub fn loop_integrator(&self) -> f64 {
+        self.integrator
+    }
+
+    /// The lag's state [R11]: the motor's torque where it lags its command (0 without a lag).
+    pub fn motor_state(&self) -> f64 {
+        self.motor
+    }
+
+    /// The torque the loop's motor gives now [R11] (0 without a loop).
+    pub fn motor_torque(&self) -> f64 {
+        self.control().map_or(0.0, |c| c.law.torque)
+    }
+
+    /// The loop now [R10]-[R11], None without one.
+    #[inline]
+    fn control(&self) -> Option<control::Point> {
+        let p = &self.params;
+        let kind = Kind::of(p);
+        if kind == Kind::None {
+            return None;
+        }
+        let (r, omega) = (self.roll.radius, self.omega.value());
+        let reference = self.table(Key::Reference).map(|t| self.read(t, self.time));
+        let (e, de) = match kind {
+            Kind::Force => {
+                let set = self.table(Key::Set).map_or(p.loop_set, |t| self.read(t, self.time).0);
+                (p.loop_sign * (set - self.inputs.measured), [-p.loop_sign, 0.0, 0.0])
+            }
+            _ => (reference.map_or(p.loop_speed, |(v, _)| v) - r * omega, [0.0, -r, -omega]),
+        };
+        let (ff, dff_r) = match reference {
+            Some((v, a)) if p.loop_feedforward => control::feedforward(p, r, self.roll.inertia, v, a),
+            _ => (0.0, 0.0),
+        };
+        Some(control::Point { law: control::evaluate(p, e, ff, self.integrator, self.motor), de, dff_r })
     }
 
     /// The carriage's force (load minus every span's pull) [R4] at t, and its rate.
@@ -255,6 +313,7 @@ impl Roller {
             (state, contact::contact(p, &state).force)
         });
         let v = self.surface_speed();
+        let control = self.control();
         let (radius_rate, inertia_rate) =
             if p.winding() { (self.roll.radius_rate(p, v), self.roll.inertia_rate(p, v)) } else { (0.0, 0.0) };
         let (omega_rate, surface_rate) = match (self.drive(), self.table(Key::Speed)) {
@@ -264,7 +323,8 @@ impl Roller {
             }
             _ => {
                 let omega = self.omega.value();
-                let rate = physics::omega_rate(p, &self.roll, self.web_torque_with(friction), omega, self.torque_at(self.time).0, inertia_rate);
+                let torque = self.torque_at(self.time).0 + control.map_or(0.0, |c| c.law.torque) + self.brake().0;
+                let rate = physics::omega_rate(p, &self.roll, self.web_torque_with(friction), omega, torque, inertia_rate);
                 (rate, self.roll.radius * rate + omega * radius_rate)
             }
         };
@@ -275,7 +335,8 @@ impl Roller {
         } else {
             [0.0, 0.0]
         };
-        [omega_rate, radius_rate, carriage[0], carriage[1], v_web_rate]
+        let [integrator_rate, motor_rate] = control.map_or([0.0; 2], |c| c.law.rates);
+        [omega_rate, radius_rate, carriage[0], carriage[1], v_web_rate, integrator_rate, motor_rate]
     }
 
     /// The unit direction of one known: a state or an input (None: neither).
@@ -287,6 +348,8 @@ impl Roller {
             Real::y => d.state[2] = 1.0,
             Real::y_dot => d.state[3] = 1.0,
             Real::v_web => d.state[4] = 1.0,
+            Real::loop_I => d.state[5] = 1.0,
+            Real::motor_torque => d.state[6] = 1.0,
             k => *Self::input_field(&mut d.u, k)? = 1.0,
         }
         Some(d)
@@ -318,6 +381,8 @@ impl Roller {
             torque: if speed_table.is_some() { 0.0 } else { self.drive_torque() },
             strain_table: self.table(Key::Strain).is_some(),
             contact: self.params.traction.then(|| self.contact_state()),
+            control: self.control(),
+            brake_slope: self.brake().1,
         };
         point.linearize()
     }
@@ -355,6 +420,25 @@ impl Roller {
         let r = self.roll.radius;
         let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
         let mut v_web = self.v_web;
+        if Kind::of(p) != Kind::None || self.table(Key::Brake).is_some() {
+            // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused): the loop's integrator,
+            // its motor and the roll's own (omega, r), with J moving with r, by the same L-stable method.
+            let y = self.controlled_step(t, h)?;
+            let carriage = if p.carriage {
+                let (g0, g1) = self.carriage_force(t);
+                physics::carriage_step(p, self.carriage, g0, g1, h)
+            } else {
+                self.carriage
+            };
+            if !(y.iter().all(|x| x.is_finite()) && y[1] > 0.0 && carriage.iter().all(|x| x.is_finite())) {
+                return Err(FmiError::discard(format!("the roller's loop would reach (omega, r, loop.I, motor.torque) = {y:?}: take a shorter step or check the inputs")));
+            }
+            let inertia = if p.winding() { self.roll.inertia_at(p, y[1]) } else { self.roll.inertia };
+            self.omega = CompensatedSum::from_parts(y[0], 0.0);
+            self.roll = Roll { radius: y[1], inertia, ..self.roll };
+            (self.integrator, self.motor, self.carriage) = (y[2], y[3], carriage);
+            return Ok(());
+        }
         let (omega, travel) = match &speed_table {
             _ if p.traction => {
                 // [R6]-[R7] are nonlinear and stiff (the friction's slope over the web's small mass):
@@ -418,6 +502,26 @@ impl Roller {
             .map_err(|failure| FmiError::discard(format!("the web's slip on the roller could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
+    /// (omega, r, loop.I, motor.torque) after [t, t+h] of a piece with a loop [R10]-[R11], the inputs held.
+    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 4]> {
+        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor];
+        let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
+        let control = solver::Control { rtol: SLIP_RTOL, atol: y0.map(scale), initial_step: h, max_steps: 100_000 };
+        solver::rosenbrock::integrate(&Controlled { roller: self, t0: t }, h, y0, &control)
+            .map(|solution| solution.y)
+            .map_err(|failure| FmiError::discard(format!("the roller's loop could not be followed over the step ({failure:?}): take a shorter step")))
+    }
+
+    /// The roller at time t with (omega, r, loop.I, motor.torque) at y, the rest as now (a step's trial point).
+    fn at_trial(&self, t: f64, y: &[f64; 4]) -> Roller {
+        let mut trial = self.clone();
+        let inertia = if self.params.winding() { self.roll.inertia_at(&self.params, y[1]) } else { self.roll.inertia };
+        trial.omega = CompensatedSum::from_parts(y[0], 0.0);
+        trial.roll = Roll { radius: y[1], inertia, ..self.roll };
+        (trial.integrator, trial.motor, trial.time) = (y[2], y[3], t);
+        trial
+    }
+
     /// A communication step [time, time+h], split where a table kinks or jumps
     /// and where a `set` event falls; one at the end (within the profiles'
     /// tolerance) applies at the start of the next step.
@@ -456,6 +560,7 @@ impl Roller {
         self.time = time;
         self.events_at = time;
         self.next_event = 0;
+        (self.integrator, self.motor) = (0.0, 0.0);
     }
 }
 
@@ -473,7 +578,7 @@ impl Model for Roller {
         out.f64(self.omega.hi());
         out.f64(self.omega.lo());
         let r = &self.roll;
-        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.v_web, self.time, self.events_at] {
+        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.v_web, self.integrator, self.motor, self.time, self.events_at] {
             out.f64(x);
         }
         out.i32(self.next_event as i32);
@@ -490,6 +595,8 @@ impl Model for Roller {
         };
         self.carriage = [r.finite("y")?, r.finite("y_dot")?];
         self.v_web = r.finite("v_web")?;
+        self.integrator = r.finite("loop.I")?;
+        self.motor = r.finite("motor.torque")?;
         self.time = r.finite("time")?;
         self.events_at = r.finite("events applied until")?;
         let next = r.i32("next event")?;
@@ -516,6 +623,9 @@ impl Model for Roller {
 
     fn initialize(&mut self, experiment: &Experiment, resources: &Resources) -> FmiResult<Vec<String>> {
         let p = &self.params;
+        if let Some(why) = control::refusal(p) {
+            return Err(FmiError::error(why));
+        }
         if p.traction && (p.roll != 0 || p.inlets > 1 || p.outlets > 1) {
             return Err(FmiError::error(format!(
                 "includeTraction = true with roll = {}, inlets = {}, outlets = {}: a web slips only on a roller with one web \
@@ -551,7 +661,7 @@ impl Model for Roller {
     // Model Exchange: the importer integrates (omega, r, y, y').
 
     fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
-        x.copy_from_slice(&[self.omega.value(), self.roll.radius, self.carriage[0], self.carriage[1], self.web_speed()]);
+        x.copy_from_slice(&[self.omega.value(), self.roll.radius, self.carriage[0], self.carriage[1], self.web_speed(), self.integrator, self.motor]);
         Ok(())
     }
 
@@ -567,6 +677,7 @@ impl Model for Roller {
         if self.params.traction {
             self.v_web = x[4];
         }
+        (self.integrator, self.motor) = (x[5], x[6]);
         Ok(())
     }
 
@@ -586,7 +697,7 @@ impl Model for Roller {
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
-        nominals.copy_from_slice(&[1.0, self.params.radius, 1.0, 1.0, 1.0]);
+        nominals.copy_from_slice(&[1.0, self.params.radius, 1.0, 1.0, 1.0, 1.0, 1.0]);
         Ok(())
     }
 
@@ -661,6 +772,44 @@ impl solver::Ode<2> for Slipping<'_> {
         let e = 1e-7 * (self.t0 + s).abs().max(1e-3);
         let (hi, lo) = (self.rhs(s + e, y), self.rhs(s - e, y));
         [(hi[0] - lo[0]) / (2.0 * e), (hi[1] - lo[1]) / (2.0 * e)]
+    }
+}
+
+/// [R1], [R3], [R10]-[R11] over a piece, as an ODE in (omega, r, loop.I, motor.torque) from the
+/// piece's start t0; its Jacobian from the roller's own tangents.
+struct Controlled<'a> {
+    roller: &'a Roller,
+    t0: f64,
+}
+
+/// The states (indices into the roller's) the loop's step integrates.
+const CONTROLLED: [usize; 4] = [0, 1, 5, 6];
+
+impl solver::Ode<4> for Controlled<'_> {
+    fn rhs(&self, s: f64, y: &[f64; 4]) -> [f64; 4] {
+        let d = self.roller.at_trial(self.t0 + s, y).derivatives();
+        CONTROLLED.map(|i| d[i])
+    }
+
+    fn jacobian(&self, s: f64, y: &[f64; 4]) -> [[f64; 4]; 4] {
+        let trial = self.roller.at_trial(self.t0 + s, y);
+        let at = trial.linearize();
+        let columns = CONTROLLED.map(|j| {
+            let mut d = Direction::default();
+            d.state[j] = 1.0;
+            at.along(&d).derivatives
+        });
+        std::array::from_fn(|i| std::array::from_fn(|j| columns[j][CONTROLLED[i]]))
+    }
+
+    /// Tables of time (a set point's or a reference's ramp) move f at fixed y: a central difference.
+    fn time_derivative(&self, s: f64, y: &[f64; 4]) -> [f64; 4] {
+        if !self.roller.varies_with_time(self.t0 + s) {
+            return [0.0; 4];
+        }
+        let e = 1e-7 * (self.t0 + s).abs().max(1e-3);
+        let (hi, lo) = (self.rhs(s + e, y), self.rhs(s - e, y));
+        std::array::from_fn(|i| (hi[i] - lo[i]) / (2.0 * e))
     }
 }
 

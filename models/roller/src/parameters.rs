@@ -41,10 +41,24 @@ pub struct Parameters {
     pub air_viscosity: f64,
     /// The webs stay layers [R9]: each outlet passes one inlet's strain on.
     pub layered: bool,
+    /// The drive's loop [R10]: 0 none, 1 force, 2 speed (`control::Kind`).
+    pub loop_kind: i32,
+    pub loop_set: f64,
+    /// A speed loop's reference where the profile has no reference table.
+    pub loop_speed: f64,
+    pub loop_kp: f64,
+    pub loop_ki: f64,
+    pub loop_sign: f64,
+    pub loop_feedforward: bool,
+    /// The loop's motor [R11]: its torque limit (0: none) and lag (0: none).
+    pub motor_limit: f64,
+    pub motor_lag: f64,
+    /// A powder brake's speed scale [R12].
+    pub brake_v_slip: f64,
 }
 
-/// The roller's Model Exchange states: (omega, r, y, y', v_web).
-pub const STATES: usize = 5;
+/// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque).
+pub const STATES: usize = 7;
 
 /// The most webs a roller takes in or gives out.
 pub const PORTS: usize = 4;
@@ -84,6 +98,8 @@ pub struct Inputs {
     pub strain_a: [f64; PORTS],
     pub torque: f64,
     pub load: f64,
+    /// What a force loop measures [R10].
+    pub measured: f64,
 }
 
 /// The sum of the first `count` ports' tensions: one port is read as it

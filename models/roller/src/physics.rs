@@ -8,6 +8,7 @@
 //! [R5]  1/(1+eps_b) = sum_i (m_i/M)/(1+eps_i), M = sum_i m_i          (several inlets: the merge)
 //!       evaluated as eps_b = sum_i q_i*eps_i / sum_i q_i, q_i = m_i/(1+eps_i)
 //! [R9]  eps_b,k = eps_a,((k-1) mod n)+1                                 (layered: each outlet one inlet's)
+//! [R12] tau_brake = -B*tanh(v/v_slip)                                   (a powder brake, B >= 0 its torque)
 //!
 //! Over a piece of a communication step where the inputs are held and the
 //! profiles are linear in time, [R1] with r and J held is a linear ODE with
@@ -232,4 +233,13 @@ mod tests {
         let q = Parameters { roll: UNWINDER, ..p };
         assert_eq!(wound_radius(&q, 0.01, 100.0), None);
     }
+}
+
+/// A powder brake's torque at surface speed v [R12] and its slope in v: it opposes the motion with
+/// its full torque B once |v| is well above v_slip, and passes through 0 at rest (regularized like
+/// Coulomb friction [12] of the physics docs), so that a line can start from there.
+#[inline]
+pub fn brake_torque(b: f64, v: f64, v_slip: f64) -> (f64, f64) {
+    let th = (v / v_slip).tanh();
+    (-b * th, -b * (1.0 - th * th) / v_slip)
 }

@@ -83,16 +83,31 @@ fmi_core::bind_variables! {
         h_air: computed(h_air()),
         der_v_web: computed(derivatives()[4]),
         traction_slip_start: param(params.traction_slip_start),
+        loop_measured: input(measured),
+        loop_set: param(params.loop_set),
+        loop_speed: param(params.loop_speed),
+        brake_v_slip: param(params.brake_v_slip),
+        loop_kp: param(params.loop_kp),
+        loop_ki: param(params.loop_ki),
+        loop_sign: param(params.loop_sign),
+        motor_limit: param(params.motor_limit),
+        motor_lag: param(params.motor_lag),
+        loop_I: computed(loop_integrator()),
+        der_loop_I: computed(derivatives()[5]),
+        motor_torque: computed(motor_state()),
+        der_motor_torque: computed(derivatives()[6]),
     }
     integer {
         roll: param(params.roll),
         inlets: param(params.inlets),
         outlets: param(params.outlets),
+        loop_kind: param(params.loop_kind),
     }
     boolean {
         carriage: param(params.carriage),
         includeTraction: param(params.traction),
         layered: param(params.layered),
+        loop_feedforward: param(params.loop_feedforward),
     }
     string {
         profile: param(params.profile),

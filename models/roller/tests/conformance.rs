@@ -6,10 +6,11 @@ use fmi_testkit::conformance::{Hints, Point};
 /// tensions within the step (tau lists web_a.F and web_b.F); the same with
 /// every inlet and outlet in use, where the extra ports' tensions reach tau
 /// and their strains the merged web_b.eps [R5]; a web that may slip on a wrap
-/// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides.
+/// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides; a drive's loop; a brake.
 fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
     let nip = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/traction_nip.json");
+    let brake = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/brake.json");
     let all_ports = vec![("inlets", 4.0), ("outlets", 4.0)];
     let slipping = vec![
         ("includeTraction", 1.0),
@@ -20,14 +21,32 @@ fn hints() -> Hints {
         ("web_a.F", 100.0),
         ("web_b.F", 108.0),
     ];
+    // A force loop [R10] without a lag (its command reaches tau within the step), and one with a
+    // lag and a limit it presses into [R11].
+    let force_loop = vec![("loop.kind", 1.0), ("loop.kp", 0.2), ("loop.ki", 2.0), ("loop.set", 400.0), ("loop.measured", 380.0), ("v_start", 5.0)];
+    let lagged_loop = vec![
+        ("loop.kind", 1.0),
+        ("loop.kp", 0.2),
+        ("loop.ki", 2.0),
+        ("loop.sign", -1.0),
+        ("loop.set", 400.0),
+        ("loop.measured", 380.0),
+        ("motor.limit", 4.0),
+        ("motor.lag", 0.02),
+        ("v_start", 5.0),
+    ];
     Hints {
         points: vec![
+            Point { values: force_loop, texts: vec![] },
+            // A powder brake near rest, where its torque bends through 0 [R12].
+            Point { values: vec![("v_start", 0.004), ("R", 0.2)], texts: vec![("profile", brake.into())] },
+            Point { values: lagged_loop, texts: vec![] },
             Point { values: vec![], texts: vec![("profile", speed_drive.into())] },
             Point { values: all_ports, texts: vec![("profile", speed_drive.into())] },
             Point { values: slipping, texts: vec![("profile", nip.into())] },
         ],
         texts: vec![("profile", speed_drive.into())],
-        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller"],
+        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction"],
     }
 }
 

@@ -321,7 +321,7 @@ def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind,
 
 ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load", "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps",
                  "web_a4.F", "web_a4.eps", "web_b2.F", "web_b3.F", "web_b4.F")
-ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web")
+ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web", "loop.I", "motor.torque")
 ROLLER_UNKNOWNS = ("web_a.v", "web_b.v", "web_b.eps", "omega", "r", "y", "y_dot", "tau", "web_a.x", "web_a.y",
                    "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)", "web_a2.v", "web_a4.v",
                    "web_b2.v", "web_b2.eps", "web_b4.eps", "v_web", "der(v_web)")
@@ -419,7 +419,7 @@ def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
         if me:
             fmu.setTime(0.25)
             # Away from the start values: the carriage moving, the roll grown.
-            fmu.setContinuousStates((fmi2Real * 5)(33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3), 5)
+            fmu.setContinuousStates((fmi2Real * 7)(33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0), 7)
         else:
             fmu.doStep(0.0, 0.25)
         knowns = ROLLER_INPUTS + (ROLLER_STATES if me else ())
@@ -463,7 +463,7 @@ def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind,
         start(fmu, vr, values, me=me)
         if me:
             fmu.setTime(0.25)
-            fmu.setContinuousStates((fmi2Real * 5)(33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3), 5)
+            fmu.setContinuousStates((fmi2Real * 7)(33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0), 7)
         else:
             fmu.doStep(0.0, 0.25)
         knowns = ROLLER_INPUTS[:5] + (("omega", "v_web") if me else ())
@@ -483,3 +483,77 @@ def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind,
         assert 0 < mu_eff < 0.3, "the air film must be on its sloping part"
     if me:
         assert a["der(v_web)", "v_web"] < 0, "friction must pull the web's speed toward the surface's"
+
+
+# A drive's loop [R10]-[R11]: its integrator and its lagging motor are states, what it measures an
+# input. On a roll being wound (J and the feed-forward move with r), the command u about -5.5 N.m is
+# inside the limit's exponential bend (|u| > 0.95 * 5.3 N.m), so the limit's slope and the
+# back-calculation count; a speed loop measures the surface's own speed.
+LOOP_CASES = {
+    "force-ff-limit-lag": {"loop.kind": 1, "loop.sign": -1.0, "loop.set": 200.0, "loop.measured": 190.0,
+                           "loop.feedforward": True, "motor.limit": 5.3, "motor.lag": 0.02},
+    "force-no-lag": {"loop.kind": 1, "loop.sign": 1.0, "loop.set": 200.0, "loop.measured": 190.0, "loop.feedforward": True},
+    "speed-ff": {"loop.kind": 2, "loop.feedforward": True, "motor.limit": 50.0},
+}
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("label", LOOP_CASES)
+def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, label):
+    import json
+
+    md, unzipdir, vr = roller
+    path = tmp_path / "profile.json"
+    path.write_text(json.dumps({"reference": [[0, 5.0], [10, 6.0]]}))
+    me = kind == "ModelExchange"
+    fmu = instantiate(unzipdir, md, kind)
+    try:
+        params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
+        values = {**params, **ROLLER_POINT, "roll": 1, "profile": str(path), "loop.kp": 0.2, "loop.ki": 2.0,
+                  **LOOP_CASES[label]}
+        start(fmu, vr, values, me=me)
+        if me:
+            fmu.setTime(0.25)
+            fmu.setContinuousStates((fmi2Real * 7)(33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0), 7)
+        else:
+            fmu.doStep(0.0, 0.25)
+        knowns = ROLLER_INPUTS[:5] + ("loop.measured",) + (("omega", "r", "loop.I", "motor.torque") if me else ())
+        unknowns = ("tau", "der(omega)", "der(r)", "loop.I", "motor.torque", "der(loop.I)", "der(motor.torque)")
+        a, f, n = roller_jacobians(fmu, vr, unknowns, knowns)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    what = f"Roller {kind} loop {label}"
+    worst = compare(what, a, f, n)
+    print(f"{what}: max relative error {worst:.1e}")
+    if me and label == "force-ff-limit-lag":
+        slope = a["der(motor.torque)", "loop.I"] * 0.02
+        assert 0.0 < slope < 0.9, f"the command must sit in the limit's bend (its slope {slope})"
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+def test_roller_with_a_brake_matches_finite_differences(roller, tmp_path, kind):
+    """A powder brake [R12] near rest (v = 4 mm/s, where tanh(v/v_slip) bends) on a roll being wound."""
+    import json
+
+    md, unzipdir, vr = roller
+    path = tmp_path / "profile.json"
+    path.write_text(json.dumps({"brake": [[0, 2.0], [10, 3.0]]}))
+    me = kind == "ModelExchange"
+    fmu = instantiate(unzipdir, md, kind)
+    try:
+        params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
+        values = {**params, **ROLLER_POINT, "web_b.F": 180.0, "roll": 1, "profile": str(path), "v_start": 0.004}
+        start(fmu, vr, values, me=me)
+        if me:
+            fmu.setTime(0.25)
+            fmu.setContinuousStates((fmi2Real * 7)(0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0), 7)
+        else:
+            fmu.doStep(0.0, 0.01)
+        knowns = ROLLER_INPUTS[:5] + (("omega", "r") if me else ())
+        a, f, n = roller_jacobians(fmu, vr, ("tau", "der(omega)", "der(r)"), knowns)
+    finally:
+        fmu.terminate()
+        fmu.freeInstance()
+    what = f"Roller {kind} brake"
+    print(f"{what}: max relative error {compare(what, a, f, n):.1e}")

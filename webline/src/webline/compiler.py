@@ -33,7 +33,7 @@ from .master import Master, Options, settle_start_values
 from .profiles import Profile
 from .result import Result
 from .names import ROLLER_VARIABLES, SPAN_VARIABLES
-from .scene import Dancer, Scene, SceneError, Span
+from .scene import BRAKE_V_SLIP, Dancer, Scene, SceneError, Span
 from .system import Component, Connection, System
 
 # A roller whose surface speed is prescribed (source, sink, speed drive) needs
@@ -83,8 +83,20 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
         start.update({"wound.thickness": float(wound.thickness), "wound.density": float(wound.density),
                       "wound.width": float(wound.width)})
     drive = getattr(node, "drive", None)
-    if drive is not None and drive.kind in ("torque", "tension"):
+    if drive is not None and drive.kind in ("torque", "tension", "brake"):
         profile[drive.kind] = table(drive.profile)
+    if drive is not None and drive.kind == "brake":
+        start["brake.v_slip"] = BRAKE_V_SLIP
+    if drive is not None and drive.loop is not None:
+        start.update(loop_values(drive.loop))
+        if drive.loop.speed and drive.loop.set_input:  # the Line FMU's input v_ref, starting there
+            start["loop.speed"] = float(drive.loop.set.value(0.0))
+        elif drive.loop.speed:  # its reference: the speed it holds, and the one it feeds forward
+            profile["reference"] = table(drive.loop.set)
+        elif drive.loop.feedforward:
+            profile["reference"] = table(scene.speed_reference())
+        if not drive.loop.speed and not drive.loop.set.is_constant():
+            profile["setpoint"] = table(drive.loop.set)
     strain = getattr(node, "strain", None)
     if strain is not None:
         if strain.is_constant():
@@ -112,6 +124,21 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if sets:
         profile["set"] = sets
     return Component(node.name, "roller", fmu, start, profile or None)
+
+
+def loop_values(loop) -> dict:
+    """The Roller's parameters of a drive's loop [R10]-[R11]: a force loop on loop.measured, which the
+    line wires from the span it names (`compile_scene`), or a speed loop on its own surface speed."""
+    return {
+        "loop.kind": 2 if loop.speed else 1,
+        "loop.sign": float(loop.sign),
+        "loop.set": float(loop.set.value(0.0)),
+        "loop.kp": float(loop.kp),
+        "loop.ki": float(loop.ki),
+        "loop.feedforward": bool(loop.feedforward),
+        "motor.limit": float(loop.limit),
+        "motor.lag": float(loop.lag),
+    }
 
 
 def traction_values(scene: Scene, node) -> dict:
@@ -380,6 +407,11 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
                 connect(up.name, "web_b.y", name, "frame_a.y")
             connect(name, "web_a.F", up.name, f"{a}.F")
             connect(name, "web_b.F", down.name, f"{b}.F")
+
+    for n in scene.nodes:  # a drive's loop reads the tension it holds
+        loop = getattr(getattr(n, "drive", None), "loop", None)
+        if loop is not None and not loop.speed:
+            connect(loop.measure[0], "summary_Tension", n.name, "loop.measured")
 
     record, sums = _record(scene)
     system = System(

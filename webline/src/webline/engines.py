@@ -43,6 +43,17 @@ def refuse_traction(scene):
                          "default engine) or with --engine reference")
 
 
+def refuse_loops(scene):
+    """A drive's loop reads a span's tension as an input the line wires inside its equations; the
+    parts' co-simulation and its SSP export do not wire it (nor predict its stable step)."""
+    looped = [c for c in scene.nodes if getattr(getattr(c, "drive", None), "loop", None) is not None]
+    if looped:
+        c = looped[0]
+        raise SceneError(f"{c.where}: {c.type} {c.name!r} has a loop in its drive (\"pi\"): the parts' co-simulation and "
+                         "its SSP export do not wire what a loop measures; run the scene as one Line FMU (webline run's "
+                         "default engine) or with --engine reference")
+
+
 def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None = None, force: bool = False,
               **options) -> Result:
     """A scene run by an engine (None: `line`, or `reference` where the Line FMU cannot run it), its
@@ -76,6 +87,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
         from .compiler import run_scene as run_parts
 
         refuse_traction(scene)
+        refuse_loops(scene)
         from .stability import operating_lines
 
         warnings += check_step(lambda: operating_lines(scene, fmu_dir), scene.name, step or scene.step, force,
@@ -87,6 +99,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
         from .stability import export_step
 
         refuse_traction(scene)
+        refuse_loops(scene)
         with tempfile.TemporaryDirectory(prefix="webline-ssp-") as tmp:
             system = compile_scene(scene, fmu_dir)
             system.step = export_step(system)
@@ -286,6 +299,7 @@ def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None
     if stop_time is not None:
         scene.stop_time = stop_time
     refuse_traction(scene)
+    refuse_loops(scene)
     exported = compile_scene(scene, fmu_dir)
     exported.step = export_step(exported)
     archive = write_ssp(exported, Path(workdir) / f"{scene.name}.ssp")

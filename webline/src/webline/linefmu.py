@@ -70,6 +70,9 @@ def line_spec(scene: Scene, fmu_dir=None, start: str | None = None, settle=True)
                 part.update(model="ConvertingSpan", role="span")
             else:
                 part.update(model="Roller", role=c.type, torque_input=scene.speed_profile(c) is None)
+                loop = getattr(getattr(c, "drive", None), "loop", None)
+                if loop is not None and loop.set_input:
+                    part["speed_input" if loop.speed else "set_input"] = True
                 wrap = getattr(c, "wrap", None)
                 if wrap is not None:
                     part["wrap"] = float(wrap)

@@ -23,6 +23,8 @@ scene. States:
   before it (with includeMass) adds m_up*R^2: F_b = T + p + m*dv_b/dt and
   v_b = R*omega;
 * each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0);
+* each drive's loop (docs/physics.md [R10]-[R11]): its integrator I, and its motor's torque tau_m where
+  it lags (`loop_torque`);
 * where the web may slip on a roller or dancer (docs/physics.md, "Rollers that slip"), the web's
   speed over it v_w: m_w dv_w/dt = T_b - T_a + f, the spans on both sides see v_w, and the roller
   turns by -R*f instead of R*(T_b - T_a) (`friction`).
@@ -45,7 +47,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
 from .result import Result
-from .scene import Dancer, Prescribed, Roller, Scene, SceneError, Span, span_layers, start_strain
+from .scene import BRAKE_V_SLIP, Dancer, Prescribed, Roller, Scene, SceneError, Span, span_layers, start_strain
 
 RTOL = 1e-10
 
@@ -83,7 +85,14 @@ class LineODE:
         self.rolls = [m for m in self.movers if getattr(m, "wound", None) is not None]
         first_roll = n_s + n_m + 2 * n_d + len(self.slippers)
         self.i_r = {m.name: first_roll + i for i, m in enumerate(self.rolls)}
-        self.n = first_roll + len(self.rolls)
+        # A drive's loop: its integrator, then its motor's torque where it lags.
+        self.loops = [c for c in self.movers if getattr(getattr(c, "drive", None), "loop", None) is not None]
+        first = first_roll + len(self.rolls)
+        self.i_loop = {}
+        for c in self.loops:
+            self.i_loop[c.name] = (first, first + 1 if c.drive.loop.lag > 0 else None)
+            first += 1 + (c.drive.loop.lag > 0)
+        self.n = first
         # The line's shape, once: each span's rollers, each roller's spans in and out.
         self.up = {sp.name: scene.upstream(sp) for sp in self.spans}
         self.down = {sp.name: scene.downstream(sp) for sp in self.spans}
@@ -123,7 +132,47 @@ class LineODE:
         if d.kind == "tension":
             R = self.radius(node, z)
             return (-R if node.type == "unwinder" else R) * self.pv(d.profile, t)
+        if d.kind == "brake":  # a powder brake opposes the surface's motion, through 0 at rest [R12]
+            return -self.pv(d.profile, t) * np.tanh(self.speed(node, t, z) / BRAKE_V_SLIP)
         return 0.0
+
+    def loop_torque(self, node, t, z, q, dz):
+        """A drive's PI loop [R10] and its motor [R11] at (t, z): its torque, its rates into dz.
+        e = sign*(set - measured), or v_ref - R*omega for a speed loop; u = kp*e + I + ff; I' = ki*e + (limit(u) - u)*ki/kp; the motor's torque
+        limit(u), or with a lag tau_m' = (limit(u) - tau_m)/lag. The limit is the identity up to 95 % of
+        it and bends exponentially into it over the last 5 %; ff = d(J*v_ref/R)/dt, the inertia torque of
+        the speed reference (its own for a speed loop, else the line's): J*a_ref/R, and on a roll being
+        wound (J_rate - J*R_rate/R)*v_ref/R with R_rate, J_rate of [R3] at v_ref."""
+        lp = node.drive.loop
+        R = self.radius(node, z)
+        J = self.roll_inertia(node, R) if node.name in self.i_r else self.inertia[node.name][0]
+        if lp.speed:  # a speed loop on its own surface speed
+            e = self.pv(lp.set, t) - R * z[self.i_omega[node.name]]
+        else:  # a span's tension (scenes refuse a load cell's)
+            e = lp.sign * (self.pv(lp.set, t) - q[lp.measure[0]]["T"])
+        ff = 0.0
+        if lp.feedforward:
+            reference = lp.set if lp.speed else self.s.speed_reference()
+            v_ref, a_ref = self.pv(reference, t), self.pslope(reference)
+            ff = J * a_ref / R
+            if node.name in self.i_r:
+                w = node.wound
+                R_rate = (-1.0 if node.type == "unwinder" else 1.0) * w.thickness * v_ref / (2.0 * np.pi * R)
+                J_rate = 2.0 * np.pi * w.density * w.width * R**3 * R_rate
+                ff += (J_rate - J * R_rate / R) * v_ref / R
+        i_int, i_motor = self.i_loop[node.name]
+        u = lp.kp * e + z[i_int] + ff
+        limited = u
+        if lp.limit > 0.0:
+            knee = 0.95 * lp.limit
+            if abs(u) > knee:
+                limited = np.sign(u) * (lp.limit - 0.05 * lp.limit * np.exp(-(abs(u) - knee) / (0.05 * lp.limit)))
+        tracking = lp.ki / lp.kp if lp.kp > 0.0 and lp.ki > 0.0 else 1.0
+        dz[i_int] = lp.ki * e + (limited - u) * tracking
+        if i_motor is None:
+            return limited
+        dz[i_motor] = (limited - z[i_motor]) / lp.lag
+        return z[i_motor]
 
     def speed(self, node, t, z):
         if isinstance(node, Prescribed):
@@ -196,7 +245,11 @@ class LineODE:
             if node.name in self.i_vw and not self.stuck:  # the web pulls the roller through its friction only [R6]
                 contact = self.contact(node, t, z, v, q)
                 F_down, F_up = -contact["f"], 0.0
-            num = R * (F_down - F_up) + self.torque(node, t, z) - b * omega - J_rate * omega
+            tau = self.torque(node, t, z)
+            if node.name in self.i_loop:
+                q[node.name] = {"tau": tau + self.loop_torque(node, t, z, q, dz)}
+                tau = q[node.name]["tau"]
+            num = R * (F_down - F_up) + tau - b * omega - J_rate * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
             accel[node.name] = R * domega + omega * dz[self.i_r[node.name]] if node.name in self.i_r else R * domega
@@ -407,6 +460,10 @@ class LineODE:
             names[i] = f"the web's speed over {k!r}"
         for k, i in self.i_r.items():
             names[i] = f"roll {k!r}'s radius"
+        for k, (i, m) in self.i_loop.items():
+            names[i] = f"{k!r}'s loop integrator"
+            if m is not None:
+                names[m] = f"{k!r}'s motor torque"
         return names
 
     def given_state(self, t=0.0):
@@ -469,7 +526,7 @@ class LineODE:
             elif quantity == "omega":
                 row.append(z[self.i_omega[cname]])
             elif quantity == "tau":
-                row.append(self.torque(c, t, z))
+                row.append(q[cname]["tau"] if cname in self.i_loop else self.torque(c, t, z))
             elif quantity == "r":
                 row.append(self.radius(c, z))
             elif quantity == "y":
@@ -491,6 +548,10 @@ def atol_of(ode: LineODE, z0):
         a[i] = 1e-11
     for name, i in ode.i_r.items():
         a[i] = 1e-13
+    for name, (i, m) in ode.i_loop.items():  # torques
+        a[i] = 1e-10
+        if m is not None:
+            a[m] = 1e-10
     return a
 
 

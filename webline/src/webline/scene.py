@@ -122,15 +122,44 @@ def span_layers(wp1: Web, wp2: Web) -> list[tuple[Web, Web]]:
     return list(zip(wp1.plies, wp2.plies))
 
 
+# A powder brake's speed scale [R12]: its torque passes through 0 at rest over about this surface speed.
+BRAKE_V_SLIP = 0.01  # m/s
+
+
+@dataclass
+class Loop:
+    """A PI loop in a drive ([R10]-[R11] of the physics docs): the torque that holds a span's tension
+    (`measure` = (span, "T"); a load cell's, (roller, "F"), is refused: not wired yet) at `set`; gains in SI (N.m per N,
+    N.m per N.s); the motor's torque `limit` (N.m, 0: none) and `lag` (s, 0: none); with
+    `feedforward` the torque d(J*v_ref/R)/dt of the line's speed reference (its first speed drive)."""
+
+    measure: tuple | None  # None: a speed loop, on the roller's own surface speed
+    set: Profile  # a force, or a speed loop's reference speed
+    kp: float
+    ki: float
+    limit: float = 0.0
+    lag: float = 0.0
+    feedforward: bool = False
+    sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
+    set_input: bool = False  # the set point is the Line FMU's input <name>.T_set (<name>.v_ref), starting at `set`
+
+    @property
+    def speed(self) -> bool:
+        """A speed loop: a real motor holds the surface speed at `set` (N.m per m/s, N.m per m)."""
+        return self.measure is None
+
+
 @dataclass
 class Drive:
     """How a roller is driven: 'idler' (no torque), 'torque', 'tension' (an
     end roller's motor holds a tension: tau = -R*T at an unwinder, +R*T at a
-    winder) or 'speed' (an ideal speed drive: the surface speed follows the
-    profile; no Roller FMU)."""
+    winder), 'speed' (an ideal speed drive: the surface speed follows the
+    profile; no Roller FMU), 'pi' (a tension loop, `loop`), 'speed loop' (a real motor's, `loop`)
+    or 'brake' (a powder brake: -B*tanh(v/BRAKE_V_SLIP), B the profile, [R12])."""
 
     kind: str
     profile: Profile | None = None
+    loop: Loop | None = None
 
 
 @dataclass
@@ -379,8 +408,8 @@ class Scene:
             return profile.value(t)
         if node.v_start is not None and t == 0.0:
             return node.v_start
-        for other in self.nodes:
-            p = self.speed_profile(other)
+        for other in [node] + self.nodes:  # a speed loop starts at its reference
+            p = self.speed_or_reference(other)
             if p is not None:
                 return p.value(t)
         return node.v_start or 0.0
@@ -394,6 +423,16 @@ class Scene:
         total = [sum(abs(p.value(t)) for p in profiles) for t in knots]
         picked = [0.0, knots[total.index(min(total))], knots[total.index(max(total))]]
         return sorted(set(picked))
+
+    def speed_reference(self):
+        """The line's speed reference: the profile of its first speed-driven part or speed loop (None: it
+        has none)."""
+        return next((p for p in map(self.speed_or_reference, self.nodes) if p is not None), None)
+
+    def speed_or_reference(self, node):
+        """The speed a node follows: prescribed, or its speed loop's reference (None: neither)."""
+        loop = getattr(getattr(node, "drive", None), "loop", None)
+        return loop.set if loop is not None and loop.speed else self.speed_profile(node)
 
     def torque_profile(self, node):
         """The motor torque of a Roller-FMU node as a profile (N m)."""
@@ -470,6 +509,8 @@ def profiles_of(c):
     d = getattr(c, "drive", None)
     if d is not None and d.profile is not None:
         out.append(d.profile)
+    if d is not None and d.loop is not None:
+        out.append(d.loop.set)
     t = getattr(c, "traction", None)
     if t is not None and t.nip_load is not None:
         out.append(t.nip_load)
@@ -716,11 +757,75 @@ def _web_ref(r: _Reader, webs: dict, node: Node, what: str) -> Web:
 
 def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
     o = r.obj(node, what)
+    if "speed" in kinds and "speed" in o and isinstance(o["speed"].value, Obj) and "input" in o["speed"].value \
+            and "loop" not in o:
+        raise r.err(o["speed"], f"{what}.speed: a speed input drives a speed loop (a real motor): give the drive a "
+                                "\"loop\" ({\"kp\", \"ki\"}); an ideal speed drive's reference as an input is not modelled yet")
+    if "speed" in kinds and "speed" in o and "loop" in o:  # a speed loop on a real motor
+        o = r.keys(node, what, required=("speed", "loop"), optional=("feedforward",))
+        g = r.keys(o["loop"], f"{what}.loop", required=("kp", "ki"), optional=("limit", "lag"))
+        speed_node, speed_input = o["speed"], False
+        if isinstance(speed_node.value, Obj) and "input" in speed_node.value:  # the Line FMU's input <name>.v_ref
+            speed_node, speed_input = r.keys(speed_node, f"{what}.speed", required=("input",))["input"], True
+            if "feedforward" in o:
+                raise r.err(r.key_pos(o["feedforward"]), f"{what}: a speed loop fed by an input has no reference "
+                                                         "acceleration to feed forward")
+        loop = Loop(measure=None, set_input=speed_input,
+                    set=Profile.constant(r.quantity(speed_node, units.SPEED, f"{what}.speed.input")) if speed_input
+                    else r.profile(speed_node, units.SPEED, f"{what}.speed"),
+                    kp=r.quantity(g["kp"], units.DIMENSIONLESS, f"{what}.loop.kp (N.m per m/s)", nonnegative=True),
+                    ki=r.quantity(g["ki"], units.DIMENSIONLESS, f"{what}.loop.ki (N.m per m)", nonnegative=True))
+        _motor(r, g, f"{what}.loop", loop)
+        if "feedforward" in o:
+            _feedforward(r, o["feedforward"], f"{what}.feedforward", loop)
+        return Drive("speed loop", None, loop)
     if len(o.items) != 1 or next(iter(o.keys())) not in kinds:
         raise r.err(node, f"{what} must be an object with one key of {', '.join(kinds)}")
     kind, body = next(iter(o.items.items()))
-    dim = {"torque": units.TORQUE, "tension": units.FORCE, "speed": units.SPEED}[kind]
+    if kind == "pi":
+        return Drive("pi", None, _loop(r, body, f"{what}.pi"))
+    dim = {"torque": units.TORQUE, "tension": units.FORCE, "speed": units.SPEED, "brake": units.TORQUE}[kind]
     return Drive(kind, r.profile(body, dim, f"{what}.{kind}"))
+
+
+def _loop(r: _Reader, node: Node, what: str) -> Loop:
+    """A drive's "pi": {"measure": "SPAN.T" or "ROLLER.F", "set", "kp", "ki", "limit", "lag", "feedforward"}.
+    Which parts it names is checked once the line is read (`_check_loops`)."""
+    o = r.keys(node, what, required=("measure", "set", "kp", "ki"), optional=("limit", "lag", "feedforward"))
+    measure = r.string(o["measure"], f"{what}.measure")
+    part, _, quantity = measure.rpartition(".")
+    if not part or quantity not in ("T", "F"):
+        raise r.err(o["measure"], f"{what}.measure must be \"SPAN.T\" (a span's tension) or \"ROLLER.F\" (a load cell), found {measure!r}")
+    set_node, set_input = o["set"], False
+    if isinstance(set_node.value, Obj) and "input" in set_node.value:  # the Line FMU's input <name>.T_set
+        set_node, set_input = r.keys(set_node, f"{what}.set", required=("input",))["input"], True
+    loop = Loop(
+        measure=(part, quantity),
+        set=Profile.constant(r.quantity(set_node, units.FORCE, f"{what}.set.input")) if set_input
+        else r.profile(set_node, units.FORCE, f"{what}.set"),
+        set_input=set_input,
+        kp=r.quantity(o["kp"], units.DIMENSIONLESS, f"{what}.kp (N.m per N)", nonnegative=True),
+        ki=r.quantity(o["ki"], units.DIMENSIONLESS, f"{what}.ki (N.m per N.s)", nonnegative=True),
+    )
+    _motor(r, o, what, loop)
+    if "feedforward" in o:
+        _feedforward(r, o["feedforward"], f"{what}.feedforward", loop)
+    return loop
+
+
+def _motor(r: _Reader, o, what: str, loop: Loop):
+    """A loop's motor: its torque "limit" and "lag"."""
+    if "limit" in o:
+        loop.limit = r.quantity(o["limit"], units.TORQUE, f"{what}.limit", positive=True)
+    if "lag" in o:
+        loop.lag = r.quantity(o["lag"], units.TIME, f"{what}.lag", nonnegative=True)
+
+
+def _feedforward(r: _Reader, node: Node, what: str, loop: Loop):
+    ff = r.string(node, what)
+    if ff != "inertia":
+        raise r.err(node, f"{what}: the one feed-forward is \"inertia\", found {ff!r}")
+    loop.feedforward = True
 
 
 def _span(r, o_node, name, webs) -> Span:
@@ -793,7 +898,8 @@ def _roller(r, o_node, name, kind) -> Roller:
         required.append("strain")
     o = r.keys(o_node, what, required=required, optional=optional)
     c = Roller(name=name, type=kind, where=f"{r.source}:{o_node.line}:{o_node.col}")
-    drives = {"roller": ("torque", "speed"), "unwinder": ("torque", "tension", "speed"), "winder": ("torque", "tension", "speed")}
+    drives = {"roller": ("torque", "speed", "pi", "brake"), "unwinder": ("torque", "tension", "speed", "pi", "brake"),
+              "winder": ("torque", "tension", "speed", "pi", "brake")}
     if "drive" in o:
         c.drive = _drive(r, o["drive"], f"{what}: drive", drives[kind])
     slips = "traction" in o or "nip" in o
@@ -825,6 +931,9 @@ def _roller(r, o_node, name, kind) -> Roller:
         if "split" not in o:
             raise r.err(r.key_pos(o["trim"]), f"{what}: trim goes with split (the width a slitter cuts off)")
         c.trim = r.quantity(o["trim"], units.LENGTH, f"{what}: trim", nonnegative=True)
+    if slips and (c.drive.loop is not None or c.drive.kind == "brake"):
+        raise r.err(r.key_pos(o["traction" if "traction" in o else "nip"]),
+                    f"{what}: traction or a nip on a roller whose drive has a loop or a brake is not modelled")
     if slips:
         for k, why in (("merge", "a laminating nip"), ("split", "a slitter")):
             if k in o:
@@ -1070,6 +1179,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     _check_layers(r, scene, raw)
 
     _check_traction(r, scene, raw)
+    _check_loops(r, scene, raw)
     _fill_wound(scene)
 
     # Spans next to a dancer take their length from it; no other span may.
@@ -1213,6 +1323,49 @@ def _check_traction(r, scene: Scene, raw):
                                           "moves between the two spans, and their damping is what damps it")
             if "includeMass" in sp.effects:
                 raise r.err(raw[sp.name], f"span {sp.name!r} next to {what}, which has traction: includeMass there is not modelled")
+
+
+def _downstream_of(scene: Scene, node) -> set:
+    """The names of every part the web reaches after `node`."""
+    seen, todo = set(), list(scene.spans_out(node))
+    while todo:
+        sp = todo.pop()
+        if sp.name in seen:
+            continue
+        seen.add(sp.name)
+        down = scene.downstream(sp)
+        seen.add(down.name)
+        todo += scene.spans_out(down)
+    return seen
+
+
+def _check_loops(r, scene: Scene, raw):
+    """A drive's loop measures a span's tension of this line (a load cell's reading is refused); its
+    sign follows from where that is: downstream of the drive more torque lowers it (-1), upstream it
+    raises it (+1). A feed-forward needs a speed drive whose profile is the line's speed reference."""
+    for node in scene.nodes:
+        loop = getattr(getattr(node, "drive", None), "loop", None)
+        if loop is None or loop.speed:
+            continue
+        what = f"{node.type} {node.name!r}: drive.pi.measure"
+        part, quantity = loop.measure
+        names = {c.name: c for c in scene.parts}
+        c = names.get(part)
+        if c is None:
+            raise r.err(raw[node.name], f"{what}: no part {part!r} in the line")
+        if quantity == "T" and not isinstance(c, Span):
+            raise r.err(raw[node.name], f"{what}: {part!r} is a {c.type}, not a span: measure its load cell as \"{part}.F\"")
+        if quantity == "F":
+            raise r.err(raw[node.name], f"{what}: a loop on a load cell (\"{part}.F\") is not modelled yet: the line does not "
+                                        "wire a load cell's reading into a drive; measure the tension of the span next to it (\"SPAN.T\")")
+        if part == node.name:
+            raise r.err(raw[node.name], f"{what}: a drive's loop measures another part than its own roller")
+        if quantity == "T" and c.layered:
+            raise r.err(raw[node.name], f"{what}: a loop on a laminate's tension is not modelled (measure a plain span)")
+        loop.sign = -1.0 if part in _downstream_of(scene, node) else 1.0
+        if loop.feedforward and scene.speed_reference() is None:
+            raise r.err(raw[node.name], f"{node.type} {node.name!r}: drive.pi.feedforward needs the line's speed reference, "
+                                        "a speed-driven part (its first)")
 
 
 def _check_split(r, scene: Scene, b: Branch, raw):
