@@ -124,8 +124,9 @@ def test_loop_keys_are_checked_and_the_parts_refuse_loops(fmus):
             run_scene(scene, engine, fmu_dir=fmus)
 
 
-def fmpy_run(fmu, changes, stop=2.0, h=0.01, output="entry.T"):
-    """`output` at every step of the Line FMU in FMPy, `changes` {step: {name: value}} set before that step."""
+def fmpy_run(fmu, changes, stop=2.0, h=0.01, output="entry.T", slopes=None):
+    """`output` at every step of the Line FMU in FMPy, `changes` {step: {name: value}} set before that step
+    (`slopes` {step: {name: rate}}: fmi2SetRealInputDerivatives then)."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
@@ -141,6 +142,8 @@ def fmpy_run(fmu, changes, stop=2.0, h=0.01, output="entry.T"):
         for k in range(int(round(stop / h))):
             for name, value in changes.get(k, {}).items():
                 slave.setReal([vr[name]], [value])
+            for name, rate in (slopes or {}).get(k, {}).items():
+                slave.setRealInputDerivatives([vr[name]], [1], [rate])
             slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
             t += h
             rows.append(slave.getReal([vr[output]])[0])
@@ -212,7 +215,7 @@ def test_a_speed_loop_follows_its_ramp_and_its_feedforward_cuts_the_error_tenfol
 def test_a_speed_input_from_fmpy_moves_the_line(fmus, tmp_path):
     """"speed": {"input": "5 m/s"} on a speed loop makes its reference the Line FMU's input pull.v_ref:
     set to 6 m/s from FMPy between steps, the pull roll follows it (to 1e-4 m/s 2.9 s later), and the
-    line with it; an ideal speed drive's reference as an input is refused by name."""
+    line with it."""
     scene = speed_looped(False, speed={"input": "5 m/s"})
     fmu = linefmu.export(scene, tmp_path / "speed.fmu", fmus)
     held, md = fmpy_run(fmu, {}, stop=1.0, output="pull.v")
@@ -220,11 +223,54 @@ def test_a_speed_input_from_fmpy_moves_the_line(fmus, tmp_path):
     assert np.max(np.abs(held - 5.0)) < 1e-9
     moved, _ = fmpy_run(fmu, {10: {"pull.v_ref": 6.0}}, stop=3.0, output="pull.v")
     assert abs(moved[-1] - 6.0) < 1e-4 and moved[5] == held[5], f"pull.v {moved[-1]} after v_ref = 6 m/s"
-    with pytest.raises(SceneError, match="speed input drives a speed loop"):
-        parse_scene(json.dumps({"name": "x", "stop_time": "1 s", "step": "1 ms", "webs": {"PET": PET}, "line": [
+
+
+def ideal_speed_input():
+    """A pull roll on an ideal speed drive whose speed is the Line FMU's input pull.v_ref (5.005 m/s at
+    the start) between a source at 5 m/s (strain 0) and a sink at 5.01 m/s."""
+    return parse_scene(json.dumps({
+        "name": "speed_input", "stop_time": "1 s", "step": "10 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
             {"type": "source", "name": "src", "speed": "5 m/s", "strain": 0.0},
-            {"type": "span", "name": "a", "L": "1 m", "web": "PET"},
-            {"type": "winder", "name": "w", "J": "1 kg.m2", "R": "0.2 m", "drive": {"speed": {"input": "5 m/s"}}}]}), "x.json")
+            {"type": "span", "name": "a", "L": "1 m", **DAMPED},
+            {"type": "roller", "name": "pull", "drive": {"speed": {"input": "5.005 m/s"}}},
+            {"type": "span", "name": "b", "L": "1 m", **DAMPED},
+            {"type": "sink", "name": "out", "speed": "5.01 m/s"},
+        ],
+        "record": ["pull.v", "a.T", "b.T"]}), "speed_input.json")
+
+
+def test_an_ideal_speed_drive_follows_its_input_from_fmpy(fmus, tmp_path):
+    """"speed": {"input": "5.005 m/s"} on an ideal speed drive: the Line FMU's input pull.v_ref, held over
+    a step. Untouched, the Line FMU and the reference (which holds it at its start value) agree to 1e-6
+    and sit at the mass balance's steady state 1 + eps_b = (v_b/v_a)(1 + eps_a), T = EA*eps (EA = 225 kN).
+    Set to 5.0075 m/s from FMPy, the pull roll is there from that step on, and 4 s later both spans
+    are at the new steady state to 1e-6 N (their transport time L/v is 0.2 s; measured 2e-9 N and
+    6e-8 N). An input derivative on it is refused (the drive holds its input over a step)."""
+    ea, v_in, v_out = 4.5e9 * 50e-6, 5.0, 5.01
+
+    def steady(v_pull):  # the spans' tensions, from the source's strain 0 through both spans
+        eps_a = v_pull / v_in - 1.0
+        return ea * eps_a, ea * ((v_out / v_pull) * (1.0 + eps_a) - 1.0)
+
+    scene = ideal_speed_input()
+    for result in both(scene, fmus):
+        for span, T in zip("ab", steady(5.005)):
+            assert np.max(np.abs(result.column(f"{span}.T [N]") - T)) < 1e-6, f"{span}.T from {T} N"
+    fmu = linefmu.export(scene, tmp_path / "ideal.fmu", fmus)
+    _, md = fmpy_run(fmu, {}, stop=0.02, output="pull.v")
+    assert next(v for v in md.modelVariables if v.name == "pull.v_ref").causality == "input"
+    changes = {10: {"pull.v_ref": 5.0075}}
+    v, _ = fmpy_run(fmu, changes, stop=5.0, output="pull.v")
+    assert v[9] == 5.005 and np.all(v[10:] == 5.0075), "the surface speed is the input, held over each step"
+    for span, T in zip("ab", steady(5.0075)):
+        got, _ = fmpy_run(fmu, changes, stop=5.0, output=f"{span}.T")
+        print(f"{span}.T: {got[-1]:.9f} N, the mass balance's {T:.9f} N (from {steady(5.005)['ab'.index(span)]:.3f} N)")
+        assert abs(got[-1] - T) < 1e-6, f"{span}.T {got[-1]} N, the mass balance's {T} N"
+    from fmpy.fmi1 import FMICallException
+
+    with pytest.raises(FMICallException):  # a ramped input would move the speed with no acceleration to match
+        fmpy_run(fmu, {}, stop=0.05, output="pull.v", slopes={2: {"pull.v_ref": 0.1}})
 
 
 def test_a_powder_brake_holds_the_closed_form_tension_and_starts_from_rest(fmus):

@@ -108,6 +108,7 @@ fmi_core::bind_variables! {
         includeTraction: param(params.traction),
         layered: param(params.layered),
         loop_feedforward: param(params.loop_feedforward),
+        speed_input: param(params.speed_input),
     }
     string {
         profile: param(params.profile),

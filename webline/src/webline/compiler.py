@@ -72,7 +72,10 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if speed is not None:
         # With traction the radius counts (the web's mass on the wrap, the air film): the scene's.
         start.update(J=PRESCRIBED_J, R=float(node.R) if traction is not None else PRESCRIBED_R, b=0.0)
-        profile["speed"] = table(speed)
+        if getattr(getattr(node, "drive", None), "input", False):  # held at loop.speed: the Line FMU's input v_ref
+            start.update({"speed.input": True, "loop.speed": float(speed.value(0.0))})
+        else:
+            profile["speed"] = table(speed)
     else:
         start.update(J=float(node.J), R=float(node.R), b=float(node.b))
     start["v_start"] = float(scene.initial_speed(node))

@@ -160,6 +160,7 @@ class Drive:
     kind: str
     profile: Profile | None = None
     loop: Loop | None = None
+    input: bool = False  # an ideal speed drive on the Line FMU's input <name>.v_ref, `profile` its start value
 
 
 @dataclass
@@ -758,9 +759,10 @@ def _web_ref(r: _Reader, webs: dict, node: Node, what: str) -> Web:
 def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
     o = r.obj(node, what)
     if "speed" in kinds and "speed" in o and isinstance(o["speed"].value, Obj) and "input" in o["speed"].value \
-            and "loop" not in o:
-        raise r.err(o["speed"], f"{what}.speed: a speed input drives a speed loop (a real motor): give the drive a "
-                                "\"loop\" ({\"kp\", \"ki\"}); an ideal speed drive's reference as an input is not modelled yet")
+            and "loop" not in o:  # an ideal speed drive on the Line FMU's input <name>.v_ref, held over a step
+        o = r.keys(node, what, required=("speed",))
+        start = r.keys(o["speed"], f"{what}.speed", required=("input",))["input"]
+        return Drive("speed", Profile.constant(r.quantity(start, units.SPEED, f"{what}.speed.input")), input=True)
     if "speed" in kinds and "speed" in o and "loop" in o:  # a speed loop on a real motor
         o = r.keys(node, what, required=("speed", "loop"), optional=("feedforward",))
         g = r.keys(o["loop"], f"{what}.loop", required=("kp", "ki"), optional=("limit", "lag"))
