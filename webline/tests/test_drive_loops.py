@@ -113,7 +113,7 @@ def test_loop_keys_are_checked_and_the_parts_refuse_loops(fmus):
         looped({**good, "measure": "nowhere.T"}, "10 m/s", "1 s")
     with pytest.raises(SceneError, match="not a span"):
         looped({**good, "measure": "pull.T"}, "10 m/s", "1 s")
-    with pytest.raises(SceneError, match="not modelled yet"):
+    with pytest.raises(SceneError, match="has no load cell"):
         looped({**good, "measure": "pull.F"}, "10 m/s", "1 s")
     with pytest.raises(SceneError, match="feedforward"):
         looped({**good, "feedforward": "magic"}, "10 m/s", "1 s")
@@ -316,3 +316,41 @@ def test_a_loop_on_a_wound_roll_feeds_its_changing_inertia_forward(fmus):
     r = line.column("unwind.r [m]")
     assert r[-1] < r[0] - 1e-3, "the roll winds off"
     assert np.max(np.abs(line.column("entry.T [N]") - 300.0)) < 5.0
+
+
+def load_cell_looped(idler):
+    """An unwinder whose loop holds the load cell of the idler between its two spans, a pull roll
+    ramping 10 -> 11 m/s (a sink)."""
+    return json.dumps({
+        "name": "load_cell_loop", "stop_time": "20 s", "step": "10 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
+            {"type": "unwinder", "name": "unwind", "J": "8 kg.m2", "R": "0.5 m", "b": "0.1 N.m.s", "strain": 0.0,
+             "v_start": "10 m/s", "drive": {"pi": {"measure": "idle.F", "set": "500 N", "kp": 0.2, "ki": 2.0}}},
+            {"type": "span", "name": "entry", "L": "2 m", **DAMPED},
+            {"type": "roller", "name": "idle", "J": "0.2 kg.m2", "R": "0.1 m", "b": "0.005 N.m.s", **idler},
+            {"type": "span", "name": "exit", "L": "2 m", **DAMPED},
+            {"type": "sink", "name": "pull", "speed": {"ramp": {"start": "0.5 s", "duration": "1 s", "from": "10 m/s",
+                                                                 "to": "11 m/s"}}},
+        ],
+        "record": ["entry.T", "exit.T", "unwind.tau"]})
+
+
+def test_a_pi_loop_on_an_idlers_load_cell_holds_its_set_point(fmus):
+    """"measure": "idle.F": the unwinder's loop holds the load cell of an idler with a 90 degree wrap,
+    F = sqrt(T_a^2 + T_b^2 - 2 T_a T_b cos(wrap)) of the spans on either side (physics, a load cell),
+    which the Line FMU wires from the roller's output load_cell.F into loop.measured (its tangents in
+    the line's Jacobian) and the reference computes from its spans. Through the pull roll's 10 -> 11 m/s
+    ramp the idler's bearing friction b*omega/R (5.5 N at 11 m/s) parts the two tensions, and the
+    integral brings F back to 500 N to 1e-6 N in both engines, which agree to 1e-6. A roller without
+    a wrap has no load cell to measure."""
+    scene = parse_scene(load_cell_looped({"wrap": "90 deg"}), "load_cell_loop.json")
+    for result in both(scene, fmus):
+        Ta, Tb = result.column("entry.T [N]"), result.column("exit.T [N]")
+        F = np.sqrt(Ta**2 + Tb**2)  # cos(90 deg) = 0
+        assert abs(F[0] - 500.0) < 1e-8, "the equilibrium start puts the drive's torque in the integrator"
+        assert np.max(np.abs(F - 500.0)) > 0.1, "the ramp must move the load cell"
+        print(f"F at the end {F[-1] - 500.0:+.3g} N off 500 N, band {np.min(F) - 500:+.3g}..{np.max(F) - 500:+.3g} N")
+        assert abs(F[-1] - 500.0) < 1e-6, f"F = {F[-1]} N at the end"
+        assert abs(Tb[-1] - Ta[-1] - 0.005 * 110.0 / 0.1) < 1e-3, "the idler's friction b*omega/R parts the tensions"
+    with pytest.raises(SceneError, match="has no load cell"):
+        parse_scene(load_cell_looped({}), "x.json")

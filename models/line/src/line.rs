@@ -70,6 +70,16 @@ impl Line {
             if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 2 || r.params.speed_input) {
                 return Err(FmiError::error(format!("line.json: part {}: speed_input needs a roller whose drive has a speed loop (loop.kind = 2) or is an ideal speed drive on it (speed.input = true)", ps.name)));
             }
+            // A load cell a connection reads (a drive's loop on it): the roller's own output load_cell.F at
+            // the spec's wrap; elsewhere the line's output NAME.F alone, and the roller's tangents stay fixed.
+            if spec.connections.iter().any(|c| c.from.0 == ps.name && c.from.1 == "load_cell.F") {
+                let w = ps.wrap.unwrap_or(0.0);
+                if w <= 0.0 {
+                    return Err(FmiError::error(format!("line.json: part {}: a connection reads its load_cell.F, which needs a wrap > 0 degrees (it has {w})", ps.name)));
+                }
+                let vr = part.description().variable_by_name("load_cell.wrap").expect("a roller has a load cell").vr;
+                part.set_real(vr, w.to_radians())?;
+            }
             if ps.profile.is_some() {
                 let vr = part.description().variable_by_name("profile").expect("parts have a profile").vr;
                 part.set_string(vr, &format!("{PROFILE_FOLDER}/{}.json", ps.name))?;

@@ -216,6 +216,15 @@ impl Roller {
         physics::load_cell(u.pull_back(p), u.pull_forward(p), cos_wrap)
     }
 
+    /// The output load_cell.F: the load cell at its own wrap `load_cell.wrap` (0: none, F = 0).
+    pub fn load_cell_force(&self) -> f64 {
+        if self.params.load_cell_wrap > 0.0 {
+            self.load_cell(self.params.load_cell_wrap.cos())
+        } else {
+            0.0
+        }
+    }
+
     /// The drive's torque at time t, and its rate (a speed drive: 0, see
     /// `drive_torque`). The profile has at most one drive table.
     #[inline]

@@ -86,6 +86,8 @@ fmi_core::bind_variables! {
         loop_measured: input(measured),
         loop_set: param(params.loop_set),
         loop_speed: param(params.loop_speed),
+        load_cell_wrap: param(params.load_cell_wrap),
+        load_cell_F: computed(load_cell_force()),
         brake_v_slip: param(params.brake_v_slip),
         loop_kp: param(params.loop_kp),
         loop_ki: param(params.loop_ki),

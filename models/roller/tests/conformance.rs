@@ -12,7 +12,7 @@ fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
     let nip = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/traction_nip.json");
     let brake = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/brake.json");
-    let all_ports = vec![("inlets", 4.0), ("outlets", 4.0)];
+    let all_ports = vec![("inlets", 4.0), ("outlets", 4.0), ("load_cell.wrap", 1.5)];
     let slipping = vec![
         ("includeTraction", 1.0),
         ("traction.wrap", 1.5),

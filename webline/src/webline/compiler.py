@@ -411,10 +411,10 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
             connect(name, "web_a.F", up.name, f"{a}.F")
             connect(name, "web_b.F", down.name, f"{b}.F")
 
-    for n in scene.nodes:  # a drive's loop reads the tension it holds
+    for n in scene.nodes:  # a drive's loop reads the tension it holds: a span's, or a roller's load cell
         loop = getattr(getattr(n, "drive", None), "loop", None)
         if loop is not None and not loop.speed:
-            connect(loop.measure[0], "summary_Tension", n.name, "loop.measured")
+            connect(loop.measure[0], "load_cell.F" if loop.measure[1] == "F" else "summary_Tension", n.name, "loop.measured")
 
     record, sums = _record(scene)
     system = System(
