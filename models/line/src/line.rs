@@ -167,14 +167,19 @@ impl Line {
     }
 
     /// An ideal speed drive's input v_ref (its `loop.speed`) moves its surface speed at once: its
-    /// omega, a state of the line whose rate is the held input's slope 0, jumps with it.
+    /// omega, a state of the line whose rate is the held input's slope 0, jumps with it. In Model
+    /// Exchange the importer owns the states: the next event update moves it and says so.
     fn follow_speed_input(&mut self, part: usize) {
-        let (Part::Roller(r), Some(net)) = (&mut self.ode.parts[part], self.ode.net.as_mut()) else { return };
-        if r.params.speed_input && self.initialized {
-            let omega = r.surface_speed() / r.radius();
-            self.ode.x[net.first_state[part]] = omega;
-            net.parts_changed();
+        let (Part::Roller(r), Some(net)) = (&self.ode.parts[part], self.ode.net.as_mut()) else { return };
+        if !(r.params.speed_input && self.initialized) {
+            return;
         }
+        if !self.model_exchange {
+            self.ode.x[net.first_state[part]] = r.surface_speed() / r.radius();
+        }
+        // Its speed moves the spans' inputs, though loop.speed is no input of the roller's outputs.
+        net.parts_changed();
+        let _ = self.ode.settle();
     }
 
     /// d(unknown)/d(known) of the line now, by central differences (step 1e-6

@@ -766,3 +766,30 @@ fn a_set_point_input_moves_the_line_and_a_tunable_gain_changes_its_response() {
     let apart = runs[0].iter().zip(&runs[1]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(apart > 1.0, "another gain must give another response (they differ by {apart} N at most)");
 }
+
+/// An ideal speed drive on the line's input `pull.v_ref` (speed.input): in Co-Simulation its omega
+/// jumps with the input, the damping of the span into it sees the new speed at once, and the spans follow by transport; in Model Exchange the event update that
+/// follows moves omega to v/r and reports the states changed.
+#[test]
+fn an_ideal_speed_drive_follows_its_input_in_both_interfaces() {
+    let mut spec = paper_line("equilibrium");
+    spec["parts"][4].as_object_mut().unwrap().remove("profile");
+    spec["parts"][4]["start"] = json!({"J": 0.01, "R": 0.1, "b": 0.0, "speed.input": true, "loop.speed": 10.0});
+    spec["parts"][4]["speed_input"] = json!(true);
+    let mut line = initialized(&spec);
+    assert!((get(&line, "pull.v") - 10.0).abs() < 1e-12 && (get(&line, "pull.omega") - 100.0).abs() < 1e-9);
+    let before = get(&line, "exit.T");
+    line.set_real(vr(&line, "pull.v_ref"), 10.5).unwrap();
+    assert_eq!((get(&line, "pull.v"), get(&line, "pull.omega")), (10.5, 105.0));
+    // The span's damping sees the new speed at once: d_r*EA*(1 + eps)*dv/L = 1e-3*225e3*0.5/1.5 = 75 N.
+    let jump = get(&line, "exit.T") - before;
+    assert!((jump - 75.0).abs() < 0.5, "exit.T jumps by {jump} N");
+    line.do_step(0.01).unwrap();
+    assert_eq!(get(&line, "pull.omega"), 105.0, "held: no slope within the step");
+    let (mut me, r) = instantiate(&spec).unwrap();
+    me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap();
+    me.set_real(vr(&me, "pull.v_ref"), 10.5).unwrap();
+    assert_eq!(get(&me, "pull.v"), 10.5);
+    assert!(me.event_update().states_changed, "the event update moves omega");
+    assert!((get(&me, "pull.omega") - 105.0).abs() < 1e-12, "omega {}", get(&me, "pull.omega"));
+}
