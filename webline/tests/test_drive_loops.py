@@ -113,7 +113,7 @@ def test_loop_keys_are_checked_and_the_parts_refuse_loops(fmus):
         looped({**good, "measure": "nowhere.T"}, "10 m/s", "1 s")
     with pytest.raises(SceneError, match="not a span"):
         looped({**good, "measure": "pull.T"}, "10 m/s", "1 s")
-    with pytest.raises(SceneError, match="not modelled yet"):
+    with pytest.raises(SceneError, match="has no load cell"):
         looped({**good, "measure": "pull.F"}, "10 m/s", "1 s")
     with pytest.raises(SceneError, match="feedforward"):
         looped({**good, "feedforward": "magic"}, "10 m/s", "1 s")
@@ -124,8 +124,9 @@ def test_loop_keys_are_checked_and_the_parts_refuse_loops(fmus):
             run_scene(scene, engine, fmu_dir=fmus)
 
 
-def fmpy_run(fmu, changes, stop=2.0, h=0.01, output="entry.T"):
-    """`output` at every step of the Line FMU in FMPy, `changes` {step: {name: value}} set before that step."""
+def fmpy_run(fmu, changes, stop=2.0, h=0.01, output="entry.T", slopes=None):
+    """`output` at every step of the Line FMU in FMPy, `changes` {step: {name: value}} set before that step
+    (`slopes` {step: {name: rate}}: fmi2SetRealInputDerivatives then)."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
@@ -141,6 +142,8 @@ def fmpy_run(fmu, changes, stop=2.0, h=0.01, output="entry.T"):
         for k in range(int(round(stop / h))):
             for name, value in changes.get(k, {}).items():
                 slave.setReal([vr[name]], [value])
+            for name, rate in (slopes or {}).get(k, {}).items():
+                slave.setRealInputDerivatives([vr[name]], [1], [rate])
             slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
             t += h
             rows.append(slave.getReal([vr[output]])[0])
@@ -212,7 +215,7 @@ def test_a_speed_loop_follows_its_ramp_and_its_feedforward_cuts_the_error_tenfol
 def test_a_speed_input_from_fmpy_moves_the_line(fmus, tmp_path):
     """"speed": {"input": "5 m/s"} on a speed loop makes its reference the Line FMU's input pull.v_ref:
     set to 6 m/s from FMPy between steps, the pull roll follows it (to 1e-4 m/s 2.9 s later), and the
-    line with it; an ideal speed drive's reference as an input is refused by name."""
+    line with it."""
     scene = speed_looped(False, speed={"input": "5 m/s"})
     fmu = linefmu.export(scene, tmp_path / "speed.fmu", fmus)
     held, md = fmpy_run(fmu, {}, stop=1.0, output="pull.v")
@@ -220,11 +223,54 @@ def test_a_speed_input_from_fmpy_moves_the_line(fmus, tmp_path):
     assert np.max(np.abs(held - 5.0)) < 1e-9
     moved, _ = fmpy_run(fmu, {10: {"pull.v_ref": 6.0}}, stop=3.0, output="pull.v")
     assert abs(moved[-1] - 6.0) < 1e-4 and moved[5] == held[5], f"pull.v {moved[-1]} after v_ref = 6 m/s"
-    with pytest.raises(SceneError, match="speed input drives a speed loop"):
-        parse_scene(json.dumps({"name": "x", "stop_time": "1 s", "step": "1 ms", "webs": {"PET": PET}, "line": [
+
+
+def ideal_speed_input():
+    """A pull roll on an ideal speed drive whose speed is the Line FMU's input pull.v_ref (5.005 m/s at
+    the start) between a source at 5 m/s (strain 0) and a sink at 5.01 m/s."""
+    return parse_scene(json.dumps({
+        "name": "speed_input", "stop_time": "1 s", "step": "10 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
             {"type": "source", "name": "src", "speed": "5 m/s", "strain": 0.0},
-            {"type": "span", "name": "a", "L": "1 m", "web": "PET"},
-            {"type": "winder", "name": "w", "J": "1 kg.m2", "R": "0.2 m", "drive": {"speed": {"input": "5 m/s"}}}]}), "x.json")
+            {"type": "span", "name": "a", "L": "1 m", **DAMPED},
+            {"type": "roller", "name": "pull", "drive": {"speed": {"input": "5.005 m/s"}}},
+            {"type": "span", "name": "b", "L": "1 m", **DAMPED},
+            {"type": "sink", "name": "out", "speed": "5.01 m/s"},
+        ],
+        "record": ["pull.v", "a.T", "b.T"]}), "speed_input.json")
+
+
+def test_an_ideal_speed_drive_follows_its_input_from_fmpy(fmus, tmp_path):
+    """"speed": {"input": "5.005 m/s"} on an ideal speed drive: the Line FMU's input pull.v_ref, held over
+    a step. Untouched, the Line FMU and the reference (which holds it at its start value) agree to 1e-6
+    and sit at the mass balance's steady state 1 + eps_b = (v_b/v_a)(1 + eps_a), T = EA*eps (EA = 225 kN).
+    Set to 5.0075 m/s from FMPy, the pull roll is there from that step on, and 4 s later both spans
+    are at the new steady state to 1e-6 N (their transport time L/v is 0.2 s; measured 2e-9 N and
+    6e-8 N). An input derivative on it is refused (the drive holds its input over a step)."""
+    ea, v_in, v_out = 4.5e9 * 50e-6, 5.0, 5.01
+
+    def steady(v_pull):  # the spans' tensions, from the source's strain 0 through both spans
+        eps_a = v_pull / v_in - 1.0
+        return ea * eps_a, ea * ((v_out / v_pull) * (1.0 + eps_a) - 1.0)
+
+    scene = ideal_speed_input()
+    for result in both(scene, fmus):
+        for span, T in zip("ab", steady(5.005)):
+            assert np.max(np.abs(result.column(f"{span}.T [N]") - T)) < 1e-6, f"{span}.T from {T} N"
+    fmu = linefmu.export(scene, tmp_path / "ideal.fmu", fmus)
+    _, md = fmpy_run(fmu, {}, stop=0.02, output="pull.v")
+    assert next(v for v in md.modelVariables if v.name == "pull.v_ref").causality == "input"
+    changes = {10: {"pull.v_ref": 5.0075}}
+    v, _ = fmpy_run(fmu, changes, stop=5.0, output="pull.v")
+    assert v[9] == 5.005 and np.all(v[10:] == 5.0075), "the surface speed is the input, held over each step"
+    for span, T in zip("ab", steady(5.0075)):
+        got, _ = fmpy_run(fmu, changes, stop=5.0, output=f"{span}.T")
+        print(f"{span}.T: {got[-1]:.9f} N, the mass balance's {T:.9f} N (from {steady(5.005)['ab'.index(span)]:.3f} N)")
+        assert abs(got[-1] - T) < 1e-6, f"{span}.T {got[-1]} N, the mass balance's {T} N"
+    from fmpy.fmi1 import FMICallException
+
+    with pytest.raises(FMICallException):  # a ramped input would move the speed with no acceleration to match
+        fmpy_run(fmu, {}, stop=0.05, output="pull.v", slopes={2: {"pull.v_ref": 0.1}})
 
 
 def test_a_powder_brake_holds_the_closed_form_tension_and_starts_from_rest(fmus):
@@ -270,3 +316,41 @@ def test_a_loop_on_a_wound_roll_feeds_its_changing_inertia_forward(fmus):
     r = line.column("unwind.r [m]")
     assert r[-1] < r[0] - 1e-3, "the roll winds off"
     assert np.max(np.abs(line.column("entry.T [N]") - 300.0)) < 5.0
+
+
+def load_cell_looped(idler):
+    """An unwinder whose loop holds the load cell of the idler between its two spans, a pull roll
+    ramping 10 -> 11 m/s (a sink)."""
+    return json.dumps({
+        "name": "load_cell_loop", "stop_time": "20 s", "step": "10 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
+            {"type": "unwinder", "name": "unwind", "J": "8 kg.m2", "R": "0.5 m", "b": "0.1 N.m.s", "strain": 0.0,
+             "v_start": "10 m/s", "drive": {"pi": {"measure": "idle.F", "set": "500 N", "kp": 0.2, "ki": 2.0}}},
+            {"type": "span", "name": "entry", "L": "2 m", **DAMPED},
+            {"type": "roller", "name": "idle", "J": "0.2 kg.m2", "R": "0.1 m", "b": "0.005 N.m.s", **idler},
+            {"type": "span", "name": "exit", "L": "2 m", **DAMPED},
+            {"type": "sink", "name": "pull", "speed": {"ramp": {"start": "0.5 s", "duration": "1 s", "from": "10 m/s",
+                                                                 "to": "11 m/s"}}},
+        ],
+        "record": ["entry.T", "exit.T", "unwind.tau"]})
+
+
+def test_a_pi_loop_on_an_idlers_load_cell_holds_its_set_point(fmus):
+    """"measure": "idle.F": the unwinder's loop holds the load cell of an idler with a 90 degree wrap,
+    F = sqrt(T_a^2 + T_b^2 - 2 T_a T_b cos(wrap)) of the spans on either side (physics, a load cell),
+    which the Line FMU wires from the roller's output load_cell.F into loop.measured (its tangents in
+    the line's Jacobian) and the reference computes from its spans. Through the pull roll's 10 -> 11 m/s
+    ramp the idler's bearing friction b*omega/R (5.5 N at 11 m/s) parts the two tensions, and the
+    integral brings F back to 500 N to 1e-6 N in both engines, which agree to 1e-6. A roller without
+    a wrap has no load cell to measure."""
+    scene = parse_scene(load_cell_looped({"wrap": "90 deg"}), "load_cell_loop.json")
+    for result in both(scene, fmus):
+        Ta, Tb = result.column("entry.T [N]"), result.column("exit.T [N]")
+        F = np.sqrt(Ta**2 + Tb**2)  # cos(90 deg) = 0
+        assert abs(F[0] - 500.0) < 1e-8, "the equilibrium start puts the drive's torque in the integrator"
+        assert np.max(np.abs(F - 500.0)) > 0.1, "the ramp must move the load cell"
+        print(f"F at the end {F[-1] - 500.0:+.3g} N off 500 N, band {np.min(F) - 500:+.3g}..{np.max(F) - 500:+.3g} N")
+        assert abs(F[-1] - 500.0) < 1e-6, f"F = {F[-1]} N at the end"
+        assert abs(Tb[-1] - Ta[-1] - 0.005 * 110.0 / 0.1) < 1e-3, "the idler's friction b*omega/R parts the tensions"
+    with pytest.raises(SceneError, match="has no load cell"):
+        parse_scene(load_cell_looped({}), "x.json")

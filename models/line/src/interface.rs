@@ -35,7 +35,7 @@ pub enum Binding {
 /// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction and
 /// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
 /// measures) and a span's variable length are the line's structure, which line.json fixes.
-const NOT_OFFERED: [&str; 19] = [
+const NOT_OFFERED: [&str; 21] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",
@@ -55,6 +55,8 @@ const NOT_OFFERED: [&str; 19] = [
     "loop.sign",
     "loop.feedforward",
     "motor.lag",
+    "speed.input",
+    "load_cell.wrap",
 ];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.

@@ -67,8 +67,18 @@ impl Line {
             if ps.set_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 1) {
                 return Err(FmiError::error(format!("line.json: part {}: set_input needs a roller whose drive has a force loop (loop.kind = 1)", ps.name)));
             }
-            if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 2) {
-                return Err(FmiError::error(format!("line.json: part {}: speed_input needs a roller whose drive has a speed loop (loop.kind = 2)", ps.name)));
+            if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 2 || r.params.speed_input) {
+                return Err(FmiError::error(format!("line.json: part {}: speed_input needs a roller whose drive has a speed loop (loop.kind = 2) or is an ideal speed drive on it (speed.input = true)", ps.name)));
+            }
+            // A load cell a connection reads (a drive's loop on it): the roller's own output load_cell.F at
+            // the spec's wrap; elsewhere the line's output NAME.F alone, and the roller's tangents stay fixed.
+            if spec.connections.iter().any(|c| c.from.0 == ps.name && c.from.1 == "load_cell.F") {
+                let w = ps.wrap.unwrap_or(0.0);
+                if w <= 0.0 {
+                    return Err(FmiError::error(format!("line.json: part {}: a connection reads its load_cell.F, which needs a wrap > 0 degrees (it has {w})", ps.name)));
+                }
+                let vr = part.description().variable_by_name("load_cell.wrap").expect("a roller has a load cell").vr;
+                part.set_real(vr, w.to_radians())?;
             }
             if ps.profile.is_some() {
                 let vr = part.description().variable_by_name("profile").expect("parts have a profile").vr;
@@ -156,6 +166,22 @@ impl Line {
         }
     }
 
+    /// An ideal speed drive's input v_ref (its `loop.speed`) moves its surface speed at once: its
+    /// omega, a state of the line whose rate is the held input's slope 0, jumps with it. In Model
+    /// Exchange the importer owns the states: the next event update moves it and says so.
+    fn follow_speed_input(&mut self, part: usize) {
+        let (Part::Roller(r), Some(net)) = (&self.ode.parts[part], self.ode.net.as_mut()) else { return };
+        if !(r.params.speed_input && self.initialized) {
+            return;
+        }
+        if !self.model_exchange {
+            self.ode.x[net.first_state[part]] = r.surface_speed() / r.radius();
+        }
+        // Its speed moves the spans' inputs, though loop.speed is no input of the roller's outputs.
+        net.parts_changed();
+        let _ = self.ode.settle();
+    }
+
     /// d(unknown)/d(known) of the line now, by central differences (step 1e-6
     /// of the known's size: truncation ~1e-12, rounding ~1e-10 relative). Known:
     /// a state or an input of the line; unknown: an output or a derivative.
@@ -233,6 +259,7 @@ impl Variables for Line {
             Binding::Real { part, vr: part_vr, port } => {
                 self.ode.parts[part].write(port, value)?;
                 self.part_set(vr);
+                self.follow_speed_input(part);
                 // An input moves the outputs that depend on it; a failure shows when they are read.
                 // One that moves no connection (a motor torque) changes only what its part computes when read.
                 if self.ode.net.as_ref().is_none_or(|net| net.input_moves_connections(part, part_vr)) {
@@ -413,6 +440,12 @@ impl Model for Line {
         let Binding::Real { part, vr: part_vr, .. } = self.binding(vr)? else {
             return Err(FmiError::error(format!("value reference {vr} is not an input")));
         };
+        // The roller's speed drive reads its acceleration as 0 (held): a ramped v_ref would move its
+        // surface speed with no acceleration to match.
+        if value != 0.0 && matches!(&self.ode.parts[part], Part::Roller(r) if r.params.speed_input && part_vr == roller::description::Real::loop_speed.vr()) {
+            let name = self.shared.description.variable(vr).map_or_else(|| "v_ref".to_string(), |v| v.name.to_string());
+            return Err(FmiError::error(format!("{name}: an ideal speed drive holds its input over a step; its derivative {value} is not taken (only 0)")));
+        }
         let base = self.ode.parts[part].get_real(part_vr)?;
         match self.ode.ramps.iter_mut().find(|(p, v, _, _)| *p == part && *v == part_vr) {
             Some(r) => *r = (part, part_vr, base, value),

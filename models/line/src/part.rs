@@ -382,7 +382,7 @@ impl Part {
                     | R::air_roughness
                     | R::air_viscosity => p.traction,
                     R::loop_set => p.loop_kind == 1,
-                    R::loop_speed => p.loop_kind == 2,
+                    R::loop_speed => p.loop_kind == 2 || p.speed_input,
                     R::loop_kp | R::loop_ki | R::motor_limit => p.loop_kind != 0,
                     _ => true,
                 }

@@ -137,8 +137,8 @@ pub struct PartSpec {
     /// an input is connected.
     #[serde(default)]
     pub set_input: bool,
-    /// Whether the Line FMU gives its speed loop's reference as an input `<name>.v_ref` (m/s) instead
-    /// of the tunable parameter `<name>.loop.speed`.
+    /// Whether the Line FMU gives its speed loop's reference, or its ideal speed drive's speed
+    /// (`speed.input`), as an input `<name>.v_ref` (m/s) instead of the tunable parameter `<name>.loop.speed`.
     #[serde(default)]
     pub speed_input: bool,
     /// A load cell: the wrap angle of the web on the roller, degrees; the
@@ -148,9 +148,11 @@ pub struct PartSpec {
 }
 
 impl PartSpec {
-    /// Its profile prescribes its surface speed (a table `speed`).
+    /// Its profile prescribes its surface speed (a table `speed`), or its input v_ref does
+    /// (`speed.input`, an ideal speed drive).
     pub fn speed_driven(&self) -> bool {
         self.profile.as_ref().is_some_and(|p| p.get("speed").is_some())
+            || self.start.get("speed.input").is_some_and(|v| v.as_bool() == Some(true))
     }
 }
 

@@ -348,7 +348,7 @@ fn winding_merge_line() -> Value {
 /// entries (a roll's radius rate: 2e-6); a connection left out of the chain costs a whole entry.
 #[test]
 fn the_chained_jacobian_is_the_lines_own() {
-    for (name, spec) in [("paper line", paper_line("equilibrium")), ("winding merge", winding_merge_line())] {
+    for (name, spec) in [("paper line", paper_line("equilibrium")), ("winding merge", winding_merge_line()), ("load cell loop", load_cell_looped_line(json!([[0.0, 10.0]])))] {
         let mut line = initialized(&spec);
         if name == "paper line" {
             let tau = vr(&line, "idler.tau_m");
@@ -701,6 +701,44 @@ fn a_pi_loop_holds_its_set_point_against_bearing_friction() {
     }
 }
 
+/// The looped line whose unwinder holds the idler's load cell (wrap 90 degrees) at 500 N: the
+/// roller's output load_cell.F wired into loop.measured. Its spans start strained (F = 500 N at
+/// 1.6e-3): a load cell has no slope where both forces are 0, so the steady state is sought from there.
+fn load_cell_looped_line(pull: Value) -> Value {
+    let mut spec = looped_line(pull, 0.0, 0.0);
+    spec["parts"][1]["start"]["eps_start"] = json!(1.6e-3);
+    spec["parts"][3]["start"]["eps_start"] = json!(1.6e-3);
+    spec["parts"][2]["wrap"] = json!(90.0);
+    spec["parts"][0]["start"]["loop.set"] = json!(500.0);
+    let connections = spec["connections"].as_array_mut().unwrap();
+    connections.pop();
+    connections.push(connect("idler", "load_cell.F", "unwind", "loop.measured"));
+    spec
+}
+
+/// A PI loop on a load cell [R10] (physics, "A load cell"): it starts at its set point, and after the
+/// pull roll's 10 -> 11 m/s ramp its integral brings F = sqrt(T_a^2 + T_b^2) (cos 90 degrees = 0) back
+/// to 500 N to 1e-6 N; the line's own output idler.F is the same force. A connection that reads the
+/// load cell of a roller without a wrap is refused by name.
+#[test]
+fn a_pi_loop_on_a_load_cell_holds_its_set_point() {
+    let mut line = initialized(&load_cell_looped_line(json!([[0.0, 10.0], [0.5, 10.0], [1.5, 11.0]])));
+    let cell = |line: &Line| get(line, "entry.T").hypot(get(line, "exit.T"));
+    assert!((cell(&line) - 500.0).abs() < 1e-8, "starts at {}", cell(&line));
+    let mut worst: f64 = 0.0;
+    for _ in 0..2000 {
+        line.do_step(0.01).unwrap();
+        worst = worst.max((cell(&line) - 500.0).abs());
+    }
+    assert!(worst > 0.1, "the ramp must move the load cell (worst {worst} N)");
+    assert!((cell(&line) - 500.0).abs() < 1e-6, "{} N off after 20 s", cell(&line) - 500.0);
+    assert!((get(&line, "idler.F") - cell(&line)).abs() < 1e-9, "idler.F {} vs {}", get(&line, "idler.F"), cell(&line));
+    let mut spec = load_cell_looped_line(json!([[0.0, 10.0]]));
+    spec["parts"][2].as_object_mut().unwrap().remove("wrap");
+    let err = instantiate(&spec).err().expect("refused");
+    assert!(err.message.contains("reads its load_cell.F, which needs a wrap > 0"), "{}", err.message);
+}
+
 /// A loop's set point as the line's input `unwind.T_set` (the scene's switch): the line moves to it;
 /// and a tunable gain set between steps changes the response (the same step with another kp).
 #[test]
@@ -727,4 +765,31 @@ fn a_set_point_input_moves_the_line_and_a_tunable_gain_changes_its_response() {
     }
     let apart = runs[0].iter().zip(&runs[1]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(apart > 1.0, "another gain must give another response (they differ by {apart} N at most)");
+}
+
+/// An ideal speed drive on the line's input `pull.v_ref` (speed.input): in Co-Simulation its omega
+/// jumps with the input, the damping of the span into it sees the new speed at once, and the spans follow by transport; in Model Exchange the event update that
+/// follows moves omega to v/r and reports the states changed.
+#[test]
+fn an_ideal_speed_drive_follows_its_input_in_both_interfaces() {
+    let mut spec = paper_line("equilibrium");
+    spec["parts"][4].as_object_mut().unwrap().remove("profile");
+    spec["parts"][4]["start"] = json!({"J": 0.01, "R": 0.1, "b": 0.0, "speed.input": true, "loop.speed": 10.0});
+    spec["parts"][4]["speed_input"] = json!(true);
+    let mut line = initialized(&spec);
+    assert!((get(&line, "pull.v") - 10.0).abs() < 1e-12 && (get(&line, "pull.omega") - 100.0).abs() < 1e-9);
+    let before = get(&line, "exit.T");
+    line.set_real(vr(&line, "pull.v_ref"), 10.5).unwrap();
+    assert_eq!((get(&line, "pull.v"), get(&line, "pull.omega")), (10.5, 105.0));
+    // The span's damping sees the new speed at once: d_r*EA*(1 + eps)*dv/L = 1e-3*225e3*0.5/1.5 = 75 N.
+    let jump = get(&line, "exit.T") - before;
+    assert!((jump - 75.0).abs() < 0.5, "exit.T jumps by {jump} N");
+    line.do_step(0.01).unwrap();
+    assert_eq!(get(&line, "pull.omega"), 105.0, "held: no slope within the step");
+    let (mut me, r) = instantiate(&spec).unwrap();
+    me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap();
+    me.set_real(vr(&me, "pull.v_ref"), 10.5).unwrap();
+    assert_eq!(get(&me, "pull.v"), 10.5);
+    assert!(me.event_update().states_changed, "the event update moves omega");
+    assert!((get(&me, "pull.omega") - 105.0).abs() < 1e-12, "omega {}", get(&me, "pull.omega"));
 }

@@ -131,6 +131,9 @@ pub fn refusal(p: &Parameters) -> Option<String> {
     if Kind::of(p) == Kind::None {
         return None;
     }
+    if p.speed_input {
+        return Some(format!("loop.kind = {} with speed.input = true: an ideal speed drive has no loop (a speed loop takes loop.speed itself)", p.loop_kind));
+    }
     if p.traction {
         return Some("loop.kind > 0 with includeTraction = true: a loop on a roller where the web may slip is not modelled".into());
     }

@@ -84,6 +84,9 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
         return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
     }
     let kind = crate::control::Kind::of(p);
+    if p.speed_input && (loaded.drive != Drive::Torque || kind != crate::control::Kind::None || loaded.table(Key::Brake).is_some()) {
+        return Err("speed.input = true: the surface speed is loop.speed; the profile may have no speed, torque, tension or brake table and loop.kind must be 0".into());
+    }
     if kind != crate::control::Kind::None && !matches!(loaded.drive, Drive::Torque | Drive::TorqueTable) {
         return Err(format!("loop.kind = {}: a loop drives by torque; the profile's speed or tension table would override it", p.loop_kind));
     }

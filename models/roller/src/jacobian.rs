@@ -41,6 +41,7 @@ pub struct Tangents {
     pub contact_a_x: f64,
     pub contact_b_x: f64,
     pub contact_y: f64,
+    pub load_cell_force: f64,
 }
 
 impl Tangents {
@@ -56,9 +57,10 @@ impl Tangents {
 /// and [R4] are then linear with coefficients made of parameters. So for a roller that winds
 /// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on, and so do
 /// layers [R9], each its own). Not where the web may slip: [R7] is nonlinear; nor where a drive has a
-/// loop: its limit [R11] is nonlinear, and its gains and limit are tunable.
+/// loop: its limit [R11] is nonlinear, and its gains and limit are tunable; nor with a load cell, a
+/// root of the forces.
 pub fn tangents_fixed(p: &Parameters) -> bool {
-    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && control::Kind::of(p) == control::Kind::None
+    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && control::Kind::of(p) == control::Kind::None && p.load_cell_wrap == 0.0
 }
 
 /// What the tangents read besides the direction: the roller now, its drive's tables read at
@@ -131,6 +133,18 @@ fn strain_leaving_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> [f64; PORTS
     }
     let gradient = physics::merged_strain_gradient(p, &u.strain_a);
     [gradient.iter().zip(&d.strain_a).map(|(g, x)| g * x).sum(); PORTS]
+}
+
+/// d(load cell) along d(F_a), d(F_b): F = sqrt(F_a^2 + F_b^2 - 2 F_a F_b cos(wrap)), so
+/// dF = ((F_a - F_b cos) dF_a + (F_b - F_a cos) dF_b)/F; 0 where F is 0 (a cusp, where a
+/// central difference gives 0 too).
+fn load_cell_tangent(a: f64, b: f64, cos: f64, da: f64, db: f64) -> f64 {
+    let f = physics::load_cell(a, b, cos);
+    if f > 0.0 {
+        ((a - b * cos) * da + (b - a * cos) * db) / f
+    } else {
+        0.0
+    }
 }
 
 /// A roller's values the tangents along any direction use (`Point::linearize`).
@@ -241,6 +255,11 @@ impl Linearization<'_> {
             contact_a_x: 0.0,
             contact_b_x: 2.0 * d_r,
             contact_y: -d_y,
+            load_cell_force: if p.load_cell_wrap > 0.0 {
+                load_cell_tangent(u.pull_back(p), u.pull_forward(p), p.load_cell_wrap.cos(), d.u.pull_back(p), d.u.pull_forward(p))
+            } else {
+                0.0
+            },
         }
     }
 }

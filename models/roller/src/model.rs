@@ -64,7 +64,20 @@ impl Roller {
 
     #[inline]
     fn drive(&self) -> Drive {
+        if self.params.speed_input {
+            return Drive::Speed;
+        }
         self.profile.as_ref().map_or(Drive::Torque, |l| l.drive)
+    }
+
+    /// A speed drive's surface speed and its slope at t (the time now, or a piece's start): its
+    /// table's, or `loop.speed` held over the step, slope 0, where `speed.input` is true.
+    #[inline]
+    fn prescribed(&self, t: f64) -> Option<(f64, f64)> {
+        if self.params.speed_input {
+            return Some((self.params.loop_speed, 0.0));
+        }
+        self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed).map(|table| self.read(table, t))
     }
 
     /// The surface speed follows a speed table (a source, a sink, a speed
@@ -92,9 +105,9 @@ impl Roller {
     /// v [R2]; a speed drive's profile at the time now.
     #[inline]
     pub fn surface_speed(&self) -> f64 {
-        match (self.drive(), self.table(Key::Speed)) {
-            (Drive::Speed, Some(t)) => self.read(t, self.time).0,
-            _ => physics::surface_speed(self.roll.radius, self.omega.value()),
+        match self.prescribed(self.time) {
+            Some((v, _)) => v,
+            None => physics::surface_speed(self.roll.radius, self.omega.value()),
         }
     }
 
@@ -121,9 +134,9 @@ impl Roller {
     /// The contact's state at time t with the roller at omega and the web at v_web (a step's trial point).
     fn contact_state_at(&self, t: f64, omega: f64, v_web: f64) -> contact::State {
         let (u, r) = (&self.inputs, self.roll.radius);
-        let v_surface = match (self.drive(), self.table(Key::Speed)) {
-            (Drive::Speed, Some(table)) => self.read(table, t).0,
-            _ => physics::surface_speed(r, omega),
+        let v_surface = match self.prescribed(t) {
+            Some((v, _)) => v,
+            None => physics::surface_speed(r, omega),
         };
         contact::State {
             v_web,
@@ -203,6 +216,15 @@ impl Roller {
         physics::load_cell(u.pull_back(p), u.pull_forward(p), cos_wrap)
     }
 
+    /// The output load_cell.F: the load cell at its own wrap `load_cell.wrap` (0: none, F = 0).
+    pub fn load_cell_force(&self) -> f64 {
+        if self.params.load_cell_wrap > 0.0 {
+            self.load_cell(self.params.load_cell_wrap.cos())
+        } else {
+            0.0
+        }
+    }
+
     /// The drive's torque at time t, and its rate (a speed drive: 0, see
     /// `drive_torque`). The profile has at most one drive table.
     #[inline]
@@ -222,9 +244,9 @@ impl Roller {
 
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
     pub fn drive_torque(&self) -> f64 {
-        match (self.drive(), self.table(Key::Speed)) {
-            (Drive::Speed, Some(t)) => physics::speed_drive_torque(&self.params, &self.roll, self.web_torque(), self.omega.value(), self.read(t, self.time).1),
-            _ => self.torque_at(self.time).0 + self.motor_torque() + self.brake().0,
+        match self.prescribed(self.time) {
+            Some((_, slope)) => physics::speed_drive_torque(&self.params, &self.roll, self.web_torque(), self.omega.value(), slope),
+            None => self.torque_at(self.time).0 + self.motor_torque() + self.brake().0,
         }
     }
 
@@ -316,12 +338,11 @@ impl Roller {
         let control = self.control();
         let (radius_rate, inertia_rate) =
             if p.winding() { (self.roll.radius_rate(p, v), self.roll.inertia_rate(p, v)) } else { (0.0, 0.0) };
-        let (omega_rate, surface_rate) = match (self.drive(), self.table(Key::Speed)) {
-            (Drive::Speed, Some(t)) => {
-                let slope = self.read(t, self.time).1;
+        let (omega_rate, surface_rate) = match self.prescribed(self.time) {
+            Some((_, slope)) => {
                 (physics::omega_rate_at_speed(slope, v, self.roll.radius, radius_rate), slope)
             }
-            _ => {
+            None => {
                 let omega = self.omega.value();
                 let torque = self.torque_at(self.time).0 + control.map_or(0.0, |c| c.law.torque) + self.brake().0;
                 let rate = physics::omega_rate(p, &self.roll, self.web_torque_with(friction), omega, torque, inertia_rate);
@@ -365,8 +386,8 @@ impl Roller {
     /// at the time now.
     #[inline]
     pub fn linearize(&self) -> Linearization<'_> {
-        let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
-        let tension = match (speed_table, self.drive()) {
+        let prescribed = self.prescribed(self.time);
+        let tension = match (prescribed, self.drive()) {
             (None, Drive::Tension) => self.table(Key::Tension).map_or(0.0, |t| t.value(self.time)),
             _ => 0.0,
         };
@@ -376,9 +397,12 @@ impl Roller {
             omega: self.omega(),
             roll: self.roll,
             speed: self.surface_speed(),
-            speed_slope: speed_table.map(|t| t.slope(self.time)),
+            speed_slope: match self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed) {
+                Some(t) if !self.params.speed_input => Some(t.slope(self.time)),
+                _ => prescribed.map(|(_, slope)| slope),
+            },
             tension,
-            torque: if speed_table.is_some() { 0.0 } else { self.drive_torque() },
+            torque: if prescribed.is_some() { 0.0 } else { self.drive_torque() },
             strain_table: self.table(Key::Strain).is_some(),
             contact: self.params.traction.then(|| self.contact_state()),
             control: self.control(),
@@ -418,7 +442,7 @@ impl Roller {
     fn piece(&mut self, t: f64, h: f64) -> FmiResult {
         let p = &self.params;
         let r = self.roll.radius;
-        let speed_table = self.table(Key::Speed).filter(|_| self.drive() == Drive::Speed);
+        let prescribed = self.prescribed(t); // at the piece's start, after its events
         let mut v_web = self.v_web;
         if Kind::of(p) != Kind::None || self.table(Key::Brake).is_some() {
             // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused): the loop's integrator,
@@ -439,7 +463,7 @@ impl Roller {
             (self.integrator, self.motor, self.carriage) = (y[2], y[3], carriage);
             return Ok(());
         }
-        let (omega, travel) = match &speed_table {
+        let (omega, travel) = match prescribed {
             _ if p.traction => {
                 // [R6]-[R7] are nonlinear and stiff (the friction's slope over the web's small mass):
                 // an L-stable Rosenbrock method on (omega, v_web), the inputs held. No roll winds here.
@@ -447,8 +471,7 @@ impl Roller {
                 v_web = y[1];
                 (CompensatedSum::from_parts(y[0], 0.0), 0.0)
             }
-            Some(table) => {
-                let (v0, slope) = self.read(table, t); // at the piece's start, after its events
+            Some((v0, slope)) => {
                 let v1 = v0 + slope * h; // the left limit at a jump that ends the piece
                 (CompensatedSum::from_parts(v1 / r, 0.0), 0.5 * (v0 + v1) * h)
             }
@@ -464,7 +487,7 @@ impl Roller {
                 FmiError::discard(format!("the roll ran empty: its radius {r} m would fall to 0 after {travel} m of web; check R and wound.thickness"))
             })?;
             let inertia = roll.inertia_at(p, radius);
-            omega = match &speed_table {
+            omega = match prescribed {
                 Some(_) => CompensatedSum::from_parts(omega.value() * r / radius, 0.0),
                 // [R1] keeps J*omega across the change of J.
                 None => CompensatedSum::from_parts(omega.value() * roll.inertia / inertia, 0.0),
@@ -551,6 +574,7 @@ impl Roller {
         let p = &self.params;
         self.roll = Roll::new(p.radius, p.inertia);
         let speed = match (self.drive(), self.table(Key::Speed)) {
+            _ if p.speed_input => p.loop_speed,
             (Drive::Speed, Some(t)) => t.value(time),
             _ => p.speed_start,
         };
@@ -737,14 +761,14 @@ impl Slipping<'_> {
         use contact::{V_SURFACE, V_WEB};
         let (roller, t) = (self.roller, self.t0 + s);
         let (p, r) = (&roller.params, roller.roll.radius);
-        let speed_table = roller.table(Key::Speed).filter(|_| roller.drive() == Drive::Speed);
+        let prescribed = roller.prescribed(t);
         let state = roller.contact_state_at(t, y[0], y[1]);
         let f = contact::contact(p, &state).force;
         // d(surface speed)/d(omega): r, or 0 where the surface follows a table.
-        let dv = if speed_table.is_some() { 0.0 } else { r };
+        let dv = if prescribed.is_some() { 0.0 } else { r };
         let (df_domega, df_dv_web) = (f.d[V_SURFACE] * dv, f.d[V_WEB]);
-        let (omega_rate, d_omega_rate) = match speed_table {
-            Some(table) => (roller.read(table, t).1 / r, [0.0, 0.0]),
+        let (omega_rate, d_omega_rate) = match prescribed {
+            Some((_, slope)) => (slope / r, [0.0, 0.0]),
             None => {
                 let j = roller.roll.inertia;
                 ((-r * f.x + roller.torque_at(t).0 - p.damping * y[0]) / j, [(-r * df_domega - p.damping) / j, -r * df_dv_web / j])

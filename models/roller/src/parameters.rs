@@ -50,6 +50,10 @@ pub struct Parameters {
     pub loop_ki: f64,
     pub loop_sign: f64,
     pub loop_feedforward: bool,
+    /// An ideal speed drive on `loop.speed` (the Line's input v_ref), held over a step.
+    pub speed_input: bool,
+    /// The wrap angle its load cell sees, rad.
+    pub load_cell_wrap: f64,
     /// The loop's motor [R11]: its torque limit (0: none) and lag (0: none).
     pub motor_limit: f64,
     pub motor_lag: f64,

@@ -86,6 +86,8 @@ fmi_core::bind_variables! {
         loop_measured: input(measured),
         loop_set: param(params.loop_set),
         loop_speed: param(params.loop_speed),
+        load_cell_wrap: param(params.load_cell_wrap),
+        load_cell_F: computed(load_cell_force()),
         brake_v_slip: param(params.brake_v_slip),
         loop_kp: param(params.loop_kp),
         loop_ki: param(params.loop_ki),
@@ -108,6 +110,7 @@ fmi_core::bind_variables! {
         includeTraction: param(params.traction),
         layered: param(params.layered),
         loop_feedforward: param(params.loop_feedforward),
+        speed_input: param(params.speed_input),
     }
     string {
         profile: param(params.profile),

@@ -6,12 +6,13 @@ use fmi_testkit::conformance::{Hints, Point};
 /// tensions within the step (tau lists web_a.F and web_b.F); the same with
 /// every inlet and outlet in use, where the extra ports' tensions reach tau
 /// and their strains the merged web_b.eps [R5]; a web that may slip on a wrap
-/// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides; a drive's loop; a brake.
+/// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides; a drive's loop; a brake;
+/// an ideal speed drive on its input.
 fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
     let nip = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/traction_nip.json");
     let brake = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/brake.json");
-    let all_ports = vec![("inlets", 4.0), ("outlets", 4.0)];
+    let all_ports = vec![("inlets", 4.0), ("outlets", 4.0), ("load_cell.wrap", 1.5)];
     let slipping = vec![
         ("includeTraction", 1.0),
         ("traction.wrap", 1.5),
@@ -44,9 +45,11 @@ fn hints() -> Hints {
             Point { values: vec![], texts: vec![("profile", speed_drive.into())] },
             Point { values: all_ports, texts: vec![("profile", speed_drive.into())] },
             Point { values: slipping, texts: vec![("profile", nip.into())] },
+            // An ideal speed drive on its input loop.speed (speed.input), the web pulling on both sides.
+            Point { values: vec![("speed.input", 1.0), ("loop.speed", 6.0), ("web_a.F", 100.0), ("web_b.F", 120.0)], texts: vec![] },
         ],
         texts: vec![("profile", speed_drive.into())],
-        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction"],
+        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop"],
     }
 }
 

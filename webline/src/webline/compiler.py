@@ -72,7 +72,10 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if speed is not None:
         # With traction the radius counts (the web's mass on the wrap, the air film): the scene's.
         start.update(J=PRESCRIBED_J, R=float(node.R) if traction is not None else PRESCRIBED_R, b=0.0)
-        profile["speed"] = table(speed)
+        if getattr(getattr(node, "drive", None), "input", False):  # held at loop.speed: the Line FMU's input v_ref
+            start.update({"speed.input": True, "loop.speed": float(speed.value(0.0))})
+        else:
+            profile["speed"] = table(speed)
     else:
         start.update(J=float(node.J), R=float(node.R), b=float(node.b))
     start["v_start"] = float(scene.initial_speed(node))
@@ -408,10 +411,10 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
             connect(name, "web_a.F", up.name, f"{a}.F")
             connect(name, "web_b.F", down.name, f"{b}.F")
 
-    for n in scene.nodes:  # a drive's loop reads the tension it holds
+    for n in scene.nodes:  # a drive's loop reads the tension it holds: a span's, or a roller's load cell
         loop = getattr(getattr(n, "drive", None), "loop", None)
         if loop is not None and not loop.speed:
-            connect(loop.measure[0], "summary_Tension", n.name, "loop.measured")
+            connect(loop.measure[0], "load_cell.F" if loop.measure[1] == "F" else "summary_Tension", n.name, "loop.measured")
 
     record, sums = _record(scene)
     system = System(

@@ -73,6 +73,8 @@ def line_spec(scene: Scene, fmu_dir=None, start: str | None = None, settle=True)
                 loop = getattr(getattr(c, "drive", None), "loop", None)
                 if loop is not None and loop.set_input:
                     part["speed_input" if loop.speed else "set_input"] = True
+                if getattr(getattr(c, "drive", None), "input", False):  # an ideal speed drive on v_ref
+                    part["speed_input"] = True
                 wrap = getattr(c, "wrap", None)
                 if wrap is not None:
                     part["wrap"] = float(wrap)

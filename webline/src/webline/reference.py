@@ -148,7 +148,13 @@ class LineODE:
         J = self.roll_inertia(node, R) if node.name in self.i_r else self.inertia[node.name][0]
         if lp.speed:  # a speed loop on its own surface speed
             e = self.pv(lp.set, t) - R * z[self.i_omega[node.name]]
-        else:  # a span's tension (scenes refuse a load cell's)
+        elif lp.measure[1] == "F":  # a roller's load cell on the web forces it carries, as the Roller's pulls
+            cell = self.s.component(lp.measure[0])
+            F_a = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[cell.name])
+            F_b = sum(q[sp.name]["T"] for sp in self.outs[cell.name])
+            F = np.sqrt(max(F_a * F_a + F_b * F_b - 2.0 * F_a * F_b * np.cos(np.radians(cell.wrap)), 0.0))
+            e = lp.sign * (self.pv(lp.set, t) - F)
+        else:  # a span's tension
             e = lp.sign * (self.pv(lp.set, t) - q[lp.measure[0]]["T"])
         ff = 0.0
         if lp.feedforward:

@@ -129,7 +129,7 @@ BRAKE_V_SLIP = 0.01  # m/s
 @dataclass
 class Loop:
     """A PI loop in a drive ([R10]-[R11] of the physics docs): the torque that holds a span's tension
-    (`measure` = (span, "T"); a load cell's, (roller, "F"), is refused: not wired yet) at `set`; gains in SI (N.m per N,
+    (`measure` = (span, "T")) or a load cell's (roller, "F") at `set`; gains in SI (N.m per N,
     N.m per N.s); the motor's torque `limit` (N.m, 0: none) and `lag` (s, 0: none); with
     `feedforward` the torque d(J*v_ref/R)/dt of the line's speed reference (its first speed drive)."""
 
@@ -160,6 +160,7 @@ class Drive:
     kind: str
     profile: Profile | None = None
     loop: Loop | None = None
+    input: bool = False  # an ideal speed drive on the Line FMU's input <name>.v_ref, `profile` its start value
 
 
 @dataclass
@@ -758,9 +759,10 @@ def _web_ref(r: _Reader, webs: dict, node: Node, what: str) -> Web:
 def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
     o = r.obj(node, what)
     if "speed" in kinds and "speed" in o and isinstance(o["speed"].value, Obj) and "input" in o["speed"].value \
-            and "loop" not in o:
-        raise r.err(o["speed"], f"{what}.speed: a speed input drives a speed loop (a real motor): give the drive a "
-                                "\"loop\" ({\"kp\", \"ki\"}); an ideal speed drive's reference as an input is not modelled yet")
+            and "loop" not in o:  # an ideal speed drive on the Line FMU's input <name>.v_ref, held over a step
+        o = r.keys(node, what, required=("speed",))
+        start = r.keys(o["speed"], f"{what}.speed", required=("input",))["input"]
+        return Drive("speed", Profile.constant(r.quantity(start, units.SPEED, f"{what}.speed.input")), input=True)
     if "speed" in kinds and "speed" in o and "loop" in o:  # a speed loop on a real motor
         o = r.keys(node, what, required=("speed", "loop"), optional=("feedforward",))
         g = r.keys(o["loop"], f"{what}.loop", required=("kp", "ki"), optional=("limit", "lag"))
@@ -1340,9 +1342,9 @@ def _downstream_of(scene: Scene, node) -> set:
 
 
 def _check_loops(r, scene: Scene, raw):
-    """A drive's loop measures a span's tension of this line (a load cell's reading is refused); its
-    sign follows from where that is: downstream of the drive more torque lowers it (-1), upstream it
-    raises it (+1). A feed-forward needs a speed drive whose profile is the line's speed reference."""
+    """A drive's loop measures a span's tension of this line, or the load cell of a roller with a wrap;
+    its sign follows from where that is: downstream of the drive more torque lowers it (-1), upstream it
+    raises it (+1) (a load cell's webs both lie on one side of another roller). A feed-forward needs a speed drive whose profile is the line's speed reference."""
     for node in scene.nodes:
         loop = getattr(getattr(node, "drive", None), "loop", None)
         if loop is None or loop.speed:
@@ -1355,9 +1357,12 @@ def _check_loops(r, scene: Scene, raw):
             raise r.err(raw[node.name], f"{what}: no part {part!r} in the line")
         if quantity == "T" and not isinstance(c, Span):
             raise r.err(raw[node.name], f"{what}: {part!r} is a {c.type}, not a span: measure its load cell as \"{part}.F\"")
-        if quantity == "F":
-            raise r.err(raw[node.name], f"{what}: a loop on a load cell (\"{part}.F\") is not modelled yet: the line does not "
-                                        "wire a load cell's reading into a drive; measure the tension of the span next to it (\"SPAN.T\")")
+        if quantity == "F" and (isinstance(c, Span) or not getattr(c, "wrap", None)):
+            raise r.err(raw[node.name], f"{what}: {part!r} has no load cell: \"{part}.F\" needs a roller with a wrap > 0 "
+                                        "(its \"wrap\", degrees)")
+        if quantity == "F" and any("includeMass" in sp.effects for sp in scene.spans_in(c)):
+            raise r.err(raw[node.name], f"{what}: a loop on {part!r}'s load cell with includeMass on the span into it is not "
+                                        "modelled (the web's mass moves the force the cell reads within the line's solve)")
         if part == node.name:
             raise r.err(raw[node.name], f"{what}: a drive's loop measures another part than its own roller")
         if quantity == "T" and c.layered:
