@@ -33,6 +33,12 @@ impl Phase {
         1 << self as u8
     }
 
+    /// Phases reached only through a finished initialization (the error state may have been
+    /// entered before it, so it is not one).
+    pub const fn initialized(self) -> bool {
+        matches!(self, Phase::StepComplete | Phase::StepFailed | Phase::Terminated | Phase::EventMode | Phase::ContinuousTimeMode)
+    }
+
     pub fn from_u8(x: u8) -> Option<Phase> {
         Phase::ALL.get(x as usize).copied()
     }

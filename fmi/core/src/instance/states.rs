@@ -40,12 +40,7 @@ impl<M: Model> Instance<M> {
             let kind = if snapshot.experiment.model_exchange { "a Model Exchange" } else { "a Co-Simulation" };
             return Err(FmiError::error(format!("the state's phase \"{}\" cannot belong to {kind} instance", snapshot.phase.name())));
         }
-        // Phases reached only through a finished initialization; the error
-        // state may have been entered before it.
-        let initialized = matches!(
-            snapshot.phase,
-            Phase::StepComplete | Phase::StepFailed | Phase::Terminated | Phase::EventMode | Phase::ContinuousTimeMode
-        );
+        let initialized = snapshot.phase.initialized();
         check_values(&snapshot.model, initialized)?;
         if initialized {
             snapshot.model.outputs_defined()?;

@@ -174,6 +174,12 @@ impl<M: Model> Instance<M> {
             if !(slot.set_lo <= x && x <= slot.set_hi) {
                 return Err(out_of_range(&d.variables[slot.row as usize], x).prefixed(call));
             }
+            // A tunable parameter set after initialization takes effect at once, as an input
+            // does: no later check would see it (an FMU state saved then would not restore).
+            let v = &d.variables[slot.row as usize];
+            if self.phase.initialized() && v.causality == Causality::Parameter && !v.range.contains(x) {
+                return Err(out_of_range(v, x).prefixed(call));
+            }
         }
         self.settled = false;
         for (&vr, &x) in vrs.iter().zip(values) {

@@ -86,6 +86,7 @@ macro_rules! conformance_tests {
             integer_parameter_out_of_range_is_refused_at_exit_initialization,
             non_finite_reals_are_refused_immediately,
             input_out_of_range_is_refused_immediately,
+            tunable_parameter_out_of_range_after_initialization_is_refused,
             enumeration_outside_its_items_is_refused,
             boolean_other_than_0_or_1_is_refused,
             unknown_value_references_are_refused,

@@ -236,6 +236,32 @@ pub fn input_out_of_range_is_refused_immediately<M: Tested>() {
     assert_eq!(run(&fmu, t, 7, 20).0, reference);
 }
 
+/// Proves that a tunable Real parameter set outside its range after initialization is refused at
+/// once, as an input is (no later check would see it, and an FMU state saved with it would not
+/// restore), with one line naming the variable, the value and the range, the value kept; its own
+/// value is accepted again. A model without tunable parameters has nothing to check.
+pub fn tunable_parameter_out_of_range_after_initialization_is_refused<M: Tested>() {
+    let tunables: Vec<&Variable> = of_causality::<M>(Causality::Parameter)
+        .into_iter()
+        .filter(|v| v.kind == Kind::Real && matches!(v.variability, Variability::Tunable) && bounded(v))
+        .collect();
+    if tunables.is_empty() {
+        println!("skipped: no tunable Real parameter with an allowed range");
+        return;
+    }
+    for v in &tunables {
+        let kept = configured::<M>(v);
+        for &x in &outside(&v.range).0 {
+            let fmu = drive::<M>(Phase::Complete);
+            assert_eq!(fmu.set(&v.name, x), ERROR, "{} = {x} after initialization", v.name);
+            assert_one_error(&fmu.take_logs(), &strs(&range_needles(v, x)));
+            assert_eq!(fmu.real(&v.name).to_bits(), kept.to_bits(), "{}: value kept", v.name);
+        }
+        let fmu = drive::<M>(Phase::Complete);
+        assert_eq!(fmu.set(&v.name, kept), OK, "{} = {kept} (its own value) after initialization: {:?}", v.name, fmu.logs());
+    }
+}
+
 /// Proves that enumeration values outside the declared items (just below
 /// and above them, -1, i32::MAX) are refused for every enumeration with one
 /// line naming the variable, the value and the allowed items, that the old
