@@ -379,8 +379,8 @@ def dancer_looped(stiffness="0 N/m", part="dancer"):
 def test_a_dancer_loop_holds_its_dancer_at_the_set_point_against_a_load_change(fmus, stiffness):
     """The dancer's load steps 400 -> 440 N: the spans' tension follows it to 220 N, the web stretches and the
     winder must run faster to keep the web stored on the dancer. The loop's integral takes the new speed trim up
-    and the dancer is back at 0.5 m to 1e-6 m in both engines (a P loop alone would leave the trim's change over
-    dancer.kp, 2e-5 m, and a spring alone the load's change over k, 20 mm). Without a spring the line has a
+    and the dancer is back at 0.5 m to 1e-6 m in both engines (a P loop alone would leave the trim's change,
+    4.4e-4 m/s, over dancer.kp: 4.4e-5 m; a spring alone the load's change over k, 20 mm). Without a spring the line has a
     steady state only through the loop: the equilibrium start puts the dancer at its set point."""
     for result in both(dancer_looped(stiffness), fmus):
         y = result.column("dancer.y [m]")
