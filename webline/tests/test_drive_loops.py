@@ -391,6 +391,10 @@ def test_a_dancer_loop_holds_its_dancer_at_the_set_point_against_a_load_change(f
         assert abs(result.column("up_leg.T [N]")[-1] - 221.0) < 1e-2, "the spans carry the dancer's load"
 
 
-def test_a_dancer_loop_names_a_dancer(fmus):
+def test_a_dancer_loop_names_a_dancer_and_the_parts_refuse_it(fmus):
     with pytest.raises(SceneError, match="drive.dancer.dancer: 'up_leg' is a span, not a dancer"):
         dancer_looped(part="up_leg")
+    scene = dancer_looped()
+    assert scene.line[-1].drive.loop.dancer.sign == 1.0, "the dancer upstream: more web stored calls for more speed"
+    with pytest.raises(SceneError, match="has a loop in its drive"):
+        run_scene(scene, "parts", fmu_dir=fmus)
