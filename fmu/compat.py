@@ -22,7 +22,7 @@ from fmpy.util import write_csv
 from demo import scene_inputs
 
 # With one inlet and one outlet and no loop in the drive, these inputs are not read.
-ROLLER_EXTRA_PORTS = [f"web_a{k}.{q}" for k in (2, 3, 4) for q in ("F", "eps")] + [f"web_b{j}.F" for j in (2, 3, 4)] + ["loop.measured"]
+ROLLER_EXTRA_PORTS = [f"web_a{k}.{q}" for k in (2, 3, 4) for q in ("F", "eps")] + [f"web_b{j}.F" for j in (2, 3, 4)] + ["loop.measured", "dancer.y"]
 
 # The span's default scene is fmu/demo.py's; the Roller's is a motor torque
 # pulse under equal tensions: omega rises from 100 to 110 rad/s and holds.
@@ -40,7 +40,7 @@ SCENES = {
     "Roller": {
         "stop": 2.0,
         "step": 1e-3,
-        # The extra inlets' and outlets' inputs and the loop's measure at 0: not read here.
+        # The extra inlets' and outlets' inputs and the loops' measures at 0: not read here.
         "inputs": lambda fmu: table(
             ["web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load"] + ROLLER_EXTRA_PORTS,
             [row + (0.0,) * len(ROLLER_EXTRA_PORTS) for row in

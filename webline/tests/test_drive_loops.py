@@ -354,3 +354,47 @@ def test_a_pi_loop_on_an_idlers_load_cell_holds_its_set_point(fmus):
         assert abs(Tb[-1] - Ta[-1] - 0.005 * 110.0 / 0.1) < 1e-3, "the idler's friction b*omega/R parts the tensions"
     with pytest.raises(SceneError, match="has no load cell"):
         parse_scene(load_cell_looped({}), "x.json")
+
+
+def dancer_looped(stiffness="0 N/m", part="dancer"):
+    """A source at 5 m/s, two spans that hang from a dancer (5 kg) whose load steps 400 -> 440 N at 1 s, a winder
+    whose speed loop (a real motor) has its reference trimmed by a PI on the dancer's position [R13]."""
+    return parse_scene(json.dumps({
+        "name": "dancer_loop", "stop_time": "5 s", "step": "10 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
+            {"type": "source", "name": "infeed", "speed": "5 m/s", "strain": 0.0},
+            {"type": "span", "name": "down_leg", "web": "PET", "effects": ["variableLength", "includeDamping"]},
+            {"type": "dancer", "name": "dancer", "J": "0.01 kg.m2", "R": "0.05 m", "b": "0.001 N.m.s", "mass": "5 kg",
+             "load": {"table": [["0 s", "400 N"], ["1 s", "400 N"], ["1.2 s", "440 N"]]}, "damping": "2000 N.s/m",
+             "stiffness": stiffness, "y_start": "0.5 m", "v_start": "5 m/s"},
+            {"type": "span", "name": "up_leg", "web": "PET", "effects": ["variableLength", "includeDamping"]},
+            {"type": "winder", "name": "wind", "J": "1 kg.m2", "R": "0.2 m", "b": "0.01 N.m.s", "v_start": "5 m/s",
+             "drive": {"speed": "5 m/s", "loop": {"kp": 200, "ki": 2000},
+                       "dancer": {"dancer": part, "set": "0.5 m", "kp": 10, "ki": 25}}},
+        ],
+        "record": ["dancer.y", "up_leg.T", "wind.v"]}), "dancer_loop.json")
+
+
+@pytest.mark.parametrize("stiffness", ["0 N/m", "2000 N/m"])
+def test_a_dancer_loop_holds_its_dancer_at_the_set_point_against_a_load_change(fmus, stiffness):
+    """The dancer's load steps 400 -> 440 N: the spans' tension follows it to 220 N, the web stretches and the
+    winder must run faster to keep the web stored on the dancer. The loop's integral takes the new speed trim up
+    and the dancer is back at 0.5 m to 1e-6 m in both engines (a P loop alone would leave the trim's change,
+    4.4e-4 m/s, over dancer.kp: 4.4e-5 m; a spring alone the load's change over k, 20 mm). Without a spring the line has a
+    steady state only through the loop: the equilibrium start puts the dancer at its set point."""
+    for result in both(dancer_looped(stiffness), fmus):
+        y = result.column("dancer.y [m]")
+        assert abs(y[0] - 0.5) < 1e-9, f"the equilibrium start holds the dancer at its set point ({y[0]})"
+        assert np.max(np.abs(y - 0.5)) > 1e-4, "the load change must move the dancer"
+        assert abs(y[-1] - 0.5) < 1e-6, f"{y[-1] - 0.5:.3g} m off its set point after the load change"
+        # The spans carry the load, 219 + 221 N: the dancer's bearing takes b*omega/R = 2 N of the difference.
+        assert abs(result.column("up_leg.T [N]")[-1] - 221.0) < 1e-2, "the spans carry the dancer's load"
+
+
+def test_a_dancer_loop_names_a_dancer_and_the_parts_refuse_it(fmus):
+    with pytest.raises(SceneError, match="drive.dancer.dancer: 'up_leg' is a span, not a dancer"):
+        dancer_looped(part="up_leg")
+    scene = dancer_looped()
+    assert scene.line[-1].drive.loop.dancer.sign == 1.0, "the dancer upstream: more web stored calls for more speed"
+    with pytest.raises(SceneError, match="has a loop in its drive"):
+        run_scene(scene, "parts", fmu_dir=fmus)

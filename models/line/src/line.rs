@@ -67,8 +67,8 @@ impl Line {
             if ps.set_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 1) {
                 return Err(FmiError::error(format!("line.json: part {}: set_input needs a roller whose drive has a force loop (loop.kind = 1)", ps.name)));
             }
-            if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 2 || r.params.speed_input) {
-                return Err(FmiError::error(format!("line.json: part {}: speed_input needs a roller whose drive has a speed loop (loop.kind = 2) or is an ideal speed drive on it (speed.input = true)", ps.name)));
+            if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 2 || r.params.loop_kind == 3 || r.params.speed_input) {
+                return Err(FmiError::error(format!("line.json: part {}: speed_input needs a roller whose drive has a speed or dancer loop (loop.kind = 2 or 3) or is an ideal speed drive on it (speed.input = true)", ps.name)));
             }
             // A load cell a connection reads (a drive's loop on it): the roller's own output load_cell.F at
             // the spec's wrap; elsewhere the line's output NAME.F alone, and the roller's tangents stay fixed.

@@ -310,11 +310,15 @@ impl Part {
                 if r.params.traction {
                     states.push(4);
                 }
-                // A drive's loop: its integrator, and its motor's torque where it lags [R10]-[R11].
+                // A drive's loop: its integrator, its motor's torque where it lags [R10]-[R11], and a
+                // dancer loop's integrator [R13].
                 if r.params.loop_kind != 0 {
                     states.push(5);
                     if r.params.motor_lag > 0.0 {
                         states.push(6);
+                    }
+                    if r.params.loop_kind == 3 {
+                        states.push(7);
                     }
                 }
                 states
@@ -382,7 +386,8 @@ impl Part {
                     | R::air_roughness
                     | R::air_viscosity => p.traction,
                     R::loop_set => p.loop_kind == 1,
-                    R::loop_speed => p.loop_kind == 2 || p.speed_input,
+                    R::loop_speed => p.loop_kind == 2 || p.loop_kind == 3 || p.speed_input,
+                    R::dancer_set | R::dancer_kp | R::dancer_ki => p.loop_kind == 3,
                     R::loop_kp | R::loop_ki | R::motor_limit => p.loop_kind != 0,
                     _ => true,
                 }

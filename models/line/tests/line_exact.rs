@@ -342,6 +342,59 @@ fn winding_merge_line() -> Value {
     line_spec(parts, c, "given")
 }
 
+/// A source at 5 m/s, two spans of variable length that hang from a dancer without a spring (5 kg, 400 N),
+/// a pull roll whose speed loop on a real motor (its reference 5 -> 5.05 m/s at 20-30 ms) is trimmed by a
+/// dancer loop [R13] on the dancer's y, wired from the dancer's output y into the pull roll's dancer.y.
+fn dancer_looped_line() -> Value {
+    let mut down = span("down_leg", 0.5, 8.9e-4, &["variableLength", "includeDamping"]);
+    for (k, v) in [("frame_a.x", 0.0), ("frame_a.y", 0.5), ("frame_b.x", 0.0), ("frame_b.y", 0.0)] {
+        down["start"][k] = json!(v);
+    }
+    let mut up = span("up_leg", 0.5, 8.9e-4, &["variableLength", "includeDamping"]);
+    for (k, v) in [("frame_a.x", 0.1), ("frame_a.y", 0.0), ("frame_b.x", 0.1), ("frame_b.y", 0.5)] {
+        up["start"][k] = json!(v);
+    }
+    let dancer = roller(
+        "dancer",
+        "dancer",
+        json!({"J": 0.01, "R": 0.05, "b": 0.001, "v_start": 5.0, "carriage": true, "carriage.m": 5.0, "carriage.d": 300.0,
+               "carriage.k": 0.0, "carriage.y_start": 0.5}),
+        Some(json!({"load": [[0.0, 400.0]]})),
+    );
+    let pull = roller(
+        "pull",
+        "roller",
+        json!({"J": 0.05, "R": 0.1, "b": 0.01, "v_start": 5.0, "loop.kind": 3, "loop.sign": 1.0, "loop.kp": 50.0, "loop.ki": 500.0,
+               "motor.lag": 0.002, "dancer.set": 0.5, "dancer.kp": 10.0, "dancer.ki": 25.0}),
+        Some(json!({"reference": [[0.0, 5.0], [0.02, 5.0], [0.03, 5.05]]})),
+    );
+    let parts = vec![prescribed("src", "source", json!([[0.0, 5.0]])), down, dancer, up, pull];
+    let mut c = chain(&["src", "down_leg", "dancer", "up_leg", "pull"]);
+    c.push(connect("dancer", "web_a.y", "down_leg", "frame_b.y"));
+    c.push(connect("dancer", "web_b.y", "up_leg", "frame_a.y"));
+    c.push(connect("dancer", "y", "pull", "dancer.y"));
+    line_spec(parts, c, "equilibrium")
+}
+
+/// A dancer loop holds a dancer without a spring: the equilibrium start puts it at its set point (its
+/// loop's integral is the one thing that holds it there), and after the pull roll's reference steps
+/// 5 -> 5.05 m/s the trim takes the step back (-0.05 m/s) and the dancer returns to 0.5 m to 1e-6 m.
+#[test]
+fn a_dancer_loop_holds_a_springless_dancer_at_its_set_point() {
+    let mut line = initialized(&dancer_looped_line());
+    assert!((get(&line, "dancer.y") - 0.5).abs() < 1e-9, "starts at {}", get(&line, "dancer.y"));
+    let trim = get(&line, "pull.dancer.I");
+    let mut worst: f64 = 0.0;
+    for _ in 0..500 {
+        line.do_step(0.01).unwrap();
+        worst = worst.max((get(&line, "dancer.y") - 0.5).abs());
+    }
+    assert!(worst > 1e-4, "the step must move the dancer (worst {worst} m)");
+    assert!((get(&line, "dancer.y") - 0.5).abs() < 1e-6, "{} m off after 5 s", get(&line, "dancer.y") - 0.5);
+    let change = get(&line, "pull.dancer.I") - trim;
+    assert!((change + 0.05).abs() < 1e-4, "the trim takes the step up: it moved by {change} m/s");
+}
+
 /// The Jacobian chained from the parts' tangents against the line's own grouped differences,
 /// off equilibrium (a torque step, a line started unsteady): every entry within 1e-5 of its
 /// row's largest. Forward differences are good to about 1e-7 of it, less in a row of small

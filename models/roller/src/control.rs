@@ -7,6 +7,8 @@
 //!       tau_ff = d(J*v_ref/r)/dt = J*a_ref/r + (J' - J*r'/r)*v_ref/r   (r', J' of [R3] at v_ref)
 //! [R11] motor.torque = sat(u) (no lag), or d(motor.torque)/dt = (sat(u) - motor.torque)/T_m;
 //!       sat(u) = u for |u| <= L - w, else sign(u)*(L - w*exp(-(|u| - L + w)/w)),  w = L/20.
+//! [R13] a dancer loop: the speed loop of [R10] with v_ref + trim for v_ref,
+//!       e_d = loop.sign*(dancer.y - dancer.set);  trim = dancer.kp*e_d + dancer.I;  d(dancer.I)/dt = dancer.ki*e_d.
 
 use crate::parameters::Parameters;
 use std::f64::consts::PI;
@@ -19,6 +21,8 @@ pub enum Kind {
     Force,
     /// The surface speed at the profile's reference table.
     Speed,
+    /// The speed loop with its reference trimmed by a PI on a dancer's position [R13].
+    Dancer,
 }
 
 impl Kind {
@@ -26,6 +30,7 @@ impl Kind {
         match p.loop_kind {
             1 => Kind::Force,
             2 => Kind::Speed,
+            3 => Kind::Dancer,
             _ => Kind::None,
         }
     }
@@ -81,13 +86,22 @@ pub struct Loop {
     pub lag: f64,
 }
 
-/// The loop at a roller's point: its law, the error's slopes in (loop.measured, omega, r) and the
-/// feed-forward's in r.
+/// The loop at a roller's point: its law, the error's slopes in (loop.measured, omega, r, dancer.y,
+/// dancer.I) and the feed-forward's in r; a dancer loop's integrator rate [R13] and its slope in dancer.y.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Point {
     pub law: Loop,
-    pub de: [f64; 3],
+    pub de: [f64; 5],
     pub dff_r: f64,
+    pub dancer_rate: f64,
+    pub dancer_rate_dy: f64,
+}
+
+/// A dancer loop's error e_d = loop.sign*(dancer.y - dancer.set) and speed trim [R13].
+#[inline]
+pub fn dancer(p: &Parameters, y: f64, integrator: f64) -> (f64, f64) {
+    let e = p.loop_sign * (y - p.dancer_set);
+    (e, p.dancer_kp * e + integrator)
 }
 
 /// 1/T_t of the back-calculation [R10]: ki/kp, or 1/s where either gain is 0 (a pure P or I loop).

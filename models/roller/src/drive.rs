@@ -93,8 +93,8 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
     if loaded.table(Key::Set).is_some() && kind != crate::control::Kind::Force {
         return Err("a setpoint table needs loop.kind = 1 (a force loop)".into());
     }
-    if loaded.table(Key::Reference).is_some() && !(kind == crate::control::Kind::Speed || (kind != crate::control::Kind::None && p.loop_feedforward)) {
-        return Err("a reference table needs loop.kind = 2 (a speed loop) or a loop with loop.feedforward = true".into());
+    if loaded.table(Key::Reference).is_some() && !(matches!(kind, crate::control::Kind::Speed | crate::control::Kind::Dancer) || (kind != crate::control::Kind::None && p.loop_feedforward)) {
+        return Err("a reference table needs loop.kind = 2 or 3 (a speed or dancer loop) or a loop with loop.feedforward = true".into());
     }
     Ok(loaded)
 }

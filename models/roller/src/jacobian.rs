@@ -9,7 +9,7 @@ use crate::parameters::{Inputs, Parameters, PORTS, STATES};
 use crate::physics::{self, Roll};
 use std::f64::consts::PI;
 
-/// A direction in the knowns: d(omega, r, y, y', v_web, loop.I, motor.torque) and d(inputs).
+/// A direction in the knowns: d(omega, r, y, y', v_web, loop.I, motor.torque, dancer.I) and d(inputs).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Direction {
     pub state: [f64; STATES],
@@ -32,7 +32,8 @@ pub struct Tangents {
     pub drive_torque: f64,
     pub loop_integrator: f64,
     pub motor_state: f64,
-    /// d of (omega, r, y, y', v_web, loop.I, motor.torque)/dt.
+    pub dancer_integrator: f64,
+    /// d of (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I)/dt.
     pub derivatives: [f64; STATES],
     pub omega: f64,
     pub radius: f64,
@@ -183,7 +184,7 @@ impl Linearization<'_> {
     #[inline]
     pub fn along(&self, d: &Direction) -> Tangents {
         let (p, u) = (self.params, self.inputs);
-        let [d_omega, d_r, d_y, d_y_dot, d_v_web, d_integrator, d_motor] = d.state;
+        let [d_omega, d_r, d_y, d_y_dot, d_v_web, d_integrator, d_motor, d_dancer] = d.state;
         let (omega, r, j, v, c, r_rate) = (self.omega, self.r, self.inertia, self.v, self.c, self.r_rate);
         let winding = p.winding();
         // [R3]: J(r), and with v = r*omega (or a speed table) r' = s*h_w*v/(2*pi*r).
@@ -203,9 +204,11 @@ impl Linearization<'_> {
         };
         // The loop [R10]-[R11]: its rates and its motor's torque along d.
         let (d_loop_rates, d_motor_torque) = self.control.map_or(([0.0; 2], 0.0), |c| {
-            let de = c.de[0] * d.u.measured + c.de[1] * d_omega + c.de[2] * d_r;
+            let de = c.de[0] * d.u.measured + c.de[1] * d_omega + c.de[2] * d_r + c.de[3] * d.u.dancer_y + c.de[4] * d_dancer;
             c.law.along(de, c.dff_r * d_r, d_integrator, d_motor)
         });
+        // A dancer loop's integrator [R13]: its rate dancer.ki*e_d moves with dancer.y only.
+        let d_dancer_rate = self.control.map_or(0.0, |c| c.dancer_rate_dy * d.u.dancer_y);
         // Without traction the web's speed is the surface's, and so is its rate: d(r*omega)/dt.
         let (d_torque, d_omega_rate, d_surface_rate) = if self.speed_table {
             // tau = J*v'/r + b*omega - r*(F_b - F_a); omega' = v'/r - v*r'/r^2.
@@ -245,9 +248,10 @@ impl Linearization<'_> {
             h_air,
             outlet_strains: if self.strain_table { [0.0; PORTS] } else { strain_leaving_tangent(p, u, &d.u) },
             drive_torque: d_torque,
-            derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate, d_v_web_rate, d_loop_rates[0], d_loop_rates[1]],
+            derivatives: [d_omega_rate, d_r_rate, d_y_rate, d_y_dot_rate, d_v_web_rate, d_loop_rates[0], d_loop_rates[1], d_dancer_rate],
             loop_integrator: d_integrator,
             motor_state: d_motor,
+            dancer_integrator: d_dancer,
             omega: d_omega,
             radius: d_r,
             carriage: [d_y, d_y_dot],

@@ -34,6 +34,8 @@ pub struct Roller {
     /// The loop's integrator and its motor's lagged torque [R10]-[R11] (0 without a loop).
     integrator: f64,
     motor: f64,
+    /// A dancer loop's integrator [R13], a speed trim (0 without one).
+    dancer: f64,
     profile: Option<Loaded>,
 }
 
@@ -270,6 +272,11 @@ impl Roller {
         self.integrator
     }
 
+    /// A dancer loop's integrator [R13] (0 without one).
+    pub fn dancer_integrator(&self) -> f64 {
+        self.dancer
+    }
+
     /// The lag's state [R11]: the motor's torque where it lags its command (0 without a lag).
     pub fn motor_state(&self) -> f64 {
         self.motor
@@ -290,18 +297,25 @@ impl Roller {
         }
         let (r, omega) = (self.roll.radius, self.omega.value());
         let reference = self.table(Key::Reference).map(|t| self.read(t, self.time));
+        let v_ref = reference.map_or(p.loop_speed, |(v, _)| v);
+        let (mut dancer_rate, mut dancer_rate_dy) = (0.0, 0.0);
         let (e, de) = match kind {
             Kind::Force => {
                 let set = self.table(Key::Set).map_or(p.loop_set, |t| self.read(t, self.time).0);
-                (p.loop_sign * (set - self.inputs.measured), [-p.loop_sign, 0.0, 0.0])
+                (p.loop_sign * (set - self.inputs.measured), [-p.loop_sign, 0.0, 0.0, 0.0, 0.0])
             }
-            _ => (reference.map_or(p.loop_speed, |(v, _)| v) - r * omega, [0.0, -r, -omega]),
+            Kind::Dancer => {
+                let (e_d, trim) = control::dancer(p, self.inputs.dancer_y, self.dancer);
+                (dancer_rate, dancer_rate_dy) = (p.dancer_ki * e_d, p.dancer_ki * p.loop_sign);
+                (v_ref + trim - r * omega, [0.0, -r, -omega, p.dancer_kp * p.loop_sign, 1.0])
+            }
+            _ => (v_ref - r * omega, [0.0, -r, -omega, 0.0, 0.0]),
         };
         let (ff, dff_r) = match reference {
             Some((v, a)) if p.loop_feedforward => control::feedforward(p, r, self.roll.inertia, v, a),
             _ => (0.0, 0.0),
         };
-        Some(control::Point { law: control::evaluate(p, e, ff, self.integrator, self.motor), de, dff_r })
+        Some(control::Point { law: control::evaluate(p, e, ff, self.integrator, self.motor), de, dff_r, dancer_rate, dancer_rate_dy })
     }
 
     /// The carriage's force (load minus every span's pull) [R4] at t, and its rate.
@@ -357,7 +371,8 @@ impl Roller {
             [0.0, 0.0]
         };
         let [integrator_rate, motor_rate] = control.map_or([0.0; 2], |c| c.law.rates);
-        [omega_rate, radius_rate, carriage[0], carriage[1], v_web_rate, integrator_rate, motor_rate]
+        let dancer_rate = control.map_or(0.0, |c| c.dancer_rate);
+        [omega_rate, radius_rate, carriage[0], carriage[1], v_web_rate, integrator_rate, motor_rate, dancer_rate]
     }
 
     /// The unit direction of one known: a state or an input (None: neither).
@@ -371,6 +386,7 @@ impl Roller {
             Real::v_web => d.state[4] = 1.0,
             Real::loop_I => d.state[5] = 1.0,
             Real::motor_torque => d.state[6] = 1.0,
+            Real::dancer_I => d.state[7] = 1.0,
             k => *Self::input_field(&mut d.u, k)? = 1.0,
         }
         Some(d)
@@ -460,7 +476,7 @@ impl Roller {
             let inertia = if p.winding() { self.roll.inertia_at(p, y[1]) } else { self.roll.inertia };
             self.omega = CompensatedSum::from_parts(y[0], 0.0);
             self.roll = Roll { radius: y[1], inertia, ..self.roll };
-            (self.integrator, self.motor, self.carriage) = (y[2], y[3], carriage);
+            (self.integrator, self.motor, self.dancer, self.carriage) = (y[2], y[3], y[4], carriage);
             return Ok(());
         }
         let (omega, travel) = match prescribed {
@@ -525,9 +541,9 @@ impl Roller {
             .map_err(|failure| FmiError::discard(format!("the web's slip on the roller could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
-    /// (omega, r, loop.I, motor.torque) after [t, t+h] of a piece with a loop [R10]-[R11], the inputs held.
-    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 4]> {
-        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor];
+    /// (omega, r, loop.I, motor.torque, dancer.I) after [t, t+h] of a piece with a loop [R10]-[R11], [R13], the inputs held.
+    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 5]> {
+        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor, self.dancer];
         let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
         let control = solver::Control { rtol: SLIP_RTOL, atol: y0.map(scale), initial_step: h, max_steps: 100_000 };
         solver::rosenbrock::integrate(&Controlled { roller: self, t0: t }, h, y0, &control)
@@ -535,13 +551,13 @@ impl Roller {
             .map_err(|failure| FmiError::discard(format!("the roller's loop could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
-    /// The roller at time t with (omega, r, loop.I, motor.torque) at y, the rest as now (a step's trial point).
-    fn at_trial(&self, t: f64, y: &[f64; 4]) -> Roller {
+    /// The roller at time t with (omega, r, loop.I, motor.torque, dancer.I) at y, the rest as now (a step's trial point).
+    fn at_trial(&self, t: f64, y: &[f64; 5]) -> Roller {
         let mut trial = self.clone();
         let inertia = if self.params.winding() { self.roll.inertia_at(&self.params, y[1]) } else { self.roll.inertia };
         trial.omega = CompensatedSum::from_parts(y[0], 0.0);
         trial.roll = Roll { radius: y[1], inertia, ..self.roll };
-        (trial.integrator, trial.motor, trial.time) = (y[2], y[3], t);
+        (trial.integrator, trial.motor, trial.dancer, trial.time) = (y[2], y[3], y[4], t);
         trial
     }
 
@@ -584,7 +600,7 @@ impl Roller {
         self.time = time;
         self.events_at = time;
         self.next_event = 0;
-        (self.integrator, self.motor) = (0.0, 0.0);
+        (self.integrator, self.motor, self.dancer) = (0.0, 0.0, 0.0);
     }
 }
 
@@ -602,7 +618,7 @@ impl Model for Roller {
         out.f64(self.omega.hi());
         out.f64(self.omega.lo());
         let r = &self.roll;
-        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.v_web, self.integrator, self.motor, self.time, self.events_at] {
+        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.v_web, self.integrator, self.motor, self.dancer, self.time, self.events_at] {
             out.f64(x);
         }
         out.i32(self.next_event as i32);
@@ -621,6 +637,7 @@ impl Model for Roller {
         self.v_web = r.finite("v_web")?;
         self.integrator = r.finite("loop.I")?;
         self.motor = r.finite("motor.torque")?;
+        self.dancer = r.finite("dancer.I")?;
         self.time = r.finite("time")?;
         self.events_at = r.finite("events applied until")?;
         let next = r.i32("next event")?;
@@ -685,7 +702,7 @@ impl Model for Roller {
     // Model Exchange: the importer integrates (omega, r, y, y').
 
     fn get_continuous_states(&self, x: &mut [f64]) -> FmiResult {
-        x.copy_from_slice(&[self.omega.value(), self.roll.radius, self.carriage[0], self.carriage[1], self.web_speed(), self.integrator, self.motor]);
+        x.copy_from_slice(&[self.omega.value(), self.roll.radius, self.carriage[0], self.carriage[1], self.web_speed(), self.integrator, self.motor, self.dancer]);
         Ok(())
     }
 
@@ -701,7 +718,7 @@ impl Model for Roller {
         if self.params.traction {
             self.v_web = x[4];
         }
-        (self.integrator, self.motor) = (x[5], x[6]);
+        (self.integrator, self.motor, self.dancer) = (x[5], x[6], x[7]);
         Ok(())
     }
 
@@ -721,7 +738,7 @@ impl Model for Roller {
     }
 
     fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
-        nominals.copy_from_slice(&[1.0, self.params.radius, 1.0, 1.0, 1.0, 1.0, 1.0]);
+        nominals.copy_from_slice(&[1.0, self.params.radius, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]);
         Ok(())
     }
 
@@ -799,7 +816,7 @@ impl solver::Ode<2> for Slipping<'_> {
     }
 }
 
-/// [R1], [R3], [R10]-[R11] over a piece, as an ODE in (omega, r, loop.I, motor.torque) from the
+/// [R1], [R3], [R10]-[R11], [R13] over a piece, as an ODE in (omega, r, loop.I, motor.torque, dancer.I) from the
 /// piece's start t0; its Jacobian from the roller's own tangents.
 struct Controlled<'a> {
     roller: &'a Roller,
@@ -807,15 +824,15 @@ struct Controlled<'a> {
 }
 
 /// The states (indices into the roller's) the loop's step integrates.
-const CONTROLLED: [usize; 4] = [0, 1, 5, 6];
+const CONTROLLED: [usize; 5] = [0, 1, 5, 6, 7];
 
-impl solver::Ode<4> for Controlled<'_> {
-    fn rhs(&self, s: f64, y: &[f64; 4]) -> [f64; 4] {
+impl solver::Ode<5> for Controlled<'_> {
+    fn rhs(&self, s: f64, y: &[f64; 5]) -> [f64; 5] {
         let d = self.roller.at_trial(self.t0 + s, y).derivatives();
         CONTROLLED.map(|i| d[i])
     }
 
-    fn jacobian(&self, s: f64, y: &[f64; 4]) -> [[f64; 4]; 4] {
+    fn jacobian(&self, s: f64, y: &[f64; 5]) -> [[f64; 5]; 5] {
         let trial = self.roller.at_trial(self.t0 + s, y);
         let at = trial.linearize();
         let columns = CONTROLLED.map(|j| {
@@ -827,9 +844,9 @@ impl solver::Ode<4> for Controlled<'_> {
     }
 
     /// Tables of time (a set point's or a reference's ramp) move f at fixed y: a central difference.
-    fn time_derivative(&self, s: f64, y: &[f64; 4]) -> [f64; 4] {
+    fn time_derivative(&self, s: f64, y: &[f64; 5]) -> [f64; 5] {
         if !self.roller.varies_with_time(self.t0 + s) {
-            return [0.0; 4];
+            return [0.0; 5];
         }
         let e = 1e-7 * (self.t0 + s).abs().max(1e-3);
         let (hi, lo) = (self.rhs(s + e, y), self.rhs(s - e, y));

@@ -59,10 +59,14 @@ pub struct Parameters {
     pub motor_lag: f64,
     /// A powder brake's speed scale [R12].
     pub brake_v_slip: f64,
+    /// A dancer loop's set point and gains [R13].
+    pub dancer_set: f64,
+    pub dancer_kp: f64,
+    pub dancer_ki: f64,
 }
 
-/// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque).
-pub const STATES: usize = 7;
+/// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I).
+pub const STATES: usize = 8;
 
 /// The most webs a roller takes in or gives out.
 pub const PORTS: usize = 4;
@@ -104,6 +108,8 @@ pub struct Inputs {
     pub load: f64,
     /// What a force loop measures [R10].
     pub measured: f64,
+    /// The position of the dancer a dancer loop holds [R13].
+    pub dancer_y: f64,
 }
 
 /// The sum of the first `count` ports' tensions: one port is read as it

@@ -98,6 +98,12 @@ fmi_core::bind_variables! {
         der_loop_I: computed(derivatives()[5]),
         motor_torque: computed(motor_state()),
         der_motor_torque: computed(derivatives()[6]),
+        dancer_y: input(dancer_y),
+        dancer_set: param(params.dancer_set),
+        dancer_kp: param(params.dancer_kp),
+        dancer_ki: param(params.dancer_ki),
+        dancer_I: computed(dancer_integrator()),
+        der_dancer_I: computed(derivatives()[7]),
     }
     integer {
         roll: param(params.roll),

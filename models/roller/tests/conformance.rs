@@ -7,7 +7,7 @@ use fmi_testkit::conformance::{Hints, Point};
 /// every inlet and outlet in use, where the extra ports' tensions reach tau
 /// and their strains the merged web_b.eps [R5]; a web that may slip on a wrap
 /// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides; a drive's loop; a brake;
-/// an ideal speed drive on its input.
+/// an ideal speed drive on its input; a dancer loop [R13], without a lag (its position reaches tau) and with one.
 fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
     let nip = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/traction_nip.json");
@@ -36,8 +36,22 @@ fn hints() -> Hints {
         ("motor.lag", 0.02),
         ("v_start", 5.0),
     ];
+    let dancer_loop = vec![
+        ("loop.kind", 3.0),
+        ("loop.kp", 20.0),
+        ("loop.ki", 100.0),
+        ("loop.speed", 5.0),
+        ("dancer.kp", 2.0),
+        ("dancer.ki", 3.0),
+        ("dancer.set", 0.3),
+        ("dancer.y", 0.25),
+        ("v_start", 5.0),
+    ];
+    let lagged_dancer_loop = [dancer_loop.clone(), vec![("motor.lag", 0.02)]].concat();
     Hints {
         points: vec![
+            Point { values: dancer_loop, texts: vec![] },
+            Point { values: lagged_dancer_loop, texts: vec![] },
             Point { values: force_loop, texts: vec![] },
             // A powder brake near rest, where its torque bends through 0 [R12].
             Point { values: vec![("v_start", 0.004), ("R", 0.2)], texts: vec![("profile", brake.into())] },

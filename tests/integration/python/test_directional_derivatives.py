@@ -321,7 +321,7 @@ def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind,
 
 ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load", "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps",
                  "web_a4.F", "web_a4.eps", "web_b2.F", "web_b3.F", "web_b4.F")
-ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web", "loop.I", "motor.torque")
+ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web", "loop.I", "motor.torque", "dancer.I")
 ROLLER_UNKNOWNS = ("web_a.v", "web_b.v", "web_b.eps", "omega", "r", "y", "y_dot", "tau", "web_a.x", "web_a.y",
                    "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)", "web_a2.v", "web_a4.v",
                    "web_b2.v", "web_b2.eps", "web_b4.eps", "v_web", "der(v_web)")
@@ -419,7 +419,7 @@ def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
         if me:
             fmu.setTime(0.25)
             # Away from the start values: the carriage moving, the roll grown.
-            fmu.setContinuousStates((fmi2Real * 7)(33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0), 7)
+            fmu.setContinuousStates((fmi2Real * 8)(33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0, 0.0), 8)
         else:
             fmu.doStep(0.0, 0.25)
         knowns = ROLLER_INPUTS + (ROLLER_STATES if me else ())
@@ -463,7 +463,7 @@ def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind,
         start(fmu, vr, values, me=me)
         if me:
             fmu.setTime(0.25)
-            fmu.setContinuousStates((fmi2Real * 7)(33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0), 7)
+            fmu.setContinuousStates((fmi2Real * 8)(33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0, 0.0), 8)
         else:
             fmu.doStep(0.0, 0.25)
         knowns = ROLLER_INPUTS[:5] + (("omega", "v_web") if me else ())
@@ -488,12 +488,16 @@ def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind,
 # A drive's loop [R10]-[R11]: its integrator and its lagging motor are states, what it measures an
 # input. On a roll being wound (J and the feed-forward move with r), the command u about -5.5 N.m is
 # inside the limit's exponential bend (|u| > 0.95 * 5.3 N.m), so the limit's slope and the
-# back-calculation count; a speed loop measures the surface's own speed.
+# back-calculation count; a speed loop measures the surface's own speed; a dancer loop [R13] trims its
+# reference by a PI on the input dancer.y, its integrator dancer.I an eighth state.
 LOOP_CASES = {
     "force-ff-limit-lag": {"loop.kind": 1, "loop.sign": -1.0, "loop.set": 200.0, "loop.measured": 190.0,
                            "loop.feedforward": True, "motor.limit": 5.3, "motor.lag": 0.02},
     "force-no-lag": {"loop.kind": 1, "loop.sign": 1.0, "loop.set": 200.0, "loop.measured": 190.0, "loop.feedforward": True},
     "speed-ff": {"loop.kind": 2, "loop.feedforward": True, "motor.limit": 50.0},
+    "dancer-ff-lag": {"loop.kind": 3, "loop.sign": -1.0, "loop.feedforward": True, "motor.limit": 50.0, "motor.lag": 0.02,
+                      "dancer.set": 0.3, "dancer.y": 0.28, "dancer.kp": 2.0, "dancer.ki": 3.0},
+    "dancer-no-lag": {"loop.kind": 3, "loop.sign": 1.0, "dancer.set": 0.3, "dancer.y": 0.28, "dancer.kp": 2.0, "dancer.ki": 3.0},
 }
 
 
@@ -514,11 +518,12 @@ def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, l
         start(fmu, vr, values, me=me)
         if me:
             fmu.setTime(0.25)
-            fmu.setContinuousStates((fmi2Real * 7)(33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0), 7)
+            fmu.setContinuousStates((fmi2Real * 8)(33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0, 0.02), 8)
         else:
             fmu.doStep(0.0, 0.25)
-        knowns = ROLLER_INPUTS[:5] + ("loop.measured",) + (("omega", "r", "loop.I", "motor.torque") if me else ())
-        unknowns = ("tau", "der(omega)", "der(r)", "loop.I", "motor.torque", "der(loop.I)", "der(motor.torque)")
+        knowns = ROLLER_INPUTS[:5] + ("loop.measured", "dancer.y") + (("omega", "r", "loop.I", "motor.torque", "dancer.I") if me else ())
+        unknowns = ("tau", "der(omega)", "der(r)", "loop.I", "motor.torque", "der(loop.I)", "der(motor.torque)", "dancer.I",
+                    "der(dancer.I)")
         a, f, n = roller_jacobians(fmu, vr, unknowns, knowns)
     finally:
         fmu.terminate()
@@ -547,7 +552,7 @@ def test_roller_with_a_brake_matches_finite_differences(roller, tmp_path, kind):
         start(fmu, vr, values, me=me)
         if me:
             fmu.setTime(0.25)
-            fmu.setContinuousStates((fmi2Real * 7)(0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0), 7)
+            fmu.setContinuousStates((fmi2Real * 8)(0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0), 8)
         else:
             fmu.doStep(0.0, 0.01)
         knowns = ROLLER_INPUTS[:5] + (("omega", "r") if me else ())

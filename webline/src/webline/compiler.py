@@ -132,9 +132,9 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
 def loop_values(loop) -> dict:
     """The Roller's parameters of a drive's loop [R10]-[R11]: a force loop on loop.measured, which the
     line wires from the span it names (`compile_scene`), or a speed loop on its own surface speed."""
-    return {
-        "loop.kind": 2 if loop.speed else 1,
-        "loop.sign": float(loop.sign),
+    values = {
+        "loop.kind": (3 if loop.dancer is not None else 2) if loop.speed else 1,
+        "loop.sign": float(loop.dancer.sign if loop.dancer is not None else loop.sign),
         "loop.set": float(loop.set.value(0.0)),
         "loop.kp": float(loop.kp),
         "loop.ki": float(loop.ki),
@@ -142,6 +142,9 @@ def loop_values(loop) -> dict:
         "motor.limit": float(loop.limit),
         "motor.lag": float(loop.lag),
     }
+    if loop.dancer is not None:  # a dancer loop [R13] on dancer.y, which the line wires from the dancer
+        values.update({"dancer.set": float(loop.dancer.set), "dancer.kp": float(loop.dancer.kp), "dancer.ki": float(loop.dancer.ki)})
+    return values
 
 
 def traction_values(scene: Scene, node) -> dict:
@@ -415,6 +418,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
         loop = getattr(getattr(n, "drive", None), "loop", None)
         if loop is not None and not loop.speed:
             connect(loop.measure[0], "load_cell.F" if loop.measure[1] == "F" else "summary_Tension", n.name, "loop.measured")
+        if loop is not None and loop.dancer is not None:  # a dancer loop reads the dancer's position [R13]
+            connect(loop.dancer.dancer, "y", n.name, "dancer.y")
 
     record, sums = _record(scene)
     system = System(

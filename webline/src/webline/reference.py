@@ -92,7 +92,12 @@ class LineODE:
         for c in self.loops:
             self.i_loop[c.name] = (first, first + 1 if c.drive.loop.lag > 0 else None)
             first += 1 + (c.drive.loop.lag > 0)
-        self.n = first
+        # A dancer loop's integrator [R13], a speed trim.
+        trims = [c for c in self.loops if c.drive.loop.dancer is not None]
+        self.i_trim = {c.name: first + i for i, c in enumerate(trims)}
+        # The dancers whose position a dancer loop holds: steady at its set point, spring or not.
+        self.held_by_loop = {c.drive.loop.dancer.dancer for c in trims}
+        self.n = first + len(trims)
         # The line's shape, once: each span's rollers, each roller's spans in and out.
         self.up = {sp.name: scene.upstream(sp) for sp in self.spans}
         self.down = {sp.name: scene.downstream(sp) for sp in self.spans}
@@ -148,6 +153,11 @@ class LineODE:
         J = self.roll_inertia(node, R) if node.name in self.i_r else self.inertia[node.name][0]
         if lp.speed:  # a speed loop on its own surface speed
             e = self.pv(lp.set, t) - R * z[self.i_omega[node.name]]
+            if lp.dancer is not None:  # its reference trimmed by a PI on the dancer's position [R13]
+                d, i_trim = lp.dancer, self.i_trim[node.name]
+                e_d = d.sign * (z[self.i_y[d.dancer]] - d.set)
+                dz[i_trim] = d.ki * e_d
+                e += d.kp * e_d + z[i_trim]
         elif lp.measure[1] == "F":  # a roller's load cell on the web forces it carries, as the Roller's pulls
             cell = self.s.component(lp.measure[0])
             F_a = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[cell.name])
@@ -361,7 +371,7 @@ class LineODE:
         Where the web may slip, the line is solved first with the web held to every roller's surface,
         then with its speeds free from there: away from its steady tensions the friction saturates, and
         a search through such states stalls."""
-        springless = [d for d in self.dancers if d.stiffness == 0.0]
+        springless = [d for d in self.dancers if d.stiffness == 0.0 and d.name not in self.held_by_loop]
         held = [self.i_y[d.name] for d in springless]  # their positions: held
         balance = [i + 1 for i in held]  # their accelerations: checked afterwards
         # A roll's radius is never steady while web winds: held at its start, its rate not solved for.
@@ -470,6 +480,8 @@ class LineODE:
             names[i] = f"{k!r}'s loop integrator"
             if m is not None:
                 names[m] = f"{k!r}'s motor torque"
+        for k, i in self.i_trim.items():
+            names[i] = f"{k!r}'s dancer loop integrator"
         return names
 
     def given_state(self, t=0.0):
@@ -558,6 +570,8 @@ def atol_of(ode: LineODE, z0):
         a[i] = 1e-10
         if m is not None:
             a[m] = 1e-10
+    for name, i in ode.i_trim.items():  # speeds
+        a[i] = 1e-12
     return a
 
 

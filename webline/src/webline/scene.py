@@ -127,6 +127,19 @@ BRAKE_V_SLIP = 0.01  # m/s
 
 
 @dataclass
+class DancerLoop:
+    """A dancer position loop [R13]: a PI on dancer `dancer`'s carriage position y against `set` (m) whose
+    output, a speed (gains in m/s per m and m/s per m.s), trims a speed loop's reference; `sign` +1 where
+    the dancer is upstream of the drive (a longer loop of web stored calls for more speed), -1 downstream."""
+
+    dancer: str
+    set: float
+    kp: float
+    ki: float
+    sign: float = 1.0
+
+
+@dataclass
 class Loop:
     """A PI loop in a drive ([R10]-[R11] of the physics docs): the torque that holds a span's tension
     (`measure` = (span, "T")) or a load cell's (roller, "F") at `set`; gains in SI (N.m per N,
@@ -142,6 +155,7 @@ class Loop:
     feedforward: bool = False
     sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
     set_input: bool = False  # the set point is the Line FMU's input <name>.T_set (<name>.v_ref), starting at `set`
+    dancer: DancerLoop | None = None  # a speed loop's reference trimmed by a dancer's position loop [R13]
 
     @property
     def speed(self) -> bool:
@@ -764,7 +778,7 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
         start = r.keys(o["speed"], f"{what}.speed", required=("input",))["input"]
         return Drive("speed", Profile.constant(r.quantity(start, units.SPEED, f"{what}.speed.input")), input=True)
     if "speed" in kinds and "speed" in o and "loop" in o:  # a speed loop on a real motor
-        o = r.keys(node, what, required=("speed", "loop"), optional=("feedforward",))
+        o = r.keys(node, what, required=("speed", "loop"), optional=("feedforward", "dancer"))
         g = r.keys(o["loop"], f"{what}.loop", required=("kp", "ki"), optional=("limit", "lag"))
         speed_node, speed_input = o["speed"], False
         if isinstance(speed_node.value, Obj) and "input" in speed_node.value:  # the Line FMU's input <name>.v_ref
@@ -780,6 +794,13 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
         _motor(r, g, f"{what}.loop", loop)
         if "feedforward" in o:
             _feedforward(r, o["feedforward"], f"{what}.feedforward", loop)
+        if "dancer" in o:  # a dancer position loop trims the reference [R13]; its dancer is checked in _check_loops
+            d = r.keys(o["dancer"], f"{what}.dancer", required=("dancer", "set", "kp", "ki"))
+            loop.dancer = DancerLoop(
+                dancer=r.string(d["dancer"], f"{what}.dancer.dancer"),
+                set=r.quantity(d["set"], units.LENGTH, f"{what}.dancer.set"),
+                kp=r.quantity(d["kp"], units.DIMENSIONLESS, f"{what}.dancer.kp (m/s per m)", nonnegative=True),
+                ki=r.quantity(d["ki"], units.DIMENSIONLESS, f"{what}.dancer.ki (m/s per m.s)", nonnegative=True))
         return Drive("speed loop", None, loop)
     if len(o.items) != 1 or next(iter(o.keys())) not in kinds:
         raise r.err(node, f"{what} must be an object with one key of {', '.join(kinds)}")
@@ -1347,6 +1368,13 @@ def _check_loops(r, scene: Scene, raw):
     raises it (+1) (a load cell's webs both lie on one side of another roller). A feed-forward needs a speed drive whose profile is the line's speed reference."""
     for node in scene.nodes:
         loop = getattr(getattr(node, "drive", None), "loop", None)
+        if loop is not None and loop.dancer is not None:
+            d = loop.dancer
+            c = {c.name: c for c in scene.parts}.get(d.dancer)
+            if not isinstance(c, Dancer):
+                raise r.err(raw[node.name], f"{node.type} {node.name!r}: drive.dancer.dancer: {d.dancer!r} is "
+                                            f"{'no part of the line' if c is None else 'a ' + c.type + ', not a dancer'}")
+            d.sign = -1.0 if d.dancer in _downstream_of(scene, node) else 1.0
         if loop is None or loop.speed:
             continue
         what = f"{node.type} {node.name!r}: drive.pi.measure"
