@@ -398,38 +398,47 @@ def roller_jacobians(fmu, vr, unknowns, knowns, step=STEP):
     return analytic, fd, noise
 
 
-@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
-@pytest.mark.parametrize("case", ROLLER_CASES, ids=roller_label)
-def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
+def roller_case(roller, tmp_path, kind, profile, values, me_states, knowns, unknowns, step=STEP, cs_time=0.25, read=()):
+    """The Roller with `profile` and `values`, away from its start (Model Exchange: its states set to
+    `me_states` at 0.25 s, where the states join `knowns`; Co-Simulation: after a step to `cs_time`):
+    (analytic, differences, noise) of `unknowns` along `knowns`, and the values `read` then."""
     import json
 
     md, unzipdir, vr = roller
-    drive, roll, carriage, (inlets, outlets) = case
-    profile = dict(DRIVES[drive])
-    if carriage:
-        profile["load"] = [[0, 50.0], [10, 80.0]]
     path = tmp_path / "profile.json"
     path.write_text(json.dumps(profile))
     me = kind == "ModelExchange"
     fmu = instantiate(unzipdir, md, kind)
     try:
-        values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "profile": str(path),
-                  "inlets": inlets, "outlets": outlets}
-        start(fmu, vr, values, me=me)
+        start(fmu, vr, {**values, "profile": str(path)}, me=me)
         if me:
             fmu.setTime(0.25)
-            # Away from the start values: the carriage moving, the roll grown.
-            fmu.setContinuousStates((fmi2Real * 8)(33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0, 0.0), 8)
+            fmu.setContinuousStates((fmi2Real * len(me_states))(*me_states), len(me_states))
         else:
-            fmu.doStep(0.0, 0.25)
-        knowns = ROLLER_INPUTS + (ROLLER_STATES if me else ())
-        # Without traction the fifth state is the surface's speed r*omega, not a known of its own:
-        # v_web reads r*omega back, so only its rate is compared.
-        unknowns = tuple(u for u in ROLLER_UNKNOWNS if not (me and u == "v_web"))
-        a, f, n = roller_jacobians(fmu, vr, unknowns, knowns)
+            fmu.doStep(0.0, cs_time)
+        found = roller_jacobians(fmu, vr, unknowns, knowns, step)
+        return found, fmu.getReal([vr[k] for k in read])
     finally:
         fmu.terminate()
         fmu.freeInstance()
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("case", ROLLER_CASES, ids=roller_label)
+def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
+    drive, roll, carriage, (inlets, outlets) = case
+    profile = dict(DRIVES[drive])
+    if carriage:
+        profile["load"] = [[0, 50.0], [10, 80.0]]
+    me = kind == "ModelExchange"
+    values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "inlets": inlets, "outlets": outlets}
+    # Away from the start values: the carriage moving, the roll grown.
+    states = (33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0, 0.0)
+    # Without traction the fifth state is the surface's speed r*omega, not a known of its own:
+    # v_web reads r*omega back, so only its rate is compared.
+    unknowns = tuple(u for u in ROLLER_UNKNOWNS if not (me and u == "v_web"))
+    (a, f, n), _ = roller_case(roller, tmp_path, kind, profile, values, states,
+                               ROLLER_INPUTS + (ROLLER_STATES if me else ()), unknowns)
     what = f"Roller {kind} {roller_label(case)}"
     worst = compare(what, a, f, n)
     print(f"{what}: max relative error {worst:.1e}")
@@ -445,37 +454,19 @@ TRACTION_CASES = {"wrap": {"traction.wrap": 1.2}, "wrap-nip-air": {"traction.wra
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
 @pytest.mark.parametrize("label", TRACTION_CASES)
 def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind, label):
-    import json
-
-    md, unzipdir, vr = roller
     profile = {"torque": [[0, 1.0], [10, 3.0]]}
     if "nip.mu" in TRACTION_CASES[label]:
         profile["nip"] = [[0, 300.0], [10, 360.0]]
-    path = tmp_path / "profile.json"
-    path.write_text(json.dumps(profile))
     me = kind == "ModelExchange"
-    fmu = instantiate(unzipdir, md, kind)
-    try:
-        params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith(("wound.", "carriage."))}
-        values = {**params, **ROLLER_POINT, "profile": str(path), "includeTraction": True, "traction.mu": 0.3,
-                  "traction.v_slip": 1e-3, "traction.width": 0.5, "traction.slip_start": 2e-3,
-                  **TRACTION_CASES[label]}
-        start(fmu, vr, values, me=me)
-        if me:
-            fmu.setTime(0.25)
-            fmu.setContinuousStates((fmi2Real * 8)(33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0, 0.0), 8)
-        else:
-            fmu.doStep(0.0, 0.25)
-        knowns = ROLLER_INPUTS[:5] + (("omega", "v_web") if me else ())
-        unknowns = ("web_a.v", "web_b.v", "v", "v_web", "slip", "traction", "mu_eff", "h_air", "tau",
-                    "der(omega)", "der(v_web)")
-        # tanh(slip/v_slip) curves over 1 mm/s: a step of 1e-6 of a speed of 5 m/s would leave a
-        # truncation error of (5e-6/1e-3)^2 ~ 2.5e-5; 1e-8 leaves 2.5e-9, rounding stays in the noise term.
-        a, f, n = roller_jacobians(fmu, vr, unknowns, knowns, step=1e-8)
-        slip, mu_eff, h_air = fmu.getReal([vr["slip"], vr["mu_eff"], vr["h_air"]])
-    finally:
-        fmu.terminate()
-        fmu.freeInstance()
+    params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith(("wound.", "carriage."))}
+    values = {**params, **ROLLER_POINT, "includeTraction": True, "traction.mu": 0.3, "traction.v_slip": 1e-3,
+              "traction.width": 0.5, "traction.slip_start": 2e-3, **TRACTION_CASES[label]}
+    unknowns = ("web_a.v", "web_b.v", "v", "v_web", "slip", "traction", "mu_eff", "h_air", "tau", "der(omega)", "der(v_web)")
+    # tanh(slip/v_slip) curves over 1 mm/s: a step of 1e-6 of a speed of 5 m/s would leave a
+    # truncation error of (5e-6/1e-3)^2 ~ 2.5e-5; 1e-8 leaves 2.5e-9, rounding stays in the noise term.
+    (a, f, n), (slip, mu_eff, h_air) = roller_case(
+        roller, tmp_path, kind, profile, values, (33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0, 0.0),
+        ROLLER_INPUTS[:5] + (("omega", "v_web") if me else ()), unknowns, step=1e-8, read=("slip", "mu_eff", "h_air"))
     what = f"Roller {kind} traction {label}"
     worst = compare(what, a, f, n)
     print(f"{what}: slip {slip:.2e} m/s, mu_eff {mu_eff:.4f}, h_air {h_air:.2e} m, max relative error {worst:.1e}")
@@ -504,30 +495,14 @@ LOOP_CASES = {
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
 @pytest.mark.parametrize("label", LOOP_CASES)
 def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, label):
-    import json
-
-    md, unzipdir, vr = roller
-    path = tmp_path / "profile.json"
-    path.write_text(json.dumps({"reference": [[0, 5.0], [10, 6.0]]}))
     me = kind == "ModelExchange"
-    fmu = instantiate(unzipdir, md, kind)
-    try:
-        params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
-        values = {**params, **ROLLER_POINT, "roll": 1, "profile": str(path), "loop.kp": 0.2, "loop.ki": 2.0,
-                  **LOOP_CASES[label]}
-        start(fmu, vr, values, me=me)
-        if me:
-            fmu.setTime(0.25)
-            fmu.setContinuousStates((fmi2Real * 8)(33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0, 0.02), 8)
-        else:
-            fmu.doStep(0.0, 0.25)
-        knowns = ROLLER_INPUTS[:5] + ("loop.measured", "dancer.y") + (("omega", "r", "loop.I", "motor.torque", "dancer.I") if me else ())
-        unknowns = ("tau", "der(omega)", "der(r)", "loop.I", "motor.torque", "der(loop.I)", "der(motor.torque)", "dancer.I",
-                    "der(dancer.I)")
-        a, f, n = roller_jacobians(fmu, vr, unknowns, knowns)
-    finally:
-        fmu.terminate()
-        fmu.freeInstance()
+    params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
+    values = {**params, **ROLLER_POINT, "roll": 1, "loop.kp": 0.2, "loop.ki": 2.0, **LOOP_CASES[label]}
+    knowns = ROLLER_INPUTS[:5] + ("loop.measured", "dancer.y") + (("omega", "r", "loop.I", "motor.torque", "dancer.I") if me else ())
+    unknowns = ("tau", "der(omega)", "der(r)", "loop.I", "motor.torque", "der(loop.I)", "der(motor.torque)", "dancer.I",
+                "der(dancer.I)")
+    (a, f, n), _ = roller_case(roller, tmp_path, kind, {"reference": [[0, 5.0], [10, 6.0]]}, values,
+                               (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0, 0.02), knowns, unknowns)
     what = f"Roller {kind} loop {label}"
     worst = compare(what, a, f, n)
     print(f"{what}: max relative error {worst:.1e}")
@@ -539,26 +514,11 @@ def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, l
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
 def test_roller_with_a_brake_matches_finite_differences(roller, tmp_path, kind):
     """A powder brake [R12] near rest (v = 4 mm/s, where tanh(v/v_slip) bends) on a roll being wound."""
-    import json
-
-    md, unzipdir, vr = roller
-    path = tmp_path / "profile.json"
-    path.write_text(json.dumps({"brake": [[0, 2.0], [10, 3.0]]}))
     me = kind == "ModelExchange"
-    fmu = instantiate(unzipdir, md, kind)
-    try:
-        params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
-        values = {**params, **ROLLER_POINT, "web_b.F": 180.0, "roll": 1, "profile": str(path), "v_start": 0.004}
-        start(fmu, vr, values, me=me)
-        if me:
-            fmu.setTime(0.25)
-            fmu.setContinuousStates((fmi2Real * 8)(0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0), 8)
-        else:
-            fmu.doStep(0.0, 0.01)
-        knowns = ROLLER_INPUTS[:5] + (("omega", "r") if me else ())
-        a, f, n = roller_jacobians(fmu, vr, ("tau", "der(omega)", "der(r)"), knowns)
-    finally:
-        fmu.terminate()
-        fmu.freeInstance()
+    params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
+    values = {**params, **ROLLER_POINT, "web_b.F": 180.0, "roll": 1, "v_start": 0.004}
+    (a, f, n), _ = roller_case(roller, tmp_path, kind, {"brake": [[0, 2.0], [10, 3.0]]}, values,
+                               (0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0), ROLLER_INPUTS[:5] + (("omega", "r") if me else ()),
+                               ("tau", "der(omega)", "der(r)"), cs_time=0.01)
     what = f"Roller {kind} brake"
     print(f"{what}: max relative error {compare(what, a, f, n):.1e}")
