@@ -1241,9 +1241,12 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 && !null_values
                 && pairs.iter().all(|&(x, value)| match var(d, x, Family::Real) {
                     Some(v) => {
-                        settable(v, slot.st)
-                            && value.is_finite()
-                            && (v.causality != Causality::Input || v.range.contains(value))
+                        // Inputs, and tunable parameters once initialized, are range-checked at once;
+                        // other parameters when initialization ends.
+                        let at_once = v.causality == Causality::Input
+                            || (v.causality == Causality::Parameter
+                                && matches!(slot.st, St::StepComplete | St::StepFailed | St::Terminated | St::Event | St::Continuous));
+                        settable(v, slot.st) && value.is_finite() && (!at_once || v.range.contains(value))
                     }
                     None => false,
                 });
