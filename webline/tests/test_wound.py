@@ -90,42 +90,40 @@ def test_without_wound_the_radius_stays(fmus):
     assert np.all(r.column("unwind.r") == R0) and np.all(r.column("rewind.r") == 0.2)
 
 
+def short_line(first, middle=(), events=()):
+    """A scene of `first`, a span of board, the `middle` parts (roller, span), and a sink."""
+    line = [first, {"type": "span", "name": "entry", "L": "2 m", "web": "board"}, *middle,
+            {"type": "sink", "name": "pull", "speed": "5 m/s"}]
+    return json.dumps({"name": "w", "stop_time": "1 s", "step": "1 ms", "webs": {"board": BOARD}, "line": line,
+                       "events": list(events)})
+
+
+WOUND_UNWINDER = {"type": "unwinder", "name": "unwind", "J": "8 kg.m2", "R": "0.4 m", "strain": 0,
+                  "drive": {"tension": "300 N"}, "wound": {"thickness": "1 mm"}}
+
+
 @pytest.mark.parametrize("roll,message", [
     ({"unwind": {"wound": {"density": "700 kg/m3"}}}, "needs the key 'thickness'"),
     ({"unwind": {"wound": {"thickness": "-1 mm"}}}, "thickness"),
-    ({"unwind": {"drive": {"speed": "5 m/s"}, "wound": {"thickness": "1 mm"}}}, "a speed-driven roll does not use"),
 ])
 def test_a_wound_roll_that_cannot_be_is_refused(roll, message):
-    unwind = roll["unwind"]
-    if "drive" in unwind:  # a speed-driven unwinder takes no J, b, v_start
-        s = json.loads(json.dumps({"unwind": unwind}))
-        with pytest.raises(SceneError, match=message):
-            parse_scene(json.dumps({
-                "name": "w", "stop_time": "1 s", "step": "1 ms", "webs": {"board": BOARD},
-                "line": [{"type": "unwinder", "name": "unwind", "strain": 0, **s["unwind"]},
-                         {"type": "span", "name": "entry", "L": "2 m", "web": "board"},
-                         {"type": "sink", "name": "pull", "speed": "5 m/s"}]}), "w.json")
-        return
     with pytest.raises(SceneError, match=message):
         scene(roll)
 
 
+def test_a_speed_driven_roll_winds_nothing():
+    # A speed-driven unwinder takes no J, b or v_start.
+    unwinder = {"type": "unwinder", "name": "unwind", "strain": 0, "drive": {"speed": "5 m/s"}, "wound": {"thickness": "1 mm"}}
+    with pytest.raises(SceneError, match="a speed-driven roll does not use"):
+        parse_scene(short_line(unwinder), "w.json")
+
+
 def test_wound_belongs_to_a_roll_and_its_radius_moves_by_no_event():
+    idler = {"type": "roller", "name": "idler", "J": "0.1 kg.m2", "R": "0.1 m", "wound": {"thickness": "1 mm"}}
+    source = {"type": "source", "name": "src", "speed": "5 m/s", "strain": 0}
     with pytest.raises(SceneError, match="wound is a roll's"):
-        parse_scene(json.dumps({
-            "name": "w", "stop_time": "1 s", "step": "1 ms", "webs": {"board": BOARD},
-            "line": [{"type": "source", "name": "src", "speed": "5 m/s", "strain": 0},
-                     {"type": "span", "name": "a", "L": "1 m", "web": "board"},
-                     {"type": "roller", "name": "idler", "J": "0.1 kg.m2", "R": "0.1 m", "wound": {"thickness": "1 mm"}},
-                     {"type": "span", "name": "b", "L": "1 m", "web": "board"},
-                     {"type": "sink", "name": "snk", "speed": "5 m/s"}]}), "w.json")
-    s = json.loads(json.dumps({"name": "w", "stop_time": "1 s", "step": "1 ms", "webs": {"board": BOARD}}))
+        parse_scene(short_line(source, (idler, {"type": "span", "name": "exit", "L": "1 m", "web": "board"})), "w.json")
     base = scene(WOUND)
     assert base.component("unwind").wound.density == 700.0 and base.component("unwind").wound.width == 1.0
     with pytest.raises(SceneError, match=r"unknown key 'R'.*allowed: b"):
-        parse_scene(json.dumps({
-            **s, "line": [{"type": "unwinder", "name": "unwind", "J": "8 kg.m2", "R": "0.4 m", "strain": 0,
-                           "drive": {"tension": "300 N"}, "wound": {"thickness": "1 mm"}},
-                          {"type": "span", "name": "entry", "L": "2 m", "web": "board"},
-                          {"type": "sink", "name": "pull", "speed": "5 m/s"}],
-            "events": [{"time": "0.5 s", "component": "unwind", "set": {"R": "0.3 m"}}]}), "w.json")
+        parse_scene(short_line(WOUND_UNWINDER, events=[{"time": "0.5 s", "component": "unwind", "set": {"R": "0.3 m"}}]), "w.json")
