@@ -212,6 +212,17 @@ def test_a_speed_loop_follows_its_ramp_and_its_feedforward_cuts_the_error_tenfol
     assert bands[False] >= 10.0 * bands[True]
 
 
+def test_a_loops_set_point_is_offered_only_where_it_acts(fmus, tmp_path):
+    """A speed loop follows its reference table, so loop.speed would act on nothing and is not offered;
+    its gains are. With the reference an input, neither loop.speed: the input v_ref takes its place."""
+    from fmpy import read_model_description
+
+    for speed, offered in ((None, False), ({"input": "5 m/s"}, False)):
+        fmu = linefmu.export(speed_looped(False, speed=speed), tmp_path / "offered.fmu", fmus)
+        names = {v.name for v in read_model_description(str(fmu)).modelVariables}
+        assert ("pull.loop.speed" in names) == offered and {"pull.loop.kp", "pull.loop.ki"} <= names, sorted(names)
+
+
 def test_a_speed_input_from_fmpy_moves_the_line(fmus, tmp_path):
     """"speed": {"input": "5 m/s"} on a speed loop makes its reference the Line FMU's input pull.v_ref:
     set to 6 m/s from FMPy between steps, the pull roll follows it (to 1e-4 m/s 2.9 s later), and the

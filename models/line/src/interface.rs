@@ -273,10 +273,7 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
         }
         for v in d.variables.iter() {
             let offered = !NOT_OFFERED.contains(&&*v.name)
-                && (v.kind != Kind::Real || parts[p].acts(v.vr, ps.speed_driven()))
-                && !(ps.set_input && v.name == "loop.set")
-                && !(ps.speed_input && v.name == "loop.speed")
-                && !(v.name == "brake.v_slip" && !ps.profile.as_ref().is_some_and(|p| p.get("brake").is_some()));
+                && (v.kind != Kind::Real || parts[p].acts(v.vr, ps));
             if v.causality == Causality::Parameter && v.kind != Kind::String && offered {
                 offer!(&v.name, &v.name, Causality::Parameter);
             }

@@ -5,6 +5,7 @@
 //! their profiles and records by `Arc`.
 
 use crate::port::Port;
+use crate::spec::PartSpec;
 use converting_span::ConvertingSpan;
 use fmi_core::description::ModelDescription;
 use fmi_core::{Compiled, EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
@@ -358,12 +359,14 @@ impl Part {
         }
     }
 
-    /// Whether the part's Real parameter `vr` acts on the line (`speed_driven`: a profile prescribes
-    /// its surface speed). The line offers only those: a dancer's span takes its length from the
+    /// Whether the part's Real parameter `vr` acts on the line, as `spec` (its line.json entry)
+    /// makes it. The line offers only those: a dancer's span takes its length from the
     /// dancer; a surface that follows its speed table has no inertia, radius, damping, start
     /// speed or roll build-up that the line sees; only a roll builds up, only a dancer has a
-    /// carriage, and the arriving webs' masses weigh only where several merge [R5].
-    pub fn acts(&self, vr: u32, speed_driven: bool) -> bool {
+    /// carriage, and the arriving webs' masses weigh only where several merge [R5]; a loop's
+    /// set point and reference act unless a table or the line's input gives them [R10].
+    pub fn acts(&self, vr: u32, spec: &PartSpec) -> bool {
+        let speed_driven = spec.speed_driven();
         use converting_span::description::Real as S;
         use roller::description::Real as R;
         match (self, self.port(vr)) {
@@ -385,8 +388,11 @@ impl Part {
                     | R::nip_mu
                     | R::air_roughness
                     | R::air_viscosity => p.traction,
-                    R::loop_set => p.loop_kind == 1,
-                    R::loop_speed => p.loop_kind == 2 || p.loop_kind == 3 || p.speed_input,
+                    R::loop_set => p.loop_kind == 1 && !spec.has_table("setpoint") && !spec.set_input,
+                    R::loop_speed => {
+                        ((p.loop_kind == 2 || p.loop_kind == 3) && !spec.has_table("reference") || p.speed_input) && !spec.speed_input
+                    }
+                    R::brake_v_slip => spec.has_table("brake"),
                     R::dancer_set | R::dancer_kp | R::dancer_ki => p.loop_kind == 3,
                     R::loop_kp | R::loop_ki | R::motor_limit => p.loop_kind != 0,
                     _ => true,

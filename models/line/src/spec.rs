@@ -151,8 +151,12 @@ impl PartSpec {
     /// Its profile prescribes its surface speed (a table `speed`), or its input v_ref does
     /// (`speed.input`, an ideal speed drive).
     pub fn speed_driven(&self) -> bool {
-        self.profile.as_ref().is_some_and(|p| p.get("speed").is_some())
-            || self.start.get("speed.input").is_some_and(|v| v.as_bool() == Some(true))
+        self.has_table("speed") || self.start.get("speed.input").is_some_and(|v| v.as_bool() == Some(true))
+    }
+
+    /// Its profile has the table `key`.
+    pub fn has_table(&self, key: &str) -> bool {
+        self.profile.as_ref().is_some_and(|p| p.get(key).is_some())
     }
 }
 
