@@ -29,7 +29,8 @@ def reaches_into_bench(code: str, modules) -> list[str]:
 
 def test_nothing_outside_bench_imports_from_it():
     listed = subprocess.run(["git", "ls-files", "*.py"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
-    outside = [f for f in listed if not f.startswith("bench/") and (ROOT / f).exists()]
+    this = Path(__file__).resolve().relative_to(ROOT).as_posix()  # it names bench/ to list the modules there
+    outside = [f for f in listed if not f.startswith("bench/") and f != this and (ROOT / f).exists()]
     assert len(outside) > 50, outside
     modules = bench_modules() - {p.stem for f in outside for p in [Path(f)]}  # a name both sides have is not bench's
     found = {f: hits for f in outside if (hits := reaches_into_bench((ROOT / f).read_text(encoding="utf-8"), modules))}
