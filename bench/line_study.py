@@ -15,7 +15,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from webline.accuracy import convergence, union_grid
+from webline.accuracy import UNSTABLE, convergence, stability_limit, union_grid
 from webline.cli import time_arg
 from webline.fmus import DEFAULT_FMU_DIR
 from webline.reference import reference
@@ -31,7 +31,6 @@ VARIANTS = [
     ("jacobi", "extrapolate"),
     ("jacobi", "hold"),
 ]
-UNSTABLE = 0.1  # an error above 10 % of the tension's range: the coupling diverged
 
 
 def line_study(scene, stiff_scene, steps, stiff_steps, fmu_dir, out_png):
@@ -91,13 +90,6 @@ def line_study(scene, stiff_scene, steps, stiff_steps, fmu_dir, out_png):
     return accuracy, stiff
 
 
-def stability_limit(rows):
-    """The largest step at which the run stayed within UNSTABLE, and the smallest at which it did not."""
-    stable = [r.step for r in rows if r.error < UNSTABLE]
-    unstable = [r.step for r in rows if not r.error < UNSTABLE]
-    return (max(stable) if stable else None, min(unstable) if unstable else None)
-
-
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("scene", nargs="?", default=str(SCENES / "lamination.json"))
@@ -119,7 +111,7 @@ def main(argv=None):
     print(f"{scene.name}: largest tension error (and wall time) by communication step")
     print("  " + f"{'variant':<28}" + "".join(f"{h * 1e3:>16g}ms" for h in steps))
     for (alg, coupling), rows in accuracy.items():
-        cells = "".join(f"{'diverged':>18}" if not r.error < 0.1 else f"{r.error:>10.2e} ({r.wall_time:.2f}s)" for r in rows)
+        cells = "".join(f"{'diverged':>18}" if not r.error < UNSTABLE else f"{r.error:>10.2e} ({r.wall_time:.2f}s)" for r in rows)
         print(f"  {alg + ', ' + coupling:<28}{cells}")
     print(f"{stiff.name}: stability limit of the communication step")
     for coupling, rows in stiff_rows.items():

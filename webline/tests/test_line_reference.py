@@ -14,16 +14,15 @@ the whole line as one ODE, SciPy's Radau at rtol 1e-10).
 """
 
 import math
-import sys
 
 import numpy as np
 import pytest
 from webline.compiler import run_scene
 from webline.reference import reference
 from webline.scene import load_scene, parse_scene
-from webline.accuracy import convergence, errors, observed_orders, tension_error, union_grid
+from webline.accuracy import convergence, errors, observed_orders, stability_limit, tension_error, union_grid
 
-from .conftest import ROOT, SCENES
+from .conftest import SCENES
 
 
 DEFAULT_STEP_TOLERANCE = {"lamination": 1e-3, "emergency_stop": 3e-3, "dancer": 5e-3, "splice": 2.5e-2, "stiff_line": 1e-4}
@@ -98,9 +97,6 @@ def test_stability_limit_of_a_stiff_line(fmus):
     """Heavy board in two 0.2 m spans around a light idler (about 4500 rad/s), Kelvin–Voigt damped:
     held inputs stay stable at 0.25 ms and diverge at 0.35 ms; extrapolation with input derivatives
     stays stable to 0.35 ms and diverges at 0.5 ms, and it is more accurate."""
-    sys.path.insert(0, str(ROOT / "bench"))  # the study's rule for a diverged run
-    from line_study import stability_limit
-
     s = load_scene(SCENES / "stiff_line.json")
     steps = [5e-4, 3.5e-4, 2.5e-4, 1.25e-4]
     ref = reference(s, times=union_grid(s, steps))

@@ -103,11 +103,17 @@ pub fn model_of<M: Model>(request: &Request, logger: &dyn Log) -> Option<M> {
     match catch_unwind(AssertUnwindSafe(|| M::instantiate(&resources))) {
         Ok(Ok(model)) => Some(model),
         Ok(Err(error)) => {
-            logger.log(Status::Error, "logStatusError", &format!("{}: {}", request.function, error.message));
+            refuse(logger, &format!("{}: {}", request.function, error.message));
             None
         }
         Err(_) => None,
     }
+}
+
+/// One error line where no instance exists to report it (instantiation refused); no panic
+/// of the importer's logger crosses back.
+pub fn refuse(logger: &dyn Log, message: &str) {
+    let _ = catch_unwind(AssertUnwindSafe(|| logger.log(Status::Error, "logStatusError", message)));
 }
 
 /// A new instance of `model`, or NULL after one log line saying why; no panic crosses.

@@ -7,12 +7,11 @@
 //!   poisoning, the state machine, a status plus one log line;
 //! * `state_store` — the FMU states an instance has handed out;
 //! * `library` — the library's own reference to itself while instances live;
-//! * `logger` — the importer's logger, for both standards;
 //! * `fmu_states`, `alike` — the bodies of the functions both standards have
 //!   alike: the FMU states; the life cycle, Model Exchange, Strings and
 //!   directional derivatives;
-//! * `fmi2`, `fmi3` — each standard's C types, the bodies of its own functions,
-//!   and the one list of its C signatures (`export_fmi2!`, `export_fmi3!`).
+//! * `fmi2`, `fmi3` — each standard's C types, its logger, the bodies of its own
+//!   functions, and the one list of its C signatures (`export_fmi2!`, `export_fmi3!`).
 
 #![allow(non_camel_case_types, non_snake_case, non_upper_case_globals, clippy::missing_safety_doc)]
 
@@ -26,7 +25,6 @@ pub mod fmu_states;
 #[doc(hidden)]
 pub mod handle;
 mod library;
-mod logger;
 mod state_store;
 
 pub use fmi_core;

@@ -1,4 +1,5 @@
-"""Shared fixtures and the exact reference solution for the FMU tests.
+"""Shared fixtures (the packaged FMUs from fmu/packaged.py) and the exact reference solution
+for the FMU tests.
 
 The reference is computed with mpmath at 40 significant digits from the
 closed-form solution of the span's material balance with piecewise-constant
@@ -8,7 +9,7 @@ evaluates the state at any time, independently of the communication steps
 the importer takes.
 """
 
-import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,34 +39,14 @@ def _kept_logger(function):
 _fmpy_simulation.fmi2CallbackLoggerTYPE = _kept_logger
 
 ROOT = Path(__file__).resolve().parents[3]
-FMU = ROOT / "out" / "ConvertingSpan.fmu"
+sys.path.insert(0, str(ROOT / "fmu"))
+from packaged import FMU, fmu_path, fmus, packaged  # noqa: E402, F401 (fmu_path and fmus are fixtures)
 
 INPUTS = ("web_a.v", "web_a.eps", "web_b.v")
 DPS = 40
 
 # --------------------------------------------------------------------------
 # Fixtures
-
-
-def _packaged(path):
-    """`path` (an FMU in out/), written by fmu/package.py if it is not there yet."""
-    if not path.exists():
-        subprocess.run(["python3", "fmu/package.py"], cwd=ROOT, check=True)
-    assert path.exists(), f"{path} was not written by fmu/package.py"
-    return path
-
-
-@pytest.fixture(scope="session")
-def fmu_path():
-    """The packaged FMU."""
-    return _packaged(FMU)
-
-
-@pytest.fixture(scope="session")
-def fmus():
-    """The folder with both FMUs (ConvertingSpan.fmu, Roller.fmu)."""
-    _packaged(FMU)
-    return _packaged(FMU.parent / "Roller.fmu").parent
 
 
 @pytest.fixture(scope="session")
@@ -119,7 +100,7 @@ def fmi3_twin(fmi2):
     path = Path(fmi2)
     name = ET.parse(path / "modelDescription.xml").getroot().get("modelName") if path.is_dir() else path.stem
     if name not in _FMI3_UNZIPPED:
-        _FMI3_UNZIPPED[name] = extract(str(_packaged(ROOT / "out" / "fmi3" / f"{name}.fmu")))
+        _FMI3_UNZIPPED[name] = extract(str(packaged(ROOT / "out" / "fmi3" / f"{name}.fmu")))
     return _FMI3_UNZIPPED[name]
 
 

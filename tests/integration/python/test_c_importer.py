@@ -219,9 +219,9 @@ SOURCE3 = SOURCE.parent / "importer3.c"
 def run3(tmp_path_factory):
     from fmpy import extract, read_model_description
 
-    from conftest import ROOT, _packaged
+    from conftest import ROOT, packaged
 
-    fmu3 = _packaged(ROOT / "out" / "fmi3" / "ConvertingSpan.fmu")
+    fmu3 = packaged(ROOT / "out" / "fmi3" / "ConvertingSpan.fmu")
     md = read_model_description(str(fmu3))
     out = tmp_path_factory.mktemp("c_importer3") / "importer3"
     build = subprocess.run(["gcc", "-Wall", "-Werror", "-O1", "-I", str(HEADERS), str(SOURCE3), "-o", str(out), "-ldl"],

@@ -17,7 +17,7 @@ from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
 from lxml import etree
 
-from conftest import FMU, ROOT, _packaged, fmi3_twin
+from conftest import FMU, ROOT, packaged, fmi3_twin
 
 FMU3 = ROOT / "out" / "fmi3" / "ConvertingSpan.fmu"
 SCHEMA = Path(fmpy.__file__).parent / "schema" / "fmi3"
@@ -27,8 +27,8 @@ FOLDERS = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux"
 
 @pytest.fixture(scope="module")
 def fmu3():
-    _packaged(FMU)
-    return _packaged(FMU3)
+    packaged(FMU)
+    return packaged(FMU3)
 
 
 @pytest.fixture(scope="module")
@@ -208,7 +208,7 @@ def test_directional_derivatives_equal_the_fmi2_ones(md3, unzipdir3, unzipdir):
 
 @pytest.mark.parametrize("name", ["ConvertingSpan", "Roller"])
 def test_both_models_validate_and_have_the_web_ports(name):
-    fmu = _packaged(ROOT / "out" / "fmi3" / f"{name}.fmu")
+    fmu = packaged(ROOT / "out" / "fmi3" / f"{name}.fmu")
     assert validate_fmu(str(fmu)) == []
     with zipfile.ZipFile(fmu) as zf:
         document = etree.fromstring(zf.read("terminalsAndIcons/terminalsAndIcons.xml"))

@@ -199,9 +199,9 @@ FMI3_DISCARD = 2
 
 @pytest.fixture(scope="module")
 def span3(tmp_path_factory):
-    from conftest import _packaged
+    from conftest import packaged
 
-    fmu3 = _packaged(ROOT / "out" / "fmi3" / "ConvertingSpan.fmu")
+    fmu3 = packaged(ROOT / "out" / "fmi3" / "ConvertingSpan.fmu")
     return Fmu3(fmu3, extract(str(fmu3), unzipdir=str(tmp_path_factory.mktemp("hard_cases3"))))
 
 

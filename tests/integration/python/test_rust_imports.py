@@ -1,5 +1,8 @@
 """The modules of every Rust crate import each other in one direction only: no
-circle (docs/developers.md draws the layers this keeps).
+circle, and none points up (docs/developers.md draws the layers this keeps).
+An import points up where a module's folder and a module beside it import each
+other: `fmi2/calls.rs` using `logger.rs` while `logger.rs` uses `fmi2/mod.rs`'s
+types is no circle of files, but the folder `fmi2/` and `logger.rs` are one.
 
 An import of module A into module B of the same crate is a `use crate::…`,
 `use super::…`, `use self::…` or a `use` of one of B's own child modules, or a
@@ -192,6 +195,36 @@ def circle_in(root_file):
     return found and " -> ".join(str(crate.files[m].relative_to(ROOT)) for m in found)
 
 
+def upward_in(root_file, base=ROOT):
+    """The first import that points up in a crate: where the subtrees of two
+    modules or more beside each other (the children of one module) import each
+    other in a circle, that circle with an import that makes each step."""
+    crate = Crate(root_file)
+    graph = crate.imports()
+    for parent, children in sorted(crate.children.items()):
+        beside = lambda module: module[len(parent)] if module[: len(parent)] == parent and len(module) > len(parent) else None  # noqa: E731
+        folded, witness = {child: set() for child in children}, {}
+        for module, targets in sorted(graph.items()):
+            for target in sorted(targets):
+                a, b = beside(module), beside(target)
+                if a is not None and b is not None and a != b:
+                    folded[a].add(b)
+                    witness.setdefault((a, b), (module, target))
+        found = cycle(folded)
+        if found:
+            name = lambda module: crate.files[module].relative_to(base).as_posix()  # noqa: E731
+            steps = [witness[a, b] for a, b in zip(found, found[1:])]
+            return " and ".join(f"{name(m)} -> {name(t)}" for m, t in steps)
+    return None
+
+
+def test_no_rust_import_points_up():
+    roots = [r for m in manifests() for r in target_roots(m)]
+    assert len(roots) > 15, roots
+    upward = [u for u in map(upward_in, roots) if u]
+    assert not upward, "\n".join(upward)
+
+
 def test_no_rust_crate_has_an_import_circle():
     roots = [r for m in manifests() for r in target_roots(m)]
     assert len(roots) > 15, roots
@@ -228,3 +261,23 @@ def test_the_check_finds_a_circle(tmp_path):
 def circle_in_tmp(root_file):
     found = cycle(Crate(root_file).imports())
     return found and [".".join(m) for m in found]
+
+
+def test_the_check_finds_an_import_pointing_up(tmp_path):
+    """A standard's calls use a logger beside its folder, and that logger uses the
+    standard's types: no circle of files, but one of the folder and the logger."""
+    src = tmp_path / "src"
+    (src / "std2").mkdir(parents=True)
+    (src / "lib.rs").write_text("mod logger;\npub mod std2;\n")
+    (src / "logger.rs").write_text("use crate::std2::Callback;\npub struct Logger(pub Callback);\n")
+    (src / "std2" / "mod.rs").write_text("pub mod calls;\npub type Callback = fn();\n")
+    (src / "std2" / "calls.rs").write_text("use crate::logger::Logger;\npub fn f(l: Logger) {}\n")
+    assert cycle(Crate(src / "lib.rs").imports()) is None
+    assert upward_in(src / "lib.rs", tmp_path) == "src/logger.rs -> src/std2/mod.rs and src/std2/calls.rs -> src/logger.rs"
+    # With the logger inside the standard's folder nothing points up.
+    (src / "lib.rs").write_text("pub mod std2;\n")
+    (src / "logger.rs").rename(src / "std2" / "logger.rs")
+    (src / "std2" / "logger.rs").write_text("use super::Callback;\npub struct Logger(pub Callback);\n")
+    (src / "std2" / "mod.rs").write_text("pub mod calls;\nmod logger;\npub type Callback = fn();\n")
+    (src / "std2" / "calls.rs").write_text("use super::logger::Logger;\npub fn f(l: Logger) {}\n")
+    assert upward_in(src / "lib.rs", tmp_path) is None

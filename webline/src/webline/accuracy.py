@@ -15,6 +15,8 @@ from .names import engine_name
 from .reference import reference
 from .result import Result
 
+UNSTABLE = 0.1  # an error above 10 % of the tension's range: the coupling diverged
+
 
 def union_grid(scene, steps):
     times = set()
@@ -95,3 +97,10 @@ def observed_orders(rows):
         else:
             out.append(math.nan)
     return out
+
+
+def stability_limit(rows):
+    """The largest step at which the run stayed within UNSTABLE, and the smallest at which it did not."""
+    stable = [r.step for r in rows if r.error < UNSTABLE]
+    unstable = [r.step for r in rows if not r.error < UNSTABLE]
+    return (max(stable) if stable else None, min(unstable) if unstable else None)

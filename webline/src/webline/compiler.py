@@ -364,7 +364,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
             comp.start["outlets"] = len(ports[n.name][1])
         rollers.append(comp)
     # The strains the spans start at when the scene gives none: the reference's own given start
-    # (scene.start_strain, the merged strain [M2] after a nip), so that every engine starts alike.
+    # (reference.start_strain, the merged strain [M2] after a nip), so that every engine starts alike.
     from .reference import LineODE
 
     ode = LineODE(scene)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
+from scipy.optimize import brentq
 
 REQUIRED = ("name", "description", "thickness", "width", "density", "d_r")
 OPTIONAL = ("E", "stress_strain", "source")
@@ -56,6 +57,11 @@ class Curve:
         eps = np.asarray(eps, dtype=float)
         lo, hi, below, above = self._ends(eps)
         return np.where(below, self.slope(lo), np.where(above, self.slope(hi), self.slope(np.clip(eps, lo, hi))))
+
+    def strain_at_stress(self, stress: float) -> float:
+        """The strain at `stress` (Pa): sigma is non-decreasing and linear beyond the table, so a bracket
+        of strains from -0.5 to 1 holds it, and Brent's method finds it to the last bits."""
+        return brentq(lambda e: float(self.sigma(e)) - stress, -0.5, 1.0, xtol=1e-16, rtol=4 * np.finfo(float).eps)
 
 
 @dataclass(frozen=True)

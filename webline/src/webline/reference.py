@@ -47,7 +47,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
 from .result import Result
-from .scene import BRAKE_V_SLIP, Dancer, Prescribed, Roller, Scene, SceneError, Span, span_layers, start_strain
+from .scene import BRAKE_V_SLIP, STRAIN_RANGE, Dancer, Prescribed, Roller, Scene, SceneError, Span, span_layers
 
 RTOL = 1e-10
 
@@ -61,6 +61,32 @@ class EquilibriumError(SceneError):
 # rounds to 1e-14 m/s^2, which no fraction of its speed's size would accept).
 STEADY = 1e-9
 GIVEN = '"start": "given" in the scene starts every part from its given values instead'
+
+
+def start_strain(span: Span, up, down, va: float, vb: float, eps_a: float) -> float:
+    """The strain a span without T_start or eps_start starts at: at rest between its ends' start speeds,
+    (1 + eps) = (v_b / v_a) * (1 + eps_a), or eps_a when v_a = 0. Ends that run apart in opposite
+    directions, a far end at rest under a moving one, or a strain outside (-1, 10] give no such strain:
+    a SceneError names the part that causes it, with its position, before any arithmetic sees it."""
+    if va == 0:
+        return eps_a
+    ends = f"span {span.name!r} between {up.type} {up.name!r} ({va:g} m/s) and {down.type} {down.name!r} ({vb:g} m/s)"
+    way_out = f"give span {span.name!r} a T_start or eps_start, or start its ends at speeds of one sign"
+    if vb == 0:
+        raise SceneError(f"{down.where}: {down.type} {down.name!r} stands still at the start while {up.type} {up.name!r} "
+                         f"feeds span {span.name!r} at {va:g} m/s: the span would start with no web in it (strain -1); {way_out}")
+    if vb / va < 0:
+        culprit, other = (up, down) if va < 0 else (down, up)
+        raise SceneError(f"{culprit.where}: {culprit.type} {culprit.name!r} runs backwards at the start "
+                         f"({va if culprit is up else vb:g} m/s) while {other.type} {other.name!r} at the other end of span "
+                         f"{span.name!r} runs forwards: no strain carries the web between them, so the span has no start "
+                         f"strain; {way_out}")
+    eps = (vb - va + vb * eps_a) / va
+    lo, hi = STRAIN_RANGE
+    if not lo < eps <= hi:
+        raise SceneError(f"{span.where}: {ends} would start at a strain of {eps:.4g} (the arriving web's {eps_a:.4g} "
+                         f"stretched by the speeds' ratio), outside ({lo:g}, {hi:g}]; {way_out}")
+    return eps
 
 
 class LineODE:

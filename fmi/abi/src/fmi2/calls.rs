@@ -5,7 +5,7 @@
 use super::*;
 use crate::alike;
 use crate::handle::{self, enter, out_ref, slice, slice_mut, text, unsupported, Request};
-use crate::logger::Logger;
+use super::logger::Logger;
 use fmi_core::instance::unavailable_status;
 use fmi_core::standard::fmi2::Call;
 use fmi_core::standard::{Call as _, Standard};
@@ -34,7 +34,7 @@ pub unsafe fn instantiate<M: Model>(
     // Without the callback functions there is no way to report anything.
     let Some(functions) = functions.as_ref() else { return std::ptr::null_mut() };
     let name = text(instance_name).unwrap_or_default();
-    let logger = Logger::fmi2(functions, &name);
+    let logger = Logger::new(functions, &name);
     let mut request = Request {
         standard: Standard::Fmi2,
         function: "fmi2Instantiate",
@@ -53,7 +53,7 @@ pub unsafe fn instantiate<M: Model>(
         _ => {
             let offered = if description.model_exchange { "Model Exchange (0) and Co-Simulation (1)" } else { "only Co-Simulation (1)" };
             let message = format!("fmi2Instantiate: fmuType = {fmu_type} requested, but {} offers {offered}", description.model_identifier);
-            logger.refuse(&message);
+            handle::refuse(&logger, &message);
             return std::ptr::null_mut();
         }
     };

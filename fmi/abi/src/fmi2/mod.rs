@@ -1,10 +1,12 @@
-//! FMI 2.0's C types, the bodies of its functions (`calls`; those FMI 3.0's
-//! share are in the crate's `fmu_states` and `alike`), and the one list of its
-//! 44 C signatures (`exports`, [`export_fmi2!`](crate::export_fmi2)).
+//! FMI 2.0's C types, the importer's logger (`logger`), the bodies of its
+//! functions (`calls`; those FMI 3.0's share are in the crate's `fmu_states`
+//! and `alike`), and the one list of its 44 C signatures (`exports`,
+//! [`export_fmi2!`](crate::export_fmi2)).
 
 #[doc(hidden)]
 pub mod calls;
 mod exports;
+mod logger;
 
 use std::ffi::{c_char, c_int, c_void};
 

@@ -5,7 +5,7 @@
 use super::*;
 use crate::alike;
 use crate::handle::{self, enter, out_ref, slice, slice_mut, text, unsupported, Request};
-use crate::logger::Logger;
+use super::logger::Logger;
 use fmi_core::standard::fmi3::Call;
 use fmi_core::standard::fmi3_types::{self as types, Added, Type};
 use fmi_core::standard::{Call as _, Standard};
@@ -38,7 +38,7 @@ unsafe fn instantiate<M: Model>(
         resources: Resources::from_path(text(resource_path).as_deref()),
         logging_on: logging_on != 0,
     };
-    let logger = Logger::fmi3(log_message, environment);
+    let logger = Logger::new(log_message, environment);
     let Some(model) = handle::model_of::<M>(&request, &logger) else { return std::ptr::null_mut() };
     handle::instantiate::<M>(request, Box::new(logger), model)
 }
@@ -75,10 +75,11 @@ pub unsafe fn instantiate_co_simulation<M: Model>(
 ) -> fmi3Instance {
     if n_required_intermediate_variables > 0 {
         let first = required_intermediate_variables.as_ref().map_or("NULL".to_string(), |vr| vr.to_string());
-        Logger::fmi3(log_message, environment).refuse(&format!(
+        let message = format!(
             "fmi3InstantiateCoSimulation: {n_required_intermediate_variables} requiredIntermediateVariables \
              (the first {first}), but no variable of this FMU has intermediateUpdate"
-        ));
+        );
+        handle::refuse(&Logger::new(log_message, environment), &message);
         return std::ptr::null_mut();
     }
     instantiate::<M>(false, instance_name, token, resource_path, logging_on, environment, log_message)
@@ -97,8 +98,8 @@ pub unsafe fn instantiate_scheduled_execution<M: Model>(
     _lock_preemption: Option<fmi3LockPreemptionCallback>,
     _unlock_preemption: Option<fmi3UnlockPreemptionCallback>,
 ) -> fmi3Instance {
-    Logger::fmi3(log_message, environment)
-        .refuse("fmi3InstantiateScheduledExecution: this FMU offers Model Exchange and Co-Simulation, not Scheduled Execution");
+    let message = "fmi3InstantiateScheduledExecution: this FMU offers Model Exchange and Co-Simulation, not Scheduled Execution";
+    handle::refuse(&Logger::new(log_message, environment), message);
     std::ptr::null_mut()
 }
 

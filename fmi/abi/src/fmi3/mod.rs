@@ -1,10 +1,12 @@
-//! FMI 3.0's C types, the bodies of its functions (`calls`; those FMI 2.0's
-//! share are in the crate's `fmu_states` and `alike`), and the one list of its
-//! C signatures (`exports`, [`export_fmi3!`](crate::export_fmi3)).
+//! FMI 3.0's C types, the importer's logger (`logger`), the bodies of its
+//! functions (`calls`; those FMI 2.0's share are in the crate's `fmu_states`
+//! and `alike`), and the one list of its C signatures (`exports`,
+//! [`export_fmi3!`](crate::export_fmi3)).
 
 #[doc(hidden)]
 pub mod calls;
 mod exports;
+mod logger;
 
 use std::ffi::{c_char, c_int, c_void};
 

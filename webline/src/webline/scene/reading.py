@@ -1,538 +1,43 @@
-"""Scenes: a web line described in JSON, read strictly.
-
-A scene is a chain, source -> span -> roller -> span -> ... -> sink, with
-the webs the spans carry, input profiles, the communication step, the stop
-time, events (properties that change on the fly) and the outputs to record.
-A roller of the chain may carry side paths: webs that merge into it (a
-laminating nip, "merge") or webs it splits into (a slitter, "split");
-docs/merge-split.md. The format is documented in docs/scenes.md. Every problem is a
-`SceneError` whose message starts with `file:line:column` of the offending
-key or value: an unknown key, a missing value, a wrong unit, a chain that is
-not a line.
-"""
+"""Reading a scene: the JSON read strictly into the model of types.py, each part by its own keys,
+then the line held to the rules of checks.py. Every problem is a `SceneError` whose message starts
+with `file:line:column` of the offending key or value."""
 
 from __future__ import annotations
 
 import json
-import math
-import re
-from dataclasses import dataclass, field, replace
-from functools import cached_property
+from dataclasses import replace
 from pathlib import Path
 
-from . import jsontree, records, units
-from .fmus import DEFAULT_FMU_DIR, SPAN_FMU, enumeration, span_description, span_effects
-from .jsontree import Node, Obj
-from .profiles import Profile
-from .units import UnitError
-
-import numpy as np
-from scipy.optimize import brentq
+from .. import jsontree, records, units
+from ..fmus import DEFAULT_FMU_DIR, SPAN_FMU, enumeration, span_description, span_effects
+from ..jsontree import Node, Obj
+from ..profiles import Profile
+from ..units import UnitError
+from .checks import WIDTH_TOLERANCE, check_dancer_spans, check_layers, check_loops, check_merge, check_split, check_traction
+from .types import (
+    STRAIN_RANGE,
+    TRACTION_QUANTITIES,
+    Branch,
+    Dancer,
+    DancerLoop,
+    Drive,
+    Event,
+    Loop,
+    Prescribed,
+    Roller,
+    Scene,
+    SceneError,
+    Span,
+    Traction,
+    Web,
+    Wound,
+    quantities_of,
+    quantity_unit,
+)
 
 FIRST = ("source", "unwinder")
 MIDDLE = ("roller", "dancer")
 LAST = ("sink", "winder")
-
-# What can be recorded from each kind of component: quantity -> unit.
-QUANTITIES = {
-    "span": {"T": "N", "eps": "1", "L": "m", "F_a": "N", "F_b": "N"},
-    "source": {"v": "m/s", "eps": "1"},
-    "sink": {"v": "m/s"},
-    "roller": {"v": "m/s", "omega": "rad/s", "tau": "N.m"},
-    "unwinder": {"v": "m/s", "omega": "rad/s", "tau": "N.m", "r": "m"},
-    "winder": {"v": "m/s", "omega": "rad/s", "tau": "N.m", "r": "m"},
-    "dancer": {"v": "m/s", "omega": "rad/s", "y": "m", "y_dot": "m/s"},
-}
-# What a roller or dancer the web may slip on records besides (docs/physics.md, "Rollers that slip").
-TRACTION_QUANTITIES = {"v_web": "m/s", "slip": "m/s", "traction": "1", "mu_eff": "1", "h_air": "m"}
-
-
-def quantities_of(c) -> dict:
-    """What a component records: its type's quantities, and where the web may slip the traction's."""
-    return {**QUANTITIES[c.type], **(TRACTION_QUANTITIES if getattr(c, "traction", None) is not None else {})}
-
-
-class SceneError(ValueError):
-    """A scene that cannot be used; the message names the file position."""
-
-
-# ---------------------------------------------------------------- the model
-
-
-@dataclass(frozen=True)
-class Web:
-    name: str
-    E: float
-    thickness: float
-    width: float
-    density: float
-    d_r: float = 0.0
-    # A web given by a record: the span FMU is set up with the record's name
-    # (its own reader); the line reference evaluates the record's curve.
-    record: str | None = None
-    curve: records.Curve | None = field(default=None, compare=False)
-    # A laminate: its layers, each a web of its own, laminates among them flattened, each layer's density
-    # carrying its share of the adhesive (docs/merge-split.md, [M6]); () for a web of one layer.
-    layers: tuple = ()
-
-    @property
-    def area(self):
-        return self.width * self.thickness
-
-    @property
-    def EA(self):
-        return self.E * self.area
-
-    @property
-    def rho_l(self):
-        return self.density * self.area
-
-    @property
-    def plies(self) -> tuple:
-        """The webs that carry its tension side by side: a laminate's layers, else the web itself."""
-        return self.layers or (self,)
-
-    @property
-    def layer_names(self) -> tuple:
-        return tuple(w.name for w in self.layers)
-
-
-# A layer's label names its outputs (`NAME.T_<label>`) and its span's parts in the Line FMU (`NAME.<label>`):
-# the web's name with every character but a letter, a digit or _ as _, numbered _1, _2, ... where a
-# web is a layer twice; these would shadow the laminate's own outputs.
-LABEL_TAKEN = ("T", "eps", "L", "F_a", "F_b", "length")
-
-
-def layer_labels(web: Web) -> list[str]:
-    """The labels of a web's layers, in its order (docs/merge-split.md, "Outputs")."""
-    names = [re.sub(r"[^A-Za-z0-9_]", "_", w.name) for w in web.plies]
-    names = ["_" + n if n[0].isdigit() else n for n in names]
-    seen = {}
-    out = []
-    for n in names:
-        if names.count(n) > 1:
-            seen[n] = seen.get(n, 0) + 1
-            n = f"{n}_{seen[n]}"
-        out.append(n)
-    return out
-
-
-def span_layers(wp1: Web, wp2: Web) -> list[tuple[Web, Web]]:
-    """A span's layers as (web arriving, web in the span) pairs: one pair for a plain span."""
-    return list(zip(wp1.plies, wp2.plies))
-
-
-# A powder brake's speed scale [R12]: its torque passes through 0 at rest over about this surface speed.
-BRAKE_V_SLIP = 0.01  # m/s
-
-
-@dataclass
-class DancerLoop:
-    """A dancer position loop [R13]: a PI on dancer `dancer`'s carriage position y against `set` (m) whose
-    output, a speed (gains in m/s per m and m/s per m.s), trims a speed loop's reference; `sign` +1 where
-    the dancer is upstream of the drive (a longer loop of web stored calls for more speed), -1 downstream."""
-
-    dancer: str
-    set: float
-    kp: float
-    ki: float
-    sign: float = 1.0
-
-
-@dataclass
-class Loop:
-    """A PI loop in a drive ([R10]-[R11] of the physics docs): the torque that holds a span's tension
-    (`measure` = (span, "T")) or a load cell's (roller, "F") at `set`; gains in SI (N.m per N,
-    N.m per N.s); the motor's torque `limit` (N.m, 0: none) and `lag` (s, 0: none); with
-    `feedforward` the torque d(J*v_ref/R)/dt of the line's speed reference (its first speed drive)."""
-
-    measure: tuple | None  # None: a speed loop, on the roller's own surface speed
-    set: Profile  # a force, or a speed loop's reference speed
-    kp: float
-    ki: float
-    limit: float = 0.0
-    lag: float = 0.0
-    feedforward: bool = False
-    sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
-    set_input: bool = False  # the set point is the Line FMU's input <name>.T_set (<name>.v_ref), starting at `set`
-    dancer: DancerLoop | None = None  # a speed loop's reference trimmed by a dancer's position loop [R13]
-
-    @property
-    def speed(self) -> bool:
-        """A speed loop: a real motor holds the surface speed at `set` (N.m per m/s, N.m per m)."""
-        return self.measure is None
-
-
-@dataclass
-class Drive:
-    """How a roller is driven: 'idler' (no torque), 'torque', 'tension' (an
-    end roller's motor holds a tension: tau = -R*T at an unwinder, +R*T at a
-    winder), 'speed' (an ideal speed drive: the surface speed follows the
-    profile; no Roller FMU), 'pi' (a tension loop, `loop`), 'speed loop' (a real motor's, `loop`)
-    or 'brake' (a powder brake: -B*tanh(v/BRAKE_V_SLIP), B the profile, [R12])."""
-
-    kind: str
-    profile: Profile | None = None
-    loop: Loop | None = None
-    input: bool = False  # an ideal speed drive on the Line FMU's input <name>.v_ref, `profile` its start value
-
-
-@dataclass
-class Traction:
-    """Where the web may slip on a roller or dancer [R6]-[R8]: friction on the wrap (mu, with the
-    roller's wrap angle), at a nip (nip_mu, pressed with nip_load), under an air film (roughness)."""
-
-    mu: float = 0.0
-    v_slip: float = 1e-3
-    roughness: float = 0.0
-    viscosity: float = 1.81e-5
-    nip_mu: float = 0.0
-    nip_load: Profile | None = None
-    slip_start: float = 0.0  # the web's speed over the roller at a given start, minus the surface's
-
-
-@dataclass
-class Wound:
-    """The web an unwinder's roll loses or a winder's gains [R3]: the roll's radius and inertia move
-    with it. thickness is the build-up per turn (the web's caliper plus the air wound in with it);
-    density and width default to the roll's web (None until the line is read)."""
-
-    thickness: float
-    density: float | None = None
-    width: float | None = None
-
-
-@dataclass
-class Component:
-    name: str
-    type: str
-    index: int = 0  # position in the chain
-    where: str = ""  # file:line:col of its object
-
-
-@dataclass
-class Span(Component):
-    length: float | None = None  # None: from the dancer next to it
-    wp1: Web | None = None
-    wp2: Web | None = None
-    effects: frozenset = frozenset()
-    eps_start: float | None = None  # None: start at equilibrium
-    solver: str = "auto"
-    tolerance: float | None = None
-    substeps: int | None = None
-
-    @property
-    def layered(self) -> bool:
-        """It carries a laminate of several layers, each with its own strain ([M6])."""
-        return len(self.wp2.plies) > 1
-
-    @property
-    def labels(self) -> list[str]:
-        """Its layers' labels (its web at the start names them)."""
-        return layer_labels(self.wp2)
-
-
-@dataclass
-class Prescribed(Component):
-    """A source or sink: speed (and, for a source, strain) from profiles."""
-
-    speed: Profile | None = None
-    strain: Profile | None = None
-    wrap: float | None = None
-
-
-@dataclass
-class Roller(Component):
-    """A roller, unwinder or winder (Roller FMU unless speed-driven)."""
-
-    J: float | None = None
-    R: float | None = None
-    b: float = 0.0
-    v_start: float | None = None
-    drive: Drive = field(default_factory=lambda: Drive("idler"))
-    strain: Profile | None = None  # unwinder: strain of the web leaving the roll
-    wrap: float | None = None  # degrees: a load cell on its bearings (Line FMU output <name>.F), the wrap traction acts on
-    trim: float = 0.0  # a slitter: the width cut off as trim (m), which leaves without tension
-    traction: Traction | None = None  # the web may slip on it
-    wound: Wound | None = None  # an unwinder's or winder's roll that changes as web winds off or on
-
-    @property
-    def has_fmu(self):
-        return self.drive.kind != "speed"
-
-
-@dataclass
-class Dancer(Component):
-    """A dancer: a roller (Roller FMU) on a carriage loaded with a force.
-    The two spans next to it hang from it: their length is the carriage
-    position y; m*y'' = load - F_a - F_b - damping*y' - stiffness*(y - y_start), F_a and F_b the
-    tensions of the spans before and after."""
-
-    J: float = 0.0
-    R: float = 0.0
-    b: float = 0.0
-    mass: float = 0.0
-    load: Profile | None = None
-    damping: float = 0.0
-    stiffness: float = 0.0
-    y_start: float = 0.0
-    v_start: float | None = None
-    wrap: float | None = None
-    traction: Traction | None = None
-
-    has_fmu = True
-
-
-@dataclass
-class Branch:
-    """Side path of a roller on the main line. "merge": webs that meet at the
-    roller (a nip): parts = [source|unwinder, span, (roller, span)*], the last
-    span ending at the nip. "split": webs the roller cuts the web into (a
-    slitter): parts = [span, (roller, span)*, sink|winder], the first span
-    starting at the slitter."""
-
-    kind: str  # "merge" | "split"
-    node: str  # the roller on the main line
-    parts: list  # one side path
-    where: str = ""
-
-
-@dataclass
-class Event:
-    time: float
-    component: str
-    changes: dict  # key -> value (Web for web keys, float otherwise)
-    where: str = ""
-
-
-@dataclass
-class Scene:
-    name: str
-    description: str
-    path: str
-    stop_time: float
-    step: float
-    webs: dict
-    line: list
-    events: list
-    record: list  # [(component name, quantity)]
-    web_library: str | None = None  # absolute path of the scene's own web records
-    # "equilibrium" (the default): every engine starts the line in its steady state for the drives
-    # at t = 0; "given": from the parts' start values.
-    start: str = "equilibrium"
-    branches: list = field(default_factory=list)  # merges and splits (Branch), in line order
-
-    @property
-    def parts(self):
-        """Every component, main line and side paths, in the order the web flows: a merge's
-        side paths just before their nip, a split's just after its slitter."""
-        out = []
-        for c in self.line:
-            out += [p for b in self.branches if b.node == c.name and b.kind == "merge" for p in b.parts]
-            out.append(c)
-            out += [p for b in self.branches if b.node == c.name and b.kind == "split" for p in b.parts]
-        return out
-
-    @cached_property
-    def _links(self):
-        """(up, down, ins, outs): each span's roller before and after it, each roller's spans
-        coming in and going out (several at a nip or a slitter)."""
-        up, down, ins, outs = {}, {}, {}, {}
-        paths = [(self.line, None, None)] + [
-            (b.parts, self.component(b.node), b.kind) for b in self.branches]
-        for parts, node, kind in paths:
-            chain = parts + [node] if kind == "merge" else [node] + parts if kind == "split" else parts
-            for a, b in zip(chain[:-1], chain[1:]):
-                if isinstance(b, Span):
-                    up[b.name] = a
-                    outs.setdefault(a.name, []).append(b)
-                else:
-                    down[a.name] = b
-                    ins.setdefault(b.name, []).append(a)
-        return up, down, ins, outs
-
-    def component(self, name):
-        return next(c for c in self.parts if c.name == name)
-
-    def part_type(self, name) -> str:
-        """The type of a part, named as its FMU component: a laminate's layer `NAME.<label>` is its span's."""
-        return self.component(name.split(".")[0]).type
-
-    @property
-    def spans(self):
-        return [c for c in self.parts if isinstance(c, Span)]
-
-    @property
-    def nodes(self):
-        return [c for c in self.parts if not isinstance(c, Span)]
-
-    def upstream(self, span):
-        return self._links[0][span.name]
-
-    def downstream(self, span):
-        return self._links[1][span.name]
-
-    def spans_in(self, node):
-        """The spans that end at a roller: one, none at the line's start, several at a nip."""
-        return self._links[2].get(node.name, [])
-
-    def spans_out(self, node):
-        """The spans that start at a roller: one, none at the line's end, several at a slitter."""
-        return self._links[3].get(node.name, [])
-
-    def inlet_masses(self, node, web_of=None):
-        """The masses per unstretched length m_i = rho_i*A_i of the webs arriving at `node`, in port
-        order (the main line's first, then the side paths', each span's layers in its order): the
-        weights of a merge into a web of one layer ([M1], the Roller's [R5]). Each is the web its span
-        carries at its end (wp2), or `web_of(span)` (the reference's, after an event changed it). The
-        reference and the FMUs' compiler both take them from here."""
-        return [w.rho_l for sp in self.spans_in(node) for w in (web_of(sp) if web_of else sp.wp2).plies]
-
-    def layer_sources(self, span) -> list[tuple]:
-        """Where each layer of a laminate span after a nip comes from ([M6]): per layer, in the span's
-        order, (the span that brings it to the nip, its layer there). Matched by web: a web that is
-        a layer twice takes its arriving webs in port order."""
-        pool = [(sp, i, w.name) for sp in self.spans_in(self.upstream(span)) for i, w in enumerate(sp.wp2.plies)]
-        out = []
-        for w in span.wp1.plies:
-            k = next(j for j, (_, _, name) in enumerate(pool) if name == w.name)
-            sp, i, _ = pool.pop(k)
-            out.append((sp, i))
-        return out
-
-    def span_before(self, node):
-        return _single(self.spans_in(node), node, "merges webs")
-
-    def span_after(self, node):
-        return _single(self.spans_out(node), node, "splits the web")
-
-    def speed_profile(self, node):
-        """The prescribed speed of a node, or None if it has dynamics."""
-        if isinstance(node, Prescribed):
-            return node.speed
-        if isinstance(node, Roller) and node.drive.kind == "speed":
-            return node.drive.profile
-        return None
-
-    def initial_speed(self, node, t=0.0):
-        """Surface speed at the start: prescribed, v_start, or the default (the initial speed
-        of the first speed-driven component, else 0). At a later time t (an operating point
-        of the run): prescribed, else the first speed-driven component's, else as at the start."""
-        profile = self.speed_profile(node)
-        if profile is not None:
-            return profile.value(t)
-        if node.v_start is not None and t == 0.0:
-            return node.v_start
-        for other in [node] + self.nodes:  # a speed loop starts at its reference
-            p = self.speed_or_reference(other)
-            if p is not None:
-                return p.value(t)
-        return node.v_start or 0.0
-
-    def speed_times(self):
-        """The operating points that span the run's speed range: the start, and the first times in
-        [0, stop) the prescribed speeds are at their slowest and at their fastest (summed over the
-        speed-driven parts; a piecewise linear profile reaches its extremes at its knots)."""
-        profiles = [self.speed_profile(c) for c in self.nodes if self.speed_profile(c) is not None]
-        knots = sorted({0.0} | {t for p in profiles for t in p.breakpoints() if 0.0 < t < self.stop_time})
-        total = [sum(abs(p.value(t)) for p in profiles) for t in knots]
-        picked = [0.0, knots[total.index(min(total))], knots[total.index(max(total))]]
-        return sorted(set(picked))
-
-    def speed_reference(self):
-        """The line's speed reference: the profile of its first speed-driven part or speed loop (None: it
-        has none)."""
-        return next((p for p in map(self.speed_or_reference, self.nodes) if p is not None), None)
-
-    def speed_or_reference(self, node):
-        """The speed a node follows: prescribed, or its speed loop's reference (None: neither)."""
-        loop = getattr(getattr(node, "drive", None), "loop", None)
-        return loop.set if loop is not None and loop.speed else self.speed_profile(node)
-
-    def torque_profile(self, node):
-        """The motor torque of a Roller-FMU node as a profile (N m)."""
-        d = getattr(node, "drive", Drive("idler"))
-        if d.kind == "torque":
-            return d.profile
-        if d.kind == "tension":
-            sign = -1.0 if node.type == "unwinder" else 1.0
-            return d.profile.scaled(sign * node.R)
-        return Profile.constant(0.0)
-
-    def breakpoints(self):
-        """Every time a profile kinks or jumps, and every event time, in (0, stop)."""
-        times = set()
-        for c in self.parts:
-            for p in profiles_of(c):
-                times.update(p.breakpoints())
-        times.update(e.time for e in self.events)
-        return sorted(t for t in times if 0.0 < t < self.stop_time)
-
-    def columns(self):
-        """The recorded columns: 'name.quantity [unit]'."""
-        return [f"{c}.{q} [{quantity_unit(self.component(c), q)}]" for c, q in self.record]
-
-
-def quantity_unit(component, quantity: str):
-    """The unit of a quantity a component records; None if it records no such quantity. A span with
-    layers records each layer's tension, `T_<label>`, too; a roller the web may slip on its traction's."""
-    unit = quantities_of(component).get(quantity)
-    if unit is None and isinstance(component, Span) and component.layered and quantity.startswith("T_") \
-            and quantity[2:] in component.labels:
-        unit = "N"
-    return unit
-
-
-def start_strain(span: Span, up, down, va: float, vb: float, eps_a: float) -> float:
-    """The strain a span without T_start or eps_start starts at: at rest between its ends' start speeds,
-    (1 + eps) = (v_b / v_a) * (1 + eps_a), or eps_a when v_a = 0. Ends that run apart in opposite
-    directions, a far end at rest under a moving one, or a strain outside (-1, 10] give no such strain:
-    a SceneError names the part that causes it, with its position, before any arithmetic sees it."""
-    if va == 0:
-        return eps_a
-    ends = f"span {span.name!r} between {up.type} {up.name!r} ({va:g} m/s) and {down.type} {down.name!r} ({vb:g} m/s)"
-    way_out = f"give span {span.name!r} a T_start or eps_start, or start its ends at speeds of one sign"
-    if vb == 0:
-        raise SceneError(f"{down.where}: {down.type} {down.name!r} stands still at the start while {up.type} {up.name!r} "
-                         f"feeds span {span.name!r} at {va:g} m/s: the span would start with no web in it (strain -1); {way_out}")
-    if vb / va < 0:
-        culprit, other = (up, down) if va < 0 else (down, up)
-        raise SceneError(f"{culprit.where}: {culprit.type} {culprit.name!r} runs backwards at the start "
-                         f"({va if culprit is up else vb:g} m/s) while {other.type} {other.name!r} at the other end of span "
-                         f"{span.name!r} runs forwards: no strain carries the web between them, so the span has no start "
-                         f"strain; {way_out}")
-    eps = (vb - va + vb * eps_a) / va
-    lo, hi = STRAIN_RANGE
-    if not lo < eps <= hi:
-        raise SceneError(f"{span.where}: {ends} would start at a strain of {eps:.4g} (the arriving web's {eps_a:.4g} "
-                         f"stretched by the speeds' ratio), outside ({lo:g}, {hi:g}]; {way_out}")
-    return eps
-
-
-def _single(spans, node, what):
-    if len(spans) > 1:
-        raise ValueError(f"{node.type} {node.name!r} {what}: it has {len(spans)} spans on that side")
-    return spans[0] if spans else None
-
-
-def profiles_of(c):
-    out = []
-    for attr in ("speed", "strain", "load"):
-        p = getattr(c, attr, None)
-        if isinstance(p, Profile):
-            out.append(p)
-    d = getattr(c, "drive", None)
-    if d is not None and d.profile is not None:
-        out.append(d.profile)
-    if d is not None and d.loop is not None:
-        out.append(d.loop.set)
-    t = getattr(c, "traction", None)
-    if t is not None and t.nip_load is not None:
-        out.append(t.nip_load)
-    return out
-
-
-# ---------------------------------------------------------------- reading
 
 
 class _Reader:
@@ -665,17 +170,9 @@ def _web(r: _Reader, name: str, node: Node, web_library, webs) -> Web:
     )
 
 
-# Widths that add up: to this fraction of the web's width (units convert with rounding).
-WIDTH_TOLERANCE = 1e-9
-
-
 def _laminate(r: _Reader, name: str, node: Node, webs) -> Web:
-    """A laminate: its layers, laminates among them flattened to theirs, each keeping its own E, thickness,
-    d_r and strain ([M6]); the adhesive's coat weight shared among the layers' densities in proportion to
-    their mass, so that it adds mass and no stiffness. Its own values are the law of mixtures
-    (docs/merge-split.md, [M3]): thickness the webs' sum times the compression factor (what a winder's roll
-    grows by); E and density over that thickness so that E*A and the mass per length add (the adhesive's
-    coat weight added to the mass); d_r weighted by E*A, as Kelvin–Voigt elements in parallel combine."""
+    """A laminate's entry: its layers (webs of the scene, of one width and linear), its compression and
+    adhesive; its values are the law of mixtures (`Web.laminate`)."""
     what = f"web {name!r}"
     o = r.keys(node, what, required=("laminate",), optional=("compression", "adhesive", "description"))
     lst = o["laminate"]
@@ -696,30 +193,7 @@ def _laminate(r: _Reader, name: str, node: Node, webs) -> Web:
         if compression > 1:
             raise r.err(o["compression"], f"{what}: compression {compression:g} must be in (0, 1]: the nip presses, it does not swell")
     coat = r.quantity(o["adhesive"], units.AREAL_DENSITY, f"{what}: adhesive", nonnegative=True) if "adhesive" in o else 0.0
-    h = compression * sum(w.thickness for w in webs_in)
-    EA = sum(w.EA for w in webs_in)
-    mass = sum(w.density * w.thickness for w in webs_in)  # per width: the layers' and their own adhesives'
-    share = (mass + coat) / mass
-    return Web(
-        name=name,
-        E=sum(w.E * w.thickness for w in webs_in) / h,
-        thickness=h,
-        width=layers[0].width,
-        density=(mass + coat) / h,
-        d_r=sum(w.EA * w.d_r for w in webs_in) / EA,
-        # A layer's values one by one (its record's name would give the FMU the record's density).
-        layers=tuple(replace(w, density=w.density * share, record=None) for w in layers),
-    )
-
-
-def _strain_at(web: Web, tension: float) -> float:
-    """The strain at which the web carries `tension` (N) at rest."""
-    if web.curve is None:
-        return tension / web.EA
-    stress = tension / web.area
-    # sigma is non-decreasing and linear beyond the table: bracket, then solve.
-    lo, hi = -0.5, 1.0
-    return brentq(lambda e: float(web.curve.sigma(e)) - stress, lo, hi, xtol=1e-16, rtol=4 * np.finfo(float).eps)
+    return Web.laminate(name, webs_in, compression, coat)
 
 
 class _Webs(dict):
@@ -794,7 +268,7 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
         _motor(r, g, f"{what}.loop", loop)
         if "feedforward" in o:
             _feedforward(r, o["feedforward"], f"{what}.feedforward", loop)
-        if "dancer" in o:  # a dancer position loop trims the reference [R13]; its dancer is checked in _check_loops
+        if "dancer" in o:  # a dancer position loop trims the reference [R13]; its dancer is checked in check_loops
             d = r.keys(o["dancer"], f"{what}.dancer", required=("dancer", "set", "kp", "ki"))
             loop.dancer = DancerLoop(
                 dancer=r.string(d["dancer"], f"{what}.dancer.dancer"),
@@ -813,7 +287,7 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
 
 def _loop(r: _Reader, node: Node, what: str) -> Loop:
     """A drive's "pi": {"measure": "SPAN.T" or "ROLLER.F", "set", "kp", "ki", "limit", "lag", "feedforward"}.
-    Which parts it names is checked once the line is read (`_check_loops`)."""
+    Which parts it names is checked once the line is read (`check_loops`)."""
     o = r.keys(node, what, required=("measure", "set", "kp", "ki"), optional=("limit", "lag", "feedforward"))
     measure = r.string(o["measure"], f"{what}.measure")
     part, _, quantity = measure.rpartition(".")
@@ -892,7 +366,7 @@ def _span(r, o_node, name, webs) -> Span:
     if "T_start" in o and "eps_start" in o:
         raise r.err(r.key_pos(o["eps_start"]), f"{what}: give T_start or eps_start, not both")
     if "T_start" in o:
-        s.eps_start = _strain_at(s.wp2, r.quantity(o["T_start"], units.FORCE, f"{what}: T_start"))
+        s.eps_start = s.wp2.strain_at(r.quantity(o["T_start"], units.FORCE, f"{what}: T_start"))
     elif "eps_start" in o:
         s.eps_start = r.quantity(o["eps_start"], units.DIMENSIONLESS, f"{what}: eps_start")
     if s.eps_start is not None and not s.eps_start > -1:
@@ -1021,10 +495,6 @@ def _traction(r, o, what, wrap) -> Traction:
         if negative is not None:
             raise r.err(nip["load"], f"{what}: nip: load {negative[1]:g} N at t = {negative[0]:g} s: a nip presses with a load >= 0")
     return t
-
-
-# A strain the span FMU accepts: (-1, 10] (its eps_start and web_a.eps).
-STRAIN_RANGE = (-1.0, 10.0)
 
 
 def _strain_profile(r, node, what) -> Profile:
@@ -1198,32 +668,14 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     scene = Scene(name=name, description=description, path=source, stop_time=stop, step=step, webs=webs,
                   line=line, events=[], record=[], web_library=web_library, start=start, branches=branches)
     for b in {b.node: b for b in branches}.values():  # once per nip or slitter
-        (_check_merge if b.kind == "merge" else _check_split)(r, scene, b, raw)
-    _check_layers(r, scene, raw)
+        (check_merge if b.kind == "merge" else check_split)(r, scene, b, raw)
+    check_layers(r, scene, raw)
 
-    _check_traction(r, scene, raw)
-    _check_loops(r, scene, raw)
+    check_traction(r, scene, raw)
+    check_loops(r, scene, raw)
     _fill_wound(scene)
 
-    # Spans next to a dancer take their length from it; no other span may.
-    for c in scene.spans:
-        node = raw[c.name]
-        up, down = scene.upstream(c), scene.downstream(c)
-        next_to_dancer = isinstance(up, Dancer) or isinstance(down, Dancer)
-        if next_to_dancer:
-            if "variableLength" not in c.effects:
-                raise r.err(node, f"span {c.name!r} hangs from a dancer: it needs the effect variableLength")
-            if c.length is not None:
-                raise r.err(r.key_pos(node.value["L"]), f"span {c.name!r}: L comes from the dancer's position, do not give it")
-            if isinstance(up, Dancer) and isinstance(down, Dancer):
-                raise r.err(node, f"span {c.name!r} between two dancers is not supported")
-        else:
-            if "variableLength" in c.effects:
-                raise r.err(node, f"span {c.name!r}: variableLength needs a dancer next to the span")
-            if c.length is None:
-                raise r.err(node, f"span {c.name!r} needs the key 'L'")
-        if c.solver == "exact" and next_to_dancer:
-            raise r.err(node, f"span {c.name!r}: solver exact holds the length; a span on a dancer needs auto or rosenbrock")
+    check_dancer_spans(r, scene, raw)
 
     parts = scene.parts
     events = []
@@ -1325,147 +777,6 @@ def _branches(r, node, kind, roller, raw, webs) -> list:
             raise r.err(path, f"{pw} must end with a sink or winder after its span {parts[-1].name!r}")
         out.append(Branch(kind, roller.name, parts, f"{r.source}:{path.line}:{path.col}"))
     return out
-
-
-MATERIAL = ("E", "thickness", "density", "d_r")
-
-
-def _check_traction(r, scene: Scene, raw):
-    """A roller the web may slip on moves the web on its wrap as a mass [R6]: the mode of that mass
-    between the two spans (about a kilohertz for a thin film) is damped by their Kelvin-Voigt damping
-    only, so both need includeDamping with a retardation time d_r > 0. Web mass (includeMass) next to
-    it is not modelled."""
-    for node in scene.nodes:
-        if getattr(node, "traction", None) is None:
-            continue
-        what = f"{node.type} {node.name!r}"
-        for sp in scene.spans_in(node) + scene.spans_out(node):
-            if "includeDamping" not in sp.effects or not sp.wp2.d_r > 0:
-                raise r.err(raw[sp.name], f"span {sp.name!r} next to {what}, which has traction, needs the effect includeDamping "
-                                          f"and a web with d_r > 0 (its d_r is {sp.wp2.d_r:g} s): the web's mass on the wrap "
-                                          "moves between the two spans, and their damping is what damps it")
-            if "includeMass" in sp.effects:
-                raise r.err(raw[sp.name], f"span {sp.name!r} next to {what}, which has traction: includeMass there is not modelled")
-
-
-def _downstream_of(scene: Scene, node) -> set:
-    """The names of every part the web reaches after `node`."""
-    seen, todo = set(), list(scene.spans_out(node))
-    while todo:
-        sp = todo.pop()
-        if sp.name in seen:
-            continue
-        seen.add(sp.name)
-        down = scene.downstream(sp)
-        seen.add(down.name)
-        todo += scene.spans_out(down)
-    return seen
-
-
-def _check_loops(r, scene: Scene, raw):
-    """A drive's loop measures a span's tension of this line, or the load cell of a roller with a wrap;
-    its sign follows from where that is: downstream of the drive more torque lowers it (-1), upstream it
-    raises it (+1) (a load cell's webs both lie on one side of another roller). A feed-forward needs a speed drive whose profile is the line's speed reference."""
-    for node in scene.nodes:
-        loop = getattr(getattr(node, "drive", None), "loop", None)
-        if loop is not None and loop.dancer is not None:
-            d = loop.dancer
-            c = {c.name: c for c in scene.parts}.get(d.dancer)
-            if not isinstance(c, Dancer):
-                raise r.err(raw[node.name], f"{node.type} {node.name!r}: drive.dancer.dancer: {d.dancer!r} is "
-                                            f"{'no part of the line' if c is None else 'a ' + c.type + ', not a dancer'}")
-            d.sign = -1.0 if d.dancer in _downstream_of(scene, node) else 1.0
-        if loop is None or loop.speed:
-            continue
-        what = f"{node.type} {node.name!r}: drive.pi.measure"
-        part, quantity = loop.measure
-        names = {c.name: c for c in scene.parts}
-        c = names.get(part)
-        if c is None:
-            raise r.err(raw[node.name], f"{what}: no part {part!r} in the line")
-        if quantity == "T" and not isinstance(c, Span):
-            raise r.err(raw[node.name], f"{what}: {part!r} is a {c.type}, not a span: measure its load cell as \"{part}.F\"")
-        if quantity == "F" and (isinstance(c, Span) or not getattr(c, "wrap", None)):
-            raise r.err(raw[node.name], f"{what}: {part!r} has no load cell: \"{part}.F\" needs a roller with a wrap > 0 "
-                                        "(its \"wrap\", degrees)")
-        if quantity == "F" and any("includeMass" in sp.effects for sp in scene.spans_in(c)):
-            raise r.err(raw[node.name], f"{what}: a loop on {part!r}'s load cell with includeMass on the span into it is not "
-                                        "modelled (the web's mass moves the force the cell reads within the line's solve)")
-        if part == node.name:
-            raise r.err(raw[node.name], f"{what}: a drive's loop measures another part than its own roller")
-        if quantity == "T" and c.layered:
-            raise r.err(raw[node.name], f"{what}: a loop on a laminate's tension is not modelled (measure a plain span)")
-        loop.sign = -1.0 if part in _downstream_of(scene, node) else 1.0
-        if loop.feedforward and scene.speed_reference() is None:
-            raise r.err(raw[node.name], f"{node.type} {node.name!r}: drive.pi.feedforward needs the line's speed reference, "
-                                        "a speed-driven part (its first)")
-
-
-def _check_split(r, scene: Scene, b: Branch, raw):
-    """The lanes of a slitter: the incoming web's material, widths that add up to its width (with the trim)."""
-    node = scene.component(b.node)
-    (incoming,) = scene.spans_in(node)
-    web = incoming.wp2
-    lanes = scene.spans_out(node)
-    for lane in lanes:
-        w = lane.wp1
-        differs = [k for k in MATERIAL if not math.isclose(getattr(w, k), getattr(web, k), rel_tol=1e-12, abs_tol=0.0)]
-        if differs or w.curve is not web.curve:
-            raise r.err(raw[lane.name], f"roller {node.name!r} slits web {web.name!r}, but span {lane.name!r} starts with web "
-                        f"{w.name!r}, which differs in {', '.join(differs) or 'its stress-strain table'}: a slitter cuts the web, "
-                        "it does not change the material")
-        if len(w.plies) != len(web.plies):
-            raise r.err(raw[lane.name], f"roller {node.name!r} slits web {web.name!r} of {len(web.plies)} layer(s), but span "
-                        f"{lane.name!r} starts with web {w.name!r} of {len(w.plies)}: a lane of a laminate is a slit of it "
-                        f"({{\"slit\": {web.name!r}, ...}}), its layers narrowed")
-    total = sum(lane.wp1.width for lane in lanes) + node.trim
-    if abs(total - web.width) > WIDTH_TOLERANCE * web.width:
-        parts = " + ".join(f"{lane.wp1.width:g}" for lane in lanes)
-        raise r.err(raw[node.name], f"roller {node.name!r} slits web {web.name!r} ({web.width:g} m wide) into {parts} m "
-                    f"with {node.trim:g} m trim = {total:g} m: the lanes and the trim must add up to the web's width")
-
-
-def _check_merge(r, scene: Scene, b: Branch, raw):
-    """The span after a nip carries the laminate: one web (not wp1/wp2), made of the webs that meet there."""
-    node = scene.component(b.node)
-    out = scene.span_after(node)
-    if out.wp1 is not out.wp2:
-        raise r.err(raw[out.name], f"span {out.name!r} leaves roller {node.name!r}, where webs merge: its web is the laminate; "
-                    "give it as \"web\", not wp1 and wp2")
-    if node.trim:
-        raise r.err(raw[node.name], f"roller {node.name!r} merges webs: trim goes with split")
-    if getattr(node, "wrap", None) is not None:
-        raise r.err(raw[node.name], f"roller {node.name!r} merges webs, which arrive from different directions: one wrap "
-                    "angle cannot place its load cell; put the load cell on a roller before or after the nip")
-    layers = out.wp2.layer_names
-    meeting = sorted(w.name for sp in scene.spans_in(node) for w in sp.wp2.plies)
-    if layers and sorted(layers) != meeting:
-        raise r.err(raw[out.name], f"span {out.name!r} carries laminate {out.wp2.name!r} of {', '.join(layers)}, but the webs "
-                    f"meeting at {node.name!r} are {', '.join(meeting)}")
-
-
-def _check_layers(r, scene: Scene, raw):
-    """A web keeps its layers ([M6]): a span's wp1 and wp2 have as many; at a roller that is not a nip the
-    span after it carries as many as the web arriving (layers are bonded at a nip, by a merge); the labels
-    of a laminate's layers name outputs of their own."""
-    for sp in scene.spans:
-        n1, n2 = len(sp.wp1.plies), len(sp.wp2.plies)
-        if n1 != n2:
-            raise r.err(raw[sp.name], f"span {sp.name!r} converts web {sp.wp1.name!r} of {n1} layer(s) into {sp.wp2.name!r} "
-                        f"of {n2}: a span keeps a web's layers (laminate webs at a nip, with a merge)")
-        before = scene.spans_in(scene.upstream(sp))
-        if len(before) == 1 and len(before[0].wp2.plies) != n1:
-            up, p = scene.upstream(sp), before[0]
-            raise r.err(raw[sp.name], f"span {sp.name!r} starts with web {sp.wp1.name!r} of {n1} layer(s), but span {p.name!r} "
-                        f"brings {len(p.wp2.plies)} ({p.wp2.name!r}) to {up.type} {up.name!r}: a web keeps its layers from "
-                        "span to span (laminate webs at a nip, with a merge; give a laminate's measured values as a web of its own)")
-        if sp.layered:
-            labels = sp.labels
-            clash = [x for x in labels if labels.count(x) > 1 or x in LABEL_TAKEN or (x.startswith("T_") and x[2:] in labels)]
-            if clash:
-                raise r.err(raw[sp.name], f"span {sp.name!r}: the layers of {sp.wp2.name!r} would be labelled {', '.join(labels)}; "
-                            f"{clash[0]!r} clashes with another output of the span (NAME.T, NAME.eps, NAME.T_<layer>, ...): "
-                            "rename the layer's web")
 
 
 def load_scene(path, overrides=None, fmu_dir=None) -> Scene:

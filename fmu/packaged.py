@@ -1,0 +1,31 @@
+"""The packaged FMUs in out/ as pytest fixtures, for every test folder that runs them
+(tests/integration/python and webline/tests import them into their conftest.py)."""
+
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FMU = ROOT / "out" / "ConvertingSpan.fmu"
+
+
+def packaged(path):
+    """`path` (an FMU in out/), written by fmu/package.py if it is not there yet."""
+    if not path.exists():
+        subprocess.run(["python3", "fmu/package.py"], cwd=ROOT, check=True)
+    assert path.exists(), f"{path} was not written by fmu/package.py"
+    return path
+
+
+@pytest.fixture(scope="session")
+def fmu_path():
+    """The packaged span FMU."""
+    return packaged(FMU)
+
+
+@pytest.fixture(scope="session")
+def fmus():
+    """The folder with both FMUs of a web line (ConvertingSpan.fmu, Roller.fmu)."""
+    packaged(FMU)
+    return packaged(FMU.parent / "Roller.fmu").parent
