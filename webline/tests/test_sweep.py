@@ -143,7 +143,8 @@ def test_a_study_through_the_line_fmu_writes_table_series_and_plots(fmus, client
     out, series = tmp_path / "study.csv", tmp_path / "study.parquet"
     args = ["sweep", str(SPLICE), "--grid", "line.second.L=1.6 m,-1 m", "--n", "3", "--seed", "7",
             "--out", str(out), "--series", str(series), "--plot", "second.T_max", "--fmu-dir", str(fmus),
-            "--scheduler", client.scheduler.address]
+            "--scheduler", client.scheduler.address, "--metric", "peak=max(second.T)", "--metric", "late=mean(idler.v, 2.0)",
+            "--metric", "when=argmax(first.T, 1.0, 2.0)"]
     for s in SAMPLES:
         args += ["--sample", s]
     assert main(args) == 1  # some points failed
@@ -158,6 +159,27 @@ def test_a_study_through_the_line_fmu_writes_table_series_and_plots(fmus, client
     assert pl.read_parquet(series).shape == frame.shape
     # The series is the point's run: its largest tension is the table's.
     assert frame[frame["point"] == 1]["second.T [N]"].max() == table["second.T_max [N]"][1]
+    # The metrics of each point, against its series.
+    for i in range(3):
+        run, row = frame[frame["point"] == i], table.iloc[i]
+        t, T = run["time [s]"].to_numpy(), run["second.T [N]"].to_numpy()
+        assert row["peak [N]"] == T.max() == row["second.T_max [N]"]
+        assert row["second.T_overshoot [N]"] == T.max() - T[-1] and row["second.T_peak_time [s]"] == t[np.argmax(T)]
+        assert abs(row["second.T_rms [N]"] - T.std()) <= 1e-9 * T.std()  # two summations of the same squares
+        inside = np.abs(T - T[-1]) <= 0.02 * abs(T[-1])
+        settled = next(k for k in range(len(T)) if inside[k:].all())
+        assert row["second.T_settling [s]"] == t[settled]
+        assert row["late [m/s]"] == np.mean(run["idler.v [m/s]"].to_numpy()[t >= 2.0])
+        window = run[(run["time [s]"] >= 1.0) & (run["time [s]"] <= 2.0)]
+        assert row["when [s]"] == window["time [s]"].iloc[np.argmax(window["first.T [N]"].to_numpy())]
+    # The series file says how it was made.
+    import json
+
+    import pyarrow.parquet as pq
+
+    meta = json.loads(pq.read_schema(series).metadata[b"webline"])
+    assert meta["seed"] == 7 and meta["engine"] == "line" and meta["design"]["points"] == 6 and meta["missing"] == 0
+    assert meta["statuses"]["ok"] == 3 and sum(meta["statuses"].values()) == 6 and meta["seconds per point"] > 0
     assert (tmp_path / "study_envelope.png").stat().st_size > 0 and (tmp_path / "study_scatter.png").stat().st_size > 0
 
 

@@ -338,18 +338,19 @@ def run_sweep(scene_path, design, engine="line", scheduler=None, workers=2, step
 
 
 def dashboard(client):
-    """The address of Dask's dashboard, when it runs (it needs bokeh)."""
+    """The address of Dask's dashboard, when the scheduler runs one (it needs bokeh)."""
     try:
-        import bokeh  # noqa: F401
-
+        if "dashboard" not in client.scheduler_info().get("services", {}):
+            return None
         return client.dashboard_link
-    except Exception:  # no bokeh, or a scheduler without a dashboard
+    except Exception:  # a scheduler that cannot tell
         return None
 
 
 def _identity(scheduler: str, timeout: float) -> dict:
-    """What answers at `scheduler` says it is (Dask's `identity` call), within `timeout` seconds in
-    all: a Client alone waits for ever on an endpoint that accepts the connection but never answers."""
+    """What answers at `scheduler` says it is (Dask's `identity` call): an OSError if it cannot be
+    reached within `timeout` seconds, a TimeoutError if it is reached but does not answer within 2 s
+    more (a Client alone waits for ever on an endpoint that accepts the connection but never answers)."""
     import asyncio
 
     from distributed.core import rpc
@@ -361,7 +362,7 @@ def _identity(scheduler: str, timeout: float) -> dict:
         finally:
             await remote.close_rpc()
 
-    return asyncio.run(asyncio.wait_for(ask(), timeout))
+    return asyncio.run(asyncio.wait_for(ask(), timeout + 2.0))
 
 
 def connect(scheduler: str, timeout: float):
@@ -373,8 +374,7 @@ def connect(scheduler: str, timeout: float):
     except ValueError as e:
         raise StudyError(f"--scheduler {scheduler!r} is not a Dask scheduler's address (e.g. tcp://host:8786): {e}") from None
     except TimeoutError:  # connected, but no answer in Dask's protocol
-        raise StudyError(f"--scheduler {scheduler}: what listens there did not answer as a Dask scheduler within "
-                         f"{timeout:g} s (--connect-timeout)") from None
+        raise StudyError(f"--scheduler {scheduler}: what listens there did not answer as a Dask scheduler") from None
     except OSError:
         raise StudyError(f"--scheduler {scheduler}: no Dask scheduler could be reached within {timeout:g} s "
                          "(--connect-timeout)") from None
@@ -472,7 +472,10 @@ def _collect(client, futures, arrived, progress, worker_timeout):
         for fut in batch:
             points = futures[fut]
             try:
-                outcomes = fut.result()
+                outcomes = fut.result(timeout=1.0)
+            except TimeoutError:  # its result was on a worker that died: Dask runs it again, meanwhile we watch
+                pending.add(fut)
+                continue
             except Exception as e:  # the task itself was lost (a worker died too often): the rows say so
                 outcomes = [failed(f"{type(e).__name__}: {e}")] * len(points)
             for i, outcome in zip(points, outcomes if isinstance(outcomes, list) else [outcomes]):
