@@ -8,7 +8,8 @@
     webline linearize SCENE.json [--at TIME] [--bode INPUT:OUTPUT ...] [-o MODEL.mat]
     webline reference SCENE.json
     webline convergence SCENE.json [--engine parts|line] [--steps 2ms,1ms,0.5ms]
-    webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
+    webline sweep SCENE.json --grid KEY=V1,V2 ... [--sample KEY=uniform(A, B) --n N] [--scheduler tcp://host:8786]
+                             [--metric NAME=max(SIGNAL)] [--resume] [--max-failed N]
 """
 
 from __future__ import annotations

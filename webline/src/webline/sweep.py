@@ -397,9 +397,26 @@ def dask_client(scheduler=None, workers=2, client=None, connect_timeout=CONNECT_
         with connect(scheduler, connect_timeout) as c:
             yield c, f"the Dask scheduler at {scheduler}"
     else:
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
-                Client(cluster) as c:
+        with _ignoring_ctrl_c():  # the worker processes start ignoring it: Ctrl-C stops the study, which stops them
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
+        with cluster, Client(cluster) as c:
             yield c, f"a local Dask cluster of {workers} worker processes"
+
+
+@contextmanager
+def _ignoring_ctrl_c():
+    """SIGINT ignored meanwhile (in the main thread; a new Python process keeps ignoring it)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _run(client, scene_path, design, todo, engine, step, fmu_dir, keep, user, arrived, progress, worker_timeout) -> dict:
