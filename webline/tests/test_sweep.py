@@ -265,7 +265,7 @@ def test_exit_codes_max_failed_and_the_summary(tmp_path, fmus, client, capsys):
 def test_resume_refuses_another_study_naming_what_differs(tmp_path, fmus, client, capsys):
     args = ["--sample", SAMPLES[0], "--grid", "line.second.L=1.6 m,-1 m"]
     assert main(study_args(tmp_path, client, fmus, *args, "--n", "4", "--seed", "3")) == 1  # failed points: the journal stays
-    capsys.readouterr()
+    assert "  4 x failed: " in capsys.readouterr().out  # one reason, though each message names its point's values
     for extra, what in [(["--n", "4", "--seed", "4"], "the seed differs (3, now 4)"),
                         (["--n", "4", "--seed", "3", "--engine", "reference"], "the engine differs ('line', now 'reference')"),
                         (["--n", "5", "--seed", "3"], "the design"),

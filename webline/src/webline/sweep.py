@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import tempfile
 import time as clock
 from collections import Counter
@@ -138,6 +139,12 @@ def is_failed(row: dict) -> bool:
     return row["status"].startswith("failed")
 
 
+def reason(status: str) -> str:
+    """A status without the point's own values (a scene's error names the file "with" them), so that
+    points failing alike count as one reason."""
+    return re.sub(r" \(with [^()]*\)(?=:)", "", status)
+
+
 @dataclass
 class Table:
     """The rows a study has, in the order of the design (a study stopped early lacks some)."""
@@ -199,9 +206,9 @@ class Table:
                  f"{info.get('cluster', '?')} in {wall:.1f} s: {rate:.3g} ok points/s per worker "
                  f"({info.get('workers_mean') or 0:.3g} workers on average), {info.get('seconds_per_point', 0):.3g} s per point "
                  "on its worker"]
-        reasons = Counter(r["status"] for r in failed_rows)
+        reasons = Counter(reason(r["status"]) for r in failed_rows)
         for why, count in reasons.most_common(5):
-            first = next(r["point"] for r in failed_rows if r["status"] == why)
+            first = next(r["point"] for r in failed_rows if reason(r["status"]) == why)
             lines.append(f"  {count} x {why} (first: point {first})")
         if len(reasons) > 5:
             lines.append(f"  ... {len(reasons) - 5} other reasons in the table")
@@ -484,15 +491,17 @@ def _collect(client, futures, arrived, progress, worker_timeout):
 
     pending = as_completed(list(futures))
     checked, alone_since = 0.0, None
+    tries = Counter()  # a result not fetched in time: tried again with twice the time, up to a minute
     while not pending.is_empty():
         batch = pending.next_batch(block=False)
-        for fut in batch:
+        for k, fut in enumerate(batch):
             points = futures[fut]
             try:
-                outcomes = fut.result(timeout=1.0)
+                outcomes = fut.result(timeout=min(2.0 ** tries[fut.key], 60.0))
             except TimeoutError:  # its result was on a worker that died: Dask runs it again, meanwhile we watch
-                pending.add(fut)
-                continue
+                tries[fut.key] += 1
+                pending.update(batch[k:])
+                break
             except Exception as e:  # the task itself was lost (a worker died too often): the rows say so
                 outcomes = [failed(f"{type(e).__name__}: {e}")] * len(points)
             for i, outcome in zip(points, outcomes if isinstance(outcomes, list) else [outcomes]):
