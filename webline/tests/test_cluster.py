@@ -4,7 +4,8 @@ a local cluster of one worker gives; one worker killed while a second study runs
 every worker killed, the study waits and new workers finish it; several studies on one client,
 each study's release landing just after the next study sent its FMUs, never lose an FMU; a study
 process killed (SIGKILL) or interrupted (SIGINT) half way and resumed gives the uninterrupted
-table byte for byte; a scheduler that cannot be used is one line, exit 2, within 15 s."""
+table byte for byte; a scheduler that cannot be used is one line, exit 2, within 15 s; a scheduler
+without workers stops the study after its --worker-timeout."""
 
 import json
 import os
@@ -250,3 +251,20 @@ def test_a_scheduler_that_cannot_be_used_is_one_line_and_exit_2(fmus, tmp_path, 
 
             threading.Thread(target=reply, daemon=True).start()
             assert message in sweep(f"tcp://127.0.0.1:{server.getsockname()[1]}", "--connect-timeout", "3")
+
+
+def test_a_study_without_workers_stops_after_its_worker_timeout(tmp_path, fmus, capsys):
+    """A scheduler with no worker at all: the study says it waits, stops after --worker-timeout with
+    no row lost (there is none), exit 1, and its journal is not left behind empty."""
+    c = Cluster(tmp_path)
+    try:
+        started = time.monotonic()
+        code = main(["sweep", str(SPLICE), "--grid", "line.first.L=1.4 m,1.5 m", "--step", "1 ms", "--fmu-dir", str(fmus),
+                     "--out", str(tmp_path / "t.csv"), "--scheduler", c.address, "--worker-timeout", "2"])
+        captured = capsys.readouterr()
+        assert code == 1 and time.monotonic() - started < 30
+        assert "no Dask worker is left: waiting up to 2 s" in captured.err
+        assert "stopped: no Dask worker joined within 2 s (--worker-timeout)" in captured.out and "2 not run" in captured.out
+        assert not (tmp_path / "t.partial").exists() and "--resume" not in captured.out
+    finally:
+        c.close()

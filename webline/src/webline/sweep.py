@@ -339,7 +339,7 @@ def run_sweep(scene_path, design, engine="line", scheduler=None, workers=2, step
         complete = info["stopped"] is None and not info["missing"] and not table.failed()
         if complete or out is None:
             journal.remove()
-        else:
+        elif journal.folder.exists():  # (a study stopped before its first row has none: run it again as it was)
             info["journal"] = str(journal.folder)
         return table
 
