@@ -4,6 +4,8 @@ one, failed points as rows, the series file, the plots, the parts and the refere
 scheduler and workers as separate processes, the same table on one worker and on two, and a lost
 worker: test_cluster.py."""
 
+import time
+
 import numpy as np
 import pytest
 from webline import linefmu
@@ -141,10 +143,11 @@ def test_a_study_through_the_line_fmu_writes_table_series_and_plots(fmus, client
     out, series = tmp_path / "study.csv", tmp_path / "study.parquet"
     args = ["sweep", str(SPLICE), "--grid", "line.second.L=1.6 m,-1 m", "--n", "3", "--seed", "7",
             "--out", str(out), "--series", str(series), "--plot", "second.T_max", "--fmu-dir", str(fmus),
-            "--scheduler", client.scheduler.address]
+            "--scheduler", client.scheduler.address, "--metric", "peak=max(second.T)", "--metric", "late=mean(idler.v, 2.0)",
+            "--metric", "when=argmax(first.T, 1.0, 2.0)"]
     for s in SAMPLES:
         args += ["--sample", s]
-    assert main(args) == 0
+    assert main(args) == 1  # some points failed
     assert out.read_text().startswith("point,line.second.L,line.idler.J [kg.m2],line.first.L [m],unwind.v_end [m/s],first.T_min [N]")
     table = pd.read_csv(out)
     status = list(table["status"])
@@ -156,6 +159,27 @@ def test_a_study_through_the_line_fmu_writes_table_series_and_plots(fmus, client
     assert pl.read_parquet(series).shape == frame.shape
     # The series is the point's run: its largest tension is the table's.
     assert frame[frame["point"] == 1]["second.T [N]"].max() == table["second.T_max [N]"][1]
+    # The metrics of each point, against its series.
+    for i in range(3):
+        run, row = frame[frame["point"] == i], table.iloc[i]
+        t, T = run["time [s]"].to_numpy(), run["second.T [N]"].to_numpy()
+        assert row["peak [N]"] == T.max() == row["second.T_max [N]"]
+        assert row["second.T_overshoot [N]"] == T.max() - T[-1] and row["second.T_peak_time [s]"] == t[np.argmax(T)]
+        assert abs(row["second.T_rms [N]"] - T.std()) <= 1e-9 * T.std()  # two summations of the same squares
+        inside = np.abs(T - T[-1]) <= 0.02 * abs(T[-1])
+        settled = next(k for k in range(len(T)) if inside[k:].all())
+        assert row["second.T_settling [s]"] == t[settled]
+        assert row["late [m/s]"] == np.mean(run["idler.v [m/s]"].to_numpy()[t >= 2.0])
+        window = run[(run["time [s]"] >= 1.0) & (run["time [s]"] <= 2.0)]
+        assert row["when [s]"] == window["time [s]"].iloc[np.argmax(window["first.T [N]"].to_numpy())]
+    # The series file says how it was made.
+    import json
+
+    import pyarrow.parquet as pq
+
+    meta = json.loads(pq.read_schema(series).metadata[b"webline"])
+    assert meta["seed"] == 7 and meta["engine"] == "line" and meta["design"]["points"] == 6 and meta["missing"] == 0
+    assert meta["statuses"]["ok"] == 3 and sum(meta["statuses"].values()) == 6 and meta["seconds per point"] > 0
     assert (tmp_path / "study_envelope.png").stat().st_size > 0 and (tmp_path / "study_scatter.png").stat().st_size > 0
 
 
@@ -200,3 +224,91 @@ def test_bad_keys_fail_before_any_task(fmus):
     with pytest.raises(SceneError, match="a sweep runs"):
         run_sweep(SCENE, design(parse_grid(["line.film.L=1 m"])), engine="libcosim", fmu_dir=fmus)
     assert Table(keys=[]).columns() == ["point", "status"]
+
+
+def study_args(tmp_path, client, fmus, *extra, out="t.csv"):
+    return ["sweep", str(SPLICE), "--step", "1 ms", "--fmu-dir", str(fmus), "--out", str(tmp_path / out),
+            "--scheduler", client.scheduler.address, *extra]
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--sample", "line.first.L=uniform(1 kg, 2 kg)", "--n", "3", "--seed", "1"], "a mass, but the scene's value there ('1.2 m') is a length"),
+    (["--grid", "line.first.L=1 m,2 s"], "a time, but the scene's value there ('1.2 m') is a length"),
+    (["--grid", "line.first.L=1 m", "--plot", "first.T_maximum"], "--plot 'first.T_maximum': the table has no such output"),
+    (["--grid", "line.first.L=1 m", "--max-failed", "-1"], "--max-failed -1"),
+])
+def test_a_study_refused_before_it_runs_is_one_line_and_exit_2(extra, message, tmp_path, fmus, capsys):
+    """No cluster is started (none is given and the refusal comes first): one line, exit 2, no table."""
+    started = time.monotonic()
+    assert main(["sweep", str(SPLICE), "--fmu-dir", str(fmus), "--out", str(tmp_path / "t.csv"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert time.monotonic() - started < 15 and not (tmp_path / "t.csv").exists()
+
+
+def test_exit_codes_max_failed_and_the_summary(tmp_path, fmus, client, capsys):
+    # Every point ok: 0, and the journal is gone.
+    assert main(study_args(tmp_path, client, fmus, "--grid", "line.second.L=1.6 m,1.7 m")) == 0
+    assert not (tmp_path / "t.partial").exists()
+    # Failed points: 1, their reasons counted; the journal stays for --resume.
+    assert main(study_args(tmp_path, client, fmus, "--grid", "line.second.L=1.6 m,-1 m,-2 m,-3 m", out="f.csv")) == 1
+    text = capsys.readouterr().out
+    assert "4 points: 1 ok (0 with a warning), 3 failed" in text
+    assert "  1 x failed: " in text and "(first: point 1)" in text and "f.partial" in text
+    # --max-failed 1 stops once two points have failed: not every point is run.
+    assert main(study_args(tmp_path, client, fmus, "--grid", "line.second.L=-1 m,-2 m,-3 m,-4 m,-5 m,-6 m", "--max-failed", "1",
+                           out="m.csv")) == 1
+    text = capsys.readouterr().out
+    assert "more than --max-failed 1" in text and "not run" in text
+
+
+def test_resume_refuses_another_study_naming_what_differs(tmp_path, fmus, client, capsys):
+    args = ["--sample", SAMPLES[0], "--grid", "line.second.L=1.6 m,-1 m"]
+    assert main(study_args(tmp_path, client, fmus, *args, "--n", "4", "--seed", "3")) == 1  # failed points: the journal stays
+    assert "  4 x failed: " in capsys.readouterr().out  # one reason, though each message names its point's values
+    for extra, what in [(["--n", "4", "--seed", "4"], "the seed differs (3, now 4)"),
+                        (["--n", "4", "--seed", "3", "--engine", "reference"], "the engine differs ('line', now 'reference')"),
+                        (["--n", "5", "--seed", "3"], "the design"),
+                        (["--n", "4", "--seed", "3", "--series", str(tmp_path / "s.parquet")], "whether series are kept")]:
+        assert main(study_args(tmp_path, client, fmus, *args, *extra, "--resume")) == 2
+        err = capsys.readouterr().err
+        assert what in err and len(err.strip().splitlines()) == 1, err
+    # The same study resumed, its seed from the journal: only the failed points run again (and fail again).
+    assert main(study_args(tmp_path, client, fmus, *args, "--n", "4", "--resume")) == 1
+    assert "resuming: 4 of 8 points kept, 4 to run" in capsys.readouterr().err
+
+
+def test_a_torn_last_line_of_the_journal_runs_its_point_again(tmp_path):
+    from webline.journal import Journal
+
+    study = {"scene": "x", "seed": 1}
+    journal, done = Journal.start(tmp_path / "t.csv", study, resume=False)
+    journal.add(0, {"a": 0.1 + 0.2, "status": "ok"}, [1.0, 2.0, 0.5])
+    journal.close()
+    with open(tmp_path / "t.partial" / "rows.jsonl", "a") as f:
+        f.write('{"point": 1, "row": {"a": 0.3')  # a kill in the middle of a line
+    _, done = Journal.start(tmp_path / "t.csv", study, resume=True)
+    assert list(done) == [0] and done[0].row == {"a": 0.1 + 0.2, "status": "ok"}
+
+
+def test_progress_without_a_terminal_every_tenth_or_every_10_seconds(monkeypatch):
+    import io
+
+    from webline import progress
+
+    now = [0.0]
+    monkeypatch.setattr(progress.clock, "monotonic", lambda: now[0])
+    stream = io.StringIO()
+    p = progress.Progress(100, stream=stream, terminal=False)
+    p.workers(2)
+    for k in range(10):
+        now[0] += 0.1
+        p.point("ok" if k else "failed: x")
+    assert stream.getvalue().count("\n") == 1 and "sweep: 10/100 points, 1 failed" in stream.getvalue()
+    now[0] += 9.0
+    p.tick()
+    assert stream.getvalue().count("\n") == 1  # not yet 10 s since the last line
+    now[0] += 1.5
+    p.tick()
+    assert stream.getvalue().count("\n") == 2
+    assert "0.391 ok points/s per worker (2 workers)" in stream.getvalue().splitlines()[-1]

@@ -8,7 +8,8 @@
     webline linearize SCENE.json [--at TIME] [--bode INPUT:OUTPUT ...] [-o MODEL.mat]
     webline reference SCENE.json
     webline convergence SCENE.json [--engine parts|line] [--steps 2ms,1ms,0.5ms]
-    webline sweep SCENE.json --grid KEY=V1,V2 ... [--scheduler tcp://host:8786]
+    webline sweep SCENE.json --grid KEY=V1,V2 ... [--sample KEY=uniform(A, B) --n N] [--scheduler tcp://host:8786]
+                             [--metric NAME=max(SIGNAL)] [--resume] [--max-failed N]
 """
 
 from __future__ import annotations
@@ -30,6 +31,8 @@ from .result import Result
 from .scene import Dancer, SceneError, Span, load_scene
 from .ssp import SspError
 from .linefmu import LineFmuError
+from .journal import StudyError
+from .usermetric import FUNCTIONS
 
 OUT = DEFAULT_FMU_DIR  # <repo>/out
 
@@ -338,12 +341,20 @@ def cmd_convergence(args):
 
 
 def cmd_sweep(args):
+    """Exit status: 0 when every point is ok (a warning is ok), 1 when some failed or were not run,
+    2 when the study was refused before it ran, 130 when it was interrupted."""
     import secrets
 
+    from .journal import Journal
     from .sampling import DesignError, design, parse_grid, parse_sample
-    from .sweep import run_sweep
+    from .sweep import engine_name, outputs, run_sweep
+    from .sweepplot import output_column
+    from .usermetric import parse_metric
 
+    out = Path(args.out)
     seed = args.seed
+    if args.sample and seed is None and args.resume:
+        seed = Journal.seed_of(out)
     if args.sample and seed is None:  # a study that can be repeated: say which seed it drew
         seed = secrets.randbelow(2**32)
         print(f"seed {seed} (give --seed {seed} to draw the same points)")
@@ -351,30 +362,41 @@ def cmd_sweep(args):
         points = design(parse_grid(args.grid or []), [parse_sample(s) for s in args.sample or []], args.n, seed)
     except DesignError as e:
         raise SceneError(str(e)) from None
-    out = Path(args.out)
+    if args.max_failed is not None and args.max_failed < 0:
+        raise SceneError(f"--max-failed {args.max_failed}: give a number of points >= 0")
+    scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
+    column = None
+    try:  # the metrics' signals and the output to plot are known before the run: refused now, not after it
+        user = [parse_metric(m, scene) for m in args.metric or []]
+        twice = sorted({m.name for m in user if [u.name for u in user].count(m.name) > 1})
+        if twice:
+            raise SceneError(f"--metric {twice[0]!r} is given twice")
+        if args.plot is not None:
+            column = output_column(outputs(scene, engine_name(args.engine), user), args.plot)
+    except ValueError as e:
+        raise SceneError(str(e)) from None
     out.parent.mkdir(parents=True, exist_ok=True)
     if args.series:
         Path(args.series).parent.mkdir(parents=True, exist_ok=True)
     table = run_sweep(args.scene, points, engine=args.engine, scheduler=args.scheduler, workers=args.workers,
                       step=args.step, fmu_dir=args.fmu_dir, progress=sys.stderr.isatty(), series=args.series,
-                      envelope=args.plot is not None)
+                      envelope=args.plot is not None, out=out, resume=args.resume, max_failed=args.max_failed,
+                      connect_timeout=args.connect_timeout, worker_timeout=args.worker_timeout, user=user)
     table.write(out)
     print(table.format())
     written = [str(out)] + ([str(args.series)] if args.series else [])
     if args.plot is not None:
-        from .sweepplot import output_column, plot_envelope, plot_scatter
+        from .sweepplot import plot_envelope, plot_scatter
 
         title = Path(args.scene).stem
         band = table.info["envelope"]
         if band.points:
             written.append(str(plot_envelope(band, out.with_name(f"{out.stem}_envelope.png"), title)))
-        try:
-            column = output_column(table, args.plot)
-        except ValueError as e:
-            raise SceneError(str(e)) from None
         written.append(str(plot_scatter(table, column, out.with_name(f"{out.stem}_scatter.png"), title)))
     print("wrote " + ", ".join(written))
-    return 0
+    if table.info["stopped"] and table.info["stopped"].startswith("interrupted"):
+        return 130
+    return 1 if table.failed() or table.info["missing"] else 0
 
 
 def main(argv=None):
@@ -468,12 +490,23 @@ def main(argv=None):
     p.add_argument("--plot", nargs="?", const="", metavar="OUTPUT",
                    help="PNGs next to the table: each recorded tension's band over the points, and OUTPUT "
                         "(a column of the table, default the first span's T_max) against each swept key")
+    p.add_argument("--metric", action="append", metavar="NAME=FUNCTION(SIGNAL[, FROM[, TO]])",
+                   help='a scalar of your own per point, e.g. "peak=max(first.T)" or "late=mean(idler.v, 2.0, 2.5)" '
+                        f"(functions: {', '.join(FUNCTIONS)}; FROM, TO in s; docs/studies.md)")
+    p.add_argument("--resume", action="store_true",
+                   help="finish the unfinished study whose table is --out: run only its missing and failed points")
+    p.add_argument("--max-failed", type=int, metavar="N", help="stop the study once more than N points have failed")
+    p.add_argument("--connect-timeout", type=time_arg, default=10.0, metavar="SECONDS",
+                   help="how long the --scheduler has to answer (default 10 s)")
+    p.add_argument("--worker-timeout", type=time_arg, default=300.0, metavar="SECONDS",
+                   help="how long a study whose workers are all gone waits for one (default 300 s)")
     p.set_defaults(func=cmd_sweep)
 
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError, LineFmuError, StabilityError) as e:
+    except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError, LineFmuError, StabilityError,
+            StudyError) as e:
         print(f"webline: {e}", file=sys.stderr)
         return 2
 

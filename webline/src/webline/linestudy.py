@@ -8,15 +8,15 @@ tolerance); each point then sets those of its values that differ from the FMU's 
 other difference (a profile table, an event, a web by record, an effect switched on, the stop time,
 the record) is a structure of its own, exported once for all its points (docs/studies.md).
 
-On a worker: each FMU (its bytes travel with the tasks, scattered once to every worker) is extracted
-once, its model description read once and one instance made; every point resets that instance
-(fmi2Reset), sets its parameters and runs through FMPy's `simulate_fmu` as `linefmu.run` does:
-FMPy's efficient-loops pattern.
+On a worker: each FMU (its bytes reach every worker through the study's plugin, `delivery`) is
+extracted once, its model description read once and one instance made; every point resets that
+instance (fmi2Reset), sets its parameters and runs through FMPy's `simulate_fmu` as `linefmu.run`
+does: FMPy's efficient-loops pattern. The instance is freed and its folder removed when the study
+ends or the worker closes.
 """
 
 from __future__ import annotations
 
-import hashlib
 import io
 import json
 import shutil
@@ -30,13 +30,14 @@ from pathlib import Path
 
 from distributed import WorkerPlugin
 
-from . import fmpy_log, linefmu, units
+from . import delivery, fmpy_log, linefmu, units
 from .points import Outcome, failed, layout, metric_record, metrics
 from .scene import load_scene
 
 TOLERANCE = "tolerance"  # the Line FMU's own parameter: a study key, not a scene key
 PLUGIN = "webline-line-fmus"
 WARNING = 1  # fmi2Warning: a status at or above it is worth a row's word
+LINE_FMU = "Line.fmu"  # its name among a study's files
 
 
 @dataclass
@@ -55,14 +56,14 @@ class Structure:
     parts: list  # points.layout
     stop_time: float
     step: float
-    digest: str = ""  # names the FMU on the workers
+    name: str = ""  # the study's plugin that carries the FMU to the workers, and its instance's key there
 
 
 @dataclass
 class LineTask:
     """What a worker needs for one point besides the FMU (which travels apart, once)."""
 
-    digest: str
+    fmu: str  # Structure.name
     parameters: dict
     stop_time: float
     step: float
@@ -70,6 +71,7 @@ class LineTask:
     recorded: int
     parts: list
     series: bool
+    user: tuple = ()  # the user's metrics (usermetric.Metric)
 
 
 def _same(a: float, b: float) -> bool:
@@ -89,11 +91,12 @@ def _skeleton(spec: dict, scene, step: float) -> str:
 class Planner:
     """Points to Line FMU tasks: exports a structure the first time a point needs it."""
 
-    def __init__(self, scene_path, fmu_dir, step=None, series=False):
+    def __init__(self, scene_path, fmu_dir, step=None, series=False, user=()):
         self.scene_path = Path(scene_path)
         self.fmu_dir = fmu_dir
         self.step = step
         self.series = series
+        self.user = tuple(user)
         self.structures: list[Structure] = []
         self._by_skeleton: dict[str, list[Structure]] = {}
 
@@ -117,13 +120,14 @@ class Planner:
         if s.fmu is None:
             raise linefmu.LineFmuError(s.error)
         parameters = {n: v for n, v in reals.items() if n in s.offered and not _same(v, s.base[n])}
-        return s, LineTask(s.digest, parameters, s.stop_time, s.step, s.outputs, s.recorded, s.parts, self.series)
+        return s, LineTask(s.name, parameters, s.stop_time, s.step, s.outputs, s.recorded, s.parts, self.series,
+                           self.user)
 
     def _export(self, scene, reals: dict, step: float) -> Structure:
         from fmpy import read_model_description
 
         index = len(self.structures)
-        record = metric_record(scene)
+        record = metric_record(scene, self.user)
         outputs = [linefmu.output(c, q) for c, q in record]
         common = dict(index=index, outputs=outputs, recorded=len(scene.record), columns=scene.columns(),
                       parts=layout(scene), stop_time=float(scene.stop_time), step=float(step))
@@ -139,7 +143,7 @@ class Planner:
                        if v.causality == "parameter" and v.type == "Real"}
             fixed = {n: v for n, v in reals.items() if n not in offered}
             s = Structure(fmu=data, error=None, offered=frozenset(offered), base=offered, fixed=fixed,
-                          digest=hashlib.sha256(data).hexdigest()[:16], **common)
+                          name=delivery.study_name(f"line{index}"), **common)
         self.structures.append(s)
         return s
 
@@ -190,19 +194,29 @@ class _Ready:
 
 
 class LineFmus:
-    """The Line FMUs of one worker process, by digest. One point runs at a time: every instance
+    """The Line FMUs of one worker process, by their study's plugin name. One point runs at a time: every instance
     logs through FMPy's one proxy per process (fmpy_log)."""
 
     def __init__(self):
         self._ready: dict[str, _Ready] = {}
         self._lock = threading.Lock()
 
-    def run(self, digest: str, fmu: bytes, task: LineTask):
+    def run(self, key: str, fmu: bytes, task: LineTask):
         with self._lock:
-            ready = self._ready.get(digest)
+            ready = self._ready.get(key)
             if ready is None:
-                ready = self._ready[digest] = _Ready(fmu)
+                ready = self._ready[key] = _Ready(fmu)
             return ready.run(task)
+
+    def has(self, key: str) -> bool:
+        return key in self._ready
+
+    def drop(self, key: str):
+        """Frees one FMU's instance and removes its folder (its study ended); waits for a running point."""
+        with self._lock:
+            ready = self._ready.pop(key, None)
+            if ready is not None:
+                ready.close()
 
     def close(self):
         with self._lock:
@@ -213,8 +227,8 @@ class LineFmus:
 
 class LineFmusPlugin(WorkerPlugin):
     """Gives each worker its LineFmus, closed (instances freed, folders removed) when the worker closes.
-    Registered again by a later study, it stays: the workers keep the FMUs they have (and no running
-    point loses its instance)."""
+    Registered again by a later study, it stays (no running point loses its instance); each study's
+    own plugin (`delivery`) drops that study's FMUs when it ends."""
 
     name = PLUGIN
     idempotent = True
@@ -232,9 +246,13 @@ def worker_fmus() -> LineFmus:
     return get_worker().plugins[PLUGIN].fmus
 
 
-def run_points(fmu: bytes, tasks: list, fmus: LineFmus | None = None) -> list:
-    """Several points of one structure, one after the other (a Dask task)."""
-    return [run_point(fmu, task, fmus) for task in tasks]
+def run_points(tasks: list) -> list:
+    """Several points of one structure, one after the other (a Dask task): the FMU from its study's
+    plugin, whose end on this worker frees the instance."""
+    files, fmus = delivery.study_files(tasks[0].fmu), worker_fmus()
+    if not fmus.has(tasks[0].fmu):
+        files.on_teardown(lambda: fmus.drop(tasks[0].fmu))
+    return [run_point(files.files[LINE_FMU], task, fmus) for task in tasks]
 
 
 def run_point(fmu: bytes, task: LineTask, fmus: LineFmus | None = None) -> Outcome:
@@ -242,8 +260,8 @@ def run_point(fmu: bytes, task: LineTask, fmus: LineFmus | None = None) -> Outco
     started = clock.time()
     try:
         fmus = fmus or worker_fmus()
-        out, messages, simulation = fmus.run(task.digest, fmu, task)
-        row = metrics(task.parts, lambda name: out[name])
+        out, messages, simulation = fmus.run(task.fmu, fmu, task)
+        row = metrics(task.parts, lambda name: out[name], out["time"], task.user)
         warned = [m for status, m in messages if status >= WARNING]
         row["status"] = f"warning: {warned[-1]}" if warned else "ok"
         outcome = Outcome(row=row, simulation=simulation)

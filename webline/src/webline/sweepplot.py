@@ -1,5 +1,6 @@
-"""Pictures of a study: the band each recorded tension spans over all points, and an output of the
-table against each swept key."""
+"""Pictures of a study: the bands each recorded tension spans over all points (its median, 5 to
+95 %, smallest to largest), and an output of the table against each swept key, failed points
+marked. No axis has an offset: a constant output must not look like spread."""
 
 from __future__ import annotations
 
@@ -13,9 +14,15 @@ def is_tension(column: str) -> bool:
     return column.split(" [")[0].endswith(".T")
 
 
+PERCENTILES = (5, 50, 95)
+BAND_TIMES = 1000  # the percentile bands on at most this many times (all points' curves are kept for them)
+
+
 class Envelope:
     """Each recorded tension's smallest and largest value at each time over the points added so far,
-    on the time grid of the first point (another grid, from a swept stop time or step, is interpolated)."""
+    on the time grid of the first point (another grid, from a swept stop time or step, is
+    interpolated), and its 5, 50 and 95 % percentiles over the points on a grid of at most
+    BAND_TIMES of those times."""
 
     def __init__(self, columns):
         self.columns = [c for c in columns if is_tension(c)]
@@ -23,42 +30,57 @@ class Envelope:
         self.time = None
         self.lo = self.hi = None
         self.points = 0
+        self._coarse = None  # indices of self.time the percentiles are taken at
+        self._curves = []  # each point's tensions at those times
 
-    def add(self, outcome):
-        if outcome.data is None or not self.index:
+    def add(self, time, data):
+        """One point's recorded signals (a row per time, a column per signal)."""
+        if not self.index:
             return
-        x = outcome.data[:, self.index]
+        x = data[:, self.index]
         if self.time is None:
-            self.time, self.lo, self.hi = outcome.time, x.copy(), x.copy()
+            self.time, self.lo, self.hi = time, x.copy(), x.copy()
+            self._coarse = np.unique(np.linspace(0, len(time) - 1, min(len(time), BAND_TIMES)).astype(int))
         else:
-            if len(outcome.time) != len(self.time) or not np.array_equal(outcome.time, self.time):
-                x = np.column_stack([np.interp(self.time, outcome.time, x[:, j]) for j in range(x.shape[1])])
+            if len(time) != len(self.time) or not np.array_equal(time, self.time):
+                x = np.column_stack([np.interp(self.time, time, x[:, j]) for j in range(x.shape[1])])
             np.minimum(self.lo, x, out=self.lo)
             np.maximum(self.hi, x, out=self.hi)
+        self._curves.append(x[self._coarse])
         self.points += 1
+
+    def percentiles(self):
+        """(times, {percentile: array of times x tensions})."""
+        curves = np.stack(self._curves)
+        return self.time[self._coarse], {q: np.percentile(curves, q, axis=0) for q in PERCENTILES}
 
 
 def plot_envelope(envelope: Envelope, path, title: str):
     fig, ax = plt.subplots(figsize=(9, 3.6))
+    times, bands = envelope.percentiles()
+    low, median, high = (bands[q] for q in PERCENTILES)
     for j, c in enumerate(envelope.columns):
-        (line,) = ax.plot(envelope.time, envelope.lo[:, j], lw=0.7, label=c.split(" [")[0])
-        ax.plot(envelope.time, envelope.hi[:, j], lw=0.7, color=line.get_color())  # a band of no width stays a line
-        ax.fill_between(envelope.time, envelope.lo[:, j], envelope.hi[:, j], alpha=0.3, lw=0, color=line.get_color())
+        (line,) = ax.plot(times, median[:, j], lw=1.0, label=f"{c.split(' [')[0]}: median")
+        color = line.get_color()
+        ax.fill_between(times, low[:, j], high[:, j], alpha=0.35, lw=0, color=color)
+        ax.plot(envelope.time, envelope.lo[:, j], lw=0.5, color=color, ls=":")  # a band of no width stays a line
+        ax.plot(envelope.time, envelope.hi[:, j], lw=0.5, color=color, ls=":")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("tension [N]")
+    ax.ticklabel_format(useOffset=False)  # an offset would make a constant look like spread
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize=8)
-    ax.set_title(f"{title}\nsmallest to largest tension at each time over {envelope.points} points", fontsize=10)
+    ax.set_title(f"{title}\nmedian, 5 to 95 % band (shaded) and smallest to largest (dotted) over {envelope.points} points",
+                 fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
 
 
-def output_column(table, name: str | None) -> str:
-    """The table's column for `name` ("second.T_max", with or without its unit); default: the first
-    span's largest tension."""
-    metrics = [c for c in table.columns() if c not in table.keys and c not in ("point", "status")]
+def output_column(metrics: list, name: str | None) -> str:
+    """The column of `metrics` (the table's outputs) for `name` ("second.T_max", with or without its
+    unit); default: the first span's largest tension."""
     if not name:
         name = next((c for c in metrics if "T_max" in c), metrics[0] if metrics else "")
     for c in metrics:
@@ -89,19 +111,28 @@ def _numbers(values):
 
 
 def plot_scatter(table, output: str, path, title: str):
-    """The output against each swept key, one panel per key; failed points left out."""
-    ok = [r for r in table.rows if not r["status"].startswith("failed") and output in r]
+    """The output against each swept key, one panel per key; failed points marked at the bottom of each
+    panel (they have no output)."""
+    rows = [r for r in table.rows if output in r]
+    lost = [r for r in table.rows if output not in r]
     keys = list(table.keys)
     fig, axes = plt.subplots(1, max(len(keys), 1), figsize=(4.2 * max(len(keys), 1) + 0.6, 3.6), squeeze=False)
     for ax, key in zip(axes[0], keys):
-        x, labels, si = _numbers([r[key] for r in ok])
-        ax.plot(x, [r[output] for r in ok], "o", ms=3, alpha=0.6)
+        x, labels, si = _numbers([r[key] for r in rows + lost])
+        ax.plot(x[: len(rows)], [r[output] for r in rows], "o", ms=3, alpha=0.6)
+        if lost:
+            ax.plot(x[len(rows):], [0.02] * len(lost), "x", color="red", ms=5, transform=ax.get_xaxis_transform(),
+                    label=f"failed ({len(lost)})")
+            ax.legend(loc="best", fontsize=8)
         if labels is not None:
             ax.set_xticks(range(len(labels)), labels, fontsize=8)
         ax.set_xlabel(f"{key} [{si}]" if si else key)
         ax.set_ylabel(output)
+        ax.ticklabel_format(useOffset=False, axis="y")
+        if labels is None:
+            ax.ticklabel_format(useOffset=False, axis="x")
         ax.grid(True, alpha=0.3)
-    fig.suptitle(f"{title}: {output} over {len(ok)} points", fontsize=10)
+    fig.suptitle(f"{title}: {output} over {len(rows)} points" + (f", {len(lost)} failed" if lost else ""), fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -794,8 +794,8 @@ def load_scene(path, overrides=None, fmu_dir=None) -> Scene:
 
 
 def set_path(data, key: str, value):
-    """Sets a value by a dotted path. Components of the line are named by
-    their name, list entries by their index: "line.film.L",
+    """Sets a value by a dotted path and returns the value it replaced. Components of the line are
+    named by their name, list entries by their index: "line.film.L",
     "line.nip.drive.speed.ramp.to", "events.0.time", "stop_time"."""
     parts = key.split(".")
     target = data
@@ -816,10 +816,11 @@ def set_path(data, key: str, value):
     if isinstance(target, list):
         if not (last.isdigit() and int(last) < len(target)):
             raise SceneError(f"override {key!r}: {last!r} is not an index of the list there")
-        target[int(last)] = value
-        return
+        old, target[int(last)] = target[int(last)], value
+        return old
     if not isinstance(target, dict):
         raise SceneError(f"override {key!r}: the path does not lead to an object")
     if last not in target:
         raise SceneError(f"override {key!r}: the scene has no {last!r} there (an override replaces a value, it adds none)")
-    target[last] = value
+    old, target[last] = target[last], value
+    return old
