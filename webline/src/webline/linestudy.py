@@ -10,8 +10,9 @@ the record) is a structure of its own, exported once for all its points (docs/st
 
 On a worker: each FMU (its bytes travel with the tasks, scattered once to every worker) is extracted
 once, its model description read once and one instance made; every point resets that instance
-(fmi2Reset), sets its parameters and runs through FMPy's `simulate_fmu` as `linefmu.run` does:
-FMPy's efficient-loops pattern.
+(fmi2Reset), sets its parameters and runs as FMPy's `simulate_fmu` runs it in `linefmu.run` (FMPy's
+efficient-loops pattern): with the steps in one call into the library (`native`, --engine line), or
+through `simulate_fmu` itself (--engine fmpy-line), the same numbers bit for bit.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from pathlib import Path
 
 from distributed import WorkerPlugin
 
-from . import fmpy_log, linefmu, units
+from . import fmpy_log, linefmu, native, units
 from .points import Outcome, failed, layout, metric_record, metrics
 from .scene import load_scene
 
@@ -70,6 +71,7 @@ class LineTask:
     recorded: int
     parts: list
     series: bool
+    native: bool = True  # the steps in one call into the library (`native`), or FMPy's loop (--engine fmpy-line)
 
 
 def _same(a: float, b: float) -> bool:
@@ -89,8 +91,9 @@ def _skeleton(spec: dict, scene, step: float) -> str:
 class Planner:
     """Points to Line FMU tasks: exports a structure the first time a point needs it."""
 
-    def __init__(self, scene_path, fmu_dir, step=None, series=False):
+    def __init__(self, scene_path, fmu_dir, step=None, series=False, native=True):
         self.scene_path = Path(scene_path)
+        self.native = native
         self.fmu_dir = fmu_dir
         self.step = step
         self.series = series
@@ -117,7 +120,7 @@ class Planner:
         if s.fmu is None:
             raise linefmu.LineFmuError(s.error)
         parameters = {n: v for n, v in reals.items() if n in s.offered and not _same(v, s.base[n])}
-        return s, LineTask(s.digest, parameters, s.stop_time, s.step, s.outputs, s.recorded, s.parts, self.series)
+        return s, LineTask(s.digest, parameters, s.stop_time, s.step, s.outputs, s.recorded, s.parts, self.series, self.native)
 
     def _export(self, scene, reals: dict, step: float) -> Structure:
         from fmpy import read_model_description
@@ -170,11 +173,12 @@ class _Ready:
         """The point's outputs (FMPy's structured array), the FMU's messages, the seconds they took."""
         from fmpy import simulate_fmu
 
+        simulate = native.simulate if task.native else simulate_fmu
         with fmpy_log.collecting_proxied() as messages:
             t0 = clock.perf_counter()
             self.instance.reset()
             try:
-                out = simulate_fmu(self.folder, model_description=self.description, fmu_instance=self.instance,
+                out = simulate(self.folder, model_description=self.description, fmu_instance=self.instance,
                                    fmi_type="CoSimulation", stop_time=task.stop_time, step_size=task.step,
                                    output_interval=task.step, output=task.outputs, start_values=task.parameters)
             except Exception as e:  # FMPy names the call; the FMU's log says why

@@ -10,7 +10,8 @@ scheduler given by its address. Engines:
 
 - `line` (default): the scene as one Line FMU (`linestudy`): exported once per structure, its
   bytes scattered once to every worker, one instance per worker reset for every point, a few
-  points per task (`chunk_size`);
+  points per task (`chunk_size`), a point's steps in one call into the library (`native`);
+- `fmpy-line`: the same, each point through FMPy's simulate_fmu (the same numbers bit for bit);
 - `parts`: the co-simulation of the line's span and Roller FMUs (whose bytes travel likewise),
   a point per task;
 - `reference`: the monolithic SciPy reference, a point per task.
@@ -34,21 +35,23 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import linestudy, names
+from . import linestudy
 from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU
 from .points import Outcome, failed, layout, metric_record, metrics
 from .scene import SceneError, load_scene, set_path
 
-# The engines a sweep runs a scene with (names.py names every engine).
-ENGINES = ("line", "parts", "reference")
-WHAT = {"line": "the Line FMU", "parts": "the co-simulation of parts", "reference": "the monolithic reference"}
+# The engines a sweep runs a scene with (names.py names every engine). The Line FMU's two give the same
+# numbers bit for bit: `line` steps it in one call per point (native.py), `fmpy-line` in FMPy's loop.
+ENGINES = ("line", "fmpy-line", "parts", "reference")
+LINE_ENGINES = ("line", "fmpy-line")
+WHAT = {"line": "the Line FMU", "fmpy-line": "the Line FMU in FMPy's loop", "parts": "the co-simulation of parts",
+        "reference": "the monolithic reference"}
 
 
 def engine_name(name: str) -> str:
-    engine = names.ALIASES.get(name, name)
-    if engine not in ENGINES:
-        raise SceneError(f"engine {name!r}: a sweep runs {', '.join(ENGINES)} (or {', '.join(names.ALIASES)})")
-    return engine
+    if name not in ENGINES:
+        raise SceneError(f"engine {name!r}: a sweep runs {', '.join(ENGINES)}")
+    return name
 
 
 def check_keys(scene_path, keys, engine):
@@ -56,7 +59,7 @@ def check_keys(scene_path, keys, engine):
     data = json.loads(Path(scene_path).read_text(encoding="utf-8"))
     for key in keys:
         if key == linestudy.TOLERANCE:
-            if engine != "line":
+            if engine not in LINE_ENGINES:
                 raise SceneError(f"{key!r} is the Line FMU's tolerance: it goes with --engine line")
             continue
         if key == "record" or key.startswith("record."):
@@ -281,9 +284,9 @@ def _run(client, scene_path, design, engine, step, fmu_dir, keep, arrived) -> di
 
     info = {"workers": len(client.scheduler_info().get("workers", {}))}
     futures = {}  # future -> its points
-    if engine == "line":
+    if engine in LINE_ENGINES:
         client.register_plugin(linestudy.LineFmusPlugin())
-        planner = linestudy.Planner(scene_path, fmu_dir, step, series=keep)
+        planner = linestudy.Planner(scene_path, fmu_dir, step, series=keep, native=engine == "line")
         scattered = {}  # structure -> its FMU's bytes, on every worker
         chunk = chunk_size(len(design.points), info["workers"])
         waiting = {}  # structure -> [(point, task)] not yet submitted
