@@ -122,4 +122,4 @@ def test_a_study_through_either_loop_is_the_same(fmus, tmp_path):
 
 def test_a_library_without_the_entry_says_so():
     with pytest.raises(native.NativeError, match="--engine fmpy-line"):
-        native._entry(SimpleNamespace(dll=SimpleNamespace()))
+        native.entry(SimpleNamespace(dll=SimpleNamespace()))

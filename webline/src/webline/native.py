@@ -67,7 +67,8 @@ def _apply_start_values(fmu, description, values: dict, settable) -> dict:
     return values
 
 
-def _entry(fmu):
+def entry(fmu):
+    """The library's `convertingSpanDoSteps` of an FMPy FMU2Slave, typed."""
     try:
         f = getattr(fmu.dll, ENTRY)
     except AttributeError:
@@ -75,9 +76,39 @@ def _entry(fmu):
                           "run it with --engine fmpy-line") from None
     if f.argtypes is None:
         double_p, size = ctypes.POINTER(ctypes.c_double), ctypes.c_size_t
-        f.argtypes = [ctypes.c_void_p, double_p, size, ctypes.POINTER(ctypes.c_uint32), size, double_p, ctypes.POINTER(size)]
+        f.argtypes = [ctypes.c_void_p, double_p, size, ctypes.POINTER(ctypes.c_uint32), size, double_p,
+                      ctypes.POINTER(size), ctypes.POINTER(size)]
         f.restype = ctypes.c_int
     return f
+
+
+def start(fmu, description, stop: float, start_values: dict) -> float:
+    """FMPy's initialization of a reset instance (simulateCS): fmi2SetupExperiment with the default
+    experiment's tolerance and start time and the stop time, the start values, initialization mode
+    and its end. Returns the start time."""
+    from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
+
+    experiment = description.defaultExperiment
+    begin = float(experiment.startTime) if experiment is not None and experiment.startTime is not None else 0.0
+    tolerance = float(experiment.tolerance) if experiment is not None and experiment.tolerance is not None else None
+    fmu.setupExperiment(tolerance=tolerance, startTime=begin, stopTime=stop)
+    left = _apply_start_values(fmu, description, start_values, settable_in_instantiated)
+    fmu.enterInitializationMode()
+    left = _apply_start_values(fmu, description, left, settable_in_initialization_mode)
+    fmu.exitInitializationMode()
+    if left:  # simulate_fmu validates by default
+        raise Exception("The start values for the following variables could not be set: " + ", ".join(left))
+    return begin
+
+
+def steps(run, fmu, times: np.ndarray, vrs: np.ndarray, values: np.ndarray):
+    """One call of the entry `run`: the steps between `times`, the outputs `vrs` read into `values`
+    (a row per time); (status, steps taken, rows written)."""
+    taken, rows = ctypes.c_size_t(0), ctypes.c_size_t(0)
+    status = run(fmu.component, times.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), len(times) - 1,
+                 vrs.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)), len(vrs),
+                 values.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), ctypes.byref(taken), ctypes.byref(rows))
+    return status, taken.value, rows.value
 
 
 def simulate(filename, model_description, fmu_instance, fmi_type="CoSimulation", stop_time=None, step_size=None,
@@ -86,38 +117,22 @@ def simulate(filename, model_description, fmu_instance, fmi_type="CoSimulation",
     without inputs), with the steps in one call into the library. `filename` and `step_size` are
     FMPy's, unused in Co-Simulation."""
     from fmpy.fmi1 import FMICallException
-    from fmpy.simulation import settable_in_initialization_mode, settable_in_instantiated
 
     description, fmu = model_description, fmu_instance
     if fmi_type != "CoSimulation" or description.fmiVersion != "2.0":
         raise NativeError(f"the native loop runs FMI 2.0 Co-Simulation, not {description.fmiVersion} {fmi_type}")
-    experiment = description.defaultExperiment
-    start = float(experiment.startTime) if experiment is not None and experiment.startTime is not None else 0.0
-    stop = float(stop_time)
-    tolerance = float(experiment.tolerance) if experiment is not None and experiment.tolerance is not None else None
     names = set(output)
     recorded = [v for v in description.modelVariables if v.name in names and v.name != "time"]  # FMPy's Recorder
     if any(v.type != "Real" for v in recorded):
         raise NativeError(f"the native loop records Real outputs: {', '.join(v.name for v in recorded if v.type != 'Real')} are not")
-    times = communication_points(start, stop, float(output_interval),
+    run = entry(fmu)
+    stop = float(stop_time)
+    begin = start(fmu, description, stop, start_values or {})
+    times = communication_points(begin, stop, float(output_interval),
                                  bool(description.coSimulation.canHandleVariableCommunicationStepSize))
-    steps = len(times) - 1
     vrs = np.array([v.valueReference for v in recorded], dtype=np.uint32)
-    values = np.empty((steps + 1, len(vrs)))
-    steps_done, rows_done = ctypes.c_size_t(0), ctypes.c_size_t(0)
-    run = _entry(fmu)
-
-    fmu.setupExperiment(tolerance=tolerance, startTime=start, stopTime=stop)
-    left = _apply_start_values(fmu, description, start_values or {}, settable_in_instantiated)
-    fmu.enterInitializationMode()
-    left = _apply_start_values(fmu, description, left, settable_in_initialization_mode)
-    fmu.exitInitializationMode()
-    if left:  # simulate_fmu validates by default
-        raise Exception("The start values for the following variables could not be set: " + ", ".join(left))
-    status = run(fmu.component, times.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), steps,
-                 vrs.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)), len(vrs),
-                 values.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), ctypes.byref(steps_done), ctypes.byref(rows_done))
-    taken, rows = steps_done.value, rows_done.value
+    values = np.empty((len(times), len(vrs)))
+    status, taken, rows = steps(run, fmu, times, vrs, values)
     if status == OK:
         pass
     elif rows == taken:  # a read failed
