@@ -13,9 +13,10 @@ length normal around 1.5 m (sd 0.05 m), a Latin hypercube of seed 7. --quick sho
   cost      In this process, for each point of 200, interleaved: the FMU's own stepping (its 5,000
             fmi2DoStep in one call of convertingSpanDoSteps, no outputs read, after the reset and
             the initialization, which are not counted), the native loop (webline.native.simulate:
-            reset, initialization, steps, outputs, the array) and FMPy's (reset, simulate_fmu). Then
-            the same 200 points as one study on a local cluster of one worker, once per loop: a
-            point's cost on its worker is the worker's time from the end of its first task to the
+            reset, initialization, steps, outputs, the array) and FMPy's (reset, simulate_fmu), and
+            for the first 20 the parts' co-simulation as a worker runs it (`--engine parts`). Then
+            the same 200 points as one study on a local cluster of one worker, once per loop, and
+            the stepping again on the native study's worker right after its study: a point's cost on its worker is the worker's time from the end of its first task to the
             end of its last, per point, so whatever Dask and webline add per point shows there (the
             gaps between tasks included). Apart: what is paid once per study before the first
             point runs (reading the scene, the export, sending the FMU) and once per worker (its
@@ -53,17 +54,21 @@ from webline.sweep import dask_client, run_sweep  # noqa: E402
 OUT = ROOT / "out"
 SCENE = ROOT / "webline" / "scenes" / "splice.json"
 DOC = ROOT / "docs" / "studies.md"
+NATIVE_PARTS, STEPPING_PARTS = "native (the parts' points)", "stepping (the parts' points)"
 SAMPLES = ["line.idler.J=uniform(0.01 kg.m2, 0.05 kg.m2)", "line.first.L=normal(1.5 m, 0.05 m)"]
 
 
-def in_process(fmu_bytes: bytes, tasks: list, loops=True) -> dict:
+def in_process(fmu_bytes: bytes, tasks: list, loops=True, parts=()) -> dict:
     """Seconds per point in this process (a worker's, when a Dask task), each point of `tasks`
-    (linestudy.LineTask) interleaved: the FMU's own stepping (one call, no outputs) and, with `loops`,
-    the native loop and FMPy's (both reset the instance first)."""
+    (linestudy.LineTask) interleaved: the FMU's own stepping (one call, no outputs), with `loops` the
+    native loop and FMPy's (both reset the instance first), and for the first points, `parts` (their
+    overrides), the co-simulation of the parts as a worker runs it (`--engine parts`)."""
     from fmpy import extract, read_model_description, simulate_fmu
     from fmpy.simulation import instantiate_fmu
+    from webline.engines import run_scene
+    from webline.points import metric_record
 
-    seconds = {"stepping": [], "native": [], "fmpy": []}
+    seconds = {"stepping": [], "native": [], "fmpy": [], "parts": [], NATIVE_PARTS: [], STEPPING_PARTS: []}
     with tempfile.TemporaryDirectory() as tmp:
         fmu = Path(tmp) / "Line.fmu"
         fmu.write_bytes(fmu_bytes)
@@ -71,7 +76,7 @@ def in_process(fmu_bytes: bytes, tasks: list, loops=True) -> dict:
         description = read_model_description(folder)
         instance = instantiate_fmu(folder, description, "CoSimulation")
         run, nothing = native.entry(instance), np.array([], dtype=np.uint32)
-        for task in tasks:
+        for k, task in enumerate(tasks):
             instance.reset()
             begin = native.start(instance, description, task.stop_time, task.parameters)
             times = native.communication_points(begin, task.stop_time, task.step, True)
@@ -87,6 +92,14 @@ def in_process(fmu_bytes: bytes, tasks: list, loops=True) -> dict:
                          stop_time=task.stop_time, step_size=task.step, output_interval=task.step,
                          output=task.outputs, start_values=task.parameters)
                 seconds[name].append(clock.perf_counter() - t0)
+            if k < len(parts):
+                scene = load_scene(SCENE, parts[k], OUT)
+                scene.record = metric_record(scene)
+                t0 = clock.perf_counter()
+                run_scene(scene, "parts", fmu_dir=OUT)
+                seconds["parts"].append(clock.perf_counter() - t0)
+                seconds[NATIVE_PARTS].append(seconds["native"][-1])
+                seconds[STEPPING_PARTS].append(seconds["stepping"][-1])
         instance.freeInstance()
     return {k: float(np.mean(v)) for k, v in seconds.items() if v}
 
@@ -125,7 +138,7 @@ def main():
     planner = Planner(SCENE, OUT)
     tasks = [planner.plan(p)[1] for p in few.points]
     fmu = planner.structures[0].fmu
-    here = in_process(fmu, tasks)
+    here = in_process(fmu, tasks, parts=few.points[:n_parts])
     studies = {}
     with dask_client(None, 1) as (client, _):  # the stepping on the worker that ran the study, right after it
         studies["line"] = on_worker(run_sweep(SCENE, few, engine="line", client=client, fmu_dir=OUT))
@@ -178,15 +191,16 @@ def main():
         on_worker_s = np.median([b - a for a, b, _ in t.info["tasks"]])
         lines.append(f"| {name} | {len(t.rows)} | {len(t.failed())} | {wall:.1f} | {rates[name]:.2f} | {on_worker_s:.3f} |")
     native_rate, fmpy_rate, parts_rate = rates.values()
-    parts_point = float(np.median([sim for _, _, sim in runs["parts (co-simulation of the FMUs)"].info["tasks"]]))
     planning = runs["line (the Line FMU, native loop)"].info["planning"]
     lines += ["", f"Per worker, the Line FMU runs {native_rate / parts_rate:.0f}× as many points per second as the parts through "
-              f"the native loop, {fmpy_rate / parts_rate:.1f}× through FMPy's. Point for point on its worker, a point of the "
-              f"parts' co-simulation runs {parts_point:.2f} s (median), {parts_point / line['point']:.0f}× a point of the Line "
-              f"FMU through the native loop all included (the first table's bold figure), and "
-              f"{parts_point / worker_step:.0f}× the Line FMU's own stepping of a point on a worker ({worker_step:.4f} s): no loop around the Line "
-              f"FMU can make the factor larger than that. Here the client, which reads each point's scene, compiles its "
-              f"line and submits it ({planning:.1f} s for the {n_line} points, the export included), and Dask's scheduler share the machine's cores with the workers.", ""]
+              f"the native loop, {fmpy_rate / parts_rate:.1f}× through FMPy's. Here the client, which reads each point's "
+              f"scene, compiles its line and submits it ({planning:.1f} s for the {n_line} points, the export included), and "
+              "Dask's scheduler share the machine's cores with the workers.", "",
+              f"Point for point, in this process and interleaved (the first {n_parts} points of the design): the parts' "
+              f"co-simulation of a point takes {here['parts']:.3f} s, the Line FMU's native loop {here[NATIVE_PARTS]:.4f} s "
+              f"({here['parts'] / here[NATIVE_PARTS]:.0f}×), and the Line FMU's own stepping {here[STEPPING_PARTS]:.4f} s "
+              f"({here['parts'] / here[STEPPING_PARTS]:.0f}×): no loop around the Line FMU can make the factor larger than "
+              "that.", ""]
 
     text = "\n".join(lines)
     print(text)
