@@ -179,8 +179,8 @@ class _Ready:
             self.instance.reset()
             try:
                 out = simulate(self.folder, model_description=self.description, fmu_instance=self.instance,
-                                   fmi_type="CoSimulation", stop_time=task.stop_time, step_size=task.step,
-                                   output_interval=task.step, output=task.outputs, start_values=task.parameters)
+                               fmi_type="CoSimulation", stop_time=task.stop_time, step_size=task.step,
+                               output_interval=task.step, output=task.outputs, start_values=task.parameters)
             except Exception as e:  # FMPy names the call; the FMU's log says why
                 raise RuntimeError(f"{e}" + "".join(f"\n  {m}" for _, m in messages[-3:])) from e
             seconds = clock.perf_counter() - t0
