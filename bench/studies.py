@@ -113,7 +113,8 @@ def on_worker(study) -> dict:
     order = np.argsort(started)
     started, ended, sim = started[order], ended[order], sim[order]
     return {"run": float(sim[1:].mean()), "point": float((ended[-1] - ended[0]) / (len(sim) - 1)),
-            "study": float(started[0] - study.info["started"]), "worker": float(ended[0] - started[0] - sim[0])}
+            "study": float(started[0] - study.info["started"]), "worker": float(ended[0] - started[0] - sim[0]),
+            "planning": float(study.info["planning"]), "wall": float(study.info["wall_time"])}
 
 
 def alone(points) -> float:
@@ -169,6 +170,9 @@ def main():
              f"| once per study, before the first point runs: reading the scene, the export, the FMU to the worker | "
              f"{line['study']:.2f} | | {fmpy['study']:.2f} | |",
              f"| once per worker, in its first task: extracting the FMU, the instance | {line['worker']:.2f} | | {fmpy['worker']:.2f} | |",
+             f"| meanwhile on the client: reading each point's scene, compiling its line, submitting it (all points, the "
+             f"export included), of the study's {line['wall']:.1f} s and {fmpy['wall']:.1f} s | {line['planning']:.2f} | | "
+             f"{fmpy['planning']:.2f} | |",
              f"| a point as `webline run --engine fmpy-line` runs it (export, extract, instantiate, run) | | | {one:.4f} | {one / step:.0%} |",
              "", f"A point on its worker costs {line['point'] / worker_step:.2f}× the FMU's own stepping through the native loop, "
              f"{fmpy['point'] / worker_step:.2f}× through FMPy's; in this process {here['native'] / step:.2f}× and "
