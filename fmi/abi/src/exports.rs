@@ -8,7 +8,7 @@
 macro_rules! __export {
     ($model:ty; $standard:ident in $module:ident; $($name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)? => $body:expr;)*) => {
         /// The C API of this library's model for one standard, written by `fmi_abi::export_fmi2!` or `export_fmi3!`.
-        #[allow(non_snake_case, unused_variables, clippy::missing_safety_doc, clippy::too_many_arguments)]
+        #[allow(non_snake_case, unused_variables, unused_imports, clippy::missing_safety_doc, clippy::too_many_arguments)]
         pub mod $module {
             use $crate::$standard::calls::*;
             use $crate::$standard::*;

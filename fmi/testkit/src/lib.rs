@@ -80,6 +80,13 @@ mod fmi2_api {
 }
 pub use fmi2_api::*;
 
+/// `convertingSpanDoSteps`, declared from its signature (`fmi_abi::fmi2_steps_function!`): only a
+/// test binary whose library exports it (the Line's, `export_fmi2_steps!`) calls it (`Fmu::do_steps`).
+pub mod steps {
+    use fmi_abi::fmi2::*;
+    fmi_abi::fmi2_steps_function!(declare, ());
+}
+
 /// The fmi3 functions, likewise (`fmi_abi::fmi3_functions!`).
 pub mod fmi3 {
     pub use fmi_abi::fmi3::*;
@@ -641,6 +648,17 @@ impl<M: Tested> Fmu<M> {
     pub fn do_step(&self, t: f64, h: f64) -> i32 {
         // SAFETY: live instance.
         unsafe { fmi2DoStep(self.c, t, h, 0) }
+    }
+
+    /// `convertingSpanDoSteps` over `times`, reading `vrs`: (status, the rows of values, steps
+    /// taken, rows written); `None` for an argument passes NULL (`values` with room for every row).
+    pub fn do_steps(&self, times: Option<&[f64]>, n_steps: usize, vrs: &[u32]) -> (i32, Vec<f64>, usize, usize) {
+        let mut values = vec![f64::NAN; (n_steps + 1) * vrs.len()];
+        let (mut taken, mut rows) = (usize::MAX, usize::MAX);
+        let times = times.map_or(std::ptr::null(), <[f64]>::as_ptr);
+        // SAFETY: live instance; `times` holds n_steps + 1 points or is NULL, `values` has a row per point.
+        let s = unsafe { steps::convertingSpanDoSteps(self.c, times, n_steps, vrs.as_ptr(), vrs.len(), values.as_mut_ptr(), &mut taken, &mut rows) };
+        (s, values, taken, rows)
     }
 
     // ---- values by value reference

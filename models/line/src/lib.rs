@@ -40,3 +40,6 @@ pub use line::{Line, Shared};
 fmi_abi::export_fmi2!(crate::line::Line);
 #[cfg(feature = "fmu")]
 fmi_abi::export_fmi3!(crate::line::Line);
+// One call for a study's whole run (webline's native loop, docs/studies.md); importers never need it.
+#[cfg(feature = "fmu")]
+fmi_abi::export_fmi2_steps!(crate::line::Line);

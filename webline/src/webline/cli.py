@@ -479,7 +479,8 @@ def main(argv=None):
     p.add_argument("--n", type=int, help="with --sample: how many points to draw")
     p.add_argument("--seed", type=int, help="with --sample: the seed (the same seed, the same points)")
     p.add_argument("--engine", default="line", choices=("line", "fmpy-line", "parts", "reference"),
-                   help="line (default): the scene as one Line FMU, exported once per structure; parts: the "
+                   help="line (default): the scene as one Line FMU, exported once per structure, a point's steps "
+                        "in one call; fmpy-line: the same in FMPy's loop (the same numbers); parts: the "
                         "co-simulation of its FMUs; reference: the monolithic SciPy reference")
     p.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
     p.add_argument("--workers", type=int, default=2, help="workers of the local cluster")

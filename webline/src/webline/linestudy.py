@@ -10,9 +10,10 @@ the record) is a structure of its own, exported once for all its points (docs/st
 
 On a worker: each FMU (its bytes reach every worker through the study's plugin, `delivery`) is
 extracted once, its model description read once and one instance made; every point resets that
-instance (fmi2Reset), sets its parameters and runs through FMPy's `simulate_fmu` as `linefmu.run`
-does: FMPy's efficient-loops pattern. The instance is freed and its folder removed when the study
-ends or the worker closes.
+instance (fmi2Reset), sets its parameters and runs as FMPy's `simulate_fmu` runs it in `linefmu.run`
+(FMPy's efficient-loops pattern): with the steps in one call into the library (`native`, --engine
+line), or through `simulate_fmu` itself (--engine fmpy-line), the same numbers bit for bit. The
+instance is freed and its folder removed when the study ends or the worker closes.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from pathlib import Path
 
 from distributed import WorkerPlugin
 
-from . import delivery, fmpy_log, linefmu, units
+from . import delivery, fmpy_log, linefmu, native, units
 from .points import Outcome, failed, layout, metric_record, metrics
 from .scene import load_scene
 
@@ -72,6 +73,7 @@ class LineTask:
     parts: list
     series: bool
     user: tuple = ()  # the user's metrics (usermetric.Metric)
+    native: bool = True  # the steps in one call into the library (`native`), or FMPy's loop (--engine fmpy-line)
 
 
 def _same(a: float, b: float) -> bool:
@@ -91,12 +93,13 @@ def _skeleton(spec: dict, scene, step: float) -> str:
 class Planner:
     """Points to Line FMU tasks: exports a structure the first time a point needs it."""
 
-    def __init__(self, scene_path, fmu_dir, step=None, series=False, user=()):
+    def __init__(self, scene_path, fmu_dir, step=None, series=False, user=(), native=True):
         self.scene_path = Path(scene_path)
         self.fmu_dir = fmu_dir
         self.step = step
         self.series = series
         self.user = tuple(user)
+        self.native = native
         self.structures: list[Structure] = []
         self._by_skeleton: dict[str, list[Structure]] = {}
 
@@ -121,7 +124,7 @@ class Planner:
             raise linefmu.LineFmuError(s.error)
         parameters = {n: v for n, v in reals.items() if n in s.offered and not _same(v, s.base[n])}
         return s, LineTask(s.name, parameters, s.stop_time, s.step, s.outputs, s.recorded, s.parts, self.series,
-                           self.user)
+                           self.user, self.native)
 
     def _export(self, scene, reals: dict, step: float) -> Structure:
         from fmpy import read_model_description
@@ -174,13 +177,14 @@ class _Ready:
         """The point's outputs (FMPy's structured array), the FMU's messages, the seconds they took."""
         from fmpy import simulate_fmu
 
+        simulate = native.simulate if task.native else simulate_fmu
         with fmpy_log.collecting_proxied() as messages:
             t0 = clock.perf_counter()
             self.instance.reset()
             try:
-                out = simulate_fmu(self.folder, model_description=self.description, fmu_instance=self.instance,
-                                   fmi_type="CoSimulation", stop_time=task.stop_time, step_size=task.step,
-                                   output_interval=task.step, output=task.outputs, start_values=task.parameters)
+                out = simulate(self.folder, model_description=self.description, fmu_instance=self.instance,
+                               fmi_type="CoSimulation", stop_time=task.stop_time, step_size=task.step,
+                               output_interval=task.step, output=task.outputs, start_values=task.parameters)
             except Exception as e:  # FMPy names the call; the FMU's log says why
                 raise RuntimeError(f"{e}" + "".join(f"\n  {m}" for _, m in messages[-3:])) from e
             seconds = clock.perf_counter() - t0

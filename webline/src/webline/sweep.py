@@ -10,7 +10,9 @@ scheduler given by its address. Engines:
 
 - `line` (default): the scene as one Line FMU (`linestudy`): exported once per structure, its
   bytes on every worker through the study's own plugin (`delivery`), one instance per worker reset
-  for every point, a few points per task (`chunk_size`);
+  for every point, a few points per task (`chunk_size`), a point's steps in one call into the
+  library (`native`);
+- `fmpy-line`: the same, each point through FMPy's simulate_fmu (the same numbers bit for bit);
 - `parts`: the co-simulation of the line's span and Roller FMUs (whose bytes travel likewise),
   a point per task;
 - `reference`: the monolithic SciPy reference, a point per task.
@@ -37,16 +39,19 @@ from pathlib import Path
 
 import numpy as np
 
-from . import delivery, linestudy, names, units
+from . import delivery, linestudy, units
 from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU
 from .journal import Journal, StudyError, identity
 from .points import Outcome, failed, layout, metric_record, metrics
 from .progress import Progress
 from .scene import SceneError, load_scene, set_path
 
-# The engines a sweep runs a scene with (names.py names every engine).
-ENGINES = ("line", "parts", "reference")
-WHAT = {"line": "the Line FMU", "parts": "the co-simulation of parts", "reference": "the monolithic reference"}
+# The engines a sweep runs a scene with (names.py names every engine). The Line FMU's two give the
+# same numbers bit for bit: `line` steps it in one call per point (native.py), `fmpy-line` in FMPy's loop.
+ENGINES = ("line", "fmpy-line", "parts", "reference")
+LINE_ENGINES = ("line", "fmpy-line")
+WHAT = {"line": "the Line FMU", "fmpy-line": "the Line FMU in FMPy's loop", "parts": "the co-simulation of parts",
+        "reference": "the monolithic reference"}
 CONNECT_TIMEOUT = 10.0  # seconds a scheduler has to answer (--connect-timeout)
 WORKER_TIMEOUT = 300.0  # seconds a study without workers waits for one (--worker-timeout)
 
@@ -56,10 +61,9 @@ class Stopped(Exception):
 
 
 def engine_name(name: str) -> str:
-    engine = names.ALIASES.get(name, name)
-    if engine not in ENGINES:
-        raise SceneError(f"engine {name!r}: a sweep runs {', '.join(ENGINES)} (or {', '.join(names.ALIASES)})")
-    return engine
+    if name not in ENGINES:
+        raise SceneError(f"engine {name!r}: a sweep runs {', '.join(ENGINES)}")
+    return name
 
 
 def _kind(value):
@@ -84,7 +88,7 @@ def check_keys(scene_path, design, engine):
             given.setdefault(key, {}).setdefault(_kind(value), value)
     for key, kinds in given.items():
         if key == linestudy.TOLERANCE:
-            if engine != "line":
+            if engine not in LINE_ENGINES:
                 raise SceneError(f"{key!r} is the Line FMU's tolerance: it goes with --engine line")
             continue
         if key == "record" or key.startswith("record."):
@@ -440,9 +444,9 @@ def _run(client, scene_path, design, todo, engine, step, fmu_dir, keep, user, ar
         plugins.append(name)
 
     try:
-        if engine == "line":
+        if engine in LINE_ENGINES:
             client.register_plugin(linestudy.LineFmusPlugin())
-            planner = linestudy.Planner(scene_path, fmu_dir, step, series=keep, user=user)
+            planner = linestudy.Planner(scene_path, fmu_dir, step, series=keep, user=user, native=engine == "line")
             chunk = chunk_size(len(todo), present)
             waiting = {}  # structure -> [(point, task)] not yet submitted
 

@@ -303,3 +303,47 @@ pub unsafe fn get_string_status<M: Model>(
 ) -> fmi2Status {
     enter::<M, _>(c, Call::GetStringStatus, |_| Err(unavailable_status(Call::GetStringStatus.name(), kind)))
 }
+
+// ---- An extension beyond the standard (`export_fmi2_steps!`): many Co-Simulation steps in one call
+
+/// `convertingSpanDoSteps`: what an importer's loop of `fmi2DoStep` and `fmi2GetReal` does, in one
+/// call. The outputs `vr` are read into row 0 of `values`, then for each `k < n_steps` the step
+/// from `times[k]` to `times[k + 1]` is taken (`fmi2DoStep(c, times[k], times[k + 1] - times[k])`)
+/// and the outputs read into row `k + 1`. `times` holds `n_steps + 1` points, `values`
+/// `(n_steps + 1) * nvr`; `*steps_done` counts the steps taken, `*rows_done` the rows written. Each
+/// step and read is the instance's own, as through the standard's functions: the same numbers,
+/// statuses and log lines. The call stops at the first that fails and returns its status (a step's
+/// or a read's: `*steps_done` and `*rows_done` say which); the state check is fmi2DoStep's, once.
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn do_steps<M: Model>(
+    c: fmi2Component,
+    times: *const fmi2Real,
+    n_steps: usize,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    values: *mut fmi2Real,
+    steps_done: *mut usize,
+    rows_done: *mut usize,
+) -> fmi2Status {
+    let call = Call::DoStep;
+    enter::<M, _>(c, call, |h| {
+        let steps = out_ref(call, steps_done, "stepsDone")?;
+        let rows = out_ref(call, rows_done, "rowsDone")?;
+        (*steps, *rows) = (0, 0);
+        let too_many = || fmi_core::FmiError::error(format!("convertingSpanDoSteps: nSteps = {n_steps} with nvr = {nvr} is too large"));
+        let points = n_steps.checked_add(1).ok_or_else(too_many)?;
+        let times = slice(call, times, points, "times")?;
+        let vrs = slice(call, vr, nvr, "vr")?;
+        let values = slice_mut(call, values, points.checked_mul(nvr).ok_or_else(too_many)?, "values")?;
+        let read = Call::GetReal.name();
+        h.instance.get_reals(read, vrs, &mut values[..nvr])?;
+        *rows = 1;
+        for k in 0..n_steps {
+            h.instance.do_step(call.name(), times[k], times[k + 1] - times[k])?;
+            *steps = k + 1;
+            h.instance.get_reals(read, vrs, &mut values[(k + 1) * nvr..(k + 2) * nvr])?;
+            *rows = k + 2;
+        }
+        OK
+    })
+}

@@ -65,3 +65,21 @@ macro_rules! fmi2_functions {
 macro_rules! export_fmi2 {
     ($model:ty) => { $crate::fmi2_functions!($crate::__export, $model); };
 }
+
+/// Calls `$callback!` (as `fmi2_functions!` does) with the one function this layer adds to FMI 2.0
+/// for importers that know it (`calls::do_steps`): none needs it, and the FMU stays standard.
+#[macro_export]
+macro_rules! fmi2_steps_function {
+    ($callback:path, $model:ty) => {
+        $callback! {
+            $model; fmi2 in fmi2_steps_export;
+            convertingSpanDoSteps(c: fmi2Component, times: *const fmi2Real, n_steps: usize, vr: *const fmi2ValueReference, nvr: usize, values: *mut fmi2Real, steps_done: *mut usize, rows_done: *mut usize) -> fmi2Status => do_steps::<$model>(c, times, n_steps, vr, nvr, values, steps_done, rows_done);
+        }
+    };
+}
+
+/// Exports `convertingSpanDoSteps` of `$model` beside its FMI 2.0 C API (`export_fmi2!`).
+#[macro_export]
+macro_rules! export_fmi2_steps {
+    ($model:ty) => { $crate::fmi2_steps_function!($crate::__export, $model); };
+}
