@@ -17,6 +17,10 @@ functions) under FMI 3.0's platform folders, the
 modelDescription.xml and terminalsAndIcons.xml that fmi-build writes from the
 FMI 2.0 description, the same documentation and resources. The documentation's variable and unit tables are
 rendered from the model description, so they never disagree with the FMU.
+out/line/ is the Line FMU's template: its library for each platform, each
+platform's line-description (the tool that writes a line's model description)
+and its documentation page; `webline export --fmu` makes a line's FMU from it,
+and the wheel (fmu/wheel.py) carries it.
 Only the Python standard library is used (and binutils' objdump).
 
 The platforms (README, "Platforms"; docs/platforms.md):
@@ -110,8 +114,17 @@ class Platform:
         self.target_dir = target_dir
 
     def library(self, model):
-        triple = self.target.removesuffix(".2.17")
-        return model.target_dir(self.target_dir) / triple / "release" / f"{self.prefix}{model.crate}{self.suffix}"
+        return self.release(model.target_dir(self.target_dir)) / f"{self.prefix}{model.crate}{self.suffix}"
+
+    def release(self, target_dir):
+        return target_dir / self.target.removesuffix(".2.17") / "release"
+
+    def description_tool(self):
+        """The Line's line-description for this platform, which the wheel carries (webline export --fmu
+        outside a checkout): built in a folder of its own, as its build of the Line's library with
+        the feature `cli` would replace the library the FMUs ship."""
+        exe = ".exe" if self.suffix == ".dll" else ""
+        return self.release(tools_target_dir(self.target_dir)) / f"line-description{exe}"
 
 
 PLATFORMS = {
@@ -177,6 +190,12 @@ LINE_MANIFEST = ["--manifest-path", str(ROOT / "models" / "line" / "Cargo.toml")
 # `export_fmi2_steps!`, webline's native loop); importers never need it.
 LINE_EXTENSIONS = frozenset({"convertingSpanDoSteps"})
 
+LINE_TOOL = [*LINE_MANIFEST, "--features", "cli", "--bin", "line-description"]
+
+
+def tools_target_dir(base):
+    return base.parent / "line-tools" / base.name
+
 
 class StepFailed(Exception):
     """A step of packaging failed: the one line the user reads instead of a traceback."""
@@ -207,10 +226,11 @@ def build(platforms):
     Two builds at a time: a release build ends in one long single-threaded link (LTO, one
     codegen unit), so a second build keeps the other core busy. Builds that share a target
     folder wait for each other on cargo's lock."""
-    models = [(p, packages(), "libraries", p.target_dir) for p in platforms]
-    lines = [(p, LINE_MANIFEST, "Line library", LINE.target_dir(p.target_dir)) for p in platforms]
+    models = [(p, ["--lib", *packages()], "libraries", p.target_dir) for p in platforms]
+    lines = [(p, ["--lib", *LINE_MANIFEST], "Line library", LINE.target_dir(p.target_dir)) for p in platforms]
+    tools = [(p, LINE_TOOL, "Line's line-description", tools_target_dir(p.target_dir)) for p in platforms]
     # interleaved, so that the two running builds rarely share a target folder
-    jobs = [job for pair in zip(models, lines) for job in pair]
+    jobs = [job for triple in zip(models, lines, tools) for job in triple]
     with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
         waiting = [pool.submit(build_crates, *job) for job in jobs] + [pool.submit(build_export_tool)]
         for done in waiting:
@@ -226,7 +246,7 @@ def build_export_tool():
 
 
 def build_crates(platform, selection, what, target_dir):
-    common = ["--release", "--lib", "--quiet", *selection, "--target", platform.target]
+    common = ["--release", "--quiet", *selection, "--target", platform.target]
     common += ["--target-dir", str(target_dir)]
     env = dict(os.environ)
     if platform.folder == "linux64":
@@ -473,17 +493,30 @@ def write_fmu3(out, model, libraries):
     return out
 
 
-def write_line_template(folder, libraries):
-    """The Line FMU's generic libraries under FMI 2.0's and FMI 3.0's platform
-    folders (fmi2/binaries, fmi3/binaries), replacing what was there."""
+def write_line_template(folder, libraries, tools):
+    """The Line FMU's generic libraries under FMI 2.0's and FMI 3.0's platform folders
+    (fmi2/binaries, fmi3/binaries), each platform's line-description (tools/<platform>/) and
+    the FMU's documentation page with the stylesheet inlined (documentation/index.html): what
+    `webline export --fmu` needs, in a checkout or from the wheel. Replaces what was there."""
     for standard, names in (("fmi2", {f: f for f in SUFFIXES}), ("fmi3", FMI3_FOLDERS)):
-        binaries = folder / standard / "binaries"
-        wanted = {binaries / names[platform] / f"Line{SUFFIXES[platform]}": library for platform, library in libraries.items()}
-        for stale in [p for p in binaries.rglob("*") if p.is_file() and p not in wanted] if binaries.is_dir() else []:
-            stale.unlink()
-        for target, library in sorted(wanted.items()):
-            write_if_changed(target, library.read_bytes())
+        wanted = {Path(standard, "binaries", names[platform], f"Line{SUFFIXES[platform]}"): library
+                  for platform, library in libraries.items()}
+        replace_folder(folder / standard / "binaries", {folder / k: v.read_bytes() for k, v in wanted.items()})
+    replace_folder(folder / "tools", {folder / "tools" / platform / tool.name: tool.read_bytes()
+                                      for platform, tool in tools.items()}, mode=0o755)
+    page = LINE.template.read_text(encoding="utf-8").replace("<!-- STYLE -->", STYLE.read_text(encoding="utf-8"))
+    write_if_changed(folder / "documentation" / "index.html", page.encode("utf-8"))
     return folder
+
+
+def replace_folder(folder, files, mode=None):
+    """The folder holds exactly files ({path: bytes}) afterwards."""
+    for stale in [p for p in folder.rglob("*") if p.is_file() and p not in files] if folder.is_dir() else []:
+        stale.unlink()
+    for target, data in sorted(files.items()):
+        write_if_changed(target, data)
+        if mode is not None:
+            target.chmod(mode)
 
 
 def write_if_changed(out, data):
@@ -588,8 +621,13 @@ def main():
         line_libraries["linux64"] = LINE.host_library
     for folder, library in line_libraries.items():
         check_library(folder, library, True, LINE_EXTENSIONS)
-    print(f"wrote {write_line_template(span_out.parent / 'line', line_libraries)} (the Line FMU's libraries: "
-          f"{', '.join(sorted(line_libraries))}; webline export --fmu adds a line)")
+    # A host build's tool is not portable: the wheel's tools come from the platforms' builds only.
+    line_tools = {folder: PLATFORMS[folder].description_tool() for folder in chosen}
+    for folder, tool in line_tools.items():
+        if not tool.is_file():
+            sys.exit(f"package.py: {tool} is missing; run without --no-build")
+    print(f"wrote {write_line_template(span_out.parent / 'line', line_libraries, line_tools)} (the Line FMU's "
+          f"libraries and line-description: {', '.join(sorted(line_libraries))}; webline export --fmu adds a line)")
     for folder, path in args.add_binary:
         # tests/run.sh runs the platforms built here; an added library only its own platform can run.
         print(f"added binaries/{folder} from {path}: its exports are checked, but it was not run here; "

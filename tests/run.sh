@@ -36,6 +36,8 @@ stage "Rust tests of the Line" cargo test --profile cross-test --quiet \
     --manifest-path models/line/Cargo.toml --target-dir target/line
 stage "packaging" python3 fmu/package.py
 stage "compatibility files" "$PY" fmu/compat.py out
+# The webline wheel, which tests/integration/python/test_wheel.py installs into a venv of its own.
+stage "wheel" "$PY" fmu/wheel.py
 export CONVERTING_SPAN_PACKAGED=1 # hardening.sh and cross.sh need not package again
 # Hardening and the other platforms run beside pytest: they spend their time in cargo and
 # the emulators, pytest in one Python process, so side by side they keep both cores busy.

@@ -10,19 +10,25 @@
     webline convergence SCENE.json [--engine parts|line] [--steps 2ms,1ms,0.5ms]
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--sample KEY=uniform(A, B) --n N] [--scheduler tcp://host:8786]
                              [--metric NAME=max(SIGNAL)] [--resume] [--max-failed N]
+    webline scenes [--to scenes]
+    webline --version
+
+Outputs go to ./out of the current folder unless --out says otherwise; which FMUs webline
+runs (the repository's out/ in a checkout, else the wheel's) is installation.py's choice.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import shutil
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from . import units
+from . import installation, units
 from .names import ARCHIVE_ENGINES, ENGINES, engine_name
 from .fmus import DEFAULT_FMU_DIR, FmuError
 from .linear import StabilityError
@@ -34,7 +40,7 @@ from .linefmu import LineFmuError
 from .journal import StudyError
 from .usermetric import FUNCTIONS
 
-OUT = DEFAULT_FMU_DIR  # <repo>/out
+OUT = Path("out")  # of the current folder, wherever webline runs from
 
 
 def time_arg(text: str) -> float:
@@ -64,7 +70,7 @@ def add_master_options(p):
     p.add_argument("--coupling", choices=COUPLINGS,
                    help="parts: extrapolate (the default): input extrapolation, input derivatives for the spans; "
                         "hold: zero-order hold")
-    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR, help="where ConvertingSpan.fmu and Roller.fmu are (default: out/)")
+    p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR, help=f"where ConvertingSpan.fmu and Roller.fmu are (default: {DEFAULT_FMU_DIR})")
     p.add_argument("--no-rollback", action="store_true", help="parts: do not save FMU states; a discarded step is an error")
 
 
@@ -399,8 +405,35 @@ def cmd_sweep(args):
     return 1 if table.failed() or table.info["missing"] else 0
 
 
+def cmd_scenes(args):
+    """The shipped scenes copied into a folder of the user's, to run and change; a file there is kept."""
+    folder = Path(args.to)
+    folder.mkdir(parents=True, exist_ok=True)
+    copied, kept = [], []
+    for scene in sorted(installation.SCENES.glob("*.json")):
+        target = folder / scene.name
+        if target.exists():
+            kept.append(target.name)
+        else:
+            shutil.copyfile(scene, target)
+            copied.append(target.name)
+    print(f"copied {len(copied)} scenes into {folder}: {', '.join(copied) or 'none'}"
+          + (f"; kept your {', '.join(kept)}" if kept else ""))
+    if copied:
+        print(f"run one: webline run {folder / copied[0]}")
+    return 0
+
+
+# The commands that need no FMU library of this platform.
+WITHOUT_LIBRARIES = ("scenes", "reference")
+
+
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog="webline", description="Co-simulate web lines of ConvertingSpan and Roller FMUs.")
+    # Raw: the version's lines (installation.describe) print as they are.
+    parser = argparse.ArgumentParser(prog="webline", description="Co-simulate web lines of ConvertingSpan and Roller FMUs.",
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=installation.describe(),
+                        help="webline's version, and which FMUs it uses and why")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("run", help="run a scene (the Line FMU by default) or an SSP archive: CSV, PNG and a summary")
@@ -414,7 +447,7 @@ def main(argv=None):
                         "libcosim or fmpy: the SSP archive in those (Jacobi, held inputs; a scene is exported first)")
     p.add_argument("--force", action="store_true",
                    help="parts: run above the predicted stable step anyway (the summary warns)")
-    p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
+    p.add_argument("--out", default=str(OUT), help="output folder (default: ./out)")
     p.add_argument("--no-plot", action="store_true")
     p.add_argument("--reference", action="store_true", help="also compute the monolithic reference and print the error")
     g = p.add_mutually_exclusive_group()
@@ -450,7 +483,7 @@ def main(argv=None):
                    help="a Bode plot from a Line input to a Line output, e.g. unwind.tau_m:entry.T (repeat for more)")
     p.add_argument("-o", "--output", type=Path, help="the model (default: OUT/SCENE_linear.mat)")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
-    p.add_argument("--out", default=str(OUT), help="output folder (default: out/)")
+    p.add_argument("--out", default=str(OUT), help="output folder (default: ./out)")
     p.set_defaults(func=cmd_linearize)
 
     p = sub.add_parser("reference", help="the monolithic SciPy reference of a scene, as CSV")
@@ -486,7 +519,7 @@ def main(argv=None):
     p.add_argument("--workers", type=int, default=2, help="workers of the local cluster")
     p.add_argument("--step", type=time_arg)
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
-    p.add_argument("--out", default=str(OUT / "sweep.csv"), help="the table (default: out/sweep.csv)")
+    p.add_argument("--out", default=str(OUT / "sweep.csv"), help="the table (default: ./out/sweep.csv)")
     p.add_argument("--series", metavar="FILE.parquet", help="also every point's recorded signals, in one Parquet file")
     p.add_argument("--plot", nargs="?", const="", metavar="OUTPUT",
                    help="PNGs next to the table: each recorded tension's band over the points, and OUTPUT "
@@ -503,12 +536,25 @@ def main(argv=None):
                    help="how long a study whose workers are all gone waits for one (default 300 s)")
     p.set_defaults(func=cmd_sweep)
 
+    p = sub.add_parser("scenes", help="copy the shipped scenes (lamination, laminator, slitter, ...) into a folder")
+    p.add_argument("--to", default="scenes", help="the folder (default: ./scenes); a scene already there is kept")
+    p.set_defaults(func=cmd_scenes)
+
     args = parser.parse_args(argv)
     try:
+        if args.command not in WITHOUT_LIBRARIES:
+            installation.require_platform(getattr(args, "fmu_dir", None))
         return args.func(args)
     except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError, LineFmuError, StabilityError,
-            StudyError) as e:
+            StudyError, installation.PlatformError) as e:
         print(f"webline: {e}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as e:
+        extra = installation.missing_extra(e)
+        if extra is None:
+            raise
+        print(f"webline {args.command}: needs the {extra} extra ({e.name} is not installed): "
+              f"pip install 'webline[{extra}]'", file=sys.stderr)
         return 2
 
 

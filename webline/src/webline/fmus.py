@@ -35,8 +35,10 @@ from fmpy.fmi2 import (
 from fmpy import calloc, free
 from lxml import etree
 
-ROOT = Path(__file__).resolve().parents[3]
-DEFAULT_FMU_DIR = ROOT / "out"
+from .installation import CHECKOUT, FMU_DIR
+
+# The repository's out/ in a checkout, the wheel's data when installed (installation.py).
+DEFAULT_FMU_DIR = FMU_DIR
 SPAN_FMU = "ConvertingSpan.fmu"
 ROLLER_FMU = "Roller.fmu"
 
@@ -64,11 +66,11 @@ def _read(path: str, mtime: float):
 
 
 def _span_path(fmu_dir=None) -> Path:
-    """The FMU in `fmu_dir` (out/ by default); without a `fmu_dir` and before the
-    FMUs are built, the repository's modelDescription.xml, which the FMU is packaged from."""
+    """The FMU in `fmu_dir` (DEFAULT_FMU_DIR by default); in a checkout, without a `fmu_dir` and
+    before the FMUs are built, the repository's modelDescription.xml, which the FMU is packaged from."""
     path = Path(fmu_dir or DEFAULT_FMU_DIR) / SPAN_FMU
-    if not path.exists() and fmu_dir is None and (ROOT / "modelDescription.xml").exists():
-        path = ROOT / "modelDescription.xml"
+    if not path.exists() and fmu_dir is None and CHECKOUT and (CHECKOUT / "modelDescription.xml").exists():
+        path = CHECKOUT / "modelDescription.xml"
     if not path.exists():
         raise FileNotFoundError(f"{path} is missing: build the FMUs first with `python3 fmu/package.py`")
     return path

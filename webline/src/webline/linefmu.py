@@ -12,6 +12,7 @@ Line library, built once for every platform (`fmu/package.py`).
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import tempfile
@@ -21,13 +22,16 @@ from pathlib import Path
 from . import fmpy_log
 from .compiler import compile_scene, layer_parts
 from .fmus import DEFAULT_FMU_DIR
+from .installation import CHECKOUT, LINE, host_platform
 from .scene import Scene, Span
 from .system import profile_text
 
 FORMAT = "converting-span-line 1"
-ROOT = Path(__file__).resolve().parents[3]
-# Where fmu/package.py leaves the Line library of each platform, FMI 2.0 and 3.0 names.
-TEMPLATE = "line"
+# Where fmu/package.py leaves the Line library of each platform (FMI 2.0 and 3.0 names), the
+# description tool of each (tools/PLATFORM/) and the documentation page (documentation/index.html).
+TEMPLATE = LINE
+# Zip entries' time: the same line gives the same FMU bytes (as fmu/package.py's FMUs).
+ZIP_TIME = (2026, 1, 1, 0, 0, 0)
 
 
 # A scene's recorded quantity -> the Line FMU's output of that part (a laminate's T_<label>: as it is).
@@ -100,18 +104,21 @@ def spec_text(spec: dict) -> str:
     return json.dumps(spec, indent=1, sort_keys=True) + "\n"
 
 
-def description_tool() -> Path:
-    """The host's line-description, built on first use (cargo, from this checkout)."""
-    manifest = ROOT / "models" / "line" / "Cargo.toml"
+def description_tool(fmu_dir) -> Path:
+    """The host's line-description: in a checkout built on first use (cargo), so that it follows the
+    Rust sources; installed, the one fmu/package.py built for this platform (in the wheel)."""
+    if CHECKOUT is None:
+        return shipped_tool(fmu_dir)
+    manifest = CHECKOUT / "models" / "line" / "Cargo.toml"
     # Its own target folder: a build of the line links the span's crate without its C API,
     # which must not replace the span's own library in target/ (fmu/package.py does the same).
-    target = ROOT / "target" / "line"
+    target = CHECKOUT / "target" / "line"
     exe = target / "release" / "line-description"
     run = subprocess.run(
         ["cargo", "build", "--quiet", "--release", "--manifest-path", str(manifest), "--features", "cli", "--bin", "line-description"],
         capture_output=True,
         text=True,
-        env={**__import__("os").environ, "CARGO_TARGET_DIR": str(target)},
+        env={**os.environ, "CARGO_TARGET_DIR": str(target)},
     )
     if run.returncode != 0:
         raise LineFmuError(f"cannot build line-description: {run.stderr.strip().splitlines()[-1] if run.stderr.strip() else run.returncode}",
@@ -119,12 +126,24 @@ def description_tool() -> Path:
     return exe
 
 
-def descriptions(text: str, out: Path):
+def shipped_tool(fmu_dir) -> Path:
+    """This platform's line-description in the FMU folder (fmu/package.py's tools/PLATFORM/)."""
+    tools = Path(fmu_dir) / TEMPLATE / "tools"
+    platform = host_platform()
+    exe = tools / platform / ("line-description.exe" if platform == "win64" else "line-description")
+    if not exe.is_file():
+        carried = sorted(p.name for p in tools.iterdir()) if tools.is_dir() else []
+        raise LineFmuError(f"no line-description for {platform} in {tools} (it holds {', '.join(carried) or 'none'}): "
+                           "build it on this platform from the repository (`bash fmu/main.sh`)", cannot_export=True)
+    return exe
+
+
+def descriptions(text: str, out: Path, fmu_dir):
     """modelDescription.xml (FMI 2.0) and fmi3/ files for the spec text, into out."""
     with tempfile.TemporaryDirectory() as tmp:
         spec_file = Path(tmp) / "line.json"
         spec_file.write_text(text)
-        run = subprocess.run([str(description_tool()), str(spec_file), str(out)], capture_output=True, text=True)
+        run = subprocess.run([str(description_tool(fmu_dir)), str(spec_file), str(out)], capture_output=True, text=True)
         if run.returncode != 0:
             raise LineFmuError(run.stderr.strip() or f"line-description failed ({run.returncode})", cannot_export=True)
 
@@ -143,7 +162,7 @@ def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None
     out.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        descriptions(text, tmp)
+        descriptions(text, tmp, fmu_dir)
         entries = {"modelDescription.xml": (tmp / ("fmi3" if fmi3 else "") / "modelDescription.xml").read_bytes()}
         if fmi3:
             entries["terminalsAndIcons/terminalsAndIcons.xml"] = (tmp / "fmi3" / "terminalsAndIcons.xml").read_bytes()
@@ -154,11 +173,15 @@ def export(scene: Scene, out, fmu_dir=None, fmi3=False, start: str | None = None
         for path in sorted(binaries.rglob("*")):
             if path.is_file():
                 entries[f"binaries/{path.relative_to(binaries).as_posix()}"] = path.read_bytes()
-        entries["documentation/index.html"] = documentation(spec, entries["modelDescription.xml"], fmi3).encode()
+        page = (fmu_dir / TEMPLATE / "documentation" / "index.html").read_text(encoding="utf-8")
+        entries["documentation/index.html"] = documentation(page, spec, entries["modelDescription.xml"], fmi3).encode()
         part_file = out.with_suffix(".part")
         with zipfile.ZipFile(part_file, "w", zipfile.ZIP_DEFLATED) as z:
             for name, data in entries.items():
-                z.writestr(name, data)
+                info = zipfile.ZipInfo(name, ZIP_TIME)
+                info.compress_type = zipfile.ZIP_DEFLATED
+                info.external_attr = 0o644 << 16
+                z.writestr(info, data)
         part_file.replace(out)
     return out
 
@@ -240,8 +263,9 @@ def run_libcosim(fmu: Path, outputs: list[str], step: float, stop: float):
     return step * np.arange(1, n + 1), rows, clock.perf_counter() - t0
 
 
-def documentation(spec: dict, description: bytes, fmi3: bool) -> str:
-    """The FMU's documentation/index.html: which line, its parts, its variables."""
+def documentation(page: str, spec: dict, description: bytes, fmi3: bool) -> str:
+    """The FMU's documentation/index.html from the page fmu/package.py wrote (its stylesheet inlined):
+    which line, its parts, its variables."""
     import html
     import xml.etree.ElementTree as ET
 
@@ -266,9 +290,7 @@ def documentation(spec: dict, description: bytes, fmi3: bool) -> str:
                     f"<td>{esc(v.get('description', ''))}</td></tr>")
     parts = [f"<tr><td><code>{esc(p['name'])}</code></td><td>{esc(p['role'])}</td><td>{esc(p['model'])}</td>"
              f"<td>{esc(', '.join(offered.get(p['name'], [])))}</td></tr>" for p in spec["parts"]]
-    text = (ROOT / "models" / "line" / "documentation" / "index.html").read_text(encoding="utf-8")
     values = {
-        "<!-- STYLE -->": (ROOT / "fmu" / "style.css").read_text(encoding="utf-8"),
         "<!-- NAME -->": esc(spec["name"]),
         "<!-- DESCRIPTION -->": esc(spec.get("description", "")),
         "<!-- GUID -->": esc(token or ""),
@@ -277,5 +299,5 @@ def documentation(spec: dict, description: bytes, fmi3: bool) -> str:
         "<!-- VARIABLES -->": "\n".join(rows),
     }
     for key, value in values.items():
-        text = text.replace(key, value)
-    return text
+        page = page.replace(key, value)
+    return page
