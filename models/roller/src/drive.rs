@@ -2,6 +2,7 @@
 //! follows, read from the JSON file `profile` names (crate `profiles`).
 
 use crate::description::{Real, DESCRIPTION};
+use crate::number::Number;
 use crate::parameters::Parameters;
 use fmi_core::{FmiError, FmiResult, Resources};
 use profiles::{Profile, Table, Value};
@@ -39,6 +40,26 @@ pub enum Drive {
     Tension,
     /// The surface speed follows the table exactly.
     Speed,
+}
+
+/// What the drive's table gives at a time: a torque table's torque, a tension table's tension.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Read {
+    #[default]
+    None,
+    Torque(f64),
+    Tension(f64),
+}
+
+/// The drive's torque [R1]: tau_m, plus a torque table's, or a tension drive's -/+ r*T
+/// (unwinder/winder: the web pulls an unwinder back and a winder forward).
+#[inline]
+pub fn torque<N: Number>(p: &Parameters, read: Read, tau_m: N, radius: N) -> N {
+    match read {
+        Read::None => tau_m,
+        Read::Torque(x) => tau_m + x,
+        Read::Tension(x) => tau_m + radius * p.roll_sign() * x,
+    }
 }
 
 /// A checked profile and its text (kept for FMU states, which restore
