@@ -11,31 +11,8 @@
 //!       e_d = loop.sign*(dancer.y - dancer.set);  trim = dancer.kp*e_d + dancer.I;  d(dancer.I)/dt = dancer.ki*e_d.
 
 use crate::number::Number;
-use crate::parameters::Parameters;
+use crate::parameters::{Kind, Parameters};
 use std::f64::consts::PI;
-
-/// What the drive's loop holds (`loop.kind`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
-    None,
-    /// A force (a span's tension, a load cell) at `loop.set` or the profile's setpoint table.
-    Force,
-    /// The surface speed at the profile's reference table.
-    Speed,
-    /// The speed loop with its reference trimmed by a PI on a dancer's position [R13].
-    Dancer,
-}
-
-impl Kind {
-    pub fn of(p: &Parameters) -> Kind {
-        match p.loop_kind {
-            1 => Kind::Force,
-            2 => Kind::Speed,
-            3 => Kind::Dancer,
-            _ => Kind::None,
-        }
-    }
-}
 
 /// The share of the limit over which the torque bends into it: smooth (C1), so that Newton's
 /// method in the Line's implicit steps sees a slope everywhere, and exact inside.

@@ -2,9 +2,9 @@
 //! Jacobian): the right-hand side (`rhs`) evaluated in `Tangent` along a direction in the states
 //! and the inputs. The profile's tables are functions of time only, so they and their slopes are held.
 
-use crate::control;
 use crate::number::Tangent;
-use crate::parameters::{Inputs, Parameters};
+use crate::parameters::{Inputs, Kind, Parameters};
+use crate::roll;
 use crate::rhs::{self, Modes, Outputs, Point};
 use crate::state::States;
 
@@ -24,9 +24,9 @@ pub type Tangents = Outputs<f64>;
 /// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on, and so do
 /// layers [R9], each its own). Not where the web may slip: [R7] is nonlinear; nor where a drive has a
 /// loop: its limit [R11] is nonlinear, and its gains and limit are tunable; nor with a load cell, a
-/// root of the forces.
+/// root of the forces; nor where the bearings' torque is not linear in omega.
 pub fn tangents_fixed(p: &Parameters) -> bool {
-    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && control::Kind::of(p) == control::Kind::None && p.load_cell_wrap == 0.0
+    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && Kind::of(p) == Kind::None && p.load_cell_wrap == 0.0 && roll::bearing_damping(p).is_some()
 }
 
 /// The roller at one point, for the tangents along any direction there (`Roller::linearize`).

@@ -44,7 +44,7 @@ pub struct Parameters {
     pub air_viscosity: f64,
     /// The webs stay layers [R9]: each outlet passes one inlet's strain on.
     pub layered: bool,
-    /// The drive's loop [R10]: 0 none, 1 force, 2 speed (`control::Kind`).
+    /// The drive's loop [R10]: 0 none, 1 force, 2 speed, 3 dancer (`Kind`).
     pub loop_kind: i32,
     pub loop_set: f64,
     /// A speed loop's reference where the profile has no reference table.
@@ -66,6 +66,29 @@ pub struct Parameters {
     pub dancer_set: f64,
     pub dancer_kp: f64,
     pub dancer_ki: f64,
+}
+
+/// What the drive's loop holds (`loop.kind`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    None,
+    /// A force (a span's tension, a load cell) at `loop.set` or the profile's setpoint table.
+    Force,
+    /// The surface speed at the profile's reference table.
+    Speed,
+    /// The speed loop with its reference trimmed by a PI on a dancer's position [R13].
+    Dancer,
+}
+
+impl Kind {
+    pub fn of(p: &Parameters) -> Kind {
+        match p.loop_kind {
+            1 => Kind::Force,
+            2 => Kind::Speed,
+            3 => Kind::Dancer,
+            _ => Kind::None,
+        }
+    }
 }
 
 /// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I).
@@ -180,7 +203,6 @@ impl Parameters {
     /// input gives them [R10]. Inputs and computed variables always act. No fallthrough: a new
     /// variable stops the compiler here.
     pub fn acts(&self, var: Real, s: &Structure) -> bool {
-        use crate::control::Kind;
         let kind = Kind::of(self);
         let speed_loop = matches!(kind, Kind::Speed | Kind::Dancer);
         match var {
@@ -266,12 +288,11 @@ impl Parameters {
 
     /// A line may give a force loop's set point as its input.
     pub fn takes_set_input(&self) -> bool {
-        crate::control::Kind::of(self) == crate::control::Kind::Force
+        Kind::of(self) == Kind::Force
     }
 
     /// A line may give a speed or dancer loop's reference, or an ideal speed drive's speed, as its input.
     pub fn takes_speed_input(&self) -> bool {
-        use crate::control::Kind;
         match Kind::of(self) {
             Kind::Speed | Kind::Dancer => true,
             Kind::None | Kind::Force => self.speed_input,

@@ -78,12 +78,13 @@ pub fn speed_drive_torque<N: Number>(inertia: N, radius: N, slope: f64, web: N, 
     inertia * slope / radius - bearing - web
 }
 
-/// [R1] with r and J held over a piece of length h: the drive torque is
-/// `tau0 + tau1*s` (s from the piece's start). Exact:
+/// [R1] with r and J held over a piece of length h, the bearings' torque -b*omega
+/// (`roll::bearing_damping`): the drive torque is `tau0 + tau1*s` (s from the piece's start). Exact:
 /// omega(h) = omega + (a0 - (b/J)*omega)*int e^{-(b/J)(h-s)} ds + a1*int s e^{-(b/J)(h-s)} ds.
-pub fn rotation_step(p: &Parameters, roll: &Roll, u: &Inputs, omega: CompensatedSum, tau0: f64, tau1: f64, h: f64) -> CompensatedSum {
+#[allow(clippy::too_many_arguments)]
+pub fn rotation_step(p: &Parameters, roll: &Roll, u: &Inputs, omega: CompensatedSum, damping: f64, tau0: f64, tau1: f64, h: f64) -> CompensatedSum {
     let j = roll.inertia;
-    let decay = p.damping / j;
+    let decay = damping / j;
     let a0 = (web_torque(p, roll.radius, u) + tau0) / j;
     let a1 = tau1 / j;
     omega.plus((a0 - decay * omega.value()) * decay_integral(decay, h) + a1 * ramp_integral(decay, h))
@@ -121,7 +122,7 @@ mod tests {
         // w(t) = a0/k + a1*(t/k - 1/k^2) + C e^{-kt}
         let c = w0 - a0 / k + a1 / (k * k);
         let exact = a0 / k + a1 * (h / k - 1.0 / (k * k)) + c * (-k * h).exp();
-        let got = rotation_step(&p, &roll, &Inputs::default(), CompensatedSum::from_parts(w0, 0.0), tau0, tau1, h).value();
+        let got = rotation_step(&p, &roll, &Inputs::default(), CompensatedSum::from_parts(w0, 0.0), p.damping, tau0, tau1, h).value();
         assert!((got - exact).abs() < 1e-13 * exact.abs(), "{got} {exact}");
     }
 

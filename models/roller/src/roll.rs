@@ -59,6 +59,14 @@ pub fn bearing_torque<N: Number>(p: &Parameters, omega: N) -> N {
     -(omega * p.damping)
 }
 
+/// The bearings' torque as -c*omega: c, which [R1]'s exact step takes (`physics::rotation_step`);
+/// None where a term of `bearing_torque` is not linear in omega (the step and the tangents then
+/// follow the right-hand side).
+#[inline]
+pub fn bearing_damping(p: &Parameters) -> Option<f64> {
+    Some(p.damping)
+}
+
 /// [R3] after a piece in which the surface moved `travel` metres: the new
 /// radius squared (None: the roll ran empty).
 pub fn wound_radius(p: &Parameters, radius: f64, travel: f64) -> Option<f64> {

@@ -4,7 +4,7 @@
 
 use crate::description::Real;
 use crate::number::{Number, Tangent};
-use crate::control::Kind;
+use crate::parameters::Kind;
 use crate::parameters::{Parameters, STATES};
 
 /// One of the roller's continuous states.

@@ -3,7 +3,7 @@
 //! [R4]) and by an L-stable Rosenbrock method on the right-hand side (`rhs`) where they are not
 //! (the web's slip [R6]-[R7], a loop [R10]-[R11], a brake [R12]).
 
-use crate::control::Kind;
+use crate::parameters::Kind;
 use crate::drive::{Drive, Key};
 use crate::model::Roller;
 use crate::rhs::{self, Modes, Point};
@@ -48,7 +48,9 @@ impl Roller {
         let r = self.roll.radius;
         let prescribed = self.prescribed(t); // at the piece's start, after its events
         let mut v_web = self.v_web;
-        if Kind::of(p) != Kind::None || self.table(Key::Brake).is_some() {
+        // [R1] is linear in omega without a loop, a brake or bearings whose torque is not -b*omega.
+        let linear = roll::bearing_damping(p).filter(|_| Kind::of(p) == Kind::None && self.table(Key::Brake).is_none());
+        let Some(damping) = linear else {
             // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused): the loop's integrator,
             // its motor and the roll's own (omega, r), with J moving with r, by the same L-stable method.
             let y = self.controlled_step(t, h)?;
@@ -66,7 +68,7 @@ impl Roller {
             self.roll = Roll { radius: y[1], inertia, ..self.roll };
             (self.integrator, self.motor, self.dancer, self.carriage) = (y[2], y[3], y[4], carriage);
             return Ok(());
-        }
+        };
         let (omega, travel) = match prescribed {
             _ if p.traction => {
                 // [R6]-[R7] are nonlinear and stiff (the friction's slope over the web's small mass):
@@ -81,7 +83,7 @@ impl Roller {
             }
             None => {
                 let (tau0, tau1) = self.torque_at(t);
-                let next = physics::rotation_step(p, &self.roll, &self.inputs, self.omega, tau0, tau1, h);
+                let next = physics::rotation_step(p, &self.roll, &self.inputs, self.omega, damping, tau0, tau1, h);
                 (next, 0.5 * r * (self.omega.value() + next.value()) * h)
             }
         };
