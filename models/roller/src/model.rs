@@ -172,7 +172,7 @@ impl Roller {
             roll: self.roll,
             prescribed: self.prescribed(t),
             drive: self.drive_read(t).0,
-            brake: self.value(Key::Brake, t).map_or(0.0, |(b, _)| b),
+            brake: self.value(Key::Brake, t).map(|(b, _)| b),
             control: control::Reads { set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x), reference: self.value(Key::Reference, t) },
             load: self.value(Key::Load, t).map_or(0.0, |(x, _)| x),
             strain: self.value(Key::Strain, t).map(|(x, _)| x),
@@ -292,7 +292,7 @@ impl Roller {
 
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
     pub fn drive_torque(&self) -> f64 {
-        self.evaluate().torque
+        rhs::torque(&self.params, &self.point(), &self.states(), &self.inputs, &Modes::default())
     }
 
     /// Whether the tangents along omega, the carriage and the inputs stay as they are until an event or

@@ -21,8 +21,8 @@ pub struct Point {
     /// A prescribed surface speed and its slope (a speed table, or `speed.input`'s loop.speed).
     pub prescribed: Option<(f64, f64)>,
     pub drive: drive::Read,
-    /// A brake's torque B [R12] (0 without a brake table).
-    pub brake: f64,
+    /// A brake's torque B [R12] (None without a brake table).
+    pub brake: Option<f64>,
     pub control: control::Reads,
     /// The carriage's load table [R4] (0 without one).
     pub load: f64,
@@ -69,16 +69,25 @@ pub struct Rates<N> {
     pub surface_speed: N,
 }
 
-/// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
+/// What [R1] sums and what it is made of, at the roller's point.
+struct Torques<N> {
+    inertia: N,
+    surface_speed: N,
+    /// The friction where the web may slip [R6]-[R7], and the web's acceleration it gives.
+    friction: Option<(N, N)>,
+    web: N,
+    bearing: N,
+    loop_law: control::Law<N>,
+}
+
 #[inline]
-pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Rates<N> {
+fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Torques<N> {
     let (omega, r) = (x.omega, x.radius);
     let inertia = at.roll.inertia(p, r);
     let v = match at.prescribed {
         Some((v, _)) => N::constant(v),
         None => physics::surface_speed(r, omega),
     };
-    let (radius_rate, inertia_rate) = roll::rates(p, r, v);
     let friction = at.slip.map(|s| {
         let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r];
         match modes.friction {
@@ -89,7 +98,6 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         Some((f, _)) => -(r * f),
         None => physics::web_torque(p, r, u),
     };
-    let bearing = roll::bearing_torque(p, omega);
     let loop_law = control::law(p, &at.control, &control::Seen {
         omega,
         radius: r,
@@ -100,16 +108,40 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         motor: x.motor_torque,
         dancer: x.dancer_integrator,
     });
-    let (omega_rate, surface_rate, torque) = match at.prescribed {
-        Some((_, slope)) => (
-            physics::omega_rate_at_speed(slope, v, r, radius_rate),
-            N::constant(slope),
-            physics::speed_drive_torque(inertia, r, slope, web, bearing),
-        ),
+    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law }
+}
+
+/// The drive's torque: its table and tau_m, its loop, a brake; where the surface follows a
+/// speed, the torque [R1] needs for it.
+#[inline]
+fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, t: &Torques<N>) -> N {
+    match at.prescribed {
+        Some((_, slope)) => physics::speed_drive_torque(t.inertia, x.radius, slope, t.web, t.bearing),
         None => {
-            let torque = drive::torque(p, at.drive, u.torque, r) + loop_law.torque + brake::torque(at.brake, v, p.brake_v_slip);
-            let rate = physics::net_torque(web, torque, bearing, inertia_rate, omega) / inertia;
-            (rate, r * rate + omega * radius_rate, torque)
+            let brake = at.brake.map_or_else(N::default, |b| brake::torque(b, t.surface_speed, p.brake_v_slip));
+            drive::torque(p, at.drive, u.torque, x.radius) + t.loop_law.torque + brake
+        }
+    }
+}
+
+/// The drive's torque at the roller's point (`Rates::torque` alone).
+#[inline]
+pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> N {
+    drive_torque(p, at, x, u, &torques(p, at, x, u, modes))
+}
+
+/// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
+#[inline]
+pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Rates<N> {
+    let (omega, r) = (x.omega, x.radius);
+    let t = torques(p, at, x, u, modes);
+    let (v, torque) = (t.surface_speed, drive_torque(p, at, x, u, &t));
+    let (radius_rate, inertia_rate) = roll::rates(p, r, v);
+    let (omega_rate, surface_rate) = match at.prescribed {
+        Some((_, slope)) => (physics::omega_rate_at_speed(slope, v, r, radius_rate), N::constant(slope)),
+        None => {
+            let rate = physics::net_torque(t.web, torque, t.bearing, inertia_rate, omega) / t.inertia;
+            (rate, r * rate + omega * radius_rate)
         }
     };
     let force = carriage::force(u.load, at.load, u.pull_back(p), u.pull_forward(p));
@@ -120,10 +152,10 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         carriage_y: y_rate,
         carriage_speed: y_speed_rate,
         // Without traction the web's speed is the surface's, and so is its rate.
-        web_speed: friction.map_or(surface_rate, |(_, a)| a),
-        loop_integrator: loop_law.integrator_rate,
-        motor_torque: loop_law.motor_rate,
-        dancer_integrator: loop_law.dancer_rate,
+        web_speed: t.friction.map_or(surface_rate, |(_, a)| a),
+        loop_integrator: t.loop_law.integrator_rate,
+        motor_torque: t.loop_law.motor_rate,
+        dancer_integrator: t.loop_law.dancer_rate,
     };
     Rates { derivatives, torque, surface_speed: v }
 }
