@@ -31,13 +31,13 @@ pub fn force<N: Number>(load: N, table: f64, pull_back: N, pull_forward: N) -> N
     load + table - pull_back - pull_forward
 }
 
-/// The carriage's (dy/dt, dy'/dt) [R4] with the total force g (0 without a carriage).
+/// The carriage's (dy/dt, dy'/dt) [R4] with the total force `g` (0 without a carriage, `g` not formed).
 #[inline]
-pub fn rates<N: Number>(p: &Parameters, y: N, speed: N, g: N) -> (N, N) {
+pub fn rates<N: Number>(p: &Parameters, y: N, speed: N, g: impl FnOnce() -> N) -> (N, N) {
     if !p.carriage {
         return (N::default(), N::default());
     }
-    (speed, (g - speed * p.carriage_damping - (y - p.carriage_start) * p.carriage_stiffness) / p.carriage_mass)
+    (speed, (g() - speed * p.carriage_damping - (y - p.carriage_start) * p.carriage_stiffness) / p.carriage_mass)
 }
 
 /// Where the webs touch the roller [R4]: web_b's x (web_a's is 0), at the roller's start position.

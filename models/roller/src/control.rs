@@ -81,9 +81,13 @@ pub struct Seen<N> {
 /// [R10]-[R11], [R13] at the roller's point.
 #[inline]
 pub fn law<N: Number>(p: &Parameters, reads: &Reads, x: &Seen<N>) -> Law<N> {
+    let kind = Kind::of(p);
+    if kind == Kind::None {
+        return Law::default();
+    }
     let v_ref = reads.reference.map_or(p.loop_speed, |(v, _)| v);
     let mut dancer_rate = N::default();
-    let e = match Kind::of(p) {
+    let e = match kind {
         Kind::None => return Law::default(),
         Kind::Force => (N::constant(reads.set) - x.measured) * p.loop_sign,
         Kind::Speed => N::constant(v_ref) - x.radius * x.omega,

@@ -168,6 +168,12 @@ impl Roller {
     #[inline]
     pub(crate) fn point_at(&self, t: f64, x: &States) -> Point {
         let p = &self.params;
+        let slip = p.traction.then(|| Slip::at(p, self.contact_state_at(t, x.omega, x.web_speed)));
+        if self.profile.is_none() {
+            // No tables to read (an idler, most rollers of a line): what the parameters give.
+            let control = control::Reads { set: p.loop_set, reference: None };
+            return Point { roll: self.roll, prescribed: self.prescribed(t), control, slip, ..Point::default() };
+        }
         Point {
             roll: self.roll,
             prescribed: self.prescribed(t),
@@ -176,7 +182,7 @@ impl Roller {
             control: control::Reads { set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x), reference: self.value(Key::Reference, t) },
             load: self.value(Key::Load, t).map_or(0.0, |(x, _)| x),
             strain: self.value(Key::Strain, t).map(|(x, _)| x),
-            slip: p.traction.then(|| Slip::at(p, self.contact_state_at(t, x.omega, x.web_speed))),
+            slip,
         }
     }
 

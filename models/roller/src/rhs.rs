@@ -144,8 +144,7 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
             (rate, r * rate + omega * radius_rate)
         }
     };
-    let force = carriage::force(u.load, at.load, u.pull_back(p), u.pull_forward(p));
-    let (y_rate, y_speed_rate) = carriage::rates(p, x.carriage_y, x.carriage_speed, force);
+    let (y_rate, y_speed_rate) = carriage::rates(p, x.carriage_y, x.carriage_speed, || carriage::force(u.load, at.load, u.pull_back(p), u.pull_forward(p)));
     let derivatives = States {
         omega: omega_rate,
         radius: radius_rate,
