@@ -67,16 +67,7 @@ impl Roller {
     /// The Model Exchange states now (the web's speed the surface's where it cannot slip).
     #[inline]
     pub fn states(&self) -> States {
-        States {
-            omega: self.omega.value(),
-            radius: self.roll.radius,
-            carriage_y: self.carriage[0],
-            carriage_speed: self.carriage[1],
-            web_speed: self.web_speed(),
-            loop_integrator: self.integrator,
-            motor_torque: self.motor,
-            dancer_integrator: self.dancer,
-        }
+        self.states_with(self.web_speed())
     }
 
     /// Sets the Model Exchange states: J moves with r on a roll being wound [R3].
@@ -164,8 +155,8 @@ impl Roller {
     }
 
     /// What the equations read at time t with the roller at `x`: the tables, and the contact where
-    /// the web may slip.
-    #[inline]
+    /// the web may slip (the leaving strain's table, which only an output reads: `linearize`).
+    #[inline(always)]
     pub(crate) fn point_at(&self, t: f64, x: &States) -> Point {
         let p = &self.params;
         let slip = p.traction.then(|| Slip::at(p, self.contact_state_at(t, x.omega, x.web_speed)));
@@ -181,7 +172,7 @@ impl Roller {
             brake: self.value(Key::Brake, t).map(|(b, _)| b),
             control: control::Reads { set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x), reference: self.value(Key::Reference, t) },
             load: self.value(Key::Load, t).map_or(0.0, |(x, _)| x),
-            strain: self.value(Key::Strain, t).map(|(x, _)| x),
+            strain: None,
             slip,
         }
     }
@@ -189,7 +180,28 @@ impl Roller {
     /// What the equations read now.
     #[inline]
     pub(crate) fn point(&self) -> Point {
-        self.point_at(self.time, &self.states())
+        self.point_at(self.time, &self.held())
+    }
+
+    /// The states as the roller holds them: the web's speed its own field, which the equations
+    /// read only where the web may slip (`states` gives the surface's speed there otherwise).
+    #[inline(always)]
+    pub(crate) fn held(&self) -> States {
+        States { web_speed: self.v_web, ..self.states_with(0.0) }
+    }
+
+    #[inline(always)]
+    fn states_with(&self, web_speed: f64) -> States {
+        States {
+            omega: self.omega.value(),
+            radius: self.roll.radius,
+            carriage_y: self.carriage[0],
+            carriage_speed: self.carriage[1],
+            web_speed,
+            loop_integrator: self.integrator,
+            motor_torque: self.motor,
+            dancer_integrator: self.dancer,
+        }
     }
 
     /// v [R2]; a speed drive's profile at the time now.
@@ -291,14 +303,16 @@ impl Roller {
     }
 
     /// The rates and the drive's torque now (`rhs::rates`).
-    #[inline]
+    #[inline(always)]
     fn evaluate(&self) -> rhs::Rates<f64> {
-        rhs::rates(&self.params, &self.point(), &self.states(), &self.inputs, &Modes::default())
+        let x = self.held();
+        rhs::rates(&self.params, &self.point_at(self.time, &x), &x, &self.inputs, &Modes::default())
     }
 
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
     pub fn drive_torque(&self) -> f64 {
-        rhs::torque(&self.params, &self.point(), &self.states(), &self.inputs, &Modes::default())
+        let x = self.held();
+        rhs::torque(&self.params, &self.point_at(self.time, &x), &x, &self.inputs, &Modes::default())
     }
 
     /// Whether the tangents along omega, the carriage and the inputs stay as they are until an event or
@@ -375,11 +389,13 @@ impl Roller {
     /// at the time now, the contact with its gradient.
     #[inline]
     pub fn linearize(&self) -> Linearization<'_> {
-        let mut point = self.point();
+        let x = self.held();
+        let mut point = self.point_at(self.time, &x);
+        point.strain = self.value(Key::Strain, self.time).map(|(x, _)| x);
         if let Some(s) = point.slip.as_mut() {
             s.used = Some(contact::traction_used(&self.params, &s.state, s.contact.mu_eff));
         }
-        Linearization { params: &self.params, inputs: &self.inputs, point, states: self.states() }
+        Linearization { params: &self.params, inputs: &self.inputs, point, states: x }
     }
 }
 

@@ -80,7 +80,7 @@ struct Torques<N> {
     loop_law: control::Law<N>,
 }
 
-#[inline]
+#[inline(always)]
 fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Torques<N> {
     let (omega, r) = (x.omega, x.radius);
     let inertia = at.roll.inertia(p, r);
@@ -113,7 +113,7 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, 
 
 /// The drive's torque: its table and tau_m, its loop, a brake; where the surface follows a
 /// speed, the torque [R1] needs for it.
-#[inline]
+#[inline(always)]
 fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, t: &Torques<N>) -> N {
     match at.prescribed {
         Some((_, slope)) => physics::speed_drive_torque(t.inertia, x.radius, slope, t.web, t.bearing),

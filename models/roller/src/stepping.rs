@@ -209,7 +209,7 @@ struct Slipping<'a> {
 impl Slipping<'_> {
     /// The roller at time t0 + s with (omega, v_web) at y: what the equations read there, its states.
     fn trial(&self, s: f64, y: &[f64; 2]) -> (Point, States) {
-        let x = States { omega: y[0], web_speed: y[1], ..self.roller.states() };
+        let x = States { omega: y[0], web_speed: y[1], ..self.roller.held() };
         (self.roller.point_at(self.t0 + s, &x), x)
     }
 }
@@ -276,7 +276,7 @@ impl solver::Ode<5> for Controlled<'_> {
 
     fn jacobian(&self, s: f64, y: &[f64; 5]) -> [[f64; 5]; 5] {
         let trial = self.roller.at_trial(self.t0 + s, y);
-        jacobian(&trial, &trial.point(), &trial.states(), CONTROLLED)
+        jacobian(&trial, &trial.point(), &trial.held(), CONTROLLED)
     }
 
     /// Tables of time (a set point's or a reference's ramp) move f at fixed y: a central difference.
