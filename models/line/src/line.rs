@@ -64,10 +64,10 @@ impl Line {
                 ModelKind::Roller => Part::roller(),
             };
             apply_start(&mut part, ps).map_err(|e| FmiError::error(format!("line.json: part {}: {e}", ps.name)))?;
-            if ps.set_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 1) {
+            if ps.set_input && !matches!(&part, Part::Roller(r) if r.params.takes_set_input()) {
                 return Err(FmiError::error(format!("line.json: part {}: set_input needs a roller whose drive has a force loop (loop.kind = 1)", ps.name)));
             }
-            if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.loop_kind == 2 || r.params.loop_kind == 3 || r.params.speed_input) {
+            if ps.speed_input && !matches!(&part, Part::Roller(r) if r.params.takes_speed_input()) {
                 return Err(FmiError::error(format!("line.json: part {}: speed_input needs a roller whose drive has a speed or dancer loop (loop.kind = 2 or 3) or is an ideal speed drive on it (speed.input = true)", ps.name)));
             }
             // A load cell a connection reads (a drive's loop on it): the roller's own output load_cell.F at

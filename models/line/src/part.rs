@@ -9,6 +9,8 @@ use crate::spec::PartSpec;
 use converting_span::ConvertingSpan;
 use fmi_core::description::ModelDescription;
 use fmi_core::{Compiled, EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
+use roller::parameters::Structure;
+use roller::state::State;
 use roller::Roller;
 
 /// What a span computes at once for the rollers at its ends (forces, strain, dx/dt): a line
@@ -247,7 +249,7 @@ impl Part {
     /// State `index` keeps its start value in the steady state: a roll's radius (never steady
     /// while web winds), a speed a table prescribes.
     pub fn held_at_steady_state(&self, index: usize) -> bool {
-        matches!(self, Part::Roller(r) if index == 1 || (index == 0 && r.speed_prescribed()))
+        matches!(self, Part::Roller(r) if r.held_at_steady_state(State::ALL[index]))
     }
 
     /// A roller's load cell for a wrap angle with this cosine.
@@ -293,37 +295,12 @@ impl Part {
         matches!(self, Part::Roller(r) if r.tangents_fixed())
     }
 
-    /// The part's continuous states the line integrates (indices into its
-    /// Model Exchange state vector): a Roller's radius only on a roll being
-    /// wound, its carriage only on a dancer, the web's speed over it only where
-    /// the web may slip.
+    /// The part's continuous states the line integrates (indices into its Model Exchange state
+    /// vector): a span's one, the ones a Roller says move (`Parameters::active_states`).
     pub fn active_states(&self) -> Vec<usize> {
         match self {
             Part::Span(_) => vec![0],
-            Part::Roller(r) => {
-                let mut states = vec![0];
-                if r.params.winding() {
-                    states.push(1);
-                }
-                if r.params.carriage {
-                    states.extend([2, 3]);
-                }
-                if r.params.traction {
-                    states.push(4);
-                }
-                // A drive's loop: its integrator, its motor's torque where it lags [R10]-[R11], and a
-                // dancer loop's integrator [R13].
-                if r.params.loop_kind != 0 {
-                    states.push(5);
-                    if r.params.motor_lag > 0.0 {
-                        states.push(6);
-                    }
-                    if r.params.loop_kind == 3 {
-                        states.push(7);
-                    }
-                }
-                states
-            }
+            Part::Roller(r) => r.params.active_states().into_iter().map(State::index).collect(),
         }
     }
 
@@ -336,69 +313,36 @@ impl Part {
     }
 
     /// The part's states a line integrates whatever the values of the parameters it offers
-    /// (Co-Simulation's states, which keep their number): its active states, and a roll's radius
-    /// wherever `wound.thickness` may make it one (a roll not driven at a prescribed speed,
-    /// `speed_driven`), held while it is not.
+    /// (Co-Simulation's states, which keep their number): a span's one, a Roller's
+    /// `Parameters::possible_states` (a surface at a prescribed speed is `speed_driven`).
     pub fn possible_states(&self, speed_driven: bool) -> Vec<usize> {
-        let mut states = self.active_states();
-        if let Part::Roller(r) = self {
-            if r.params.roll != 0 && !speed_driven && !states.contains(&1) {
-                states.insert(1, 1);
-            }
+        match self {
+            Part::Span(_) => self.active_states(),
+            Part::Roller(r) => r.params.possible_states(speed_driven).into_iter().map(State::index).collect(),
         }
-        states
     }
 
-    /// The parameter that makes a roller's state `index` one the line integrates (a span's
+    /// The parameter that makes the part's state `index` one the line integrates (a span's
     /// state always is one).
-    pub fn state_switch(index: usize) -> &'static str {
-        if index == 1 {
-            "wound.thickness"
-        } else {
-            "carriage"
+    pub fn state_switch(&self, index: usize) -> &'static str {
+        match self {
+            Part::Span(_) => "L",
+            Part::Roller(_) => State::ALL[index].switch(),
         }
     }
 
     /// Whether the part's Real parameter `vr` acts on the line, as `spec` (its line.json entry)
-    /// makes it. The line offers only those: a dancer's span takes its length from the
-    /// dancer; a surface that follows its speed table has no inertia, radius, damping, start
-    /// speed or roll build-up that the line sees; only a roll builds up, only a dancer has a
-    /// carriage, and the arriving webs' masses weigh only where several merge [R5]; a loop's
-    /// set point and reference act unless a table or the line's input gives them [R10].
+    /// makes it. The line offers only those: a dancer's span takes its length from the dancer;
+    /// a Roller's say its own (`Parameters::acts`).
     pub fn acts(&self, vr: u32, spec: &PartSpec) -> bool {
-        let speed_driven = spec.speed_driven();
         use converting_span::description::Real as S;
-        use roller::description::Real as R;
         match (self, self.port(vr)) {
             (Part::Span(s), Some(Port::Span(S::L))) => !s.params.effects.variable_length,
-            (Part::Roller(r), Some(Port::Roller(var))) => {
-                let (p, inlets) = (&r.params, r.params.inlets);
-                match var {
-                    R::J | R::R | R::b | R::v_start => !speed_driven,
-                    R::wound_thickness | R::wound_density | R::wound_width => p.roll != 0 && !speed_driven,
-                    R::carriage_m | R::carriage_d | R::carriage_k | R::carriage_y_start => p.carriage,
-                    R::web_a_m | R::web_a2_m => inlets >= 2,
-                    R::web_a3_m => inlets >= 3,
-                    R::web_a4_m => inlets >= 4,
-                    R::traction_mu
-                    | R::traction_wrap
-                    | R::traction_v_slip
-                    | R::traction_width
-                    | R::traction_slip_start
-                    | R::nip_mu
-                    | R::air_roughness
-                    | R::air_viscosity => p.traction,
-                    R::loop_set => p.loop_kind == 1 && !spec.has_table("setpoint") && !spec.set_input,
-                    R::loop_speed => {
-                        ((p.loop_kind == 2 || p.loop_kind == 3) && !spec.has_table("reference") || p.speed_input) && !spec.speed_input
-                    }
-                    R::brake_v_slip => spec.has_table("brake"),
-                    R::dancer_set | R::dancer_kp | R::dancer_ki => p.loop_kind == 3,
-                    R::loop_kp | R::loop_ki | R::motor_limit => p.loop_kind != 0,
-                    _ => true,
-                }
-            }
-            _ => true,
+            (Part::Span(_), Some(Port::Span(_))) => true,
+            (Part::Roller(r), Some(Port::Roller(var))) => r.params.acts(var, &structure(spec)),
+            // No Real of the part: nothing it could switch off.
+            (_, None) => true,
+            _ => unreachable!("a port is resolved from its own part"),
         }
     }
 
@@ -418,6 +362,18 @@ impl Part {
     /// A span whose length moves and whose tension is damped reads dL/dt.
     pub fn reads_length_rate(&self) -> bool {
         matches!(self, Part::Span(s) if s.params.effects.variable_length && s.params.effects.include_damping)
+    }
+}
+
+/// What a roller's line.json entry fixes besides its parameters.
+fn structure(spec: &PartSpec) -> Structure {
+    Structure {
+        speed_driven: spec.speed_driven(),
+        setpoint_table: spec.has_table("setpoint"),
+        reference_table: spec.has_table("reference"),
+        brake_table: spec.has_table("brake"),
+        set_input: spec.set_input,
+        speed_input: spec.speed_input,
     }
 }
 

@@ -63,9 +63,10 @@ pub fn join(spec: &Spec, parts: &[Part], integrated: &[Vec<usize>]) -> FmiResult
     for (p, part) in parts.iter().enumerate() {
         let Some(&i) = part.active_states().iter().find(|i| !integrated[p].contains(i)) else { continue };
         let (d, name) = (part.description(), &spec.parts[p].name);
-        let switch = Part::state_switch(i);
+        let switch = part.state_switch(i);
         let value = d.variable_by_name(switch).map_or_else(String::new, |v| match v.kind {
             fmi_core::description::Kind::Real => part.get_real(v.vr).map_or_else(|_| "?".into(), |x| x.to_string()),
+            fmi_core::description::Kind::Integer => part.get_integer(v.vr).map_or_else(|_| "?".into(), |x| x.to_string()),
             _ => part.get_boolean(v.vr).map_or_else(|_| "?".into(), |b| b.to_string()),
         });
         let state = d.variable(d.states[i]).map_or("?", |v| &v.name);

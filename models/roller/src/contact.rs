@@ -14,7 +14,16 @@
 //! Each result is a value with its gradient in the contact's knowns (`Dual`): the tangents are the
 //! equations' own, differentiated once, here, and formed once per point for every direction.
 
+use crate::number::Number;
 use crate::parameters::Parameters;
+
+/// How the web meets the roller: today always by [R7]'s regularized friction, which covers
+/// sticking (|s| << v_slip) and sliding alike.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Friction {
+    #[default]
+    Regularized,
+}
 
 /// The least wrap whose web mass [R6] counts: a roller the web only touches at a nip still
 /// carries the web over a short arc there, and [R6] needs a mass to stay an ODE.
@@ -51,6 +60,13 @@ impl Dual {
     #[inline]
     pub fn along(&self, direction: &Gradient) -> f64 {
         self.d.iter().zip(direction).map(|(g, d)| g * d).sum()
+    }
+
+    /// This result in the roller's number, the knowns (v_web, v_surface, T_a, T_b, r) in it: the
+    /// contact's own gradient, chained.
+    #[inline]
+    pub fn lift<N: Number>(&self, knowns: &[N; 5]) -> N {
+        N::chain(self.x, &self.d, knowns)
     }
 
     /// f(self), f' its slope there.

@@ -10,31 +10,9 @@
 //! [R13] a dancer loop: the speed loop of [R10] with v_ref + trim for v_ref,
 //!       e_d = loop.sign*(dancer.y - dancer.set);  trim = dancer.kp*e_d + dancer.I;  d(dancer.I)/dt = dancer.ki*e_d.
 
-use crate::parameters::Parameters;
+use crate::number::Number;
+use crate::parameters::{Kind, Parameters};
 use std::f64::consts::PI;
-
-/// What the drive's loop holds (`loop.kind`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
-    None,
-    /// A force (a span's tension, a load cell) at `loop.set` or the profile's setpoint table.
-    Force,
-    /// The surface speed at the profile's reference table.
-    Speed,
-    /// The speed loop with its reference trimmed by a PI on a dancer's position [R13].
-    Dancer,
-}
-
-impl Kind {
-    pub fn of(p: &Parameters) -> Kind {
-        match p.loop_kind {
-            1 => Kind::Force,
-            2 => Kind::Speed,
-            3 => Kind::Dancer,
-            _ => Kind::None,
-        }
-    }
-}
 
 /// The share of the limit over which the torque bends into it: smooth (C1), so that Newton's
 /// method in the Line's implicit steps sees a slope everywhere, and exact inside.
@@ -56,52 +34,88 @@ pub fn limit(p: &Parameters, u: f64) -> (f64, f64) {
     (u.signum() * (l - w * decay), decay)
 }
 
-/// The feed-forward torque d(J*v_ref/r)/dt [R10] at radius r, inertia j, reference speed v and
-/// acceleration a, and its derivative in r (J moves with r on a roll being wound [R3]).
+/// The feed-forward torque d(J*v_ref/r)/dt [R10] at radius r, inertia j (moving with r on a roll
+/// being wound [R3]), reference speed v and acceleration a.
 #[inline]
-pub fn feedforward(p: &Parameters, r: f64, j: f64, v: f64, a: f64) -> (f64, f64) {
+pub fn feedforward<N: Number>(p: &Parameters, r: N, j: N, v: f64, a: f64) -> N {
     if !p.winding() {
-        return (j * a / r, -j * a / (r * r));
+        return j * a / r;
     }
-    // r' = c*v/r, J' = k*r^3*r' = k*c*v*r^2, dJ/dr = k*r^3.
+    // r' = c*v/r, J' = k*r^3*r' = k*c*v*r^2.
     let (k, c) = (2.0 * PI * p.wound_density * p.wound_width, p.roll_sign() * p.wound_thickness / (2.0 * PI));
-    let dj = k * r.powi(3);
-    let ff = j * a / r + k * c * v * v * r - j * c * v * v / r.powi(3);
-    let d = dj * a / r - j * a / (r * r) + k * c * v * v - dj * c * v * v / r.powi(3) + 3.0 * j * c * v * v / r.powi(4);
-    (ff, d)
+    j * a / r + r * (k * c * v * v) - j * c * v * v / r.powi(3)
 }
 
-/// The loop's point: its rates and the motor's torque, with their slopes in what moves them.
+/// What the loop reads from the profile at a time: a force loop's set point (its table's, else
+/// `loop.set`) and the reference's speed and slope where a table gives one.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Loop {
-    /// d(loop.I)/dt and d(motor.torque)/dt.
-    pub rates: [f64; 2],
-    /// The torque the motor gives now.
-    pub torque: f64,
-    /// d(u)/d(e), d(u)/d(I) = 1, and sat'(u).
-    pub kp: f64,
-    pub slope: f64,
-    pub ki: f64,
-    pub tracking: f64,
-    pub lag: f64,
+pub struct Reads {
+    pub set: f64,
+    pub reference: Option<(f64, f64)>,
 }
 
-/// The loop at a roller's point: its law, the error's slopes in (loop.measured, omega, r, dancer.y,
-/// dancer.I) and the feed-forward's in r; a dancer loop's integrator rate [R13] and its slope in dancer.y.
+/// The loop's share of the roller's rates [R10]-[R11], [R13]: the torque its motor gives and the
+/// rates of its states (all 0 without a loop).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Point {
-    pub law: Loop,
-    pub de: [f64; 5],
-    pub dff_r: f64,
-    pub dancer_rate: f64,
-    pub dancer_rate_dy: f64,
+pub struct Law<N> {
+    pub torque: N,
+    pub integrator_rate: N,
+    pub motor_rate: N,
+    pub dancer_rate: N,
+}
+
+/// What the loop sees of the roller: its speed, radius and inertia, the inputs it measures
+/// (loop.measured, dancer.y) and its own states (loop.I, motor.torque, dancer.I).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Seen<N> {
+    pub omega: N,
+    pub radius: N,
+    pub inertia: N,
+    pub measured: N,
+    pub dancer_y: N,
+    pub integrator: N,
+    pub motor: N,
+    pub dancer: N,
+}
+
+/// [R10]-[R11], [R13] at the roller's point.
+#[inline]
+pub fn law<N: Number>(p: &Parameters, reads: &Reads, x: &Seen<N>) -> Law<N> {
+    let kind = Kind::of(p);
+    if kind == Kind::None {
+        return Law::default();
+    }
+    let v_ref = reads.reference.map_or(p.loop_speed, |(v, _)| v);
+    let mut dancer_rate = N::default();
+    let e = match kind {
+        Kind::None => return Law::default(),
+        Kind::Force => (N::constant(reads.set) - x.measured) * p.loop_sign,
+        Kind::Speed => N::constant(v_ref) - x.radius * x.omega,
+        Kind::Dancer => {
+            let (e_d, trim) = dancer(p, x.dancer_y, x.dancer);
+            dancer_rate = e_d * p.dancer_ki;
+            N::constant(v_ref) + trim - x.radius * x.omega
+        }
+    };
+    let ff = match reads.reference {
+        Some((v, a)) if p.loop_feedforward => feedforward(p, x.radius, x.inertia, v, a),
+        _ => N::default(),
+    };
+    let u = e * p.loop_kp + x.integrator + ff;
+    let sat = {
+        let (value, slope) = limit(p, u.value());
+        u.map(value, slope)
+    };
+    let integrator_rate = e * p.loop_ki + (sat - u) * tracking(p);
+    let (torque, motor_rate) = if p.motor_lag > 0.0 { (x.motor, (sat - x.motor) / p.motor_lag) } else { (sat, N::default()) };
+    Law { torque, integrator_rate, motor_rate, dancer_rate }
 }
 
 /// A dancer loop's error e_d = loop.sign*(dancer.y - dancer.set) and speed trim [R13].
 #[inline]
-pub fn dancer(p: &Parameters, y: f64, integrator: f64) -> (f64, f64) {
-    let e = p.loop_sign * (y - p.dancer_set);
-    (e, p.dancer_kp * e + integrator)
+pub fn dancer<N: Number>(p: &Parameters, y: N, integrator: N) -> (N, N) {
+    let e = (y - p.dancer_set) * p.loop_sign;
+    (e, e * p.dancer_kp + integrator)
 }
 
 /// 1/T_t of the back-calculation [R10]: ki/kp, or 1/s where either gain is 0 (a pure P or I loop).
@@ -111,32 +125,6 @@ pub fn tracking(p: &Parameters) -> f64 {
         p.loop_ki / p.loop_kp
     } else {
         1.0
-    }
-}
-
-/// [R10]-[R11] at error e, feed-forward ff, integrator i and lagged torque m.
-#[inline]
-pub fn evaluate(p: &Parameters, e: f64, ff: f64, i: f64, m: f64) -> Loop {
-    let u = p.loop_kp * e + i + ff;
-    let (sat, slope) = limit(p, u);
-    let tracking = tracking(p);
-    let integrator_rate = p.loop_ki * e + (sat - u) * tracking;
-    let (torque, motor_rate) = if p.motor_lag > 0.0 { (m, (sat - m) / p.motor_lag) } else { (sat, 0.0) };
-    Loop { rates: [integrator_rate, motor_rate], torque, kp: p.loop_kp, slope, ki: p.loop_ki, tracking, lag: p.motor_lag }
-}
-
-impl Loop {
-    /// Along d(e), d(ff), d(I), d(m): d(rates) and d(torque).
-    #[inline]
-    pub fn along(&self, de: f64, dff: f64, di: f64, dm: f64) -> ([f64; 2], f64) {
-        let du = self.kp * de + di + dff;
-        let dsat = self.slope * du;
-        let d_integrator = self.ki * de + (dsat - du) * self.tracking;
-        if self.lag > 0.0 {
-            ([d_integrator, (dsat - dm) / self.lag], dm)
-        } else {
-            ([d_integrator, 0.0], dsat)
-        }
     }
 }
 
@@ -157,6 +145,7 @@ pub fn refusal(p: &Parameters) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::number::Tangent;
 
     fn limited(l: f64) -> Parameters {
         Parameters { motor_limit: l, loop_kp: 0.2, loop_ki: 2.0, ..Default::default() }
@@ -186,9 +175,9 @@ mod tests {
         let p = Parameters { roll: 1, wound_thickness: 1e-4, wound_density: 800.0, wound_width: 1.2, ..Default::default() };
         let (r, v, a) = (0.6, 6.0, 0.4);
         let j = |r: f64| 40.0 + 0.5 * PI * 800.0 * 1.2 * (r.powi(4) - 0.6f64.powi(4));
-        let (_, d) = feedforward(&p, r, j(r), v, a);
+        let d = feedforward(&p, Tangent::new(r, 1.0), Tangent::new(j(r), 4.0 * 0.5 * PI * 800.0 * 1.2 * r.powi(3)), v, a).d;
         let h = 1e-6;
-        let fd = (feedforward(&p, r + h, j(r + h), v, a).0 - feedforward(&p, r - h, j(r - h), v, a).0) / (2.0 * h);
+        let fd = (feedforward(&p, r + h, j(r + h), v, a) - feedforward(&p, r - h, j(r - h), v, a)) / (2.0 * h);
         assert!((d - fd).abs() < 1e-6 * fd.abs().max(1.0), "{d} vs {fd}");
     }
 }

@@ -2,6 +2,7 @@
 //! follows, read from the JSON file `profile` names (crate `profiles`).
 
 use crate::description::{Real, DESCRIPTION};
+use crate::number::Number;
 use crate::parameters::Parameters;
 use fmi_core::{FmiError, FmiResult, Resources};
 use profiles::{Profile, Table, Value};
@@ -39,6 +40,26 @@ pub enum Drive {
     Tension,
     /// The surface speed follows the table exactly.
     Speed,
+}
+
+/// What the drive's table gives at a time: a torque table's torque, a tension table's tension.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Read {
+    #[default]
+    None,
+    Torque(f64),
+    Tension(f64),
+}
+
+/// The drive's torque [R1]: tau_m, plus a torque table's, or a tension drive's -/+ r*T
+/// (unwinder/winder: the web pulls an unwinder back and a winder forward).
+#[inline]
+pub fn torque<N: Number>(p: &Parameters, read: Read, tau_m: N, radius: N) -> N {
+    match read {
+        Read::None => tau_m,
+        Read::Torque(x) => tau_m + x,
+        Read::Tension(x) => tau_m + radius * p.roll_sign() * x,
+    }
 }
 
 /// A checked profile and its text (kept for FMU states, which restore
@@ -83,17 +104,17 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
     if loaded.table(Key::Nip).is_some() && !p.traction {
         return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
     }
-    let kind = crate::control::Kind::of(p);
-    if p.speed_input && (loaded.drive != Drive::Torque || kind != crate::control::Kind::None || loaded.table(Key::Brake).is_some()) {
+    let kind = crate::parameters::Kind::of(p);
+    if p.speed_input && (loaded.drive != Drive::Torque || kind != crate::parameters::Kind::None || loaded.table(Key::Brake).is_some()) {
         return Err("speed.input = true: the surface speed is loop.speed; the profile may have no speed, torque, tension or brake table and loop.kind must be 0".into());
     }
-    if kind != crate::control::Kind::None && !matches!(loaded.drive, Drive::Torque | Drive::TorqueTable) {
+    if kind != crate::parameters::Kind::None && !matches!(loaded.drive, Drive::Torque | Drive::TorqueTable) {
         return Err(format!("loop.kind = {}: a loop drives by torque; the profile's speed or tension table would override it", p.loop_kind));
     }
-    if loaded.table(Key::Set).is_some() && kind != crate::control::Kind::Force {
+    if loaded.table(Key::Set).is_some() && kind != crate::parameters::Kind::Force {
         return Err("a setpoint table needs loop.kind = 1 (a force loop)".into());
     }
-    if loaded.table(Key::Reference).is_some() && !(matches!(kind, crate::control::Kind::Speed | crate::control::Kind::Dancer) || (kind != crate::control::Kind::None && p.loop_feedforward)) {
+    if loaded.table(Key::Reference).is_some() && !(matches!(kind, crate::parameters::Kind::Speed | crate::parameters::Kind::Dancer) || (kind != crate::parameters::Kind::None && p.loop_feedforward)) {
         return Err("a reference table needs loop.kind = 2 or 3 (a speed or dancer loop) or a loop with loop.feedforward = true".into());
     }
     Ok(loaded)

@@ -4,25 +4,41 @@
 //! standard and the C API, this crate only the model.
 //!
 //! * `parameters` — what the user sets and the inputs, in SI units;
-//! * `physics` — the equations [R1]–[R5], [R9] and their exact steps;
-//! * `contact` — where the web may slip: its speed over the roller, friction, air film [R6]–[R8];
-//! * `control` — the drive's loop and its motor [R10]–[R11];
-//! * `drive` — the profile: the drive and the tables of time it follows;
-//! * `jacobian` — the partial derivatives of the outputs and state derivatives;
+//! * `state` — the continuous states by name;
+//! * `number` — the numbers the equations are written in: f64, and `Tangent` for derivatives;
+//! * `rhs` — the right-hand side, written once: the rates and the outputs, from the effects:
+//!   * `physics` — [R1], [R2], [R5], [R9] and [R1]'s exact step;
+//!   * `roll` — the roll being wound and the bearings [R3];
+//!   * `carriage` — a dancer's carriage [R4];
+//!   * `contact` — where the web may slip: its speed over the roller, friction, air film [R6]–[R8];
+//!   * `control` — the drive's loop and its motor [R10]–[R11], [R13];
+//!   * `brake` — a powder brake [R12];
+//!   * `drive` — the profile: the drive and the tables of time it follows;
+//! * `jacobian` — the partial derivatives: `rhs` along a direction;
+//! * `model` — the roller's data and the effects' glue;
+//! * `stepping` — one communication step;
+//! * `hooks` — the hooks the FMI layer calls;
 //! * `variables` — each variable of modelDescription.xml bound to its field;
-//! * `description` — the interface generated from modelDescription.xml;
-//! * `model` — the roller's data, one step, and the FMI hooks.
+//! * `description` — the interface generated from modelDescription.xml.
 
 #![deny(unsafe_code)]
 
+pub mod brake;
+pub mod carriage;
 pub mod contact;
 pub mod control;
 pub mod description;
 pub mod drive;
+mod hooks;
 pub mod jacobian;
 mod model;
+pub mod number;
 pub mod parameters;
 pub mod physics;
+pub mod rhs;
+pub mod roll;
+pub mod state;
+mod stepping;
 mod variables;
 
 pub use model::Roller;

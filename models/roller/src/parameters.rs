@@ -1,5 +1,8 @@
 //! Parameters and inputs of the roller, in SI units.
 
+use crate::description::Real;
+use crate::number::{Number, Tangent};
+
 /// Parameters, SI.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Parameters {
@@ -41,7 +44,7 @@ pub struct Parameters {
     pub air_viscosity: f64,
     /// The webs stay layers [R9]: each outlet passes one inlet's strain on.
     pub layered: bool,
-    /// The drive's loop [R10]: 0 none, 1 force, 2 speed (`control::Kind`).
+    /// The drive's loop [R10]: 0 none, 1 force, 2 speed, 3 dancer (`Kind`).
     pub loop_kind: i32,
     pub loop_set: f64,
     /// A speed loop's reference where the profile has no reference table.
@@ -63,6 +66,29 @@ pub struct Parameters {
     pub dancer_set: f64,
     pub dancer_kp: f64,
     pub dancer_ki: f64,
+}
+
+/// What the drive's loop holds (`loop.kind`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    None,
+    /// A force (a span's tension, a load cell) at `loop.set` or the profile's setpoint table.
+    Force,
+    /// The surface speed at the profile's reference table.
+    Speed,
+    /// The speed loop with its reference trimmed by a PI on a dancer's position [R13].
+    Dancer,
+}
+
+impl Kind {
+    pub fn of(p: &Parameters) -> Kind {
+        match p.loop_kind {
+            1 => Kind::Force,
+            2 => Kind::Speed,
+            3 => Kind::Dancer,
+            _ => Kind::None,
+        }
+    }
 }
 
 /// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I).
@@ -98,24 +124,25 @@ impl Parameters {
 }
 
 /// Inputs, SI, held over a communication step. Port k's (web_a<k>, web_b<k>)
-/// at index k - 1; the ports beyond `inlets` and `outlets` are not read.
+/// at index k - 1; the ports beyond `inlets` and `outlets` are not read. In `N`, the number the
+/// equations are evaluated in (`number`): a value, or a value and its tangent.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Inputs {
-    pub force_a: [f64; PORTS],
-    pub force_b: [f64; PORTS],
-    pub strain_a: [f64; PORTS],
-    pub torque: f64,
-    pub load: f64,
+pub struct Inputs<N = f64> {
+    pub force_a: [N; PORTS],
+    pub force_b: [N; PORTS],
+    pub strain_a: [N; PORTS],
+    pub torque: N,
+    pub load: N,
     /// What a force loop measures [R10].
-    pub measured: f64,
+    pub measured: N,
     /// The position of the dancer a dancer loop holds [R13].
-    pub dancer_y: f64,
+    pub dancer_y: N,
 }
 
 /// The sum of the first `count` ports' tensions: one port is read as it
 /// is (the plain roller, bit for bit), and no loop runs over unused ones.
 #[inline]
-fn pull(forces: &[f64; PORTS], count: i32) -> f64 {
+fn pull<N: Number>(forces: &[N; PORTS], count: i32) -> N {
     match ports(count) {
         1 => forces[0],
         2 => forces[0] + forces[1],
@@ -124,16 +151,151 @@ fn pull(forces: &[f64; PORTS], count: i32) -> f64 {
     }
 }
 
-impl Inputs {
+impl<N: Number> Inputs<N> {
     /// F_a of [R1] and [R4]: every arriving web's tension.
     #[inline]
-    pub fn pull_back(&self, p: &Parameters) -> f64 {
+    pub fn pull_back(&self, p: &Parameters) -> N {
         pull(&self.force_a, p.inlets)
     }
 
     /// F_b of [R1] and [R4]: every leaving web's tension.
     #[inline]
-    pub fn pull_forward(&self, p: &Parameters) -> f64 {
+    pub fn pull_forward(&self, p: &Parameters) -> N {
         pull(&self.force_b, p.outlets)
+    }
+}
+
+impl Inputs {
+    /// The inputs with their tangents along `d`.
+    pub fn along(&self, d: &Inputs) -> Inputs<Tangent> {
+        let zip = |x: &[f64; PORTS], dx: &[f64; PORTS]| std::array::from_fn(|i| Tangent::new(x[i], dx[i]));
+        Inputs {
+            force_a: zip(&self.force_a, &d.force_a),
+            force_b: zip(&self.force_b, &d.force_b),
+            strain_a: zip(&self.strain_a, &d.strain_a),
+            torque: Tangent::new(self.torque, d.torque),
+            load: Tangent::new(self.load, d.load),
+            measured: Tangent::new(self.measured, d.measured),
+            dancer_y: Tangent::new(self.dancer_y, d.dancer_y),
+        }
+    }
+}
+
+/// What a line's entry fixes for a roller besides its parameters: where its surface speed comes
+/// from, which of its profile's tables it has, and which of its values the line gives as inputs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Structure {
+    /// A speed table or `speed.input`: the surface follows a speed, not the torques.
+    pub speed_driven: bool,
+    pub setpoint_table: bool,
+    pub reference_table: bool,
+    pub brake_table: bool,
+    /// The line gives a force loop's set point (`set_input`), a loop's or an ideal speed drive's speed (`speed_input`).
+    pub set_input: bool,
+    pub speed_input: bool,
+}
+
+impl Parameters {
+    /// Whether the Real variable `var` acts on a roller of this structure: a surface that follows
+    /// a speed has no inertia, radius, damping, start speed or roll build-up that moves it; only a
+    /// roll builds up, only a dancer has a carriage, the arriving webs' masses weigh only where
+    /// several merge [R5]; a loop's set point and reference act unless a table or the line's
+    /// input gives them [R10]. Inputs and computed variables always act. No fallthrough: a new
+    /// variable stops the compiler here.
+    pub fn acts(&self, var: Real, s: &Structure) -> bool {
+        let kind = Kind::of(self);
+        let speed_loop = matches!(kind, Kind::Speed | Kind::Dancer);
+        match var {
+            Real::J | Real::R | Real::b | Real::v_start => !s.speed_driven,
+            Real::wound_thickness | Real::wound_density | Real::wound_width => self.roll != 0 && !s.speed_driven,
+            Real::carriage_m | Real::carriage_d | Real::carriage_k | Real::carriage_y_start => self.carriage,
+            Real::web_a_m | Real::web_a2_m => self.inlets >= 2,
+            Real::web_a3_m => self.inlets >= 3,
+            Real::web_a4_m => self.inlets >= 4,
+            Real::traction_mu
+            | Real::traction_wrap
+            | Real::traction_v_slip
+            | Real::traction_width
+            | Real::traction_slip_start
+            | Real::nip_mu
+            | Real::air_roughness
+            | Real::air_viscosity => self.traction,
+            Real::loop_set => kind == Kind::Force && !s.setpoint_table && !s.set_input,
+            Real::loop_speed => (speed_loop && !s.reference_table || self.speed_input) && !s.speed_input,
+            Real::brake_v_slip => s.brake_table,
+            Real::dancer_set | Real::dancer_kp | Real::dancer_ki => kind == Kind::Dancer,
+            Real::loop_kp | Real::loop_ki | Real::motor_limit => kind != Kind::None,
+            Real::loop_sign | Real::motor_lag | Real::load_cell_wrap => true,
+            // Inputs.
+            Real::web_a_F
+            | Real::web_b_F
+            | Real::web_a_eps
+            | Real::tau_m
+            | Real::F_load
+            | Real::web_a2_F
+            | Real::web_a2_eps
+            | Real::web_a3_F
+            | Real::web_a3_eps
+            | Real::web_a4_F
+            | Real::web_a4_eps
+            | Real::web_b2_F
+            | Real::web_b3_F
+            | Real::web_b4_F
+            | Real::loop_measured
+            | Real::dancer_y => true,
+            // Computed.
+            Real::web_a_v
+            | Real::web_b_v
+            | Real::web_b_eps
+            | Real::omega
+            | Real::r
+            | Real::y
+            | Real::y_dot
+            | Real::tau
+            | Real::web_a_x
+            | Real::web_a_y
+            | Real::web_b_x
+            | Real::web_b_y
+            | Real::der_omega
+            | Real::der_r
+            | Real::der_y
+            | Real::der_y_dot
+            | Real::web_a2_v
+            | Real::web_a3_v
+            | Real::web_a4_v
+            | Real::web_b2_v
+            | Real::web_b2_eps
+            | Real::web_b3_v
+            | Real::web_b3_eps
+            | Real::web_b4_v
+            | Real::web_b4_eps
+            | Real::v
+            | Real::v_web
+            | Real::slip
+            | Real::traction
+            | Real::mu_eff
+            | Real::h_air
+            | Real::der_v_web
+            | Real::loop_I
+            | Real::der_loop_I
+            | Real::motor_torque
+            | Real::der_motor_torque
+            | Real::load_cell_F
+            | Real::dancer_I
+            | Real::der_dancer_I => true,
+        }
+    }
+
+    /// A line may give a force loop's set point as its input.
+    pub fn takes_set_input(&self) -> bool {
+        Kind::of(self) == Kind::Force
+    }
+
+    /// A line may give a speed or dancer loop's reference, or an ideal speed drive's speed, as its input.
+    pub fn takes_speed_input(&self) -> bool {
+        match Kind::of(self) {
+            Kind::Speed | Kind::Dancer => true,
+            Kind::None | Kind::Force => self.speed_input,
+        }
     }
 }

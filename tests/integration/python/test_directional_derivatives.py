@@ -368,6 +368,15 @@ def roller(fmus):
     return md, extract(str(path)), {v.name: v.valueReference for v in md.modelVariables}
 
 
+def every_pair(roller, me):
+    """Every Roller output and state derivative (unknowns), every Real input and in Model Exchange
+    every state (knowns), from its model description: a variable added later is covered too."""
+    md = roller[0]
+    unknowns = tuple(u.variable.name for u in md.outputs) + tuple(d.variable.name for d in md.derivatives)
+    inputs = tuple(v.name for v in md.modelVariables if v.causality == "input" and v.type == "Real")
+    return unknowns, inputs + (ROLLER_STATES if me else ())
+
+
 def roller_jacobians(fmu, vr, unknowns, knowns, step=STEP):
     u_refs = [vr[n] for n in unknowns]
     states = ROLLER_STATES
@@ -434,11 +443,13 @@ def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
     values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "inlets": inlets, "outlets": outlets}
     # Away from the start values: the carriage moving, the roll grown.
     states = (33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0, 0.0)
-    # Without traction the fifth state is the surface's speed r*omega, not a known of its own:
-    # v_web reads r*omega back, so only its rate is compared.
-    unknowns = tuple(u for u in ROLLER_UNKNOWNS if not (me and u == "v_web"))
-    (a, f, n), _ = roller_case(roller, tmp_path, kind, profile, values, states,
-                               ROLLER_INPUTS + (ROLLER_STATES if me else ()), unknowns)
+    # Without traction the fifth state is the surface's speed r*omega, not a known of its own: v_web
+    # reads r*omega back (its derivatives by r and omega are omega and r, by itself 0).
+    unknowns, knowns = every_pair(roller, me)
+    assert set(ROLLER_UNKNOWNS) <= set(unknowns) and set(ROLLER_INPUTS) <= set(knowns)
+    (a, f, n), _ = roller_case(roller, tmp_path, kind, profile, values, states, knowns, unknowns)
+    if me and drive != "speed":
+        assert a["v_web", "r"] == pytest.approx(33.0) and a["v_web", "omega"] == pytest.approx(0.16)
     what = f"Roller {kind} {roller_label(case)}"
     worst = compare(what, a, f, n)
     print(f"{what}: max relative error {worst:.1e}")
@@ -461,12 +472,12 @@ def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind,
     params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith(("wound.", "carriage."))}
     values = {**params, **ROLLER_POINT, "includeTraction": True, "traction.mu": 0.3, "traction.v_slip": 1e-3,
               "traction.width": 0.5, "traction.slip_start": 2e-3, **TRACTION_CASES[label]}
-    unknowns = ("web_a.v", "web_b.v", "v", "v_web", "slip", "traction", "mu_eff", "h_air", "tau", "der(omega)", "der(v_web)")
+    unknowns, knowns = every_pair(roller, me)
     # tanh(slip/v_slip) curves over 1 mm/s: a step of 1e-6 of a speed of 5 m/s would leave a
     # truncation error of (5e-6/1e-3)^2 ~ 2.5e-5; 1e-8 leaves 2.5e-9, rounding stays in the noise term.
     (a, f, n), (slip, mu_eff, h_air) = roller_case(
         roller, tmp_path, kind, profile, values, (33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0, 0.0),
-        ROLLER_INPUTS[:5] + (("omega", "v_web") if me else ()), unknowns, step=1e-8, read=("slip", "mu_eff", "h_air"))
+        knowns, unknowns, step=1e-8, read=("slip", "mu_eff", "h_air"))
     what = f"Roller {kind} traction {label}"
     worst = compare(what, a, f, n)
     print(f"{what}: slip {slip:.2e} m/s, mu_eff {mu_eff:.4f}, h_air {h_air:.2e} m, max relative error {worst:.1e}")
@@ -498,9 +509,7 @@ def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, l
     me = kind == "ModelExchange"
     params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
     values = {**params, **ROLLER_POINT, "roll": 1, "loop.kp": 0.2, "loop.ki": 2.0, **LOOP_CASES[label]}
-    knowns = ROLLER_INPUTS[:5] + ("loop.measured", "dancer.y") + (("omega", "r", "loop.I", "motor.torque", "dancer.I") if me else ())
-    unknowns = ("tau", "der(omega)", "der(r)", "loop.I", "motor.torque", "der(loop.I)", "der(motor.torque)", "dancer.I",
-                "der(dancer.I)")
+    unknowns, knowns = every_pair(roller, me)
     (a, f, n), _ = roller_case(roller, tmp_path, kind, {"reference": [[0, 5.0], [10, 6.0]]}, values,
                                (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0, 0.02), knowns, unknowns)
     what = f"Roller {kind} loop {label}"
@@ -518,7 +527,6 @@ def test_roller_with_a_brake_matches_finite_differences(roller, tmp_path, kind):
     params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
     values = {**params, **ROLLER_POINT, "web_b.F": 180.0, "roll": 1, "v_start": 0.004}
     (a, f, n), _ = roller_case(roller, tmp_path, kind, {"brake": [[0, 2.0], [10, 3.0]]}, values,
-                               (0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0), ROLLER_INPUTS[:5] + (("omega", "r") if me else ()),
-                               ("tau", "der(omega)", "der(r)"), cs_time=0.01)
+                               (0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0), *every_pair(roller, me)[::-1], cs_time=0.01)
     what = f"Roller {kind} brake"
     print(f"{what}: max relative error {compare(what, a, f, n):.1e}")

@@ -1,0 +1,280 @@
+//! The roller's right-hand side, written once: its rates (p, u, x) -> x' and its outputs, in any
+//! `Number` (f64 for values, `Tangent` for the directional derivatives). Each effect adds its
+//! terms from its own file: the drive (`drive`), the roll and its bearings (`roll`), the carriage
+//! (`carriage`), the contact (`contact`), the loop (`control`), a brake (`brake`); [R1] sums them
+//! (`physics::net_torque`).
+
+use crate::contact::{self, Contact, Dual, Friction};
+use crate::number::{Number, Tangent};
+use crate::parameters::{Inputs, Parameters, PORTS};
+use crate::physics;
+use crate::roll::{self, Roll};
+use crate::state::States;
+use crate::{brake, carriage, control, drive};
+
+/// What the equations read besides the states and inputs, at one time: the profile's tables
+/// (functions of time only, held), the roll's reference, and where the web may slip the contact
+/// at the point's values with its gradient (formed once for every direction).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Point {
+    pub roll: Roll,
+    /// A prescribed surface speed and its slope (a speed table, or `speed.input`'s loop.speed).
+    pub prescribed: Option<(f64, f64)>,
+    pub drive: drive::Read,
+    /// A brake's torque B [R12] (None without a brake table).
+    pub brake: Option<f64>,
+    pub control: control::Reads,
+    /// The carriage's load table [R4] (0 without one).
+    pub load: f64,
+    /// The leaving strain's table, where there is one.
+    pub strain: Option<f64>,
+    pub slip: Option<Slip>,
+}
+
+/// Where the web may slip: the contact [R6]-[R8] at the point and what it moves, with gradients.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Slip {
+    pub state: contact::State,
+    pub contact: Contact,
+    pub acceleration: Dual,
+    /// The share of traction in use, where the outputs are asked for (None: found when needed).
+    pub used: Option<Dual>,
+}
+
+impl Slip {
+    /// The contact at `state` [R6]-[R8].
+    pub fn at(p: &Parameters, state: contact::State) -> Slip {
+        let contact = contact::contact(p, &state);
+        Slip { state, contact, acceleration: contact::web_acceleration(p, &state, contact.force), used: None }
+    }
+
+    fn used(&self, p: &Parameters) -> Dual {
+        self.used.unwrap_or_else(|| contact::traction_used(p, &self.state, self.contact.mu_eff))
+    }
+}
+
+/// The modes a step holds: how the web meets the roller. A mode a later effect adds (a loop's
+/// held output, a contact that sticks) goes here, and `rates` reads it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Modes {
+    pub friction: Friction,
+}
+
+/// The rates of the states and what they are made of.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rates<N> {
+    pub derivatives: States<N>,
+    /// The drive's torque: its table, loop and brake; a speed drive's, what [R1] needs.
+    pub torque: N,
+    pub surface_speed: N,
+}
+
+/// What [R1] sums and what it is made of, at the roller's point.
+struct Torques<N> {
+    inertia: N,
+    surface_speed: N,
+    /// The friction where the web may slip [R6]-[R7], and the web's acceleration it gives.
+    friction: Option<(N, N)>,
+    web: N,
+    bearing: N,
+    loop_law: control::Law<N>,
+}
+
+#[inline(always)]
+fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Torques<N> {
+    let (omega, r) = (x.omega, x.radius);
+    let inertia = at.roll.inertia(p, r);
+    let v = match at.prescribed {
+        Some((v, _)) => N::constant(v),
+        None => physics::surface_speed(r, omega),
+    };
+    let friction = at.slip.map(|s| {
+        let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r];
+        match modes.friction {
+            Friction::Regularized => (s.contact.force.lift(&knowns), s.acceleration.lift(&knowns)),
+        }
+    });
+    let web = match friction {
+        Some((f, _)) => -(r * f),
+        None => physics::web_torque(p, r, u),
+    };
+    let loop_law = control::law(p, &at.control, &control::Seen {
+        omega,
+        radius: r,
+        inertia,
+        measured: u.measured,
+        dancer_y: u.dancer_y,
+        integrator: x.loop_integrator,
+        motor: x.motor_torque,
+        dancer: x.dancer_integrator,
+    });
+    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law }
+}
+
+/// The drive's torque: its table and tau_m, its loop, a brake; where the surface follows a
+/// speed, the torque [R1] needs for it.
+#[inline(always)]
+fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, t: &Torques<N>) -> N {
+    match at.prescribed {
+        Some((_, slope)) => physics::speed_drive_torque(t.inertia, x.radius, slope, t.web, t.bearing),
+        None => {
+            let brake = at.brake.map_or_else(N::default, |b| brake::torque(b, t.surface_speed, p.brake_v_slip));
+            drive::torque(p, at.drive, u.torque, x.radius) + t.loop_law.torque + brake
+        }
+    }
+}
+
+/// The drive's torque at the roller's point (`Rates::torque` alone).
+#[inline]
+pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> N {
+    drive_torque(p, at, x, u, &torques(p, at, x, u, modes))
+}
+
+/// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
+#[inline]
+pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Rates<N> {
+    let (omega, r) = (x.omega, x.radius);
+    let t = torques(p, at, x, u, modes);
+    let (v, torque) = (t.surface_speed, drive_torque(p, at, x, u, &t));
+    let (radius_rate, inertia_rate) = roll::rates(p, r, v);
+    let (omega_rate, surface_rate) = match at.prescribed {
+        Some((_, slope)) => (physics::omega_rate_at_speed(slope, v, r, radius_rate), N::constant(slope)),
+        None => {
+            let rate = physics::net_torque(t.web, torque, t.bearing, inertia_rate, omega) / t.inertia;
+            (rate, r * rate + omega * radius_rate)
+        }
+    };
+    let (y_rate, y_speed_rate) = carriage::rates(p, x.carriage_y, x.carriage_speed, || carriage::force(u.load, at.load, u.pull_back(p), u.pull_forward(p)));
+    let derivatives = States {
+        omega: omega_rate,
+        radius: radius_rate,
+        carriage_y: y_rate,
+        carriage_speed: y_speed_rate,
+        // Without traction the web's speed is the surface's, and so is its rate.
+        web_speed: t.friction.map_or(surface_rate, |(_, a)| a),
+        loop_integrator: t.loop_law.integrator_rate,
+        motor_torque: t.loop_law.motor_rate,
+        dancer_integrator: t.loop_law.dancer_rate,
+    };
+    Rates { derivatives, torque, surface_speed: v }
+}
+
+/// Everything the roller computes, each named as the roller's own (`t.x` for `Roller::x()`): the
+/// outputs, the states and their rates. In `Tangent`'s derivatives, the directional derivatives;
+/// the binding (variables.rs) reads them by the same names.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Outputs<N = f64> {
+    pub surface_speed: N,
+    pub web_speed: N,
+    pub slip: N,
+    pub traction_used: N,
+    pub mu_eff: N,
+    pub h_air: N,
+    /// The strain leaving at each outlet (`strain_leaving`).
+    pub outlet_strains: [N; PORTS],
+    pub drive_torque: N,
+    pub loop_integrator: N,
+    pub motor_state: N,
+    pub dancer_integrator: N,
+    pub rates: States<N>,
+    pub omega: N,
+    pub radius: N,
+    /// The carriage's (y, y').
+    pub carriage: [N; 2],
+    pub contact_a_x: N,
+    pub contact_b_x: N,
+    pub contact_y: N,
+    pub load_cell_force: N,
+}
+
+impl<N: Copy> Outputs<N> {
+    /// `Roller::strain_leaving(outlet)`'s.
+    #[inline]
+    pub fn strain_leaving(&self, outlet: usize) -> N {
+        self.outlet_strains[outlet]
+    }
+}
+
+/// The strain of the web leaving at outlet `outlet` (0-based): the profile's table, else the
+/// arriving web's, merged [R5] when several arrive, or where they stay layers its own inlet's [R9].
+#[inline]
+pub fn strain_leaving<N: Number>(p: &Parameters, table: Option<f64>, strain: &[N; PORTS], outlet: usize) -> N {
+    match table {
+        Some(x) => N::constant(x),
+        None if p.layered => strain[physics::layer_inlet(p, outlet)],
+        None => physics::merged_strain(p, strain),
+    }
+}
+
+/// The load cell's reading, load_cell.F: at its own wrap `load_cell.wrap` (0: none, F = 0).
+#[inline]
+pub fn load_cell_force<N: Number>(p: &Parameters, u: &Inputs<N>) -> N {
+    if p.load_cell_wrap > 0.0 {
+        physics::load_cell(u.pull_back(p), u.pull_forward(p), p.load_cell_wrap.cos())
+    } else {
+        N::default()
+    }
+}
+
+/// Every output and rate.
+pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Outputs<N> {
+    let rates = rates(p, at, x, u, modes);
+    let v = rates.surface_speed;
+    let web_speed = if at.slip.is_some() { x.web_speed } else { v };
+    let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], x.radius];
+    let lift = |d: Dual| d.lift(&knowns);
+    let (traction_used, mu_eff, h_air) = at.slip.map_or_else(Default::default, |s| (lift(s.used(p)), lift(s.contact.mu_eff), lift(s.contact.h_air)));
+    let merged = match (at.strain, p.layered) {
+        (None, false) => Some(physics::merged_strain(p, &u.strain_a)),
+        _ => None,
+    };
+    Outputs {
+        surface_speed: v,
+        web_speed,
+        slip: web_speed - v,
+        traction_used,
+        mu_eff,
+        h_air,
+        outlet_strains: std::array::from_fn(|k| merged.unwrap_or_else(|| strain_leaving(p, at.strain, &u.strain_a, k))),
+        drive_torque: rates.torque,
+        loop_integrator: x.loop_integrator,
+        motor_state: x.motor_torque,
+        dancer_integrator: x.dancer_integrator,
+        rates: rates.derivatives,
+        omega: x.omega,
+        radius: x.radius,
+        carriage: [x.carriage_y, x.carriage_speed],
+        contact_a_x: N::default(),
+        contact_b_x: carriage::contact_b_x(x.radius),
+        contact_y: carriage::contact_height(p, x.carriage_y),
+        load_cell_force: load_cell_force(p, u),
+    }
+}
+
+impl Outputs<Tangent> {
+    /// The derivatives alone.
+    pub fn tangents(&self) -> Outputs {
+        let d = |t: Tangent| t.d;
+        Outputs {
+            surface_speed: d(self.surface_speed),
+            web_speed: d(self.web_speed),
+            slip: d(self.slip),
+            traction_used: d(self.traction_used),
+            mu_eff: d(self.mu_eff),
+            h_air: d(self.h_air),
+            outlet_strains: self.outlet_strains.map(d),
+            drive_torque: d(self.drive_torque),
+            loop_integrator: d(self.loop_integrator),
+            motor_state: d(self.motor_state),
+            dancer_integrator: d(self.dancer_integrator),
+            rates: States::from_array(&self.rates.to_array().map(d)),
+            omega: d(self.omega),
+            radius: d(self.radius),
+            carriage: self.carriage.map(d),
+            contact_a_x: d(self.contact_a_x),
+            contact_b_x: d(self.contact_b_x),
+            contact_y: d(self.contact_y),
+            load_cell_force: d(self.load_cell_force),
+        }
+    }
+}

@@ -1,0 +1,90 @@
+//! The roll on the roller and its bearings: [R3] (a roll being wound or unwound: r and J move
+//! with the web that passes) and the bearings' torque in [R1].
+//!
+//! [R3]  d(r^2)/dt = s*h_w*v/pi, J = J0 + (pi/2)*rho*w*(r^4 - r0^4)   (s = -1 unwinder, +1 winder)
+
+use crate::number::Number;
+use crate::parameters::Parameters;
+use std::f64::consts::PI;
+
+/// The roll's size: r, and J as [R3] gives it from a reference (J0 at r0).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Roll {
+    pub radius: f64,
+    pub inertia: f64,
+    pub reference_radius: f64,
+    pub reference_inertia: f64,
+}
+
+impl Roll {
+    pub fn new(radius: f64, inertia: f64) -> Roll {
+        Roll { radius, inertia, reference_radius: radius, reference_inertia: inertia }
+    }
+
+    /// J at radius r [R3].
+    pub fn inertia_at(&self, p: &Parameters, radius: f64) -> f64 {
+        self.inertia_of(p, radius)
+    }
+
+    /// J at radius r [R3], in any number.
+    #[inline]
+    pub fn inertia_of<N: Number>(&self, p: &Parameters, radius: N) -> N {
+        (radius.powi(4) - self.reference_radius.powi(4)) * (0.5 * PI * p.wound_density * p.wound_width) + self.reference_inertia
+    }
+
+    /// J at radius r: [R3]'s where a roll winds, else the roll's own.
+    #[inline]
+    pub fn inertia<N: Number>(&self, p: &Parameters, radius: N) -> N {
+        if p.winding() {
+            self.inertia_of(p, radius)
+        } else {
+            N::constant(self.inertia)
+        }
+    }
+}
+
+/// (dr/dt, dJ/dt) [R3] at radius r and surface speed v (0 where no roll winds).
+#[inline]
+pub fn rates<N: Number>(p: &Parameters, radius: N, speed: N) -> (N, N) {
+    if !p.winding() {
+        return (N::default(), N::default());
+    }
+    let radius_rate = speed * (p.roll_sign() * p.wound_thickness) / (radius * (2.0 * PI));
+    (radius_rate, radius.powi(3) * (2.0 * PI * p.wound_density * p.wound_width) * radius_rate)
+}
+
+/// The bearings' torque on the roller [R1]: its viscous damping, -b*omega.
+#[inline]
+pub fn bearing_torque<N: Number>(p: &Parameters, omega: N) -> N {
+    -(omega * p.damping)
+}
+
+/// The bearings' torque as -c*omega: c, which [R1]'s exact step takes (`physics::rotation_step`);
+/// None where a term of `bearing_torque` is not linear in omega (the step and the tangents then
+/// follow the right-hand side).
+#[inline]
+pub fn bearing_damping(p: &Parameters) -> Option<f64> {
+    Some(p.damping)
+}
+
+/// [R3] after a piece in which the surface moved `travel` metres: the new
+/// radius squared (None: the roll ran empty).
+pub fn wound_radius(p: &Parameters, radius: f64, travel: f64) -> Option<f64> {
+    let r2 = radius * radius + p.roll_sign() * p.wound_thickness * travel / PI;
+    (r2 > 0.0).then(|| r2.sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::parameters::{UNWINDER, WINDER};
+
+    #[test]
+    fn a_winder_grows_by_thickness_times_travel_over_pi() {
+        let p = Parameters { roll: WINDER, wound_thickness: 50e-6, inertia: 2.0, radius: 0.2, ..Parameters::default() };
+        let r = wound_radius(&p, 0.1, 100.0).unwrap();
+        assert!((r * r - (0.01 + 50e-6 * 100.0 / PI)).abs() < 1e-16);
+        let q = Parameters { roll: UNWINDER, ..p };
+        assert_eq!(wound_radius(&q, 0.01, 100.0), None);
+    }
+}

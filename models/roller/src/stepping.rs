@@ -1,0 +1,287 @@
+//! The roller's communication step: the profile's `set` events, and the pieces between the
+//! tables' breaks, each stepped exactly where its equations are linear ([R1] with r and J held,
+//! [R4]) and by an L-stable Rosenbrock method on the right-hand side (`rhs`) where they are not
+//! (the web's slip [R6]-[R7], a loop [R10]-[R11], a brake [R12]).
+
+use crate::parameters::Kind;
+use crate::drive::{Drive, Key};
+use crate::model::Roller;
+use crate::rhs::{self, Modes, Point};
+use crate::roll::{self, Roll};
+use crate::state::{State, States};
+use crate::{carriage, physics};
+use fmi_core::{FmiError, FmiResult};
+use profiles::Value;
+use solver::CompensatedSum;
+
+impl Roller {
+    /// Applies the `set` events due at t; whether one changed the roll.
+    pub(crate) fn apply_due(&mut self, t: f64) -> bool {
+        self.events_at = self.events_at.max(t);
+        let Some(loaded) = self.profile.clone() else { return false };
+        let mut rolled = false;
+        while let Some(event) = loaded.profile.events.get(self.next_event).filter(|e| profiles::due(e.time, t)) {
+            let speed = physics::surface_speed(self.roll.radius, self.omega.value());
+            let mut new_roll = false;
+            for (name, value) in &event.changes {
+                let Value::Number(x) = *value else { continue }; // checked when the profile was read
+                match name.as_str() {
+                    "J" => (self.params.inertia, new_roll) = (x, true),
+                    "R" => (self.params.radius, new_roll) = (x, true),
+                    _ => self.params.damping = x,
+                }
+            }
+            if new_roll {
+                // A new roll at the same web speed.
+                self.roll = Roll::new(self.params.radius, self.params.inertia);
+                self.omega = CompensatedSum::from_parts(speed / self.roll.radius, 0.0);
+                rolled = true;
+            }
+            self.next_event += 1;
+        }
+        rolled
+    }
+
+    /// One piece of a step, [t, t+h], over which every table is linear.
+    fn piece(&mut self, t: f64, h: f64) -> FmiResult {
+        let p = &self.params;
+        let r = self.roll.radius;
+        let prescribed = self.prescribed(t); // at the piece's start, after its events
+        let mut v_web = self.v_web;
+        // [R1] is linear in omega without a loop, a brake or bearings whose torque is not -b*omega.
+        let linear = roll::bearing_damping(p).filter(|_| Kind::of(p) == Kind::None && self.table(Key::Brake).is_none());
+        let Some(damping) = linear else {
+            // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused): the loop's integrator,
+            // its motor and the roll's own (omega, r), with J moving with r, by the same L-stable method.
+            let y = self.controlled_step(t, h)?;
+            let carriage = if p.carriage {
+                let (g0, g1) = self.carriage_force(t);
+                carriage::step(p, self.carriage, g0, g1, h)
+            } else {
+                self.carriage
+            };
+            if !(y.iter().all(|x| x.is_finite()) && y[1] > 0.0 && carriage.iter().all(|x| x.is_finite())) {
+                return Err(FmiError::discard(format!("the roller's loop would reach (omega, r, loop.I, motor.torque) = {y:?}: take a shorter step or check the inputs")));
+            }
+            let inertia = self.roll.inertia(p, y[1]);
+            self.omega = CompensatedSum::from_parts(y[0], 0.0);
+            self.roll = Roll { radius: y[1], inertia, ..self.roll };
+            (self.integrator, self.motor, self.dancer, self.carriage) = (y[2], y[3], y[4], carriage);
+            return Ok(());
+        };
+        let (omega, travel) = match prescribed {
+            _ if p.traction => {
+                // [R6]-[R7] are nonlinear and stiff (the friction's slope over the web's small mass):
+                // an L-stable Rosenbrock method on (omega, v_web), the inputs held. No roll winds here.
+                let y = self.slipping_step(t, h)?;
+                v_web = y[1];
+                (CompensatedSum::from_parts(y[0], 0.0), 0.0)
+            }
+            Some((v0, slope)) => {
+                let v1 = v0 + slope * h; // the left limit at a jump that ends the piece
+                (CompensatedSum::from_parts(v1 / r, 0.0), 0.5 * (v0 + v1) * h)
+            }
+            None => {
+                let (tau0, tau1) = self.torque_at(t);
+                let next = physics::rotation_step(p, &self.roll, &self.inputs, self.omega, damping, tau0, tau1, h);
+                (next, 0.5 * r * (self.omega.value() + next.value()) * h)
+            }
+        };
+        let (mut omega, mut roll) = (omega, self.roll);
+        if p.winding() {
+            let radius = roll::wound_radius(p, r, travel).ok_or_else(|| {
+                FmiError::discard(format!("the roll ran empty: its radius {r} m would fall to 0 after {travel} m of web; check R and wound.thickness"))
+            })?;
+            let inertia = roll.inertia_at(p, radius);
+            omega = match prescribed {
+                Some(_) => CompensatedSum::from_parts(omega.value() * r / radius, 0.0),
+                // [R1] keeps J*omega across the change of J.
+                None => CompensatedSum::from_parts(omega.value() * roll.inertia / inertia, 0.0),
+            };
+            roll = Roll { radius, inertia, ..roll };
+        }
+        let carriage = if p.carriage {
+            let (g0, g1) = self.carriage_force(t);
+            carriage::step(p, self.carriage, g0, g1, h)
+        } else {
+            self.carriage
+        };
+        if !(omega.value().is_finite() && physics::surface_speed(roll.radius, omega.value()).is_finite() && carriage.iter().all(|x| x.is_finite())) {
+            return Err(FmiError::discard(format!(
+                "the roller would reach omega = {} rad/s, carriage (y, y') = ({}, {}) (J = {} kg.m2, web torque {} N.m): \
+                 take a shorter step or check the inputs",
+                omega.value(),
+                carriage[0],
+                carriage[1],
+                roll.inertia,
+                physics::web_torque(p, r, &self.inputs)
+            )));
+        }
+        (self.omega, self.roll, self.carriage, self.v_web) = (omega, roll, carriage, v_web);
+        Ok(())
+    }
+
+    /// (omega, v_web) after [t, t+h] of a piece [R6]-[R7], the inputs held.
+    fn slipping_step(&self, t: f64, h: f64) -> FmiResult<[f64; 2]> {
+        let y0 = [self.omega(), self.v_web];
+        let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
+        let control = solver::Control { rtol: SLIP_RTOL, atol: [scale(y0[0]), scale(y0[1])], initial_step: h, max_steps: 100_000 };
+        solver::rosenbrock::integrate(&Slipping { roller: self, t0: t }, h, y0, &control)
+            .map(|solution| solution.y)
+            .map_err(|failure| FmiError::discard(format!("the web's slip on the roller could not be followed over the step ({failure:?}): take a shorter step")))
+    }
+
+    /// (omega, r, loop.I, motor.torque, dancer.I) after [t, t+h] of a piece with a loop [R10]-[R11], [R13], the inputs held.
+    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 5]> {
+        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor, self.dancer];
+        let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
+        let control = solver::Control { rtol: SLIP_RTOL, atol: y0.map(scale), initial_step: h, max_steps: 100_000 };
+        solver::rosenbrock::integrate(&Controlled { roller: self, t0: t }, h, y0, &control)
+            .map(|solution| solution.y)
+            .map_err(|failure| FmiError::discard(format!("the roller's loop could not be followed over the step ({failure:?}): take a shorter step")))
+    }
+
+    /// The roller at time t with (omega, r, loop.I, motor.torque, dancer.I) at y, the rest as now (a step's trial point).
+    fn at_trial(&self, t: f64, y: &[f64; 5]) -> Roller {
+        let mut trial = self.clone();
+        let inertia = self.roll.inertia(&self.params, y[1]);
+        trial.omega = CompensatedSum::from_parts(y[0], 0.0);
+        trial.roll = Roll { radius: y[1], inertia, ..self.roll };
+        (trial.integrator, trial.motor, trial.dancer, trial.time) = (y[2], y[3], y[4], t);
+        trial
+    }
+
+    /// A communication step [time, time+h], split where a table kinks or jumps
+    /// and where a `set` event falls; one at the end (within the profiles'
+    /// tolerance) applies at the start of the next step.
+    pub(crate) fn advance(&mut self, h: f64) -> FmiResult {
+        let end = self.time + h;
+        let last = end - profiles::tolerance(end);
+        let mut t = self.time;
+        loop {
+            self.apply_due(t);
+            let stop = self.profile.as_ref().and_then(|l| l.profile.next_break(t)).filter(|&b| b < last).unwrap_or(end);
+            if stop > t {
+                self.piece(t, stop - t)?;
+            }
+            t = stop;
+            if t >= end {
+                break;
+            }
+        }
+        self.time = end;
+        // A master holds the outputs over the next step: at its end, read the tables after a break
+        // there (its `set` events still apply when the next step starts).
+        self.events_at = end;
+        Ok(())
+    }
+
+    pub(crate) fn start(&mut self, time: f64) {
+        let p = &self.params;
+        self.roll = Roll::new(p.radius, p.inertia);
+        let speed = match (self.drive(), self.table(Key::Speed)) {
+            _ if p.speed_input => p.loop_speed,
+            (Drive::Speed, Some(t)) => t.value(time),
+            _ => p.speed_start,
+        };
+        self.omega = CompensatedSum::from_parts(speed / p.radius, 0.0);
+        self.carriage = [p.carriage_start, 0.0];
+        self.v_web = speed + p.traction_slip_start;
+        self.time = time;
+        self.events_at = time;
+        self.next_event = 0;
+        (self.integrator, self.motor, self.dancer) = (0.0, 0.0, 0.0);
+    }
+}
+
+
+/// The roller's own step where the web may slip: tight, as the Line's tolerance is, so that a
+/// co-simulation's error is its coupling's.
+const SLIP_RTOL: f64 = 1e-10;
+const SLIP_ATOL: f64 = 1e-12;
+
+/// [R6]-[R7] over a piece, as an ODE in (omega, v_web) from the piece's start t0.
+struct Slipping<'a> {
+    roller: &'a Roller,
+    t0: f64,
+}
+
+impl Slipping<'_> {
+    /// The roller at time t0 + s with (omega, v_web) at y: what the equations read there, its states.
+    fn trial(&self, s: f64, y: &[f64; 2]) -> (Point, States) {
+        let x = States { omega: y[0], web_speed: y[1], ..self.roller.held() };
+        (self.roller.point_at(self.t0 + s, &x), x)
+    }
+}
+
+impl solver::Ode<2> for Slipping<'_> {
+    fn rhs(&self, s: f64, y: &[f64; 2]) -> [f64; 2] {
+        let (point, x) = self.trial(s, y);
+        let d = rhs::rates(&self.roller.params, &point, &x, &self.roller.inputs, &Modes::default()).derivatives;
+        SLIPPING.map(|i| d.get(i))
+    }
+
+    fn jacobian(&self, s: f64, y: &[f64; 2]) -> [[f64; 2]; 2] {
+        let (point, x) = self.trial(s, y);
+        jacobian(self.roller, &point, &x, SLIPPING)
+    }
+
+    /// Tables of time (a drive's ramp, the nip's load) move f at fixed y: a central difference.
+    fn time_derivative(&self, s: f64, y: &[f64; 2]) -> [f64; 2] {
+        time_derivative(self, self.roller, self.t0, s, y)
+    }
+}
+
+/// The states the slip's step integrates.
+const SLIPPING: [State; 2] = [State::Omega, State::WebSpeed];
+
+/// d(rates of `states`)/d(`states`) at `point` with the roller at `x`: the right-hand side's tangents.
+fn jacobian<const N: usize>(roller: &Roller, point: &Point, x: &States, states: [State; N]) -> [[f64; N]; N] {
+    let columns = states.map(|j| roller.rate_tangents(point, x, &unit(j)));
+    std::array::from_fn(|i| std::array::from_fn(|j| columns[j].get(states[i])))
+}
+
+/// df/dt at fixed y of a piece's ODE from t0: where a table of time has a slope, a central difference.
+fn time_derivative<const N: usize>(ode: &impl solver::Ode<N>, roller: &Roller, t0: f64, s: f64, y: &[f64; N]) -> [f64; N] {
+    if !roller.varies_with_time(t0 + s) {
+        return [0.0; N];
+    }
+    let e = 1e-7 * (t0 + s).abs().max(1e-3);
+    let (hi, lo) = (ode.rhs(s + e, y), ode.rhs(s - e, y));
+    std::array::from_fn(|i| (hi[i] - lo[i]) / (2.0 * e))
+}
+
+/// The unit direction along one state.
+fn unit(s: State) -> States {
+    let mut d = States::default();
+    *d.get_mut(s) = 1.0;
+    d
+}
+
+/// [R1], [R3], [R10]-[R11], [R13] over a piece, as an ODE in (omega, r, loop.I, motor.torque, dancer.I) from the
+/// piece's start t0; its Jacobian from the right-hand side's tangents.
+struct Controlled<'a> {
+    roller: &'a Roller,
+    t0: f64,
+}
+
+/// The states the loop's step integrates.
+const CONTROLLED: [State; 5] = [State::Omega, State::Radius, State::LoopIntegrator, State::MotorTorque, State::DancerIntegrator];
+
+impl solver::Ode<5> for Controlled<'_> {
+    fn rhs(&self, s: f64, y: &[f64; 5]) -> [f64; 5] {
+        let d = self.roller.at_trial(self.t0 + s, y).rates();
+        CONTROLLED.map(|i| d.get(i))
+    }
+
+    fn jacobian(&self, s: f64, y: &[f64; 5]) -> [[f64; 5]; 5] {
+        let trial = self.roller.at_trial(self.t0 + s, y);
+        jacobian(&trial, &trial.point(), &trial.held(), CONTROLLED)
+    }
+
+    /// Tables of time (a set point's or a reference's ramp) move f at fixed y: a central difference.
+    fn time_derivative(&self, s: f64, y: &[f64; 5]) -> [f64; 5] {
+        time_derivative(self, self.roller, self.t0, s, y)
+    }
+}
+
