@@ -5,7 +5,6 @@
 use crate::description::Real;
 use crate::drive::{self, Drive, Key, Loaded};
 use crate::jacobian::{Direction, Linearization, Tangents};
-use crate::number::Tangent;
 use crate::parameters::{Inputs, Parameters, STATES};
 use crate::rhs::{self, Modes, Point, Slip};
 use crate::roll::Roll;
@@ -362,11 +361,17 @@ impl Roller {
         self.rates().to_array()
     }
 
-    /// The rates' tangents along `d` in the states (the inputs held) at `point` with the roller at `x`.
+    /// d(rates)/d(`states`) at `point` with the roller at `x` (the inputs held): the rates in
+    /// `Lanes`, a lane along each state, one evaluation for every column.
     #[inline]
-    pub(crate) fn rate_tangents(&self, point: &Point, x: &States, d: &States) -> States {
-        let rates = rhs::rates(&self.params, point, &x.along(d), &self.inputs.along(&Inputs::default()), &Modes::default()).derivatives;
-        States::from_array(&rates.to_array().map(|t: Tangent| t.d))
+    pub(crate) fn rate_jacobian<const N: usize>(&self, point: &Point, x: &States, states: [State; N]) -> [[f64; N]; N] {
+        let units = states.map(|j| {
+            let mut d = States::default();
+            *d.get_mut(j) = 1.0;
+            d
+        });
+        let rates = rhs::rates(&self.params, point, &x.lanes(&units), &self.inputs.lanes(&[Inputs::default(); N]), &Modes::default()).derivatives;
+        std::array::from_fn(|i| rates.get(states[i]).d)
     }
 
     /// The unit direction of one known: a state or an input (None: neither).

@@ -251,30 +251,37 @@ pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<
     }
 }
 
+impl<N: Number> Outputs<N> {
+    /// Each output and rate through `f` (a tangent's derivative, one lane's).
+    #[inline]
+    pub fn map<M: Number>(&self, f: impl Fn(N) -> M) -> Outputs<M> {
+        Outputs {
+            surface_speed: f(self.surface_speed),
+            web_speed: f(self.web_speed),
+            slip: f(self.slip),
+            traction_used: f(self.traction_used),
+            mu_eff: f(self.mu_eff),
+            h_air: f(self.h_air),
+            outlet_strains: self.outlet_strains.map(&f),
+            drive_torque: f(self.drive_torque),
+            loop_integrator: f(self.loop_integrator),
+            motor_state: f(self.motor_state),
+            dancer_integrator: f(self.dancer_integrator),
+            rates: States::from_array(&self.rates.to_array().map(&f)),
+            omega: f(self.omega),
+            radius: f(self.radius),
+            carriage: self.carriage.map(&f),
+            contact_a_x: f(self.contact_a_x),
+            contact_b_x: f(self.contact_b_x),
+            contact_y: f(self.contact_y),
+            load_cell_force: f(self.load_cell_force),
+        }
+    }
+}
+
 impl Outputs<Tangent> {
     /// The derivatives alone.
     pub fn tangents(&self) -> Outputs {
-        let d = |t: Tangent| t.d;
-        Outputs {
-            surface_speed: d(self.surface_speed),
-            web_speed: d(self.web_speed),
-            slip: d(self.slip),
-            traction_used: d(self.traction_used),
-            mu_eff: d(self.mu_eff),
-            h_air: d(self.h_air),
-            outlet_strains: self.outlet_strains.map(d),
-            drive_torque: d(self.drive_torque),
-            loop_integrator: d(self.loop_integrator),
-            motor_state: d(self.motor_state),
-            dancer_integrator: d(self.dancer_integrator),
-            rates: States::from_array(&self.rates.to_array().map(d)),
-            omega: d(self.omega),
-            radius: d(self.radius),
-            carriage: self.carriage.map(d),
-            contact_a_x: d(self.contact_a_x),
-            contact_b_x: d(self.contact_b_x),
-            contact_y: d(self.contact_y),
-            load_cell_force: d(self.load_cell_force),
-        }
+        self.map(|t| t.d)
     }
 }

@@ -3,7 +3,7 @@
 //! are evaluated in. The Model Exchange state vector is the description's order.
 
 use crate::description::Real;
-use crate::number::{Number, Tangent};
+use crate::number::{Lanes, Number, Tangent};
 use crate::parameters::Kind;
 use crate::parameters::{Parameters, STATES};
 
@@ -173,6 +173,12 @@ impl States {
     /// The states with their tangents along `d`.
     pub fn along(&self, d: &States) -> States<Tangent> {
         States::from_array(&State::ALL.map(|s| Tangent::new(self.get(s), d.get(s))))
+    }
+
+    /// The states with their tangents along `ds[l]` in lane l.
+    #[inline]
+    pub fn lanes<const L: usize>(&self, ds: &[States; L]) -> States<Lanes<L>> {
+        States::from_array(&State::ALL.map(|s| Lanes::new(self.get(s), |l| ds[l].get(s))))
     }
 }
 
