@@ -115,6 +115,7 @@ impl Roller {
 
     /// The surface speed follows a speed table (a source, a sink, a speed
     /// drive): forces do not move it.
+    #[inline]
     pub fn speed_prescribed(&self) -> bool {
         self.drive() == Drive::Speed
     }
@@ -157,16 +158,24 @@ impl Roller {
     /// the web may slip (the leaving strain's table, which only an output reads: `linearize`).
     #[inline(always)]
     pub(crate) fn point_at(&self, t: f64, x: &States) -> Point {
+        self.reading(t, Some(x))
+    }
+
+    /// What the equations read at time t: the tables (functions of time only), and where the web
+    /// may slip the contact with the roller at `contact_at` (None: the contact left out).
+    #[inline(always)]
+    fn reading(&self, t: f64, contact_at: Option<&States>) -> Point {
         let p = &self.params;
-        let slip = p.traction.then(|| Slip::at(p, self.contact_state_at(t, x.omega, x.web_speed)));
+        let prescribed = self.prescribed(t);
+        let slip = contact_at.filter(|_| p.traction).map(|x| Slip::at(p, self.contact_state_at(t, prescribed, x.omega, x.web_speed)));
         if self.profile.is_none() {
             // No tables to read (an idler, most rollers of a line): what the parameters give.
             let control = control::Reads { set: p.loop_set, reference: None };
-            return Point { roll: self.roll, prescribed: self.prescribed(t), control, slip, ..Point::default() };
+            return Point { roll: self.roll, prescribed, control, slip, ..Point::default() };
         }
         Point {
             roll: self.roll,
-            prescribed: self.prescribed(t),
+            prescribed,
             drive: self.drive_read(t).0,
             brake: self.value(Key::Brake, t).map(|(b, _)| b),
             control: control::Reads { set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x), reference: self.value(Key::Reference, t) },
@@ -227,10 +236,11 @@ impl Roller {
         self.web_speed() - self.surface_speed()
     }
 
-    /// The contact's state at time t with the roller at omega and the web at v_web (a step's trial point).
-    pub(crate) fn contact_state_at(&self, t: f64, omega: f64, v_web: f64) -> contact::State {
+    /// The contact's state at time t (a speed drive's `prescribed` speed there) with the roller at omega
+    /// and the web at v_web (a step's trial point).
+    pub(crate) fn contact_state_at(&self, t: f64, prescribed: Option<(f64, f64)>, omega: f64, v_web: f64) -> contact::State {
         let (u, r) = (&self.inputs, self.roll.radius);
-        let v_surface = match self.prescribed(t) {
+        let v_surface = match prescribed {
             Some((v, _)) => v,
             None => physics::surface_speed(r, omega),
         };
@@ -246,7 +256,7 @@ impl Roller {
 
     /// The contact now [R6]-[R8] (None without traction).
     fn slip_now(&self) -> Option<Slip> {
-        self.params.traction.then(|| Slip::at(&self.params, self.contact_state_at(self.time, self.omega(), self.v_web)))
+        self.params.traction.then(|| Slip::at(&self.params, self.contact_state_at(self.time, self.prescribed(self.time), self.omega(), self.v_web)))
     }
 
     /// The coefficient of friction after the air film [R8] (0 without traction).
@@ -311,7 +321,9 @@ impl Roller {
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
     pub fn drive_torque(&self) -> f64 {
         let x = self.held();
-        rhs::torque(&self.params, &self.point_at(self.time, &x), &x, &self.inputs, &Modes::default())
+        // The contact only where [R1] gives a speed drive's torque: a commanded one does not read it.
+        let point = self.reading(self.time, self.speed_prescribed().then_some(&x));
+        rhs::torque(&self.params, &point, &x, &self.inputs, &Modes::default())
     }
 
     /// Whether the tangents along omega, the carriage and the inputs stay as they are until an event or

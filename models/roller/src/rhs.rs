@@ -98,17 +98,22 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, 
         Some((f, _)) => -(r * f),
         None => physics::web_torque(p, r, u),
     };
-    let loop_law = control::law(p, &at.control, &control::Seen {
-        omega,
-        radius: r,
+    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia) }
+}
+
+/// The loop's law [R10]-[R11], [R13] at the roller's point.
+#[inline(always)]
+fn loop_law<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, inertia: N) -> control::Law<N> {
+    control::law(p, &at.control, &control::Seen {
+        omega: x.omega,
+        radius: x.radius,
         inertia,
         measured: u.measured,
         dancer_y: u.dancer_y,
         integrator: x.loop_integrator,
         motor: x.motor_torque,
         dancer: x.dancer_integrator,
-    });
-    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law }
+    })
 }
 
 /// The drive's torque: its table and tau_m, its loop, a brake; where the surface follows a
@@ -117,17 +122,26 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, 
 fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, t: &Torques<N>) -> N {
     match at.prescribed {
         Some((_, slope)) => physics::speed_drive_torque(t.inertia, x.radius, slope, t.web, t.bearing),
-        None => {
-            let brake = at.brake.map_or_else(N::default, |b| brake::torque(b, t.surface_speed, p.brake_v_slip));
-            drive::torque(p, at.drive, u.torque, x.radius) + t.loop_law.torque + brake
-        }
+        None => commanded(p, at, x, u, t.loop_law.torque, t.surface_speed),
     }
 }
 
-/// The drive's torque at the roller's point (`Rates::torque` alone).
+/// The torque a drive that follows no speed gives: its table and tau_m, its loop, a brake.
+#[inline(always)]
+fn commanded<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, loop_torque: N, v: N) -> N {
+    let brake = at.brake.map_or_else(N::default, |b| brake::torque(b, v, p.brake_v_slip));
+    drive::torque(p, at.drive, u.torque, x.radius) + loop_torque + brake
+}
+
+/// The drive's torque at the roller's point (`Rates::torque` alone): without a prescribed
+/// speed, what the drive commands alone (no web, bearing or friction to form).
 #[inline]
 pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> N {
-    drive_torque(p, at, x, u, &torques(p, at, x, u, modes))
+    if at.prescribed.is_some() {
+        return drive_torque(p, at, x, u, &torques(p, at, x, u, modes));
+    }
+    let loop_torque = loop_law(p, at, x, u, at.roll.inertia(p, x.radius)).torque;
+    commanded(p, at, x, u, loop_torque, physics::surface_speed(x.radius, x.omega))
 }
 
 /// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
