@@ -85,7 +85,7 @@ impl Roller {
         Ok(())
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn drive(&self) -> Drive {
         if self.params.speed_input {
             return Drive::Speed;
@@ -95,7 +95,7 @@ impl Roller {
 
     /// A speed drive's surface speed and its slope at t (the time now, or a piece's start): its
     /// table's, or `loop.speed` held over the step, slope 0, where `speed.input` is true.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn prescribed(&self, t: f64) -> Option<(f64, f64)> {
         if self.params.speed_input {
             return Some((self.params.loop_speed, 0.0));
@@ -120,13 +120,13 @@ impl Roller {
         self.drive() == Drive::Speed
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn table(&self, key: Key) -> Option<&profiles::Table> {
         self.profile.as_ref().and_then(|l| l.table(key))
     }
 
     /// A table's value and slope at t (the time now, or a piece's start).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn read(&self, table: &profiles::Table, t: f64) -> (f64, f64) {
         if t > self.events_at {
             let within = profiles::tolerance(t).min(t - self.events_at);
@@ -137,13 +137,13 @@ impl Roller {
     }
 
     /// A table's value and slope at t, where the profile has it.
-    #[inline]
+    #[inline(always)]
     fn value(&self, key: Key, t: f64) -> Option<(f64, f64)> {
         self.table(key).map(|table| self.read(table, t))
     }
 
     /// The drive's table at t, its value and its rate.
-    #[inline]
+    #[inline(always)]
     fn drive_read(&self, t: f64) -> (drive::Read, drive::Read) {
         if let Some((x, rate)) = self.value(Key::Torque, t) {
             (drive::Read::Torque(x), drive::Read::Torque(rate))

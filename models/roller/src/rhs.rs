@@ -145,7 +145,7 @@ pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N
 }
 
 /// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
-#[inline]
+#[inline(always)]
 pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Rates<N> {
     let (omega, r) = (x.omega, x.radius);
     let t = torques(p, at, x, u, modes);

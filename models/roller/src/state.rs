@@ -125,7 +125,7 @@ pub struct States<N = f64> {
 }
 
 impl<N: Number> States<N> {
-    #[inline]
+    #[inline(always)]
     pub fn get(&self, s: State) -> N {
         match s {
             State::Omega => self.omega,
@@ -154,12 +154,12 @@ impl<N: Number> States<N> {
     }
 
     /// In the order of the Model Exchange state vector.
-    #[inline]
+    #[inline(always)]
     pub fn to_array(&self) -> [N; STATES] {
         State::ALL.map(|s| self.get(s))
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn from_array(x: &[N; STATES]) -> States<N> {
         let mut states = States::default();
         for s in State::ALL {
