@@ -282,8 +282,12 @@ impl Part {
                 rows(ds, unknowns, out, |d| at.along(d), |t, u| if let Port::Span(u) = u { ConvertingSpan::along(t, u) } else { None })
             }
             (Part::Roller(r), Directions::Roller(ds)) => {
-                let at = r.linearize();
-                rows(ds, unknowns, out, |d| at.along(d), |t, u| if let Port::Roller(u) = u { Roller::along(t, u) } else { None })
+                // Every direction's tangents from one evaluation of the right-hand side per `along_each`.
+                let mut rows = out.chunks_exact_mut(unknowns.len().max(1));
+                r.linearize().along_each(ds, |t| {
+                    let Some(row) = rows.next() else { return true };
+                    unknowns.iter().zip(row).all(|(&u, o)| if let Port::Roller(u) = u { Roller::along(t, u).map(|x| *o = x).is_some() } else { false })
+                })
             }
             _ => false,
         }

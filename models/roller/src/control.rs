@@ -79,7 +79,7 @@ pub struct Seen<N> {
 }
 
 /// [R10]-[R11], [R13] at the roller's point.
-#[inline]
+#[inline(always)]
 pub fn law<N: Number>(p: &Parameters, reads: &Reads, x: &Seen<N>) -> Law<N> {
     let kind = Kind::of(p);
     if kind == Kind::None {

@@ -98,6 +98,10 @@ impl Model for Roller {
     }
 
     fn do_step(&mut self, h: f64) -> FmiResult {
+        if self.profile.is_none() {
+            // One piece, which changes the roller only once it has succeeded (`piece`): no copy needed.
+            return self.advance(h);
+        }
         // Work on a copy (no heap: the profile is shared): a failed step changes nothing.
         let mut next = self.clone();
         next.advance(h)?;

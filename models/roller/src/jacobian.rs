@@ -2,7 +2,7 @@
 //! Jacobian): the right-hand side (`rhs`) evaluated in `Tangent` along a direction in the states
 //! and the inputs. The profile's tables are functions of time only, so they and their slopes are held.
 
-use crate::number::Tangent;
+use crate::number::{Lanes, Tangent};
 use crate::parameters::{Inputs, Kind, Parameters};
 use crate::roll;
 use crate::rhs::{self, Modes, Outputs, Point};
@@ -45,4 +45,30 @@ impl Linearization<'_> {
         let u = self.inputs.along(&d.u);
         rhs::outputs::<Tangent>(self.params, &self.point, &x, &u, &Modes::default()).tangents()
     }
+
+    /// d(everything)/d(direction) along each of `ds`, in order, to `each` (false stops: the
+    /// answer then): up to `LANES` directions an evaluation, each lane the `along` of its direction.
+    #[inline]
+    pub fn along_each(&self, ds: &[Direction], mut each: impl FnMut(&Tangents) -> bool) -> bool {
+        // Four lanes where four do: a lane costs its share whether or not it has a direction.
+        if ds.len() <= 4 {
+            self.lanes::<4>(ds, &mut each)
+        } else {
+            ds.chunks(LANES).all(|chunk| self.lanes::<LANES>(chunk, &mut each))
+        }
+    }
+
+    /// `along_each` for at most L directions, in one evaluation.
+    #[inline]
+    fn lanes<const L: usize>(&self, ds: &[Direction], each: &mut impl FnMut(&Tangents) -> bool) -> bool {
+        let d: [Direction; L] = std::array::from_fn(|l| ds.get(l).copied().unwrap_or_default());
+        let x = self.states.lanes(&d.map(|d| d.state));
+        let u = self.inputs.lanes(&d.map(|d| d.u));
+        let t = rhs::outputs::<Lanes<L>>(self.params, &self.point, &x, &u, &Modes::default());
+        (0..ds.len()).all(|l| each(&t.map(|t| t.d[l])))
+    }
 }
+
+/// The most directions `along_each` evaluates at once: a roller's knowns in a line are its
+/// active states and connected inputs, rarely more than eight.
+const LANES: usize = 8;

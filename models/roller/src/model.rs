@@ -5,7 +5,6 @@
 use crate::description::Real;
 use crate::drive::{self, Drive, Key, Loaded};
 use crate::jacobian::{Direction, Linearization, Tangents};
-use crate::number::Tangent;
 use crate::parameters::{Inputs, Parameters, STATES};
 use crate::rhs::{self, Modes, Point, Slip};
 use crate::roll::Roll;
@@ -86,7 +85,7 @@ impl Roller {
         Ok(())
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn drive(&self) -> Drive {
         if self.params.speed_input {
             return Drive::Speed;
@@ -96,7 +95,7 @@ impl Roller {
 
     /// A speed drive's surface speed and its slope at t (the time now, or a piece's start): its
     /// table's, or `loop.speed` held over the step, slope 0, where `speed.input` is true.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn prescribed(&self, t: f64) -> Option<(f64, f64)> {
         if self.params.speed_input {
             return Some((self.params.loop_speed, 0.0));
@@ -116,17 +115,18 @@ impl Roller {
 
     /// The surface speed follows a speed table (a source, a sink, a speed
     /// drive): forces do not move it.
+    #[inline]
     pub fn speed_prescribed(&self) -> bool {
         self.drive() == Drive::Speed
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn table(&self, key: Key) -> Option<&profiles::Table> {
         self.profile.as_ref().and_then(|l| l.table(key))
     }
 
     /// A table's value and slope at t (the time now, or a piece's start).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn read(&self, table: &profiles::Table, t: f64) -> (f64, f64) {
         if t > self.events_at {
             let within = profiles::tolerance(t).min(t - self.events_at);
@@ -137,13 +137,13 @@ impl Roller {
     }
 
     /// A table's value and slope at t, where the profile has it.
-    #[inline]
+    #[inline(always)]
     fn value(&self, key: Key, t: f64) -> Option<(f64, f64)> {
         self.table(key).map(|table| self.read(table, t))
     }
 
     /// The drive's table at t, its value and its rate.
-    #[inline]
+    #[inline(always)]
     fn drive_read(&self, t: f64) -> (drive::Read, drive::Read) {
         if let Some((x, rate)) = self.value(Key::Torque, t) {
             (drive::Read::Torque(x), drive::Read::Torque(rate))
@@ -158,16 +158,24 @@ impl Roller {
     /// the web may slip (the leaving strain's table, which only an output reads: `linearize`).
     #[inline(always)]
     pub(crate) fn point_at(&self, t: f64, x: &States) -> Point {
+        self.reading(t, Some(x))
+    }
+
+    /// What the equations read at time t: the tables (functions of time only), and where the web
+    /// may slip the contact with the roller at `contact_at` (None: the contact left out).
+    #[inline(always)]
+    fn reading(&self, t: f64, contact_at: Option<&States>) -> Point {
         let p = &self.params;
-        let slip = p.traction.then(|| Slip::at(p, self.contact_state_at(t, x.omega, x.web_speed)));
+        let prescribed = self.prescribed(t);
+        let slip = contact_at.filter(|_| p.traction).map(|x| Slip::at(p, self.contact_state_at(t, prescribed, x.omega, x.web_speed)));
         if self.profile.is_none() {
             // No tables to read (an idler, most rollers of a line): what the parameters give.
             let control = control::Reads { set: p.loop_set, reference: None };
-            return Point { roll: self.roll, prescribed: self.prescribed(t), control, slip, ..Point::default() };
+            return Point { roll: self.roll, prescribed, control, slip, ..Point::default() };
         }
         Point {
             roll: self.roll,
-            prescribed: self.prescribed(t),
+            prescribed,
             drive: self.drive_read(t).0,
             brake: self.value(Key::Brake, t).map(|(b, _)| b),
             control: control::Reads { set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x), reference: self.value(Key::Reference, t) },
@@ -228,10 +236,11 @@ impl Roller {
         self.web_speed() - self.surface_speed()
     }
 
-    /// The contact's state at time t with the roller at omega and the web at v_web (a step's trial point).
-    pub(crate) fn contact_state_at(&self, t: f64, omega: f64, v_web: f64) -> contact::State {
+    /// The contact's state at time t (a speed drive's `prescribed` speed there) with the roller at omega
+    /// and the web at v_web (a step's trial point).
+    pub(crate) fn contact_state_at(&self, t: f64, prescribed: Option<(f64, f64)>, omega: f64, v_web: f64) -> contact::State {
         let (u, r) = (&self.inputs, self.roll.radius);
-        let v_surface = match self.prescribed(t) {
+        let v_surface = match prescribed {
             Some((v, _)) => v,
             None => physics::surface_speed(r, omega),
         };
@@ -247,7 +256,7 @@ impl Roller {
 
     /// The contact now [R6]-[R8] (None without traction).
     fn slip_now(&self) -> Option<Slip> {
-        self.params.traction.then(|| Slip::at(&self.params, self.contact_state_at(self.time, self.omega(), self.v_web)))
+        self.params.traction.then(|| Slip::at(&self.params, self.contact_state_at(self.time, self.prescribed(self.time), self.omega(), self.v_web)))
     }
 
     /// The coefficient of friction after the air film [R8] (0 without traction).
@@ -312,7 +321,9 @@ impl Roller {
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
     pub fn drive_torque(&self) -> f64 {
         let x = self.held();
-        rhs::torque(&self.params, &self.point_at(self.time, &x), &x, &self.inputs, &Modes::default())
+        // The contact only where [R1] gives a speed drive's torque: a commanded one does not read it.
+        let point = self.reading(self.time, self.speed_prescribed().then_some(&x));
+        rhs::torque(&self.params, &point, &x, &self.inputs, &Modes::default())
     }
 
     /// Whether the tangents along omega, the carriage and the inputs stay as they are until an event or
@@ -362,11 +373,17 @@ impl Roller {
         self.rates().to_array()
     }
 
-    /// The rates' tangents along `d` in the states (the inputs held) at `point` with the roller at `x`.
+    /// d(rates)/d(`states`) at `point` with the roller at `x` (the inputs held): the rates in
+    /// `Lanes`, a lane along each state, one evaluation for every column.
     #[inline]
-    pub(crate) fn rate_tangents(&self, point: &Point, x: &States, d: &States) -> States {
-        let rates = rhs::rates(&self.params, point, &x.along(d), &self.inputs.along(&Inputs::default()), &Modes::default()).derivatives;
-        States::from_array(&rates.to_array().map(|t: Tangent| t.d))
+    pub(crate) fn rate_jacobian<const N: usize>(&self, point: &Point, x: &States, states: [State; N]) -> [[f64; N]; N] {
+        let units = states.map(|j| {
+            let mut d = States::default();
+            *d.get_mut(j) = 1.0;
+            d
+        });
+        let rates = rhs::rates(&self.params, point, &x.lanes(&units), &self.inputs.lanes(&[Inputs::default(); N]), &Modes::default()).derivatives;
+        std::array::from_fn(|i| rates.get(states[i]).d)
     }
 
     /// The unit direction of one known: a state or an input (None: neither).

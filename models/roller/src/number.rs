@@ -171,6 +171,107 @@ impl Div<f64> for Tangent {
     }
 }
 
+/// A value `x` and its derivatives `d` along L directions at once: one evaluation of the
+/// right-hand side gives a whole set of tangents (a Jacobian's columns). Each lane follows
+/// `Tangent`'s rules operation for operation, so each is bit for bit the `Tangent` along its direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lanes<const L: usize> {
+    pub x: f64,
+    pub d: [f64; L],
+}
+
+impl<const L: usize> Default for Lanes<L> {
+    #[inline(always)]
+    fn default() -> Self {
+        Lanes { x: 0.0, d: [0.0; L] }
+    }
+}
+
+impl<const L: usize> Lanes<L> {
+    /// The value x with derivative `d(k)` in lane k.
+    #[inline(always)]
+    pub fn new(x: f64, d: impl Fn(usize) -> f64) -> Lanes<L> {
+        Lanes { x, d: std::array::from_fn(d) }
+    }
+}
+
+impl<const L: usize> Number for Lanes<L> {
+    #[inline(always)]
+    fn constant(x: f64) -> Self {
+        Lanes { x, d: [0.0; L] }
+    }
+    #[inline(always)]
+    fn value(self) -> f64 {
+        self.x
+    }
+    #[inline(always)]
+    fn map(self, value: f64, slope: f64) -> Self {
+        Lanes { x: value, d: self.d.map(|d| slope * d) }
+    }
+    #[inline]
+    fn chain<const K: usize>(value: f64, gradient: &[f64; K], knowns: &[Self; K]) -> Self {
+        Lanes::new(value, |l| gradient.iter().zip(knowns).map(|(g, k)| g * k.d[l]).sum())
+    }
+}
+
+/// `Lanes`' arithmetic, lane by lane as `Tangent`'s.
+macro_rules! lanes_op {
+    ($trait:ident, $f:ident, |$a:ident, $b:ident| $x:expr, |$da:ident, $db:ident, $q:ident| $d:expr) => {
+        impl<const L: usize> $trait for Lanes<L> {
+            type Output = Lanes<L>;
+            #[inline(always)]
+            fn $f(self, o: Lanes<L>) -> Lanes<L> {
+                let ($a, $b) = (self.x, o.x);
+                let $q = $x;
+                Lanes { x: $q, d: std::array::from_fn(|l| {
+                    let ($da, $db) = (self.d[l], o.d[l]);
+                    $d
+                }) }
+            }
+        }
+    };
+}
+lanes_op!(Add, add, |a, b| a + b, |da, db, _q| da + db);
+lanes_op!(Sub, sub, |a, b| a - b, |da, db, _q| da - db);
+lanes_op!(Mul, mul, |a, b| a * b, |da, db, _q| da * b + a * db);
+lanes_op!(Div, div, |a, b| a / b, |da, db, q| (da - q * db) / b);
+
+impl<const L: usize> Neg for Lanes<L> {
+    type Output = Lanes<L>;
+    #[inline(always)]
+    fn neg(self) -> Lanes<L> {
+        Lanes { x: -self.x, d: self.d.map(|d| -d) }
+    }
+}
+impl<const L: usize> Add<f64> for Lanes<L> {
+    type Output = Lanes<L>;
+    #[inline(always)]
+    fn add(self, o: f64) -> Lanes<L> {
+        Lanes { x: self.x + o, d: self.d }
+    }
+}
+impl<const L: usize> Sub<f64> for Lanes<L> {
+    type Output = Lanes<L>;
+    #[inline(always)]
+    fn sub(self, o: f64) -> Lanes<L> {
+        Lanes { x: self.x - o, d: self.d }
+    }
+}
+impl<const L: usize> Mul<f64> for Lanes<L> {
+    type Output = Lanes<L>;
+    #[inline(always)]
+    fn mul(self, o: f64) -> Lanes<L> {
+        Lanes { x: self.x * o, d: self.d.map(|d| d * o) }
+    }
+}
+impl<const L: usize> Div<f64> for Lanes<L> {
+    type Output = Lanes<L>;
+    #[inline(always)]
+    fn div(self, o: f64) -> Lanes<L> {
+        Lanes { x: self.x / o, d: self.d.map(|d| d / o) }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -187,5 +288,20 @@ mod tests {
         let t = f(Tangent::new(x, 1.0));
         assert_eq!(t.x, f(x));
         assert!((t.d - fd).abs() < 1e-8, "{} vs {fd}", t.d);
+    }
+
+    /// Each lane is bit for bit the `Tangent` along its direction.
+    #[test]
+    fn lanes_are_tangents_side_by_side() {
+        fn f<N: Number>(x: N, y: N) -> N {
+            let z = x * y / (x + 1.0) - y * 0.5 + 3.0;
+            (z.sqrt() + (x * 0.1).tanh() - y.powi(3) / 7.0) / (x - y * 2.0) - (-x) + N::chain(2.0, &[0.3, -1.1], &[x, y])
+        }
+        let (x, y) = (1.3, -0.4);
+        let lanes = f(Lanes::<3>::new(x, |l| [1.0, 0.0, 0.25][l]), Lanes::<3>::new(y, |l| [0.0, 1.0, -2.0][l]));
+        for (l, (dx, dy)) in [(1.0, 0.0), (0.0, 1.0), (0.25, -2.0)].into_iter().enumerate() {
+            let t = f(Tangent::new(x, dx), Tangent::new(y, dy));
+            assert_eq!((lanes.x.to_bits(), lanes.d[l].to_bits()), (t.x.to_bits(), t.d.to_bits()), "lane {l}");
+        }
     }
 }

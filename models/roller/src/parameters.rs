@@ -1,7 +1,7 @@
 //! Parameters and inputs of the roller, in SI units.
 
 use crate::description::Real;
-use crate::number::{Number, Tangent};
+use crate::number::{Lanes, Number, Tangent};
 
 /// Parameters, SI.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -177,6 +177,22 @@ impl Inputs {
             load: Tangent::new(self.load, d.load),
             measured: Tangent::new(self.measured, d.measured),
             dancer_y: Tangent::new(self.dancer_y, d.dancer_y),
+        }
+    }
+
+    /// The inputs with their tangents along `ds[l]` in lane l.
+    #[inline]
+    pub fn lanes<const L: usize>(&self, ds: &[Inputs; L]) -> Inputs<Lanes<L>> {
+        let seed = |x: f64, d: fn(&Inputs) -> f64| Lanes::new(x, |l| d(&ds[l]));
+        let zip = |x: &[f64; PORTS], d: fn(&Inputs) -> &[f64; PORTS]| std::array::from_fn(|i| Lanes::new(x[i], |l| d(&ds[l])[i]));
+        Inputs {
+            force_a: zip(&self.force_a, |u| &u.force_a),
+            force_b: zip(&self.force_b, |u| &u.force_b),
+            strain_a: zip(&self.strain_a, |u| &u.strain_a),
+            torque: seed(self.torque, |u| u.torque),
+            load: seed(self.load, |u| u.load),
+            measured: seed(self.measured, |u| u.measured),
+            dancer_y: seed(self.dancer_y, |u| u.dancer_y),
         }
     }
 }

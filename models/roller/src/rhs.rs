@@ -98,17 +98,22 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, 
         Some((f, _)) => -(r * f),
         None => physics::web_torque(p, r, u),
     };
-    let loop_law = control::law(p, &at.control, &control::Seen {
-        omega,
-        radius: r,
+    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia) }
+}
+
+/// The loop's law [R10]-[R11], [R13] at the roller's point.
+#[inline(always)]
+fn loop_law<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, inertia: N) -> control::Law<N> {
+    control::law(p, &at.control, &control::Seen {
+        omega: x.omega,
+        radius: x.radius,
         inertia,
         measured: u.measured,
         dancer_y: u.dancer_y,
         integrator: x.loop_integrator,
         motor: x.motor_torque,
         dancer: x.dancer_integrator,
-    });
-    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law }
+    })
 }
 
 /// The drive's torque: its table and tau_m, its loop, a brake; where the surface follows a
@@ -117,21 +122,30 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, 
 fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, t: &Torques<N>) -> N {
     match at.prescribed {
         Some((_, slope)) => physics::speed_drive_torque(t.inertia, x.radius, slope, t.web, t.bearing),
-        None => {
-            let brake = at.brake.map_or_else(N::default, |b| brake::torque(b, t.surface_speed, p.brake_v_slip));
-            drive::torque(p, at.drive, u.torque, x.radius) + t.loop_law.torque + brake
-        }
+        None => commanded(p, at, x, u, t.loop_law.torque, t.surface_speed),
     }
 }
 
-/// The drive's torque at the roller's point (`Rates::torque` alone).
+/// The torque a drive that follows no speed gives: its table and tau_m, its loop, a brake.
+#[inline(always)]
+fn commanded<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, loop_torque: N, v: N) -> N {
+    let brake = at.brake.map_or_else(N::default, |b| brake::torque(b, v, p.brake_v_slip));
+    drive::torque(p, at.drive, u.torque, x.radius) + loop_torque + brake
+}
+
+/// The drive's torque at the roller's point (`Rates::torque` alone): without a prescribed
+/// speed, what the drive commands alone (no web, bearing or friction to form).
 #[inline]
 pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> N {
-    drive_torque(p, at, x, u, &torques(p, at, x, u, modes))
+    if at.prescribed.is_some() {
+        return drive_torque(p, at, x, u, &torques(p, at, x, u, modes));
+    }
+    let loop_torque = loop_law(p, at, x, u, at.roll.inertia(p, x.radius)).torque;
+    commanded(p, at, x, u, loop_torque, physics::surface_speed(x.radius, x.omega))
 }
 
 /// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
-#[inline]
+#[inline(always)]
 pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Rates<N> {
     let (omega, r) = (x.omega, x.radius);
     let t = torques(p, at, x, u, modes);
@@ -251,30 +265,37 @@ pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<
     }
 }
 
+impl<N: Number> Outputs<N> {
+    /// Each output and rate through `f` (a tangent's derivative, one lane's).
+    #[inline]
+    pub fn map<M: Number>(&self, f: impl Fn(N) -> M) -> Outputs<M> {
+        Outputs {
+            surface_speed: f(self.surface_speed),
+            web_speed: f(self.web_speed),
+            slip: f(self.slip),
+            traction_used: f(self.traction_used),
+            mu_eff: f(self.mu_eff),
+            h_air: f(self.h_air),
+            outlet_strains: self.outlet_strains.map(&f),
+            drive_torque: f(self.drive_torque),
+            loop_integrator: f(self.loop_integrator),
+            motor_state: f(self.motor_state),
+            dancer_integrator: f(self.dancer_integrator),
+            rates: States::from_array(&self.rates.to_array().map(&f)),
+            omega: f(self.omega),
+            radius: f(self.radius),
+            carriage: self.carriage.map(&f),
+            contact_a_x: f(self.contact_a_x),
+            contact_b_x: f(self.contact_b_x),
+            contact_y: f(self.contact_y),
+            load_cell_force: f(self.load_cell_force),
+        }
+    }
+}
+
 impl Outputs<Tangent> {
     /// The derivatives alone.
     pub fn tangents(&self) -> Outputs {
-        let d = |t: Tangent| t.d;
-        Outputs {
-            surface_speed: d(self.surface_speed),
-            web_speed: d(self.web_speed),
-            slip: d(self.slip),
-            traction_used: d(self.traction_used),
-            mu_eff: d(self.mu_eff),
-            h_air: d(self.h_air),
-            outlet_strains: self.outlet_strains.map(d),
-            drive_torque: d(self.drive_torque),
-            loop_integrator: d(self.loop_integrator),
-            motor_state: d(self.motor_state),
-            dancer_integrator: d(self.dancer_integrator),
-            rates: States::from_array(&self.rates.to_array().map(d)),
-            omega: d(self.omega),
-            radius: d(self.radius),
-            carriage: self.carriage.map(d),
-            contact_a_x: d(self.contact_a_x),
-            contact_b_x: d(self.contact_b_x),
-            contact_y: d(self.contact_y),
-            load_cell_force: d(self.load_cell_force),
-        }
+        self.map(|t| t.d)
     }
 }

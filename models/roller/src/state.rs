@@ -3,7 +3,7 @@
 //! are evaluated in. The Model Exchange state vector is the description's order.
 
 use crate::description::Real;
-use crate::number::{Number, Tangent};
+use crate::number::{Lanes, Number, Tangent};
 use crate::parameters::Kind;
 use crate::parameters::{Parameters, STATES};
 
@@ -125,7 +125,7 @@ pub struct States<N = f64> {
 }
 
 impl<N: Number> States<N> {
-    #[inline]
+    #[inline(always)]
     pub fn get(&self, s: State) -> N {
         match s {
             State::Omega => self.omega,
@@ -154,12 +154,12 @@ impl<N: Number> States<N> {
     }
 
     /// In the order of the Model Exchange state vector.
-    #[inline]
+    #[inline(always)]
     pub fn to_array(&self) -> [N; STATES] {
         State::ALL.map(|s| self.get(s))
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn from_array(x: &[N; STATES]) -> States<N> {
         let mut states = States::default();
         for s in State::ALL {
@@ -173,6 +173,12 @@ impl States {
     /// The states with their tangents along `d`.
     pub fn along(&self, d: &States) -> States<Tangent> {
         States::from_array(&State::ALL.map(|s| Tangent::new(self.get(s), d.get(s))))
+    }
+
+    /// The states with their tangents along `ds[l]` in lane l.
+    #[inline]
+    pub fn lanes<const L: usize>(&self, ds: &[States; L]) -> States<Lanes<L>> {
+        States::from_array(&State::ALL.map(|s| Lanes::new(self.get(s), |l| ds[l].get(s))))
     }
 }
 

@@ -223,7 +223,7 @@ impl solver::Ode<2> for Slipping<'_> {
 
     fn jacobian(&self, s: f64, y: &[f64; 2]) -> [[f64; 2]; 2] {
         let (point, x) = self.trial(s, y);
-        jacobian(self.roller, &point, &x, SLIPPING)
+        self.roller.rate_jacobian(&point, &x, SLIPPING)
     }
 
     /// Tables of time (a drive's ramp, the nip's load) move f at fixed y: a central difference.
@@ -235,12 +235,6 @@ impl solver::Ode<2> for Slipping<'_> {
 /// The states the slip's step integrates.
 const SLIPPING: [State; 2] = [State::Omega, State::WebSpeed];
 
-/// d(rates of `states`)/d(`states`) at `point` with the roller at `x`: the right-hand side's tangents.
-fn jacobian<const N: usize>(roller: &Roller, point: &Point, x: &States, states: [State; N]) -> [[f64; N]; N] {
-    let columns = states.map(|j| roller.rate_tangents(point, x, &unit(j)));
-    std::array::from_fn(|i| std::array::from_fn(|j| columns[j].get(states[i])))
-}
-
 /// df/dt at fixed y of a piece's ODE from t0: where a table of time has a slope, a central difference.
 fn time_derivative<const N: usize>(ode: &impl solver::Ode<N>, roller: &Roller, t0: f64, s: f64, y: &[f64; N]) -> [f64; N] {
     if !roller.varies_with_time(t0 + s) {
@@ -249,13 +243,6 @@ fn time_derivative<const N: usize>(ode: &impl solver::Ode<N>, roller: &Roller, t
     let e = 1e-7 * (t0 + s).abs().max(1e-3);
     let (hi, lo) = (ode.rhs(s + e, y), ode.rhs(s - e, y));
     std::array::from_fn(|i| (hi[i] - lo[i]) / (2.0 * e))
-}
-
-/// The unit direction along one state.
-fn unit(s: State) -> States {
-    let mut d = States::default();
-    *d.get_mut(s) = 1.0;
-    d
 }
 
 /// [R1], [R3], [R10]-[R11], [R13] over a piece, as an ODE in (omega, r, loop.I, motor.torque, dancer.I) from the
@@ -276,7 +263,7 @@ impl solver::Ode<5> for Controlled<'_> {
 
     fn jacobian(&self, s: f64, y: &[f64; 5]) -> [[f64; 5]; 5] {
         let trial = self.roller.at_trial(self.t0 + s, y);
-        jacobian(&trial, &trial.point(), &trial.held(), CONTROLLED)
+        trial.rate_jacobian(&trial.point(), &trial.held(), CONTROLLED)
     }
 
     /// Tables of time (a set point's or a reference's ramp) move f at fixed y: a central difference.
