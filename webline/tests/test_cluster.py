@@ -176,7 +176,9 @@ def test_a_release_landing_after_the_next_study_sent_its_fmus_drops_nothing_100_
 
 
 def sweep_command(cluster, fmus, out, *extra):
-    args = ["sweep", str(SPLICE), "--n", "80", "--seed", "5", "--step", "1 ms", "--out", str(out),
+    # 0.25 ms: points long enough (~0.06 s each) that a signal sent half way lands before the last one
+    # ends; at 1 ms the native loop finished the other half before the study saw SIGINT.
+    args = ["sweep", str(SPLICE), "--n", "80", "--seed", "5", "--step", "0.25 ms", "--out", str(out),
             "--fmu-dir", str(fmus), "--scheduler", cluster.address]
     for s in SAMPLES:
         args += ["--sample", s]
