@@ -176,9 +176,7 @@ def test_a_release_landing_after_the_next_study_sent_its_fmus_drops_nothing_100_
 
 
 def sweep_command(cluster, fmus, out, *extra):
-    # 0.25 ms: points long enough (~0.06 s each) that a signal sent half way lands before the last one
-    # ends; at 1 ms the native loop finished the other half before the study saw SIGINT.
-    args = ["sweep", str(SPLICE), "--n", "80", "--seed", "5", "--step", "0.25 ms", "--out", str(out),
+    args = ["sweep", str(SPLICE), "--n", "80", "--seed", "5", "--step", "1 ms", "--out", str(out),
             "--fmu-dir", str(fmus), "--scheduler", cluster.address]
     for s in SAMPLES:
         args += ["--sample", s]
@@ -189,7 +187,10 @@ def run_until_half(cluster, fmus, out, sig, tmp_path):
     """The study as its own process, redirected, sent `sig` once half its points are in its journal."""
     args = [sys.executable, "-m", "webline", *sweep_command(cluster, fmus, out)]
     err, out_text = open(tmp_path / f"stderr-{sig}.txt", "w"), open(tmp_path / f"stdout-{sig}.txt", "w")
-    process = subprocess.Popen(args, stdout=out_text, stderr=err)
+    # SIGINT as a terminal's Ctrl-C finds it: a shell without job control (CI's, a script's `&`) starts
+    # its children with SIGINT ignored, and Python then never raises KeyboardInterrupt.
+    process = subprocess.Popen(args, stdout=out_text, stderr=err,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     journal = out.with_name(f"{out.stem}.partial") / "rows.jsonl"
     deadline = time.monotonic() + 3 * WAIT
     while not (journal.exists() and len(journal.read_text().splitlines()) >= 40):
