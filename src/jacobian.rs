@@ -14,10 +14,10 @@ use solver::CompensatedSum;
 /// in the XML stops the build here until its terms are written there.
 pub const fn tangent_terms(effect: Effect) -> &'static str {
     match effect {
-        Effect::includeDamping => "d_force: d_r times the tangent of the strain rate [4], [5]",
-        Effect::preventNegativeTension => "d_tension: zero on the slack side of the clamp [5]",
-        Effect::includeMass => "d_exit_force: the momentum terms [10]",
-        Effect::variableLength => "d_length and d_length_rate: the roller positions [9]",
+        Effect::includeDamping => "d_force: d_r times the tangent of the strain rate [E4], [E5]",
+        Effect::preventNegativeTension => "d_tension: zero on the slack side of the clamp [E5]",
+        Effect::includeMass => "d_exit_force: the momentum terms [E10]",
+        Effect::variableLength => "d_length and d_length_rate: the roller positions [E9]",
     }
 }
 
@@ -29,8 +29,8 @@ pub struct Direction {
 }
 
 /// The derivatives along a `Direction` of everything the span computes, each named as the
-/// span's own (`t.x` for `ConvertingSpan::x()`): every output, dx/dt [2] among its forces, the
-/// state and the web mass [10]. The binding (variables.rs) reads them by the same names.
+/// span's own (`t.x` for `ConvertingSpan::x()`): every output, dx/dt [E2] among its forces, the
+/// state and the web mass [E10]. The binding (variables.rs) reads them by the same names.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tangents {
     pub outputs: Outputs,
@@ -43,7 +43,7 @@ pub struct Point<'a> {
     pub params: &'a Parameters,
     pub inputs: &'a Inputs,
     pub x: CompensatedSum,
-    /// The rates the outputs use ([11]; zero when no effect reads them).
+    /// The rates the outputs use ([E11]; zero when no effect reads them).
     pub rates: Rates,
     /// The importer's input derivatives for the next step, when given: dL/dt
     /// is formed from them and the current roller positions.
@@ -64,7 +64,7 @@ impl<'a> Point<'a> {
         let (p, u) = (self.params, self.inputs);
         let x = self.x.value();
         let length = physics::span_length(p, u);
-        // [1]: 1 + eps_b = L/x.
+        // [E1]: 1 + eps_b = L/x.
         let strain = physics::strain(length, self.x, 0.0);
         let forward = u.speed_a >= 0.0;
         let length_rate = self.rates.length;
@@ -137,13 +137,13 @@ impl Linearization<'_> {
         // Products with the point's reciprocals (`linearize`): a tangent is asked along many directions.
         let (inv_x, inv_length) = (self.inv_x, self.inv_length);
         let d_strain = (d_length - stretch * d.x) * inv_x;
-        // [2]: q_a - v_b/(1+eps_b). At v_a = 0 exactly: the forward branch, as `physics::inflow` takes it.
+        // [E2]: q_a - v_b/(1+eps_b). At v_a = 0 exactly: the forward branch, as `physics::inflow` takes it.
         let d_strain_in = if self.forward { d.u.strain_a } else { d_strain };
         let inflow = self.inflow;
         let d_inflow = (d.u.speed_a - inflow * d_strain_in) * self.inv_in;
         let d_outflow = (d.u.speed_b - u.speed_b * self.inv_stretch * d_strain) * self.inv_stretch;
         let d_rate = d_inflow - d_outflow;
-        // [9]: dL/dt = (r_b - r_a).(given rates)/L moves with the positions; an estimate is held.
+        // [E9]: dL/dt = (r_b - r_a).(given rates)/L moves with the positions; an estimate is held.
         let length_rate = self.length_rate;
         let d_length_rate = match self.given {
             Some(r) if p.effects.variable_length => {
@@ -152,11 +152,11 @@ impl Linearization<'_> {
             }
             _ => 0.0,
         };
-        // [4]: d(eps_b)/dt = dL/dt / x - (1+eps_b)^2/L * dx/dt.
+        // [E4]: d(eps_b)/dt = dL/dt / x - (1+eps_b)^2/L * dx/dt.
         let factor = self.factor;
         let d_factor = (2.0 * stretch * d_strain - factor * d_length) * inv_length;
         let d_strain_rate = d_length_rate * inv_x - length_rate * d.x * inv_x * inv_x - (d_factor * self.rate + factor * d_rate);
-        // [5], [5a].
+        // [E5], [E5a].
         let web = &p.span_web;
         let damping = if p.effects.include_damping { web.retardation_time } else { 0.0 };
         let d_force = match &web.curve {
@@ -168,8 +168,8 @@ impl Linearization<'_> {
             }
         };
         // The slack clamp: at a force of exactly 0 the slack side (derivative 0).
-        let d_tension = if !p.effects.prevent_negative_tension || self.force > 0.0 { d_force } else { 0.0 };
-        // [10]: F_b - F_a = q_a (rho_l2 v_b - rho_in v_a) + rho_l2 x dv_b/dt, dv_b/dt held.
+        let d_tension = if physics::carries(p, self.force) { d_force } else { 0.0 };
+        // [E10]: F_b - F_a = q_a (rho_l2 v_b - rho_in v_a) + rho_l2 x dv_b/dt, dv_b/dt held.
         let d_exit_force = if p.effects.include_mass {
             let rho_span = web.linear_density();
             let rho_in = if self.forward { p.incoming.linear_density() } else { rho_span };
@@ -194,7 +194,7 @@ impl Linearization<'_> {
     }
 }
 
-/// d(x_0) along `d` [6]: the initial state L/(1 + eps_0) moves with L and,
+/// d(x_0) along `d` [E6]: the initial state L/(1 + eps_0) moves with L and,
 /// when starting at equilibrium, with eps_0 = (v_b/v_a)(1 + eps_a) - 1.
 pub fn initial_state_tangent(p: &Parameters, u: &Inputs, d: &Inputs) -> f64 {
     let length = physics::span_length(p, u);
@@ -327,7 +327,7 @@ mod tests {
         assert!(checked > 1500, "only {checked} nonzero entries checked");
     }
 
-    /// The initial state's tangent against a central difference of x_0(u) [6].
+    /// The initial state's tangent against a central difference of x_0(u) [E6].
     #[test]
     fn initial_state_tangent_matches_a_central_difference() {
         for (equilibrium, variable) in [(true, false), (true, true), (false, true), (false, false)] {

@@ -53,12 +53,12 @@ impl ConvertingSpan {
         self.unstretched.value()
     }
 
-    /// m = rho_l2 * x [10].
+    /// m = rho_l2 * x [E10].
     pub fn web_mass(&self) -> f64 {
         physics::web_mass(&self.params.span_web, self.unstretched.value())
     }
 
-    /// dv_b/dt and dL/dt as the outputs use them [11]: the importer's input
+    /// dv_b/dt and dL/dt as the outputs use them [E11]: the importer's input
     /// derivatives when it gave them for this step, otherwise the backward
     /// differences over the last communication step.
     pub fn input_rates(&self) -> Rates {
@@ -132,19 +132,25 @@ impl ConvertingSpan {
         physics::forces(p, &self.inputs, self.unstretched, rates)
     }
 
-    /// dx/dt [2] now, with the inputs as they are.
+    /// dx/dt [E2] now, with the inputs as they are.
     pub fn unstretched_rate(&self) -> f64 {
         let length = physics::span_length(&self.params, &self.inputs);
         physics::unstretched_rate(&self.inputs, physics::strain(length, self.unstretched, 0.0))
     }
 
-    /// The web's pull before the slack clamp [5] for a state x and inputs u.
+    /// The web's pull before the slack clamp [E5] now.
+    pub fn pull(&self) -> f64 {
+        let rates = if physics::needs_input_rates(&self.params.effects) { self.input_rates() } else { Rates::default() };
+        self.web_force_at(self.unstretched, &self.inputs, rates.length)
+    }
+
+    /// The web's pull before the slack clamp [E5] for a state x and inputs u.
     pub(crate) fn web_force_at(&self, x: CompensatedSum, u: &Inputs, length_rate: f64) -> f64 {
         let length = physics::span_length(&self.params, u);
         physics::web_force(&self.params, u, length, x.value(), physics::strain(length, x, 0.0), length_rate)
     }
 
-    /// Advances over one communication step of length h [3].
+    /// Advances over one communication step of length h [E3].
     fn advance(&mut self, h: f64) -> FmiResult {
         let rates = self.input_rates.filter(|r| *r != Inputs::default());
         let step = stepping::Step { params: &self.params, start: &self.inputs, rates: rates.as_ref(), x0: self.unstretched, h };
@@ -199,7 +205,7 @@ impl ConvertingSpan {
         Ok(())
     }
 
-    /// The rates the outputs use after a step [11]: the given derivatives,
+    /// The rates the outputs use after a step [E11]: the given derivatives,
     /// or backward differences between the starts of the last two steps.
     /// Only the effects that read them (damping, web mass) pay for this.
     fn update_rates(&mut self, start: &Inputs, given: Option<&Inputs>, h: f64) {
@@ -464,7 +470,7 @@ impl Model for ConvertingSpan {
         self.slack_event.as_slice()
     }
 
-    // Model Exchange [13]: the importer integrates the unstretched length.
+    // Model Exchange [E13]: the importer integrates the unstretched length.
 
     fn partial_derivative(&self, unknown: u32, known: u32, of: Jacobian) -> FmiResult<f64> {
         let real = |vr| Real::from_vr(vr).ok_or_else(|| fmi_core::model::unknown_vr(vr));
@@ -512,7 +518,7 @@ impl Model for ConvertingSpan {
     }
 }
 
-/// The tolerance rule [12]: the parameter `tolerance` when the user set it;
+/// The tolerance rule [E12]: the parameter `tolerance` when the user set it;
 /// left at its start value, the tolerance of fmi2SetupExperiment if the
 /// importer gave one.
 pub fn effective_tolerance(parameter: f64, experiment: Option<f64>) -> f64 {

@@ -40,6 +40,16 @@ impl WebProperties {
     }
 }
 
+/// Who decides whether a web with `preventNegativeTension` is slack [E5]: the span, by its own
+/// pull; or, for a layer of a bonded laminate, the laminate, by the sum of its layers' pulls
+/// (docs/merge-split.md, [M6]), which a line decides and sets on each layer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SlackRule {
+    #[default]
+    Own,
+    Laminate { slack: bool },
+}
+
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Parameters {
     /// L, m (when the length is not taken from the roller positions).
@@ -73,6 +83,8 @@ pub struct Parameters {
     pub tolerance: f64,
     /// Sub-steps of the fixed-step solvers.
     pub substeps: i32,
+    /// Who decides that the web is slack: the span, or the laminate it is a layer of (set by a line).
+    pub slack_rule: SlackRule,
 }
 
 /// Inputs at one instant. Within a communication step they are held, or,
@@ -110,7 +122,7 @@ impl Inputs {
     }
 }
 
-/// Rates of inputs that enter the outputs [11].
+/// Rates of inputs that enter the outputs [E11].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Rates {
     /// dv_b/dt, m/s2.

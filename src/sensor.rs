@@ -1,5 +1,5 @@
 //! The sensor outputs `v` and `T` in the units picked with `toUnitV` and
-//! `toUnitF` [7]. The factors come from the unit definitions of
+//! `toUnitF` [E7]. The factors come from the unit definitions of
 //! modelDescription.xml (see build.rs); per-width units divide by wp2.width.
 
 use crate::description::{FORCE_UNIT, SPEED_UNIT};

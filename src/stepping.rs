@@ -1,7 +1,7 @@
 //! One communication step of the span: which method integrates the balance
-//! [2], and the balance written for the integrators.
+//! [E2], and the balance written for the integrators.
 //!
-//! `auto` takes the exact step [3] whenever the inputs are held over the
+//! `auto` takes the exact step [E3] whenever the inputs are held over the
 //! step (then L is constant too, even with moving rollers, because the
 //! positions are held); with input derivatives it takes Rosenbrock 2(3).
 

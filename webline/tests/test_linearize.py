@@ -32,7 +32,7 @@ V_FEED, V_TAKEOFF = 0.5, 0.5002222222
 
 
 def hand_jacobian(x1, omega, x2):
-    """d/d(x1, omega, x2) of physics.md [2], [5] and [R1] for source -> span -> idler -> span -> sink:
+    """d/d(x1, omega, x2) of physics.md [E2], [E5] and [R1] for source -> span -> idler -> span -> sink:
     x1' = v_feed - R omega x1/L1, x2' = R omega x1/L1 - v_takeoff x2/L2 (the web arrives with the
     first span's strain, 1 + eps1 = L1/x1), J omega' = R (T2 - T1) - b omega, T = EA (L/x - 1)."""
     return np.array([
@@ -93,7 +93,7 @@ def test_rewind_line_modes_and_files(fmus, tmp_path, capsys):
 
 def test_linearized_at_a_time_in_the_ramp(fmus):
     """At 2 s the pull roll runs at 6 m/s (5 -> 7 m/s from 1 s to 3 s): the feed span's own entry of A is
-    -v_pull/L (physics.md [2]), which the run to that time in Model Exchange must have reached; the
+    -v_pull/L (physics.md [E2]), which the run to that time in Model Exchange must have reached; the
     line is not steady there, and says so, the pull roll accelerating at 1 m/s2."""
     ss = linearize(load_scene(REWIND), at=2.0, fmu_dir=fmus)
     k = ss.states.index("feed.unstretchedLength")

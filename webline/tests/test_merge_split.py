@@ -344,7 +344,7 @@ STEP = """{
 
 def film_layer_after_the_step(t):
     """The film's layer in its own span and the laminate's three, exactly: with the speeds held, each span's
-    1/(1+eps) = u obeys L_s u_s' = v_in,s u_in,s - v_out,s u_s ([2] of physics.md divided by L), a chain of
+    1/(1+eps) = u obeys L_s u_s' = v_in,s u_in,s - v_out,s u_s ([E2] of physics.md divided by L), a chain of
     first-order lags that the source's strain steps at 0.1 s: u(t) = u1 + exp(A (t - 0.1)) (u0 - u1), u0
     and u1 the steady states before and after, a sum of the exponentials exp(-v_out,s (t - 0.1)/L_s)
     (A's eigenvalues, distinct here). Its tension E A (1/u - 1) in each span (N), rows by t."""

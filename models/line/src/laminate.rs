@@ -1,11 +1,14 @@
 //! A laminate span: a span part per layer, side by side between the same rollers, each with its
 //! own strain (docs/merge-split.md, [M6]). The line offers what the laminate does as one span: its
 //! tension, the sum of its layers'; its strain, theirs weighted by their stiffness; the forces at its
-//! ends; its length, which its layers share.
+//! ends; its length, which its layers share. With `preventNegativeTension` the laminate, bonded, is
+//! slack as one: when the sum of its layers' pulls is not positive, every layer carries 0; else each
+//! its own pull, a compressed layer's negative one too.
 
 use crate::part::Part;
 use crate::port::Port;
 use crate::spec::Spec;
+use converting_span::parameters::SlackRule;
 use fmi_core::{FmiError, FmiResult};
 
 /// What a laminate span offers of its own.
@@ -102,10 +105,48 @@ impl Laminate {
         }
     }
 
-    /// The layers share their span's length: a part's `L` set apart from the others' is refused,
-    /// naming both.
+    /// Whether part `p` is one of its layers.
+    pub fn has(&self, p: usize) -> bool {
+        self.layers.iter().any(|l| l.part == p)
+    }
+
+    /// Whether the laminate keeps its tension from going negative (its layers' `preventNegativeTension`).
+    pub fn clamps(&self, parts: &[Part]) -> bool {
+        parts[self.layers[0].part].prevents_negative_tension()
+    }
+
+    /// The sum of its layers' pulls before the slack clamp [E5]: the laminate's event indicator.
+    pub fn pull(&self, parts: &[Part]) -> f64 {
+        self.layers.iter().map(|l| parts[l.part].pull().expect("a layer is a span")).sum()
+    }
+
+    /// Tells every layer whether the laminate is slack now (the sum of their pulls is not
+    /// positive), from their parts as their inputs now stand.
+    pub fn decide_slack(&self, parts: &mut [Part]) {
+        let rule = SlackRule::Laminate { slack: !(self.pull(parts) > 0.0) };
+        for l in &self.layers {
+            parts[l.part].set_slack_rule(rule);
+        }
+    }
+
+    /// The layers share their span's length and whether it may go slack: a part's `L` or
+    /// `preventNegativeTension` set apart from the others' is refused, naming both.
     pub fn check(&self, spec: &Spec, parts: &[Part]) -> FmiResult {
         let first = &self.layers[0];
+        let clamps = self.clamps(parts);
+        for l in &self.layers[1..] {
+            if parts[l.part].prevents_negative_tension() != clamps {
+                let name = |p: usize| &spec.parts[p].name;
+                return Err(FmiError::error(format!(
+                    "{}.preventNegativeTension = {}, but {}.preventNegativeTension = {clamps}: the layers of laminate {} go slack \
+                     together (all on or all off)",
+                    name(l.part),
+                    !clamps,
+                    name(first.part),
+                    self.name
+                )));
+            }
+        }
         let l0 = parts[first.part].real(first.length);
         for l in &self.layers[1..] {
             let length = parts[l.part].real(l.length);

@@ -520,12 +520,23 @@ impl Model for Line {
         Ok(())
     }
 
+    /// The parts' own; a laminate that may go slack does so as one ([M6]): each of its layers'
+    /// indicator is the sum of their pulls.
     fn get_event_indicators(&self, z: &mut [f64]) -> FmiResult {
         let mut k = 0;
         for part in &self.ode.parts {
             let n = part.event_indicator_count();
             part.get_event_indicators(&mut z[k..k + n])?;
             k += n;
+        }
+        if let Some(net) = &self.ode.net {
+            for lam in net.slack_laminates() {
+                let pull = lam.pull(&self.ode.parts);
+                for layer in &lam.layers {
+                    let first: usize = self.ode.parts[..layer.part].iter().map(Part::event_indicator_count).sum();
+                    z[first] = pull;
+                }
+            }
         }
         Ok(())
     }

@@ -11,7 +11,10 @@
 //!   roller's own partial derivatives (the effective inertia `J + m r^2`);
 //!   where webs merge, every such span into the nip in one solve;
 //! * a span with `variableLength` and `includeDamping` reads dL/dt: the rates
-//!   of its frame inputs, from the feeding part's state derivatives.
+//!   of its frame inputs, from the feeding part's state derivatives;
+//! * a laminate with `preventNegativeTension` is slack as one (docs/merge-split.md,
+//!   [M6]): decided from all its layers once their inputs are set, before any of
+//!   their outputs is read.
 //!
 //! An evaluation goes straight to the parts' fields and functions: each
 //! link's output and input are resolved once, when the line is built, to the
@@ -20,6 +23,7 @@
 //! vectors copied per part.
 
 use crate::chain::Chain;
+use crate::laminate::Laminate;
 use crate::part::{Forces, Part};
 use crate::port::{Link, LinkKind};
 use crate::spec::Spec;
@@ -94,6 +98,9 @@ pub struct Network {
     /// evaluation gave it (and a frame's rate is read before the links run): an
     /// evaluation then depends on the one before, not only on (t, x) and the inputs.
     pub reads_earlier_inputs: bool,
+    /// The laminates that may go slack, each with the link before which it decides (after the
+    /// last link into its layers: `order`).
+    slack: Vec<(Laminate, usize)>,
     /// Per part: the inputs an output read by a connection depends on (None: every input).
     /// Setting another input moves no connection, only the part's own derivatives and
     /// outputs, which the part computes when they are read.
@@ -178,7 +185,8 @@ impl Network {
                 }
             }
         }
-        let mut links = order(&links, parts, spec)?;
+        let clamping: Vec<Laminate> = Laminate::of(spec, parts).into_iter().filter(|l| l.clamps(parts)).collect();
+        let mut links = order(&links, parts, spec, &clamping)?;
         // A group is solved at its first link in evaluation order; the others only mark its inputs.
         for i in 0..links.len() {
             if let LinkKind::MassLoop { group, .. } = links[i].kind {
@@ -204,6 +212,19 @@ impl Network {
                 }
             }
         }
+        // A laminate decides before the first link that reads one of its layers, directly or in a
+        // web-mass group's solve (its lead).
+        let reads_layer = |lam: &Laminate, l: &Link| {
+            lam.has(l.from)
+                || matches!(l.kind, LinkKind::MassLoop { group, lead: true } if groups[group].pulls.iter().any(|p| lam.has(p.span)))
+        };
+        let slack = clamping
+            .into_iter()
+            .map(|lam| {
+                let at = links.iter().position(|l| reads_layer(&lam, l)).unwrap_or(links.len());
+                (lam, at)
+            })
+            .collect();
         let plain = groups.is_empty() && rates.is_empty();
         let mut read = vec![false; n_parts];
         for l in &links {
@@ -247,6 +268,7 @@ impl Network {
             evaluated: None,
             evaluated_x,
             reads_earlier_inputs,
+            slack,
             moving_inputs,
             chain: None,
             kl: 0,
@@ -300,7 +322,8 @@ impl Network {
             let rate = output_rate(parts, r.from, r.output)?;
             parts[r.span].set_input_derivative(r.input, rate)?;
         }
-        for l in &self.links {
+        for (i, l) in self.links.iter().enumerate() {
+            decide_slack(&self.slack, i, parts);
             match l.kind {
                 LinkKind::Plain => {
                     let v = parts[l.from].read(l.source, l.fresh, &mut self.outputs[l.from]);
@@ -313,6 +336,7 @@ impl Network {
                 }
             }
         }
+        decide_slack(&self.slack, self.links.len(), parts);
         if let Some(dx) = dx {
             self.derivatives_from(parts, dx, true)?;
         }
@@ -351,6 +375,11 @@ impl Network {
         if let Some(chain) = self.chain.as_mut() {
             chain.renew();
         }
+    }
+
+    /// The laminates that may go slack (their layers' event indicator is the sum of their pulls).
+    pub fn slack_laminates(&self) -> impl Iterator<Item = &Laminate> {
+        self.slack.iter().map(|(lam, _)| lam)
     }
 
     /// The state derivatives of the parts as last evaluated, by the parts' own
@@ -446,6 +475,14 @@ impl Network {
     }
 }
 
+/// The laminates due to decide before link `at` (`Network::slack`): whether each is slack.
+#[inline(always)]
+fn decide_slack(slack: &[(Laminate, usize)], at: usize, parts: &mut [Part]) {
+    for (lam, _) in slack.iter().filter(|(_, k)| *k == at) {
+        lam.decide_slack(parts);
+    }
+}
+
 /// d(output)/dt of part p now: sum over its states of d(output)/dx * dx/dt.
 fn output_rate(parts: &[Part], p: usize, output: u32) -> FmiResult<f64> {
     let part = &parts[p];
@@ -500,14 +537,17 @@ fn mass_loop(parts: &mut [Part], group: &MassGroup) -> FmiResult {
 
 /// The links in an order where each one's output is computed after every
 /// link into the inputs that output depends on (ModelStructure); a web-mass
-/// loop after every other link into its roller.
-fn order(links: &[Link], parts: &[Part], spec: &Spec) -> Result<Vec<Link>, String> {
+/// loop after every other link into its roller; a layer of a laminate that may go slack after
+/// every link into any of its layers (the laminate decides from all of them).
+fn order(links: &[Link], parts: &[Part], spec: &Spec, clamping: &[Laminate]) -> Result<Vec<Link>, String> {
     // The links into the inputs output `l` depends on.
     let feeding = |l: &Link| -> Vec<usize> {
         let d = parts[l.from].description();
         let on = d.output_dependencies.iter().find(|u| u.vr == l.output).and_then(|u| u.on.clone());
         let depends = |vr: u32| on.as_ref().is_none_or(|list| list.contains(&vr));
-        links.iter().enumerate().filter(|(_, k)| k.to == l.from && depends(k.input)).map(|(i, _)| i).collect()
+        let laminate = clamping.iter().find(|lam| lam.has(l.from));
+        let feeds = |k: &Link| (k.to == l.from && depends(k.input)) || laminate.is_some_and(|lam| lam.has(k.to));
+        links.iter().enumerate().filter(|(_, k)| feeds(k)).map(|(i, _)| i).collect()
     };
     let group_of = |l: &Link| match l.kind {
         LinkKind::MassLoop { group, .. } => Some(group),

@@ -6,6 +6,7 @@
 
 use crate::port::Port;
 use crate::spec::PartSpec;
+use converting_span::parameters::SlackRule;
 use converting_span::ConvertingSpan;
 use fmi_core::description::ModelDescription;
 use fmi_core::{Compiled, EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter, Variables};
@@ -231,6 +232,26 @@ impl Part {
     /// it: an evaluation then depends on the one before.
     pub fn reads_earlier_inputs(&self) -> bool {
         matches!(self, Part::Span(s) if s.params.effects.variable_length)
+    }
+
+    /// A span's pull before its slack clamp now [E5] (a roller: None).
+    pub fn pull(&self) -> Option<f64> {
+        match self {
+            Part::Span(s) => Some(s.pull()),
+            Part::Roller(_) => None,
+        }
+    }
+
+    /// Whether a span keeps its tension from going negative (`preventNegativeTension`).
+    pub fn prevents_negative_tension(&self) -> bool {
+        matches!(self, Part::Span(s) if s.params.effects.prevent_negative_tension)
+    }
+
+    /// Who decides that a span is slack: a laminate's layer is told by its laminate ([M6]).
+    pub fn set_slack_rule(&mut self, rule: SlackRule) {
+        if let Part::Span(s) = self {
+            s.params.slack_rule = rule;
+        }
     }
 
     /// A span's strain now (the integrator scales its tolerance by it); None for a roller.

@@ -408,24 +408,33 @@ fn the_chained_jacobian_is_the_lines_own() {
             line.set_real(tau, 2.0).unwrap();
         }
         line.do_step(0.02).unwrap();
-        let net = line.network().unwrap();
-        assert!(net.chain.is_some(), "{name}: no chain");
-        let (t, x, kl, ku) = (line.time(), line.states().to_vec(), net.kl, net.ku);
-        let n = x.len();
-        let (mut chained, mut differenced) = (Band::zeros(n, kl, ku), Band::zeros(n, kl, ku));
-        line::ode::jacobian_at(&mut line.ode, t, &x, None, &mut chained, false).unwrap();
-        line::ode::jacobian_at(&mut line.ode, t, &x, None, &mut differenced, true).unwrap();
-        let mut checked = 0;
-        for i in 0..n {
-            let scale = (0..n).map(|j| differenced.get(i, j).abs()).fold(0.0, f64::max);
-            for j in 0..n {
-                let (a, b) = (chained.get(i, j), differenced.get(i, j));
-                assert!((a - b).abs() <= 1e-5 * scale, "{name}: J[{i}][{j}] chained {a}, differenced {b} (row scale {scale})");
-                checked += (b != 0.0) as usize;
-            }
-        }
+        let (_, checked) = chained_against_differences(&mut line, name);
+        let n = line.states().len();
         assert!(checked >= 2 * n, "{name}: only {checked} entries");
     }
+}
+
+/// The line's Jacobian chained from its parts' tangents against its own differences, where it
+/// stands: every entry within 1e-5 of its row's largest. The chained band, and how many entries
+/// the differences found nonzero.
+fn chained_against_differences(line: &mut Line, name: &str) -> (Band, usize) {
+    let net = line.network().unwrap();
+    assert!(net.chain.is_some(), "{name}: no chain");
+    let (t, x, kl, ku) = (line.time(), line.states().to_vec(), net.kl, net.ku);
+    let n = x.len();
+    let (mut chained, mut differenced) = (Band::zeros(n, kl, ku), Band::zeros(n, kl, ku));
+    line::ode::jacobian_at(&mut line.ode, t, &x, None, &mut chained, false).unwrap();
+    line::ode::jacobian_at(&mut line.ode, t, &x, None, &mut differenced, true).unwrap();
+    let mut checked = 0;
+    for i in 0..n {
+        let scale = (0..n).map(|j| differenced.get(i, j).abs()).fold(0.0, f64::max);
+        for j in 0..n {
+            let (a, b) = (chained.get(i, j), differenced.get(i, j));
+            assert!((a - b).abs() <= 1e-5 * scale, "{name}: J[{i}][{j}] chained {a}, differenced {b} (row scale {scale})");
+            checked += (b != 0.0) as usize;
+        }
+    }
+    (chained, checked)
 }
 
 #[test]
@@ -690,6 +699,86 @@ fn a_laminate_at_rest_starts_with_its_layers_moved_together() {
     }
 }
 
+/// `laminate_line` with both laminates free to go slack (`preventNegativeTension` on every layer),
+/// drawn by nothing (nip, pull and sink at 5 m/s), the foil arriving at `foil_strain` off its source.
+fn slack_laminate_line(foil_strain: f64) -> Value {
+    let mut spec = laminate_line("given");
+    spec["parts"][0]["start"]["web_a.eps"] = json!(5e-3);
+    spec["parts"][2]["start"]["web_a.eps"] = json!(foil_strain);
+    for (k, speed) in [(7, 5.0), (10, 5.0)] {
+        spec["parts"][k]["profile"]["speed"] = json!([[0.0, speed]]);
+    }
+    for k in [5, 6, 8, 9] {
+        spec["parts"][k]["start"]["preventNegativeTension"] = json!(true);
+    }
+    spec
+}
+
+/// A bonded laminate goes slack as one ([M6]). At zero draw each layer keeps the strain it arrived
+/// at, 1+eps_i = (v_n/v_src,i)(1+eps_src,i), and pulls E_i A_i eps_i (Kelvin–Voigt at rest in
+/// strain rate). PET from 4.99 m/s at 5e-3 pulls +1578 N; the foil from 4.998 m/s at -1e-3 is
+/// compressed, -828 N: the sum, 750 N, is positive, so each layer carries its own pull, the
+/// compressed one too (a clamp per layer would give 1578 N). At -3e-3 the foil pushes -3588 N,
+/// the sum is negative, and every layer's tension and end forces are exactly 0. After 40 time
+/// constants L/v (0.12 s) from a given start: 1e-9, as the closed-form test above.
+#[test]
+fn a_laminate_goes_slack_as_one() {
+    let (ea_pet, ea_al) = (4.5e9 * 50e-6, 69e9 * 20e-6);
+    for (foil_strain, slack) in [(-1e-3, false), (-3e-3, true)] {
+        let mut line = initialized(&slack_laminate_line(foil_strain));
+        for _ in 0..500 {
+            line.do_step(0.01).unwrap();
+        }
+        let eps = [5.0 / 4.99 * 1.005 - 1.0, 5.0 / 4.998 * (1.0 + foil_strain) - 1.0];
+        let pulls = [ea_pet * eps[0], ea_al * eps[1]];
+        assert_eq!(pulls[0] + pulls[1] <= 0.0, slack, "the case is as named");
+        let carried = if slack { [0.0, 0.0] } else { pulls };
+        for name in ["lam", "rew"] {
+            let total = carried[0] + carried[1];
+            let mut outputs = vec![("T".to_string(), total), ("F_a".into(), total), ("F_b".into(), total)];
+            for (label, t) in ["PET", "Al"].iter().zip(carried) {
+                outputs.extend([(format!("T_{label}"), t), (format!("{label}.T"), t), (format!("{label}.F_a"), t), (format!("{label}.F_b"), t)]);
+            }
+            for (output, want) in outputs {
+                let got = get(&line, &format!("{name}.{output}"));
+                assert!((got - want).abs() <= 1e-9 * pulls[0].abs(), "foil at {foil_strain}: {name}.{output} = {got}, closed form {want}");
+                if slack {
+                    assert_eq!(got, 0.0, "{name}.{output}: a slack laminate carries exactly 0");
+                }
+            }
+            // The layers still carry their own strains: slack takes the tension, not the material.
+            let strain = get(&line, &format!("{name}.Al.eps"));
+            assert!((strain - eps[1]).abs() <= 1e-9 * eps[1].abs(), "{name}: the foil's strain {strain}, not {}", eps[1]);
+        }
+        // Its layers' event indicator is the laminate's: the sum of their pulls.
+        let mut z = vec![0.0; line.description().number_of_event_indicators];
+        Model::get_event_indicators(&line, &mut z).unwrap();
+        let al = line.shared.spec.part("lam.Al").unwrap();
+        let k: usize = line.ode.parts[..al].iter().map(|p| p.event_indicator_count()).sum();
+        assert!((z[k] - (pulls[0] + pulls[1])).abs() <= 1e-9 * pulls[0], "indicator {} for the sum {}", z[k], pulls[0] + pulls[1]);
+    }
+}
+
+/// The chained Jacobian through a laminate that may go slack, against the line's differences (as
+/// `the_chained_jacobian_is_the_lines_own`, 1e-5 of a row's largest): the pull roll a free roller
+/// that both laminates turn, so its row reads every layer's force, on the carrying side (each
+/// layer's own tangent, a compressed one's too) and on the slack side (none).
+#[test]
+fn the_chained_jacobian_follows_a_laminates_slack() {
+    for foil_strain in [-1e-3, -3e-3] {
+        let mut spec = slack_laminate_line(foil_strain);
+        spec["parts"][7] = roller("pull", "roller", json!({"J": 0.01, "R": 0.1, "b": 0.0, "v_start": 5.0, "inlets": 2, "outlets": 2, "layered": true}), None);
+        let mut line = initialized(&spec);
+        line.do_step(0.02).unwrap();
+        let (chained, _) = chained_against_differences(&mut line, &format!("foil at {foil_strain}"));
+        // The pull's omega reads the foil layer before it while the laminate carries, not when slack.
+        let net = line.network().unwrap();
+        let (omega, foil) = (net.global(7, 0).unwrap(), net.global(6, 0).unwrap());
+        let slack = foil_strain < -2e-3;
+        assert_eq!(chained.get(omega, foil) == 0.0, slack, "foil at {foil_strain}: d(omega')/d(x_Al) = {}", chained.get(omega, foil));
+    }
+}
+
 #[test]
 fn bad_laminates_are_refused_with_the_reason() {
     let good = laminate_line("given");
@@ -702,6 +791,7 @@ fn bad_laminates_are_refused_with_the_reason() {
         ({ let mut s = good.clone(); s["laminates"][0]["layers"] = json!([{"part": "lam.PET", "label": "PET"}]); s }, "at least two layers"),
         ({ let mut s = good.clone(); s["parts"][5]["name"] = json!("lam..PET"); s }, "part name \"lam..PET\""),
         ({ let mut s = good.clone(); s["parts"][6]["start"]["L"] = json!(0.7); s }, "lam.Al.L = 0.7 m, but lam.PET.L = 0.6 m"),
+        ({ let mut s = good.clone(); s["parts"][6]["start"]["preventNegativeTension"] = json!(true); s }, "lam.Al.preventNegativeTension = true, but lam.PET"),
     ];
     for (spec, expected) in cases {
         let err = match instantiate(&spec) {

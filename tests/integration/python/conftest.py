@@ -3,7 +3,7 @@ for the FMU tests.
 
 The reference is computed with mpmath at 40 significant digits from the
 closed-form solution of the span's material balance with piecewise-constant
-inputs. It is written from the physics (documentation, equations [1]-[8]),
+inputs. It is written from the physics (documentation, equations [E1]-[E8]),
 not from the FMU's code: it integrates the input table piece by piece and
 evaluates the state at any time, independently of the communication steps
 the importer takes.
@@ -213,7 +213,7 @@ def _advance(L, piece, x, dt):
 
 
 def tension(p, x, piece):
-    """Span tension [5] for the unstretched length x and the inputs of `piece`."""
+    """Span tension [E5] for the unstretched length x and the inputs of `piece`."""
     L = mpf(p["L"])
     EA = mpf(p["wp2.E"]) * mpf(p["wp2.width"]) * mpf(p["wp2.thickness"])
     eps = L / x - 1
@@ -229,7 +229,7 @@ def tension(p, x, piece):
 
 
 def initial_strain(p, piece):
-    """Start strain [6]: steady state of the initial inputs, or eps_start."""
+    """Start strain [E6]: steady state of the initial inputs, or eps_start."""
     if not p["startAtEquilibrium"]:
         return mpf(p["eps_start"])
     if piece.va == 0:

@@ -59,7 +59,7 @@ def test_cvode_on_model_exchange_matches_the_exact_solution_to_its_tolerance(fmu
 
 def test_the_slack_event_indicator_makes_cvode_stop_at_the_crossing(fmu_path, defaults):
     # The downstream roller slows by 1 %: the strain falls through zero. With
-    # preventNegativeTension the event indicator (the bracket of [5]) crosses
+    # preventNegativeTension the event indicator (the bracket of [E5]) crosses
     # zero there; FMPy then records the event time twice. The exact crossing:
     # x(t) = L, from the closed form of the balance.
     table = step_table(1.0, {"web_a.v": 5.0, "web_a.eps": 1e-3, "web_b.v": 5.0}, [(0.1, {"web_b.v": 4.95})])

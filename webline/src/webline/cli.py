@@ -171,10 +171,9 @@ def cmd_export(args):
         return 0
     if args.fmi3:
         raise SceneError("--fmi3 goes with --fmu (an SSP archive carries the FMI 2.0 FMUs)")
-    from .engines import refuse_loops, refuse_traction
+    from .engines import refuse_for_parts
 
-    refuse_traction(scene)
-    refuse_loops(scene)
+    refuse_for_parts(scene)
     system = compile_scene(scene, args.fmu_dir)
     system.step = args.step or export_step(system)
     path = write_ssp(system, args.output or Path(args.out) / f"{scene.name}.ssp")

@@ -54,6 +54,27 @@ def refuse_loops(scene):
                          "default engine) or with --engine reference")
 
 
+def refuse_slack_laminates(scene):
+    """A laminate with preventNegativeTension is slack only as a whole, when the sum of its layers'
+    tensions is (docs/merge-split.md, [M6]): the parts' co-simulation steps each layer in an FMU of its
+    own, which cannot clamp on a sum it does not see."""
+    slack = [sp for sp in scene.spans if sp.layered and "preventNegativeTension" in sp.effects]
+    if slack:
+        sp = slack[0]
+        raise SceneError(f"{sp.where}: span {sp.name!r} is a laminate with preventNegativeTension, which goes slack only "
+                         "as a whole (when the sum of its layers' tensions is not positive): the parts' co-simulation and "
+                         "its SSP export step each layer in an FMU of its own and cannot clamp on that sum; run the scene "
+                         "as one Line FMU (webline run's default engine) or with --engine reference")
+
+
+def refuse_for_parts(scene):
+    """What a line of part FMUs cannot run (the parts' co-simulation and its SSP export): a web that may
+    slip, a drive's loop, a laminate that may go slack."""
+    refuse_traction(scene)
+    refuse_loops(scene)
+    refuse_slack_laminates(scene)
+
+
 def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None = None, force: bool = False,
               **options) -> Result:
     """A scene run by an engine (None: `line`, or `reference` where the Line FMU cannot run it), its
@@ -86,8 +107,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
     elif engine == "parts":
         from .compiler import run_scene as run_parts
 
-        refuse_traction(scene)
-        refuse_loops(scene)
+        refuse_for_parts(scene)
         from .stability import operating_lines
 
         warnings += check_step(lambda: operating_lines(scene, fmu_dir), scene.name, step or scene.step, force,
@@ -98,8 +118,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
         from .ssp import write_ssp
         from .stability import export_step
 
-        refuse_traction(scene)
-        refuse_loops(scene)
+        refuse_for_parts(scene)
         with tempfile.TemporaryDirectory(prefix="webline-ssp-") as tmp:
             system = compile_scene(scene, fmu_dir)
             system.step = export_step(system)
@@ -298,8 +317,7 @@ def agreement(scene_path, fmu_dir, workdir: Path, stop_time: float | None = None
     scene = load_scene(scene_path, fmu_dir=fmu_dir)
     if stop_time is not None:
         scene.stop_time = stop_time
-    refuse_traction(scene)
-    refuse_loops(scene)
+    refuse_for_parts(scene)
     exported = compile_scene(scene, fmu_dir)
     exported.step = export_step(exported)
     archive = write_ssp(exported, Path(workdir) / f"{scene.name}.ssp")

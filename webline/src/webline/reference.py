@@ -1,7 +1,7 @@
 """The monolithic reference: the whole line as one ODE, integrated by SciPy's Radau.
 
 An independent implementation of the line equations of the physics
-documentation (docs "The rollers around a span", the span's [1]-[10]); it
+documentation (docs "The rollers around a span", the span's [E1]-[E10]); it
 shares nothing with the FMUs or the co-simulation master but the parsed
 scene. States:
 
@@ -31,7 +31,7 @@ scene. States:
 
 Tension: T = EA*(eps + d_r*deps/dt) (damping), or for a web record's
 stress-strain table T = A*(sigma(eps) + d_r*dsigma/deps*deps/dt); clamped at
-0 for a slack web; a laminate's the sum of its layers' ([M6]).
+0 for a slack web; a laminate's the sum of its layers' ([M6]), slack only as one (its sum).
 Profiles are integrated piece by piece between their breakpoints and the
 events, where parameters change (a splice) with the state kept (strain;
 a roller's surface speed).
@@ -260,10 +260,13 @@ class LineODE:
                     qa = va / (1.0 + eps)
                 deps = (1.0 + eps) / L * (dL + vb - (1.0 + eps) * qa)
                 dz[first + i] = deps
-                layers.append(self.layer(sp, w1, w2, eps, deps, L, qa, va, vb))
+                layers.append(self.layer(sp, w1, w2, eps, deps, L, qa, va, vb, clamp=not sp.layered))
             if len(layers) == 1:
                 q[sp.name] = layers[0]
             else:  # a laminate ([M6]): its layers in parallel, the strain weighted by their stiffness
+                if "preventNegativeTension" in sp.effects and not sum(x["T"] for x in layers) > 0.0:
+                    for x in layers:  # bonded, it goes slack as one: every layer carries 0
+                        x["T"] = x["F_a"] = 0.0
                 q[sp.name] = {k: sum(x[k] for x in layers) for k in ("T", "p", "m")}
                 q[sp.name].update(eps=sum(x["EA"] * x["eps"] for x in layers) / sum(x["EA"] for x in layers), L=L,
                                   F_a=q[sp.name]["T"], **{f"T_{label}": x["T"] for label, x in zip(sp.labels, layers)})
@@ -319,14 +322,16 @@ class LineODE:
         return dz, q, v
 
     @staticmethod
-    def layer(sp, w1, w2, eps, deps, L, qa, va, vb):
-        """One layer of a span (the span itself, for a web of one layer): its tension, momentum flux and mass."""
+    def layer(sp, w1, w2, eps, deps, L, qa, va, vb, clamp=True):
+        """One layer of a span (the span itself, for a web of one layer): its tension, momentum flux and mass.
+        `clamp`: a web of one layer is slack when its own pull is not positive; a laminate's layer is
+        not clamped on its own (the laminate clamps on the sum, [M6])."""
         damped = "includeDamping" in sp.effects
         if w2.curve is None:
             T = w2.EA * (eps + (w2.d_r * deps if damped else 0.0))
         else:  # a record's stress-strain table, with the tangent modulus in the damping term
             T = w2.area * (float(w2.curve.sigma(eps)) + (w2.d_r * float(w2.curve.tangent(eps)) * deps if damped else 0.0))
-        if "preventNegativeTension" in sp.effects:
+        if clamp and "preventNegativeTension" in sp.effects:
             T = max(T, 0.0)
         x = L / (1.0 + eps)
         if "includeMass" in sp.effects:
