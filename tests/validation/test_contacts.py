@@ -36,14 +36,15 @@ DAMPED = {"web": "PET", "effects": ["includeDamping"]}
 HOW = ["fmi2 cs", "fmi3 cs", "fmi2 me", "reference"]
 
 
-def line(name, roll, v_sink, webs=None, v_src=5.0, record=()):
+def line(name, roll, v_sink, record=()):
+    """src (5 m/s, strain 1e-3) - a - roll (`roll`'s keys, a 90 degree wrap) - b - snk (v_sink)."""
     return parse_scene(json.dumps({
-        "name": name, "stop_time": "0.3 s", "step": "1 ms", "start": "equilibrium", "webs": webs or {"PET": PET},
+        "name": name, "stop_time": "0.3 s", "step": "1 ms", "start": "equilibrium", "webs": {"PET": PET},
         "line": [
-            {"type": "source", "name": "src", "speed": f"{v_src} m/s", "strain": 1e-3},
-            {"type": "span", "name": "a", "L": "1 m", **(DAMPED if webs is None else {"web": next(iter(webs)), "effects": ["includeDamping"]})},
+            {"type": "source", "name": "src", "speed": "5 m/s", "strain": 1e-3},
+            {"type": "span", "name": "a", "L": "1 m", **DAMPED},
             {"type": "roller", "name": "roll", "R": "0.1 m", "wrap": "90 deg", **roll},
-            {"type": "span", "name": "b", "L": "1 m", **(DAMPED if webs is None else {"web": next(iter(webs)), "effects": ["includeDamping"]})},
+            {"type": "span", "name": "b", "L": "1 m", **DAMPED},
             {"type": "sink", "name": "snk", "speed": f"{v_sink} m/s"},
         ],
         "record": ["a.T", "b.T", "roll.v_web", "roll.slip", *record]}), f"{name}.json")
@@ -135,6 +136,21 @@ def test_a_sliding_roll_with_a_wrap_and_a_nip_gives_the_law_of_the_nips_side(cas
 BOARD = {"BOARD": {"E": "5 GPa", "thickness": "0.5 mm", "width": "1 m", "density": "1000 kg/m3", "d_r": "1 ms"}}
 
 
+def floating_line(stop, record):
+    """The board from a source at 20 m/s (strain 1e-5: 25 N) over a roll driven at 15 m/s to a sink at 20 m/s."""
+    return {
+        "name": "floating", "stop_time": stop, "step": "1 ms", "start": "equilibrium", "webs": BOARD,
+        "line": [
+            {"type": "source", "name": "src", "speed": "20 m/s", "strain": 1e-5},
+            {"type": "span", "name": "a", "L": "1 m", "web": "BOARD", "effects": ["includeDamping"]},
+            {"type": "roller", "name": "roll", "R": "0.1 m", "wrap": "90 deg", "drive": {"speed": "15 m/s"},
+             "traction": {"mu": MU}},
+            {"type": "span", "name": "b", "L": "1 m", "web": "BOARD", "effects": ["includeDamping"]},
+            {"type": "sink", "name": "snk", "speed": "20 m/s"},
+        ],
+        "record": record}
+
+
 @pytest.mark.parametrize("how", HOW)
 def test_a_web_whose_speed_takes_its_tension_off_the_wrap_has_no_traction(how, where):
     """T - rho_l v^2 <= 0: the pressure p R = T - rho_l v^2 of the capstan derivation is none, so the
@@ -146,17 +162,8 @@ def test_a_web_whose_speed_takes_its_tension_off_the_wrap_has_no_traction(how, w
     1e-6 of T, T_a = T_b to 1e-9 of T (the spans' tensions differ only by the integrators' error),
     the web's speed to 1e-9; the speed drive's reaction torque, the roll's friction times its
     radius (b = 0, J domega/dt = 0 at a constant speed), exactly 0."""
-    scene = parse_scene(json.dumps({
-        "name": "floating", "stop_time": "0.2 s", "step": "1 ms", "start": "equilibrium", "webs": BOARD,
-        "line": [
-            {"type": "source", "name": "src", "speed": "20 m/s", "strain": 1e-5},
-            {"type": "span", "name": "a", "L": "1 m", "web": "BOARD", "effects": ["includeDamping"]},
-            {"type": "roller", "name": "roll", "R": "0.1 m", "wrap": "90 deg", "drive": {"speed": "15 m/s"},
-             "traction": {"mu": MU}},
-            {"type": "span", "name": "b", "L": "1 m", "web": "BOARD", "effects": ["includeDamping"]},
-            {"type": "sink", "name": "snk", "speed": "20 m/s"},
-        ],
-        "record": ["a.T", "b.T", "roll.v_web", "roll.slip", "roll.tau"]}), "floating.json")
+    scene = parse_scene(json.dumps(floating_line("0.2 s", ["a.T", "b.T", "roll.v_web", "roll.slip", "roll.tau"])),
+                        "floating.json")
     r = run(scene, how, where)
     t = 5e9 * 0.5e-3 * 1e-5
     assert np.max(np.abs(r["a.T"] - t)) <= 1e-6 * t and np.max(np.abs(r["b.T"] - t)) <= 1e-6 * t, how
@@ -170,17 +177,7 @@ def test_webline_run_names_the_roller_and_the_speed_where_the_wrap_has_no_tracti
     """The same board line run by `webline run`: its summary says that the roll has no traction on
     its wrap, at v_web = 20 m/s (the sink's speed: the web passes the roll untouched), where the
     centripetal force rho_l v^2 = 0.5 * 20^2 = 200 N exceeds the tension 25 N."""
-    scene = {
-        "name": "floating", "stop_time": "0.05 s", "step": "1 ms", "webs": BOARD,
-        "line": [
-            {"type": "source", "name": "src", "speed": "20 m/s", "strain": 1e-5},
-            {"type": "span", "name": "a", "L": "1 m", "web": "BOARD", "effects": ["includeDamping"]},
-            {"type": "roller", "name": "roll", "R": "0.1 m", "wrap": "90 deg", "drive": {"speed": "15 m/s"},
-             "traction": {"mu": MU}},
-            {"type": "span", "name": "b", "L": "1 m", "web": "BOARD", "effects": ["includeDamping"]},
-            {"type": "sink", "name": "snk", "speed": "20 m/s"},
-        ],
-        "record": ["a.T"]}
+    scene = floating_line("0.05 s", ["a.T"])
     path = tmp_path / "floating.json"
     path.write_text(json.dumps(scene))
     assert webline_main(["run", str(path), "--out", str(tmp_path), "--fmu-dir", str(fmus)]) == 0
@@ -196,9 +193,9 @@ def test_the_air_film_is_knox_and_sweeneys_at_the_entry_tension(how, where):
     speeds, T_w the tension per width where the film forms: the inlet, where the web arrives (T_a,
     running forward). The braking roll with its nip at the entry (first case above) has
     T_b/T_a = 450 N / 182 N = 2.5, so the mean tension would give a film 31 % thinner: the check
-    tells them apart. Its roughness (1 mm) is far above the film (about 20 um here), so mu_eff = mu and the
-    tensions are the first case's closed forms; h to 1e-6 relative (it goes as T_a^(-2/3) and
-    V^(2/3), both known to 1e-6 or better)."""
+    tells them apart. Its roughness (1 mm) is far above the film (about 20 um here), so mu_eff = mu
+    and the tensions are the first case's closed forms; h to 1e-6 relative (it goes as T_a^(-2/3)
+    and V^(2/3), both known to 1e-6 or better)."""
     eps_b = 5.005 / 5.0 * 1.001 - 1.0
     eps_a, v_w = steady_a(eps_b, CASES["entry, braking"][3])
     scene = line("film", {"drive": {"speed": "4.5 m/s"}, "traction": {"mu": MU, "air": {"roughness": "1 mm"}},
