@@ -24,6 +24,7 @@ from .conftest import SCENES
 
 PET = {"E": "4.5 GPa", "thickness": "50 um", "width": "1 m", "density": "1390 kg/m3", "d_r": "1 ms"}
 EA = 4.5e9 * 50e-6
+RHO_L = 1390.0 * 50e-6 * 1.0  # the web's mass per length: its centripetal force rho_l v^2 relieves the wrap
 MU, WRAP, MU_NIP, LOAD, V_SLIP = 0.3, math.radians(90.0), 0.5, 200.0, 1e-3
 DAMPED = {"web": "PET", "effects": ["includeDamping"]}
 
@@ -33,7 +34,7 @@ def scene(line, record, start="equilibrium", stop="0.3 s"):
                                    "webs": {"PET": PET}, "line": line, "record": record}), "traction.json")
 
 
-def sliding_line():
+def sliding_line(nip_side=None):
     """A drag roll (a wrap) and a nip roll, both driven slower than the web, which slides over both."""
     return scene([
         {"type": "source", "name": "src", "speed": "5 m/s", "strain": 1e-3},
@@ -42,7 +43,7 @@ def sliding_line():
          "traction": {"mu": MU}},
         {"type": "span", "name": "b", "L": "1 m", **DAMPED},
         {"type": "roller", "name": "nip", "R": "0.1 m", "drive": {"speed": "4.4 m/s"},
-         "nip": {"load": f"{LOAD} N", "mu": MU_NIP}},
+         "nip": {"load": f"{LOAD} N", "mu": MU_NIP, **({"side": nip_side} if nip_side else {})}},
         {"type": "span", "name": "c", "L": "1 m", **DAMPED},
         {"type": "sink", "name": "snk", "speed": "5.005 m/s"},
     ], ["a.T", "b.T", "c.T", "drag.v_web", "drag.slip", "drag.traction", "nip.v_web", "nip.slip", "nip.traction"])
@@ -50,11 +51,16 @@ def sliding_line():
 
 def expected_sliding():
     """The mass balance span by span (1 + eps_out = (v_out/v_in)(1 + eps_in)) gives c's strain from the
-    source and sink alone; the nip passes mu N below it, the wrap divides by exp(mu theta) below that,
-    and each roll's web speed follows from the strain before it."""
+    source and sink alone; the nip passes mu N below it, the wrap divides T - rho_l v^2 by exp(mu theta)
+    below that (v the web's speed over the drag roll, which follows from a's strain: solved by
+    iteration, each step shrinking the error by 2 rho_l v^2 / EA), and each roll's web speed follows
+    from the strain before it."""
     eps_c = 5.005 / 5.0 * 1.001 - 1.0
     eps_b = eps_c - MU_NIP * LOAD / EA
-    eps_a = eps_b * math.exp(-MU * WRAP)
+    eps_a = eps_b
+    for _ in range(10):
+        relief = RHO_L * (5.0 * (1.0 + eps_a) / 1.001) ** 2
+        eps_a = (relief + (EA * eps_b - relief) * math.exp(-MU * WRAP)) / EA
     return {"a.T": EA * eps_a, "b.T": EA * eps_b, "c.T": EA * eps_c,
             "drag.v_web": 5.0 * (1.0 + eps_a) / 1.001, "nip.v_web": 5.0 * (1.0 + eps_b) / 1.001}
 
@@ -77,14 +83,15 @@ def spin_up_line():
          "traction": {"mu": MU, "slip_start": "5 m/s"}},
         {"type": "span", "name": "b", "L": "1 m", "eps_start": 2e-3, **DAMPED},
         {"type": "sink", "name": "snk", "speed": "5.005 m/s"},
-    ], ["a.T", "idler.v", "idler.slip", "idler.traction"], start="given", stop="0.4 s")
+    ], ["a.T", "idler.v", "idler.v_web", "idler.slip", "idler.traction"], start="given", stop="0.4 s")
 
 
-def check_spin_up(t, acceleration, tension, slip, used, engine):
+def check_spin_up(t, acceleration, tension, v_web, slip, used, engine):
     """While it slides (after the sudden start's transient, a few ms), the surface accelerates at
-    R^2 T_a (exp(mu theta) - 1)/J; while it sticks with at most 90 % of its traction, |s| <= 5 v_slip."""
+    R^2 (T_a - rho_l v_w^2)(exp(mu theta) - 1)/J; while it sticks with at most 90 % of its traction,
+    |s| <= 5 v_slip."""
     sliding = (slip > 50 * V_SLIP) & (t > 0.02)
-    expected = 0.05 ** 2 * tension * (math.exp(MU * WRAP) - 1.0) / 0.01
+    expected = 0.05 ** 2 * (tension - RHO_L * v_web ** 2) * (math.exp(MU * WRAP) - 1.0) / 0.01
     assert sliding.sum() >= 8, engine  # a tenth of the run at least, at 10 ms too
     assert np.max(np.abs(acceleration[sliding] / expected[sliding] - 1.0)) < 1e-6, engine
     sticking = (slip <= 50 * V_SLIP) & (used <= 0.9)
@@ -109,7 +116,8 @@ def test_the_closed_forms_hold_in_the_reference():
     # The reference's own rates at its recorded states: the surface's acceleration R * domega/dt.
     states = _reference_states(s, t)
     accel = np.array([0.05 * ode.rhs(tk, z)[i] for tk, z in zip(t, states)])
-    check_spin_up(t, accel, r.column("a.T"), r.column("idler.slip"), r.column("idler.traction"), "reference")
+    check_spin_up(t, accel, r.column("a.T"), r.column("idler.v_web"), r.column("idler.slip"), r.column("idler.traction"),
+                  "reference")
 
 
 def _reference_states(s, times):
@@ -132,11 +140,12 @@ def test_the_closed_forms_hold_in_the_line_fmu(how, line_dir, tmp_path):
     check_sliding(result, how)
     s = spin_up_line()
     fmu = linefmu.export(s, tmp_path / "spin.fmu", line_dir, fmi3=how == "fmi3")
-    names = ["a.T", "idler.slip", "idler.traction", "der(idler.omega)"]
+    names = ["a.T", "idler.v_web", "idler.slip", "idler.traction", "der(idler.omega)"]
     h = 1e-2 if how == "cs 10 ms" else 1e-3
     out = simulate_fmu(str(fmu), stop_time=s.stop_time, step_size=h, output_interval=h, output=names,
                        fmi_type="ModelExchange" if how == "me" else "CoSimulation")
-    check_spin_up(out["time"], 0.05 * out["der(idler.omega)"], out["a.T"], out["idler.slip"], out["idler.traction"], how)
+    check_spin_up(out["time"], 0.05 * out["der(idler.omega)"], out["a.T"], out["idler.v_web"], out["idler.slip"],
+                  out["idler.traction"], how)
 
 
 def test_the_line_fmu_reports_what_a_roller_with_traction_has(line_dir, tmp_path):
@@ -154,6 +163,8 @@ def test_the_line_fmu_reports_what_a_roller_with_traction_has(line_dir, tmp_path
 @pytest.mark.parametrize("edit, says", [
     (lambda line: line[2]["traction"].update(mu=0.3) or line[2].pop("wrap"), "give the roller a \"wrap\""),
     (lambda line: line[1].update(effects=[]), "needs the effect includeDamping"),
+    (lambda line: line[2].update(nip={"load": "100 N", "mu": 0.5, "side": "middle"}),
+     "roller 'idler': nip: side 'middle' is not one of 'entry', 'exit'"),
     (lambda line: line[0].update(type="unwinder", J="1 kg.m2", R="0.1 m", drive={"tension": "100 N"}, strain=0.0)
      or line[0].pop("speed") or line[2].update(type="roller"), None),
 ])
@@ -172,6 +183,13 @@ def test_scene_keys_are_checked_by_name(edit, says):
         return
     with pytest.raises(SceneError, match=says):
         parse_scene(text, "t.json")
+
+
+@pytest.mark.parametrize("side, value", [(None, 0), ("entry", 0), ("exit", 1)])
+def test_the_nips_side_reaches_the_roller(side, value, line_dir):
+    """A scene's nip side is the Roller's nip.side in the Line's parts (entry by default)."""
+    part = next(p for p in linefmu.line_spec(sliding_line(side), line_dir)["parts"] if p["name"] == "nip")
+    assert part["start"]["nip.side"] == value
 
 
 def test_traction_is_refused_where_it_is_not_modelled():

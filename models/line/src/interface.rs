@@ -32,10 +32,10 @@ pub enum Binding {
 }
 
 /// Part parameters the line does not offer: the line solves and starts the
-/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction and
+/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side) and
 /// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
 /// measures) and a span's variable length are the line's structure, which line.json fixes.
-const NOT_OFFERED: [&str; 21] = [
+const NOT_OFFERED: [&str; 22] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",
@@ -57,6 +57,7 @@ const NOT_OFFERED: [&str; 21] = [
     "motor.lag",
     "speed.input",
     "load_cell.wrap",
+    "nip.side",
 ];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.

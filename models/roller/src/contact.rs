@@ -1,14 +1,19 @@
 //! The web's contact with a roller it may slip on (the Roller FMU's
-//! documentation numbers them; docs/physics.md gives their sources):
+//! documentation numbers them; docs/physics.md derives them and gives their sources):
 //!
 //! [R6]  m_w dv_w/dt = T_b - T_a + f,   J domega/dt = -r f + tau - b omega     (s = v_w - r omega)
 //!       m_w = m_web * r * max(theta, THETA_MIN): the web's mass on the wrap
-//! [R7]  f = f_nip + f_wrap,  g = tanh(s/v_slip)
-//!       f_nip  = -mu_nip N g                                      (the nip line, where the web meets the roller)
-//!       f_wrap = -2 sqrt(T_m+ T_b+) sinh(mu_eff theta g / 2),  T_m = T_a - f_nip   (the wrap after it)
-//!       at rest on the wrap (m_w dv_w/dt = 0): T_b = (T_a + mu_nip N g) exp(mu_eff theta g), the capstan
-//!       law with the regularized direction g of the slip; a slack side (T <= 0) transmits nothing
-//! [R8]  h = 0.643 r (12 eta V / T_w)^(2/3),  V = |v_w + r omega|/2,  T_w = (T_a + T_b)/(2 W)
+//! [R7]  f = f_nip + f_wrap,  g = tanh(s/v_slip),  T' = T - m_web v_w^2 (the pressure left after the
+//!       web's centripetal force)
+//!       f_nip  = -mu_nip N g                                       (the nip line, on the wrap's entry or exit)
+//!       f_wrap = -2 sqrt(T'_in+ T'_out+) sinh(mu_eff theta g / 2)  (the wrap between the nip and the other side)
+//!       nip at the entry (`nip.side` 0): T'_in = T'_a - f_nip, T'_out = T'_b
+//!       nip at the exit  (`nip.side` 1): T'_in = T'_a,         T'_out = T'_b + f_nip
+//!       at rest (m_w dv_w/dt = 0): T'_b = (T'_a + mu_nip N g) exp(mu_eff theta g) (entry), or
+//!       T'_b = T'_a exp(mu_eff theta g) + mu_nip N g (exit): the capstan law with the regularized
+//!       direction g of the slip; a side where T' <= 0 leaves the wrap no traction
+//! [R8]  h = 0.643 r (12 eta V / T_w)^(2/3),  V = |v_w + r omega|/2,  T_w = T_entry / W, T_entry the
+//!       tension of the side the air is dragged in from: T_a where v_w + r omega >= 0, else T_b
 //!       mu_eff = mu * clamp((3 sigma - h)/(2 sigma), 0, 1)   (sigma > 0; without air mu_eff = mu)
 //!
 //! Each result is a value with its gradient in the contact's knowns (`Dual`): the tangents are the
@@ -23,6 +28,30 @@ use crate::parameters::Parameters;
 pub enum Friction {
     #[default]
     Regularized,
+}
+
+/// Which side of the wrap the nip presses on (`nip.side`), named for the web running from web_a
+/// to web_b: the entry (web_a's side, 0) or the exit (web_b's, 1). It stays there when the web runs back.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NipSide {
+    #[default]
+    Entry,
+    Exit,
+}
+
+impl NipSide {
+    pub fn of(p: &Parameters) -> NipSide {
+        if p.nip_side == 1 {
+            NipSide::Exit
+        } else {
+            NipSide::Entry
+        }
+    }
+
+    /// Its value of `nip.side`.
+    pub fn value(self) -> i32 {
+        self as i32
+    }
 }
 
 /// The least wrap whose web mass [R6] counts: a roller the web only touches at a nip still
@@ -146,8 +175,9 @@ fn air(p: &Parameters, s: &State) -> (Dual, Dual) {
         return (Dual::default(), Dual::constant(p.traction_mu));
     }
     let speed = Dual::known(s.v_web, V_WEB).plus(Dual::known(s.v_surface, V_SURFACE)).scaled(0.5);
-    let v = if speed.x < 0.0 { speed.scaled(-1.0) } else { speed };
-    let tw = Dual::known(s.t_a, T_A).plus(Dual::known(s.t_b, T_B)).scaled(1.0 / (2.0 * p.traction_width));
+    // The film forms where both surfaces drag the air in: the entry in the mean speed's direction.
+    let (v, entry) = if speed.x < 0.0 { (speed.scaled(-1.0), Dual::known(s.t_b, T_B)) } else { (speed, Dual::known(s.t_a, T_A)) };
+    let tw = entry.scaled(1.0 / p.traction_width);
     if tw.x <= 0.0 {
         // No tension presses the web down: it lifts off, no traction (reported as a film of 3 sigma).
         return (Dual::constant(3.0 * sigma), Dual::default());
@@ -174,6 +204,13 @@ fn air(p: &Parameters, s: &State) -> (Dual, Dual) {
     (h, mu)
 }
 
+/// The tensions less the web's centripetal force, T - m_web v_w^2: what presses the web on the wrap [R7].
+fn relieved(p: &Parameters, s: &State) -> (Dual, Dual) {
+    let rho = p.mass_a[0];
+    let relief = Dual::known(s.v_web, V_WEB).map(rho * s.v_web * s.v_web, 2.0 * rho * s.v_web);
+    (Dual::known(s.t_a, T_A).minus(relief), Dual::known(s.t_b, T_B).minus(relief))
+}
+
 /// [R7] and [R8] at the contact's state.
 pub fn contact(p: &Parameters, s: &State) -> Contact {
     let slip = Dual::known(s.v_web, V_WEB).minus(Dual::known(s.v_surface, V_SURFACE));
@@ -183,9 +220,13 @@ pub fn contact(p: &Parameters, s: &State) -> Contact {
     };
     let (h_air, mu_eff) = air(p, s);
     let f_nip = g.scaled(-p.nip_mu * s.nip_load);
-    let t_m = positive(Dual::known(s.t_a, T_A).minus(f_nip));
-    let t_b = positive(Dual::known(s.t_b, T_B));
-    let product = t_m.times(t_b);
+    let (t_a, t_b) = relieved(p, s);
+    // The wrap's two ends: the nip's jump -f_nip lies between T_a and the wrap, or between the wrap and T_b.
+    let (t_in, t_out) = match NipSide::of(p) {
+        NipSide::Entry => (t_a.minus(f_nip), t_b),
+        NipSide::Exit => (t_a, t_b.plus(f_nip)),
+    };
+    let product = positive(t_in).times(positive(t_out));
     let root = if product.x > 0.0 { product.map(product.x.sqrt(), 0.5 / product.x.sqrt()) } else { Dual::default() };
     // sinh(k g), k = mu_eff theta / 2.
     let kg = mu_eff.scaled(0.5 * p.traction_wrap).times(g);
@@ -195,17 +236,23 @@ pub fn contact(p: &Parameters, s: &State) -> Contact {
 }
 
 /// The share of the available traction the tensions use: the direction g in [R7]'s law at rest,
-/// T_b = (T_a + mu_nip N g) exp(mu_eff theta g), solved for g; its magnitude. On a wrap alone
-/// |ln(T_b/T_a)|/(mu_eff theta), at a nip alone |T_b - T_a|/(mu_nip N). With no traction
-/// available (a slack side, no friction), 1 where the tensions differ, else 0.
+/// T'_b = (T'_a + mu_nip N g) exp(mu_eff theta g) with the nip at the entry, solved for g; its
+/// magnitude. With the nip at the exit, T'_b = T'_a exp(mu_eff theta g) + mu_nip N g is the same law
+/// read from web_b to web_a (T'_a and T'_b swapped, g negated), so |g| is the entry's with the sides
+/// swapped. On a wrap alone |ln(T'_b/T'_a)|/(mu_eff theta), at a nip alone |T_b - T_a|/(mu_nip N),
+/// also where a side's T' <= 0 leaves the wrap no traction. With no traction available at all, 1
+/// where the tensions differ, else 0.
 pub fn traction_used(p: &Parameters, s: &State, mu_eff: Dual) -> Dual {
-    let (t_a, t_b) = (Dual::known(s.t_a, T_A), Dual::known(s.t_b, T_B));
+    let (t_a, t_b) = match (NipSide::of(p), relieved(p, s)) {
+        (NipSide::Entry, (a, b)) => (a, b),
+        (NipSide::Exit, (a, b)) => (b, a),
+    };
     let nip = p.nip_mu * s.nip_load;
     let wrap = mu_eff.scaled(p.traction_wrap);
     let saturated = || Dual::constant(if t_a.x == t_b.x { 0.0 } else { 1.0 });
     let nip_alone = || t_b.minus(t_a).scaled(1.0 / nip);
     if t_a.x <= 0.0 || t_b.x <= 0.0 {
-        return if nip > 0.0 && wrap.x == 0.0 { abs(nip_alone()) } else { saturated() };
+        return if nip > 0.0 { abs(nip_alone()) } else { saturated() };
     }
     if nip == 0.0 && wrap.x == 0.0 {
         return saturated();
@@ -270,10 +317,15 @@ mod tests {
         State { v_web, v_surface, t_a, t_b, nip_load: 0.0, radius: 0.05 }
     }
 
+    /// A web too light for its centripetal force to count (m = 0).
+    fn massless() -> Parameters {
+        Parameters { mass_a: [0.0; 4], ..params() }
+    }
+
     /// Sliding (s >> v_slip) on a wrap, at rest: the capstan law, T_b = T_a exp(mu theta).
     #[test]
     fn sliding_on_a_wrap_holds_the_capstan_ratio() {
-        let p = params();
+        let p = massless();
         let (t_a, mu_theta) = (50.0, 0.3 * std::f64::consts::FRAC_PI_2);
         for (s, t_b) in [(0.1, t_a * mu_theta.exp()), (-0.1, t_a * (-mu_theta).exp())] {
             let c = contact(&p, &state(5.0 + s, 5.0, t_a, t_b));
@@ -291,7 +343,7 @@ mod tests {
         let s = State { nip_load: 200.0, ..state(5.1, 5.0, 80.0, 180.0) };
         let c = contact(&p, &s);
         assert!((180.0 - 80.0 + c.force.x).abs() < 1e-12);
-        let both = Parameters { nip_mu: 0.5, ..params() };
+        let both = Parameters { nip_mu: 0.5, ..massless() };
         let t_b = (80.0 + 100.0) * (0.3 * std::f64::consts::FRAC_PI_2).exp();
         let s = State { nip_load: 200.0, ..state(5.1, 5.0, 80.0, t_b) };
         let c = contact(&both, &s);
@@ -306,28 +358,97 @@ mod tests {
         assert_eq!(contact(&p, &state(4.9, 5.0, 80.0, -3.0)).force.x, 0.0);
     }
 
-    /// Knox and Sweeney's film against the formula, and the friction it leaves.
+    /// A web of mass m per length runs round the wrap at v_w: its centripetal force m v_w^2 per
+    /// radius comes out of the pressure, so the capstan law holds for T - m v_w^2, and sliding at
+    /// rest gives T_b - m v^2 = (T_a - m v^2) exp(mu theta) exactly (the sinh form's identity).
     #[test]
-    fn the_air_film_is_knox_and_sweeneys_and_takes_friction_away_between_sigma_and_three_sigma() {
+    fn centrifugal_relief_takes_m_v_squared_off_both_sides() {
+        let p = Parameters { mass_a: [0.2, 1.0, 1.0, 1.0], ..params() };
+        let (v, t_a, e) = (15.0, 80.0, (0.3 * std::f64::consts::FRAC_PI_2).exp());
+        let relief = 0.2 * v * v;
+        for (s, t_b) in [(0.1, relief + (t_a - relief) * e), (-0.1, relief + (t_a - relief) / e)] {
+            let c = contact(&p, &state(v, v - s, t_a, t_b));
+            assert!((t_b - t_a + c.force.x).abs() < 1e-12 * t_a, "s = {s}: {}", t_b - t_a + c.force.x);
+            let used = traction_used(&p, &state(v, v - s, t_a, t_b), c.mu_eff).x;
+            assert!((used - 1.0).abs() < 1e-12, "{used}");
+        }
+    }
+
+    /// Where T - m v_w^2 <= 0 on a side, the web floats on the wrap: no friction at all, however it slides.
+    #[test]
+    fn a_web_whose_tension_its_speed_cancels_has_no_traction_on_the_wrap() {
+        let p = Parameters { mass_a: [0.2, 1.0, 1.0, 1.0], ..params() };
+        // m v^2 = 0.2 * 20^2 = 80 N: one side at 70 N, then both below 80 N.
+        for (t_a, t_b) in [(70.0, 120.0), (120.0, 70.0), (79.0, 75.0), (80.0, 90.0)] {
+            for s in [0.5, -0.5, 1e-4] {
+                let c = contact(&p, &state(20.0, 20.0 - s, t_a, t_b));
+                assert_eq!(c.force.x, 0.0, "T_a {t_a}, T_b {t_b}, s {s}");
+                assert_eq!(c.force.d, [0.0; 5], "T_a {t_a}, T_b {t_b}, s {s}");
+            }
+        }
+    }
+
+    /// A nip on a wrap, sliding: with the nip on the wrap's low-tension side the wrap multiplies what
+    /// the nip passes, T_high = (T_low + mu_nip N) e^(mu theta); on the high-tension side the nip
+    /// adds after the wrap, T_high = T_low e^(mu theta) + mu_nip N. Sliding forward (web faster than
+    /// the surface, T_b high), the entry (web_a's side) is the low side; backward, the high side.
+    /// A massless web, and one whose m v^2 (0.2 * 5^2 = 5 N) the wrap's law takes off: T' = T - m v^2.
+    #[test]
+    fn a_nip_on_either_side_of_the_wrap_gives_its_own_capstan_law() {
+        let (t_low, n, mu_n) = (80.0, 200.0, 0.5);
+        let (nip, e) = (mu_n * n, (0.3 * std::f64::consts::FRAC_PI_2).exp());
+        let (nip_on_low, nip_on_high) = ((t_low + nip) * e, t_low * e + nip);
+        assert!((nip_on_low - nip_on_high - nip * (e - 1.0)).abs() < 1e-12 * nip_on_low);
+        for ((side, s, nip_low), rho) in [
+            (NipSide::Entry, 0.1, true),
+            (NipSide::Entry, -0.1, false),
+            (NipSide::Exit, 0.1, false),
+            (NipSide::Exit, -0.1, true),
+        ]
+        .into_iter()
+        .flat_map(|c| [(c, 0.0), (c, 0.2)])
+        {
+            let p = Parameters { nip_mu: mu_n, nip_side: side.value(), mass_a: [rho, 1.0, 1.0, 1.0], ..params() };
+            let relief = rho * (5.0 + s) * (5.0 + s);
+            let t_low = t_low + relief;
+            let t_high = relief + if nip_low { (t_low - relief + nip) * e } else { (t_low - relief) * e + nip };
+            // Sliding forward T_b is high, backward T_a.
+            let (t_a, t_b) = if s > 0.0 { (t_low, t_high) } else { (t_high, t_low) };
+            let at = State { nip_load: n, ..state(5.0 + s, 5.0, t_a, t_b) };
+            let c = contact(&p, &at);
+            let rest = t_b - t_a + c.force.x;
+            assert!(rest.abs() < 1e-12 * t_high, "{side:?}, s {s}: {rest}");
+            let used = traction_used(&p, &at, c.mu_eff).x;
+            assert!((used - 1.0).abs() < 1e-12, "{side:?}, s {s}: {used}");
+        }
+    }
+
+    /// Knox and Sweeney's film at the entry tension: T_a where the surfaces drag the air in from
+    /// web_a's side (v_w + v >= 0), T_b where they run back.
+    #[test]
+    fn the_air_film_forms_at_the_entry_tension() {
         let p = Parameters { air_roughness: 0.8e-6, ..params() };
-        let s = state(10.0, 10.0, 100.0, 100.0);
-        let (h, mu) = air(&p, &s);
-        let expected = 0.643 * 0.05 * (12.0 * 1.81e-5 * 10.0 / 100.0f64).powf(2.0 / 3.0);
-        assert!((h.x - expected).abs() < 1e-15 * expected, "{} {}", h.x, expected);
-        let a = ((3.0 * 0.8e-6 - expected) / (1.6e-6)).clamp(0.0, 1.0);
-        assert!((mu.x - 0.3 * a).abs() < 1e-15, "{} {}", mu.x, 0.3 * a);
+        let film = |v: f64, t: f64| 0.643 * 0.05 * (12.0 * 1.81e-5 * v / t).powf(2.0 / 3.0);
+        let (h, _) = air(&p, &state(10.0, 10.0, 100.0, 160.0));
+        assert!((h.x - film(10.0, 100.0)).abs() < 1e-15 * h.x, "{} {}", h.x, film(10.0, 100.0));
+        let (h, _) = air(&p, &state(-10.0, -10.0, 100.0, 160.0));
+        assert!((h.x - film(10.0, 160.0)).abs() < 1e-15 * h.x, "{} {}", h.x, film(10.0, 160.0));
     }
 
     /// Every gradient against central differences of the values, along several directions.
     #[test]
     fn the_gradients_are_the_equations_own() {
+        let heavy = [0.25, 1.0, 1.0, 1.0]; // m v^2 from 6 to 36 N at these speeds
         let cases = [
             (params(), 0.0),
             (Parameters { nip_mu: 0.5, ..params() }, 150.0),
+            (Parameters { nip_mu: 0.5, nip_side: NipSide::Exit.value(), ..params() }, 150.0),
             (Parameters { air_roughness: 2e-6, ..params() }, 0.0),
             (Parameters { air_roughness: 2e-6, nip_mu: 0.4, ..params() }, 90.0),
+            (Parameters { air_roughness: 2e-6, nip_mu: 0.4, nip_side: NipSide::Exit.value(), mass_a: heavy, ..params() }, 90.0),
+            (Parameters { nip_mu: 0.5, mass_a: heavy, ..params() }, 150.0),
         ];
-        let points = [(5.0004, 5.0, 60.0, 75.0), (4.9993, 5.0, 90.0, 70.0), (12.0, 11.998, 40.0, 41.0)];
+        let points = [(5.0004, 5.0, 60.0, 75.0), (4.9993, 5.0, 90.0, 70.0), (12.0, 11.998, 40.0, 41.0), (-6.0, -6.0005, 70.0, 55.0)];
         let directions: [Gradient; 2] = [[1.3e-4, -0.7e-4, 0.9, -1.7, 1e-3], [-2e-4, 1e-4, -2.0, 0.5, -2e-3]];
         for (p, n) in &cases {
             for &(vw, vs, ta, tb) in &points {

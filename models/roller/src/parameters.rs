@@ -39,6 +39,9 @@ pub struct Parameters {
     pub traction_width: f64,
     /// Friction coefficient at a nip (its load is the profile's `nip` table) [R7].
     pub nip_mu: f64,
+    /// The side of the wrap the nip presses on, for the web running from web_a to web_b: 0 the
+    /// entry, 1 the exit (`contact::NipSide`) [R7].
+    pub nip_side: i32,
     /// The surfaces' combined roughness (0: no air film) and the air's viscosity [R8].
     pub air_roughness: f64,
     pub air_viscosity: f64,

@@ -110,6 +110,7 @@ fmi_core::bind_variables! {
         inlets: param(params.inlets),
         outlets: param(params.outlets),
         loop_kind: param(params.loop_kind),
+        nip_side: param(params.nip_side),
     }
     boolean {
         carriage: param(params.carriage),

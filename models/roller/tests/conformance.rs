@@ -6,7 +6,8 @@ use fmi_testkit::conformance::{Hints, Point};
 /// tensions within the step (tau lists web_a.F and web_b.F); the same with
 /// every inlet and outlet in use, where the extra ports' tensions reach tau
 /// and their strains the merged web_b.eps [R5]; a web that may slip on a wrap
-/// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides; a drive's loop; a brake;
+/// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides, running forward with
+/// the nip at the entry and back with it at the exit; a drive's loop; a brake;
 /// an ideal speed drive on its input; a dancer loop [R13], without a lag (its position reaches tau) and with one.
 fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
@@ -58,7 +59,9 @@ fn hints() -> Hints {
             Point { values: lagged_loop, texts: vec![] },
             Point { values: vec![], texts: vec![("profile", speed_drive.into())] },
             Point { values: all_ports, texts: vec![("profile", speed_drive.into())] },
-            Point { values: slipping, texts: vec![("profile", nip.into())] },
+            Point { values: slipping.clone(), texts: vec![("profile", nip.into())] },
+            // The same web running back, the nip at the exit: the air film forms at web_b [R8].
+            Point { values: [slipping, vec![("v_start", -12.0), ("nip.side", 1.0)]].concat(), texts: vec![("profile", nip.into())] },
             // An ideal speed drive on its input loop.speed (speed.input), the web pulling on both sides.
             Point { values: vec![("speed.input", 1.0), ("loop.speed", 6.0), ("web_a.F", 100.0), ("web_b.F", 120.0)], texts: vec![] },
         ],

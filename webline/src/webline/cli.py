@@ -121,6 +121,9 @@ def summary(scene, result: Result) -> str:
         lines.append(f"  dancer {d.name}: position {y[0]:.4f} m at start, {y.min():.4f} .. {y.max():.4f} m, {y[-1]:.4f} m at the end")
     for c in [c for c in scene.parts if getattr(c, "traction", None) is not None and f"{c.name}.traction" in keys]:
         lines.append(f"  {traction_report(c.name, result.time, result.column(f'{c.name}.traction'))}")
+        floating = floating_report(scene, c, result)
+        if floating is not None:
+            lines.append(f"  {floating}")
     for t, name, what in info.get("events", []):
         lines.append(f"  event at t = {t:g} s: {name} changed {what}")
     return "\n".join(lines)
@@ -141,6 +144,36 @@ def traction_report(name: str, time, used) -> str:
     dt = np.diff(time, prepend=time[0])
     first, last = time[sliding][0], time[sliding][-1]
     return text + f"; it slid from t = {first:.3g} s to {last:.3g} s, {float(np.sum(dt[sliding])):.3g} s in all"
+
+
+def traction_columns(scene, c) -> list:
+    """What a roller the web may slip on records for the summary: its traction in use, and for
+    `floating_report` the web's speed over it and the tensions of the spans on either side."""
+    return [(c.name, "traction"), (c.name, "v_web"), (scene.span_before(c).name, "T"), (scene.span_after(c).name, "T")]
+
+
+def floating_report(scene, c, result) -> str | None:
+    """Where the web's centripetal force takes all its pressure off the wrap (T - rho_l v_w^2 <= 0 < T on
+    a side, docs/physics.md "Rollers that slip"), the wrap has no traction: when, and at which speed."""
+    if not (c.traction.mu > 0.0 and c.wrap):
+        return None
+    keys = result.keys()
+    before, after = scene.span_before(c), scene.span_after(c)
+    names = [f"{c.name}.v_web", f"{before.name}.T", f"{after.name}.T"]
+    if not all(n in keys for n in names):
+        return None
+    v, t_a, t_b = (result.column(n) for n in names)
+    relief = before.wp2.rho_l * v * v
+    tension = np.minimum(t_a, t_b)
+    floating = (tension - relief <= 0.0) & (tension > 0.0)
+    if not floating.any():
+        return None
+    k = int(np.argmax(np.where(floating, relief - tension, -np.inf)))
+    time = result.time
+    dt = np.diff(time, prepend=time[0])
+    return (f"{c.name}: no traction on its wrap from t = {time[floating][0]:.3g} s to {time[floating][-1]:.3g} s "
+            f"({float(np.sum(dt[floating])):.3g} s in all): at v_web = {v[k]:.4g} m/s the web's centripetal "
+            f"force rho_l v^2 = {relief[k]:.4g} N takes all of its tension {tension[k]:.4g} N off the wrap")
 
 
 def system_summary(result: Result) -> str:
@@ -202,9 +235,10 @@ def cmd_run(args):
     from .engines import run_scene
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
-    # Every roller the web may slip on reports its traction (the summary's "will it slip?").
-    scene.record += [(c.name, "traction") for c in scene.parts
-                     if getattr(c, "traction", None) is not None and (c.name, "traction") not in scene.record]
+    # Every roller the web may slip on reports its traction (the summary's "will it slip?") and where
+    # the web's speed leaves it none.
+    scene.record += list(dict.fromkeys(q for c in scene.parts if getattr(c, "traction", None) is not None
+                                       for q in traction_columns(scene, c) if q not in scene.record))
     engine = args.engine
     if args.reference and engine == "reference":
         raise SceneError("--reference compares an engine with the reference; --engine reference is the reference itself")

@@ -33,7 +33,7 @@ from .master import Master, Options, settle_start_values
 from .profiles import Profile
 from .result import Result
 from .names import ROLLER_VARIABLES, SPAN_VARIABLES
-from .scene import BRAKE_V_SLIP, Dancer, Scene, SceneError, Span
+from .scene import BRAKE_V_SLIP, NIP_SIDES, Dancer, Scene, SceneError, Span
 from .system import Component, Connection, System
 
 # A roller whose surface speed is prescribed (source, sink, speed drive) needs
@@ -123,6 +123,7 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
         start.update(traction_values(scene, node))
         if traction.nip_load is not None:
             profile["nip"] = table(traction.nip_load)
+            start["nip.side"] = NIP_SIDES.index(traction.nip_side)
     sets = [{"time": float(e.time), **{k: float(v) for k, v in e.changes.items()}} for e in scene.events if e.component == node.name]
     if sets:
         profile["set"] = sets

@@ -612,32 +612,39 @@ THETA_MIN = np.radians(5.0)
 
 def friction(tr, R, wrap_deg, web, v_w, v_s, T_a, T_b, load) -> dict:
     """The contact of a web that may slip (docs/physics.md, [R6]-[R8]): the friction f on the web along
-    its motion, from the capstan law on the wrap after a nip, both regularized in the slip's direction
-    g = tanh(s/v_slip), under Knox and Sweeney's air film; with what a roller with traction reports."""
+    its motion, from the capstan law on the wrap and a nip on its entry or exit side, both regularized
+    in the slip's direction g = tanh(s/v_slip), the wrap's law on T - rho_l v_w^2 (the pressure its
+    centripetal force leaves), under Knox and Sweeney's air film at the entry tension; with what a
+    roller with traction reports."""
     theta = np.radians(wrap_deg)
     s = v_w - v_s
     g = np.tanh(s / tr.v_slip)
     mu, h = tr.mu, 0.0
     if tr.roughness > 0.0:
-        V = abs(v_w + v_s) / 2.0
-        tw = (T_a + T_b) / (2.0 * web.width)
+        # The film forms where both surfaces drag the air in: T_a's side running forward, T_b's back.
+        V = (v_w + v_s) / 2.0
+        tw = (T_a if V >= 0.0 else T_b) / web.width
         if tw <= 0.0:
             h, mu = 3.0 * tr.roughness, 0.0
         else:
-            h = 0.643 * R * (12.0 * tr.viscosity * V / tw) ** (2.0 / 3.0)
+            h = 0.643 * R * (12.0 * tr.viscosity * abs(V) / tw) ** (2.0 / 3.0)
             mu = tr.mu * min(1.0, max(0.0, (3.0 * tr.roughness - h) / (2.0 * tr.roughness)))
     n = tr.nip_mu * load
     f_nip = -n * g
-    T_m = max(T_a - f_nip, 0.0)
-    f_wrap = -2.0 * np.sqrt(T_m * max(T_b, 0.0)) * np.sinh(mu * theta * g / 2.0)
+    relief = web.rho_l * v_w * v_w
+    A, B = T_a - relief, T_b - relief
+    T_in, T_out = (A - f_nip, B) if tr.nip_side == "entry" else (A, B + f_nip)
+    f_wrap = -2.0 * np.sqrt(max(T_in, 0.0) * max(T_out, 0.0)) * np.sinh(mu * theta * g / 2.0)
+    used = traction_used(A, B, n, mu * theta) if tr.nip_side == "entry" else traction_used(B, A, n, mu * theta)
     return {"f": f_nip + f_wrap, "m_w": web.rho_l * R * max(theta, THETA_MIN), "v_web": v_w, "slip": s,
-            "traction": traction_used(T_a, T_b, n, mu * theta), "mu_eff": mu, "h_air": h}
+            "traction": used, "mu_eff": mu, "h_air": h}
 
 
 def traction_used(T_a, T_b, n, w):
-    """The share of the traction in use: g solving T_b = (T_a + n g) exp(w g), |g| (docs/physics.md)."""
+    """The share of the traction in use: g solving T_b = (T_a + n g) exp(w g), |g|, the tensions less
+    rho_l v^2 and the nip on T_a's side (docs/physics.md); a slack side leaves the nip alone."""
     if T_a <= 0.0 or T_b <= 0.0:
-        if n > 0.0 and w == 0.0:
+        if n > 0.0:
             return abs(T_b - T_a) / n
         return 0.0 if T_a == T_b else 1.0
     if n == 0.0 and w == 0.0:

@@ -15,6 +15,7 @@ from ..profiles import Profile
 from ..units import UnitError
 from .checks import WIDTH_TOLERANCE, check_dancer_spans, check_layers, check_loops, check_merge, check_split, check_traction
 from .types import (
+    NIP_SIDES,
     STRAIN_RANGE,
     TRACTION_QUANTITIES,
     Branch,
@@ -488,8 +489,13 @@ def _traction(r, o, what, wrap) -> Traction:
             if "viscosity" in air:
                 t.viscosity = r.quantity(air["viscosity"], units.VISCOSITY, f"{what}: traction: air: viscosity", positive=True)
     if "nip" in o:
-        nip = r.keys(o["nip"], f"{what}: nip", required=("load", "mu"))
+        nip = r.keys(o["nip"], f"{what}: nip", required=("load", "mu"), optional=("side",))
         t.nip_mu = r.quantity(nip["mu"], units.DIMENSIONLESS, f"{what}: nip: mu", nonnegative=True)
+        if "side" in nip:
+            if nip["side"].value not in NIP_SIDES:
+                raise r.err(nip["side"], f"{what}: nip: side {nip['side'].value!r} is not one of {', '.join(map(repr, NIP_SIDES))} "
+                                         "(the side of the wrap the nip presses on, in the direction of travel)")
+            t.nip_side = nip["side"].value
         t.nip_load = r.profile(nip["load"], units.FORCE, f"{what}: nip: load")
         negative = next(((tk, v) for tk, v in t.nip_load.knots if v < 0), None)
         if negative is not None:

@@ -187,10 +187,16 @@ class Drive:
     input: bool = False  # an ideal speed drive on the Line FMU's input <name>.v_ref, `profile` its start value
 
 
+# The sides of the wrap a nip may press on, in the direction of travel (web_a to web_b), each at the
+# index that is its value of the Roller's nip.side [R7].
+NIP_SIDES = ("entry", "exit")
+
+
 @dataclass
 class Traction:
     """Where the web may slip on a roller or dancer [R6]-[R8]: friction on the wrap (mu, with the
-    roller's wrap angle), at a nip (nip_mu, pressed with nip_load), under an air film (roughness)."""
+    roller's wrap angle), at a nip (nip_mu, pressed with nip_load, on the wrap's nip_side), under an air
+    film (roughness)."""
 
     mu: float = 0.0
     v_slip: float = 1e-3
@@ -198,6 +204,7 @@ class Traction:
     viscosity: float = 1.81e-5
     nip_mu: float = 0.0
     nip_load: Profile | None = None
+    nip_side: str = "entry"  # the side of the wrap the nip presses on, one of NIP_SIDES
     slip_start: float = 0.0  # the web's speed over the roller at a given start, minus the surface's
 
 

@@ -1,0 +1,209 @@
+"""The contact laws of a roller the web may slip on (docs/physics.md, "Rollers that slip"), each
+against its closed form: the nip on either side of the wrap, the web's centripetal force relieving
+the wrap, and the air film at the entry tension. In the Line FMU (FMI 2.0 and 3.0 Co-Simulation,
+FMI 2.0 Model Exchange under FMPy's CVode at rtol 1e-10) and in webline's reference.
+
+The lines: a source at 5 m/s feeding a strain of 1e-3, a damped PET span (EA = 225 kN, rho_l =
+0.0695 kg/m), a roll driven at a speed clearly off the web's (so the web slides at |s| >= 50 v_slip,
+where tanh is 1 to the last bit), a second damped span and a sink. At steady state the mass balance
+of the span after the roll, 1 + eps_b = (v_snk/v_src)(1 + eps_src), fixes T_b = EA eps_b; the roll's
+law then fixes T_a, and the span before it carries the web to the roll at v_w = v_src (1 + eps_a)/
+(1 + eps_src). Tolerance 1e-6 of the tension: the reference integrates at rtol 1e-10, the Line FMU
+at its default tolerance (1e-9 on strains and speeds), and the lines start at their equilibrium, so
+what is left is the integrators' error, far below it; the web's mass on the wrap (m_w dv_w/dt) is 0
+at steady state.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+
+from webline import linefmu
+from webline.cli import main as webline_main
+from webline.reference import reference
+from webline.scene import parse_scene
+
+EA = 4.5e9 * 50e-6
+RHO_L = 1390.0 * 50e-6 * 1.0
+MU, WRAP, MU_NIP, LOAD, V_SLIP = 0.3, math.radians(90.0), 0.5, 200.0, 1e-3
+E = math.exp(MU * WRAP)
+NIP = MU_NIP * LOAD
+PET = {"E": "4.5 GPa", "thickness": "50 um", "width": "1 m", "density": "1390 kg/m3", "d_r": "1 ms"}
+DAMPED = {"web": "PET", "effects": ["includeDamping"]}
+HOW = ["fmi2 cs", "fmi3 cs", "fmi2 me", "reference"]
+
+
+def line(name, roll, v_sink, record=()):
+    """src (5 m/s, strain 1e-3) - a - roll (`roll`'s keys, a 90 degree wrap) - b - snk (v_sink)."""
+    return parse_scene(json.dumps({
+        "name": name, "stop_time": "0.3 s", "step": "1 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
+            {"type": "source", "name": "src", "speed": "5 m/s", "strain": 1e-3},
+            {"type": "span", "name": "a", "L": "1 m", **DAMPED},
+            {"type": "roller", "name": "roll", "R": "0.1 m", "wrap": "90 deg", **roll},
+            {"type": "span", "name": "b", "L": "1 m", **DAMPED},
+            {"type": "sink", "name": "snk", "speed": f"{v_sink} m/s"},
+        ],
+        "record": ["a.T", "b.T", "roll.v_web", "roll.slip", *record]}), f"{name}.json")
+
+
+def run(scene, how, where):
+    """The scene's recorded columns, {name: array}, in one engine."""
+    fmus, tmp_path = where
+    names = [f"{c}.{q}" for c, q in scene.record]
+    if how == "reference":
+        r = reference(scene)
+        return {n: r.column(n) for n in names}
+    fmu = linefmu.export(scene, tmp_path / f"{scene.name}.fmu", fmus, fmi3=how.startswith("fmi3"))
+    if how.endswith("me"):
+        out = simulate_fmu(str(fmu), fmi_type="ModelExchange", stop_time=scene.stop_time, output_interval=1e-3,
+                           relative_tolerance=1e-10, output=names)
+    else:
+        out = simulate_fmu(str(fmu), fmi_type="CoSimulation", stop_time=scene.stop_time, step_size=1e-3,
+                           output_interval=1e-3, output=names)
+    return {n: np.asarray(out[n], dtype=float) for n in names}
+
+
+@pytest.fixture
+def where(fmus, tmp_path):
+    """The packaged FMUs and a folder for the Line FMUs exported from them."""
+    return fmus, tmp_path
+
+
+def steady_a(eps_b, law):
+    """eps_a from T_b = EA eps_b through the roll's `law` T_a(T_b, relief), with v_w from eps_a: a fixed
+    point whose map contracts by 2 rho_l v^2 / EA (1e-5 here), so 20 steps reach the last bit."""
+    eps_a = eps_b
+    for _ in range(20):
+        v_w = 5.0 * (1.0 + eps_a) / 1.001
+        eps_a = law(EA * eps_b, RHO_L * v_w * v_w) / EA
+    return eps_a, 5.0 * (1.0 + eps_a) / 1.001
+
+
+# The four cases: the nip at the wrap's entry or exit (in the direction of travel, src to snk), the
+# roll braking the web (driven at 4.5 m/s: the web slides faster, s > 0, so the tension rises to
+# T_b) or driving it (at 5.5 m/s: s < 0, the tension falls to T_b). Braking, the entry is the
+# low-tension side; driving, the high one. With the nip on the wrap's low side the wrap multiplies
+# what the nip adds, T'_high = (T'_low + mu_nip N) e^(mu theta); on its high side the nip adds after
+# it, T'_high = T'_low e^(mu theta) + mu_nip N; T' = T - rho_l v_w^2 on the wrap (the nip's jump is
+# the same in T and T'). Each law solved for T_a given T_b (the span after the roll fixes T_b):
+CASES = {
+    # braking, nip at the entry = on the low side: T'_b = (T'_a + nN) E
+    "entry, braking": (4.5, "entry", 5.005, lambda tb, m: m + (tb - m) / E - NIP, True),
+    # braking, nip at the exit = on the high side: T'_b = T'_a E + nN
+    "exit, braking": (4.5, "exit", 5.005, lambda tb, m: m + (tb - m - NIP) / E, False),
+    # driving, nip at the entry = on the high side: T'_a = T'_b E + nN
+    "entry, driving": (5.5, "entry", 5.0, lambda tb, m: m + (tb - m) * E + NIP, False),
+    # driving, nip at the exit = on the low side: T'_a = (T'_b + nN) E
+    "exit, driving": (5.5, "exit", 5.0, lambda tb, m: m + (tb - m + NIP) * E, True),
+}
+
+
+@pytest.mark.parametrize("how", HOW)
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_sliding_roll_with_a_wrap_and_a_nip_gives_the_law_of_the_nips_side(case, how, where):
+    """A roll with a 90 degree wrap (mu 0.3) and a nip (mu_nip 0.5, N = 200 N), speed-driven clearly
+    off the web's speed so the web slides: with the nip on the wrap's low-tension side,
+    T_high - rho_l v^2 = (T_low - rho_l v^2 + mu_nip N) e^(mu theta); on its high-tension side,
+    T_high - rho_l v^2 = (T_low - rho_l v^2) e^(mu theta) + mu_nip N (the wrap multiplies what
+    reaches it; the two differ by mu_nip N (e^(mu theta) - 1) = 60 N). The law is checked on the
+    engine's own tensions and web speed at every point, and the tensions against the steady state
+    the mass balance and the law give (module docstring), each to 1e-6 of the high tension (the
+    integrators' error is far below it; see the module docstring)."""
+    v_roll, side, v_snk, law, nip_low = CASES[case]
+    scene = line("contact", {"drive": {"speed": f"{v_roll} m/s"}, "traction": {"mu": MU},
+                             "nip": {"load": f"{LOAD} N", "mu": MU_NIP, "side": side}}, v_snk)
+    r = run(scene, how, where)
+    t_a, t_b, v_w = r["a.T"], r["b.T"], r["roll.v_web"]
+    braking = v_roll < 5.0
+    low, high = (t_a, t_b) if braking else (t_b, t_a)
+    m = RHO_L * v_w ** 2
+    expected = m + ((low - m + NIP) * E if nip_low else (low - m) * E + NIP)
+    assert np.max(np.abs(high - expected) / high) <= 1e-6, f"{how}: {np.max(np.abs(high - expected) / high):.2e}"
+    assert np.min(np.abs(r["roll.slip"])) >= 50 * V_SLIP, how
+    eps_b = v_snk / 5.0 * 1.001 - 1.0
+    eps_a, v_expected = steady_a(eps_b, law)
+    for name, x, value in (("a.T", t_a, EA * eps_a), ("b.T", t_b, EA * eps_b)):
+        assert np.max(np.abs(x - value)) <= 1e-6 * np.max(high), f"{how}: {name} {x.min()}..{x.max()} vs {value}"
+    assert np.max(np.abs(v_w - v_expected)) <= 1e-6 * 5.0, how
+
+
+# A board heavy enough that its centripetal force takes all its tension off the wrap at 20 m/s:
+# 0.5 mm, 1000 kg/m3, 1 m wide: rho_l = 0.5 kg/m, rho_l v^2 = 200 N at 20 m/s.
+BOARD = {"BOARD": {"E": "5 GPa", "thickness": "0.5 mm", "width": "1 m", "density": "1000 kg/m3", "d_r": "1 ms"}}
+
+
+def floating_line(stop, record):
+    """The board from a source at 20 m/s (strain 1e-5: 25 N) over a roll driven at 15 m/s to a sink at 20 m/s."""
+    return {
+        "name": "floating", "stop_time": stop, "step": "1 ms", "start": "equilibrium", "webs": BOARD,
+        "line": [
+            {"type": "source", "name": "src", "speed": "20 m/s", "strain": 1e-5},
+            {"type": "span", "name": "a", "L": "1 m", "web": "BOARD", "effects": ["includeDamping"]},
+            {"type": "roller", "name": "roll", "R": "0.1 m", "wrap": "90 deg", "drive": {"speed": "15 m/s"},
+             "traction": {"mu": MU}},
+            {"type": "span", "name": "b", "L": "1 m", "web": "BOARD", "effects": ["includeDamping"]},
+            {"type": "sink", "name": "snk", "speed": "20 m/s"},
+        ],
+        "record": record}
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_a_web_whose_speed_takes_its_tension_off_the_wrap_has_no_traction(how, where):
+    """T - rho_l v^2 <= 0: the pressure p R = T - rho_l v^2 of the capstan derivation is none, so the
+    wrap transmits no friction whatever the slip. A board at 20 m/s (rho_l v^2 = 200 N) under about
+    25 N (strain 1e-5: EA = 2.5 MN) over a roll driven at 15 m/s: with f = 0 the roll passes the
+    web on untouched, so at steady state T_a = T_b (m_w dv_w/dt = T_b - T_a + f = 0), both spans
+    carry the strain the mass balance gives between source and sink at the same speed (eps_a =
+    eps_b = the source's 1e-5), and the web crosses the roll at the sink's speed. The tensions to
+    1e-6 of T, T_a = T_b to 1e-9 of T (the spans' tensions differ only by the integrators' error),
+    the web's speed to 1e-9; the speed drive's reaction torque, the roll's friction times its
+    radius (b = 0, J domega/dt = 0 at a constant speed), exactly 0."""
+    scene = parse_scene(json.dumps(floating_line("0.2 s", ["a.T", "b.T", "roll.v_web", "roll.slip", "roll.tau"])),
+                        "floating.json")
+    r = run(scene, how, where)
+    t = 5e9 * 0.5e-3 * 1e-5
+    assert np.max(np.abs(r["a.T"] - t)) <= 1e-6 * t and np.max(np.abs(r["b.T"] - t)) <= 1e-6 * t, how
+    assert np.max(np.abs(r["a.T"] - r["b.T"])) <= 1e-9 * t, how
+    assert np.max(np.abs(r["roll.v_web"] - 20.0)) <= 1e-9 * 20.0, how
+    assert np.min(r["roll.slip"]) >= 4.9, how
+    assert np.all(r["roll.tau"] == 0.0), f"{how}: friction torque {np.max(np.abs(r['roll.tau']))}"
+
+
+def test_webline_run_names_the_roller_and_the_speed_where_the_wrap_has_no_traction(fmus, tmp_path, capsys):
+    """The same board line run by `webline run`: its summary says that the roll has no traction on
+    its wrap, at v_web = 20 m/s (the sink's speed: the web passes the roll untouched), where the
+    centripetal force rho_l v^2 = 0.5 * 20^2 = 200 N exceeds the tension 25 N."""
+    scene = floating_line("0.05 s", ["a.T"])
+    path = tmp_path / "floating.json"
+    path.write_text(json.dumps(scene))
+    assert webline_main(["run", str(path), "--out", str(tmp_path), "--fmu-dir", str(fmus)]) == 0
+    said = [line for line in capsys.readouterr().out.splitlines() if "no traction" in line]
+    assert len(said) == 1, said
+    assert said[0].strip().startswith("roll: no traction on its wrap") and "v_web = 20 m/s" in said[0], said[0]
+    assert "rho_l v^2 = 200 N" in said[0] and "tension 25 N" in said[0], said[0]
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_the_air_film_is_knox_and_sweeneys_at_the_entry_tension(how, where):
+    """Knox and Sweeney: h = 0.643 R (12 eta V / T_w)^(2/3), V the mean of the web's and the surface's
+    speeds, T_w the tension per width where the film forms: the inlet, where the web arrives (T_a,
+    running forward). The braking roll with its nip at the entry (first case above) has
+    T_b/T_a = 450 N / 182 N = 2.5, so the mean tension would give a film 31 % thinner: the check
+    tells them apart. Its roughness (1 mm) is far above the film (about 20 um here), so mu_eff = mu
+    and the tensions are the first case's closed forms; h to 1e-6 relative (it goes as T_a^(-2/3)
+    and V^(2/3), both known to 1e-6 or better)."""
+    eps_b = 5.005 / 5.0 * 1.001 - 1.0
+    eps_a, v_w = steady_a(eps_b, CASES["entry, braking"][3])
+    scene = line("film", {"drive": {"speed": "4.5 m/s"}, "traction": {"mu": MU, "air": {"roughness": "1 mm"}},
+                          "nip": {"load": f"{LOAD} N", "mu": MU_NIP}}, 5.005, record=("roll.h_air", "roll.mu_eff"))
+    r = run(scene, how, where)
+    t_a, t_b = EA * eps_a, EA * eps_b
+    film = lambda t: 0.643 * 0.1 * (12.0 * 1.81e-5 * (v_w + 4.5) / 2.0 / (t / 1.0)) ** (2.0 / 3.0)
+    h = r["roll.h_air"]
+    assert np.max(np.abs(h / film(t_a) - 1.0)) <= 1e-6, f"{how}: {h.min()}..{h.max()} vs {film(t_a)}"
+    assert abs(film((t_a + t_b) / 2.0) / film(t_a) - 1.0) > 0.2  # the mean tension's film is another
+    assert np.all(r["roll.mu_eff"] == MU), how
