@@ -93,11 +93,11 @@ impl Roller {
                 FmiError::discard(format!("the roll ran empty: its radius {r} m would fall to 0 after {travel} m of web; check R and wound.thickness"))
             })?;
             let inertia = roll.inertia_at(p, radius);
-            omega = match prescribed {
-                Some(_) => CompensatedSum::from_parts(omega.value() * r / radius, 0.0),
-                // [R1] keeps J*omega across the change of J.
-                None => CompensatedSum::from_parts(omega.value() * roll.inertia / inertia, 0.0),
-            };
+            // A prescribed surface keeps its speed; else [R1] keeps omega across the change of J
+            // (the web that left or arrived took its own angular momentum with it).
+            if prescribed.is_some() {
+                omega = CompensatedSum::from_parts(omega.value() * r / radius, 0.0);
+            }
             roll = Roll { radius, inertia, ..roll };
         }
         let carriage = if p.carriage {
