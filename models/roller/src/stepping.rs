@@ -84,7 +84,12 @@ impl Roller {
             None => {
                 let (tau0, tau1) = self.torque_at(t);
                 let next = physics::rotation_step(p, &self.roll, &self.inputs, self.omega, damping, tau0, tau1, h);
-                (next, 0.5 * r * (self.omega.value() + next.value()) * h)
+                let mean = 0.5 * (self.omega.value() + next.value());
+                // At the piece's mean radius: r moves linearly at a steady omega [R3], so that a roll
+                // turning steadily winds exactly (one that would empty within the piece: its start's,
+                // and `wound_radius` says it ran empty).
+                let radius = Some(r + 0.5 * roll::radius_rate(p, r, r * mean) * h).filter(|&m| m > 0.0).unwrap_or(r);
+                (next, radius * mean * h)
             }
         };
         let (mut omega, mut roll) = (omega, self.roll);
