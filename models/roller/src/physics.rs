@@ -72,11 +72,11 @@ pub fn omega_rate_at_speed<N: Number>(slope: f64, speed: N, radius: N, radius_ra
     N::constant(slope) / radius - speed * radius_rate / (radius * radius)
 }
 
-/// The drive torque [R1] that makes the surface follow a speed table with slope v' (r and J
-/// held): `net_torque` = J*v'/r solved for the drive's share.
+/// The drive torque [R1] that makes the surface follow a speed table: `net_torque` = J*omega'
+/// solved for the drive's share, omega' the surface's (`omega_rate_at_speed`).
 #[inline]
-pub fn speed_drive_torque<N: Number>(inertia: N, radius: N, slope: f64, web: N, bearing: N) -> N {
-    inertia * slope / radius - bearing - web
+pub fn speed_drive_torque<N: Number>(inertia: N, omega_rate: N, web: N, bearing: N) -> N {
+    inertia * omega_rate - bearing - web
 }
 
 /// [R1] with r and J held over a piece of length h, the bearings' torque -b*omega

@@ -121,7 +121,10 @@ fn loop_law<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>,
 #[inline(always)]
 fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, t: &Torques<N>) -> N {
     match at.prescribed {
-        Some((_, slope)) => physics::speed_drive_torque(t.inertia, x.radius, slope, t.web, t.bearing),
+        Some((_, slope)) => {
+            let omega_rate = physics::omega_rate_at_speed(slope, t.surface_speed, x.radius, roll::radius_rate(p, x.radius, t.surface_speed));
+            physics::speed_drive_torque(t.inertia, omega_rate, t.web, t.bearing)
+        }
         None => commanded(p, at, x, u, t.loop_law.torque, t.surface_speed),
     }
 }

@@ -126,6 +126,11 @@ fn an_unwinder_at_constant_speed_loses_radius_as_thickness_times_travel_over_pi(
     let r = (r0 * r0 - h_w * v * 10.0 / PI).sqrt();
     assert!((get(&m, Real::r) - r).abs() < 1e-14, "{} {r}", get(&m, Real::r));
     assert!((m.omega() - v / r).abs() < 1e-12 * v / r);
+    // The drive's torque is what J*omega' = tau [R1] needs (no web, no bearings): at a constant v,
+    // omega' = -v*r'/r^2 = h*v^2/(2*pi*r^3), with J(r) of [R3].
+    let j = 6.0 + 0.5 * PI * rho * w * (r.powi(4) - r0.powi(4));
+    let tau = j * h_w * v * v / (2.0 * PI * r.powi(3));
+    assert!((get(&m, Real::tau) - tau).abs() < 1e-12 * tau, "{} {tau}", get(&m, Real::tau));
 }
 
 #[test]
