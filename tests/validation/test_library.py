@@ -107,9 +107,6 @@ def test_a_wrap_at_its_capstan_limit(engine):
     assert abs(down - 300.0) <= 1e-6 * 300.0, f"{engine}: the winder holds {down} N"
 
 
-@pytest.mark.xfail(reason="needs the momentum branch (issue 40: rolls balance J domega/dt); "
-                          "today's d(J omega)/dt spins a free roll up. Remove this mark when both have landed.",
-                   strict=False)
 @pytest.mark.parametrize("mode", ["CoSimulation", "ModelExchange"])
 def test_a_drum_at_changing_inertia_balances_J_t_domega_dt(mode, fmus):
     """The library's Unwind Drum: T_b R_t = tau_m - J_t domega/dt - d_B omega, with J_t the roll's total

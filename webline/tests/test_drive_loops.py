@@ -309,7 +309,7 @@ def test_a_powder_brake_holds_the_closed_form_tension_and_starts_from_rest(fmus)
 
 def test_a_loop_on_a_wound_roll_feeds_its_changing_inertia_forward(fmus):
     """A tension loop with its feed-forward on an unwinder whose 1 mm board winds off ("wound"): its
-    radius and inertia move [R3], and the feed-forward d(J*v_ref/r)/dt keeps all three terms. The Line
+    radius and inertia move [R3], and the feed-forward J*d(v_ref/r)/dt keeps both its terms. The Line
     FMU (the Roller's own feed-forward) and the reference (its own) agree to 1e-6 through a ramp."""
     board = {"E": "3 GPa", "thickness": "1 mm", "width": "1 m", "density": "700 kg/m3", "d_r": "10 ms"}
     scene = parse_scene(json.dumps({

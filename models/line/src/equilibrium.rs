@@ -2,8 +2,9 @@
 //! start time, the drives at their start values. Newton's method on the
 //! same evaluation and banded Jacobian the integrator uses. A roll's radius
 //! is never steady while web winds on or off, so it keeps its start value
-//! (the steady state of the line at that radius), and so does the speed of a
-//! roller whose speed a table prescribes. A laminate whose span stands still
+//! (the steady state of the line at that radius), and its surface speed is
+//! what is steady: omega' = -omega*r'/r, not 0. The speed of a roller whose
+//! speed a table prescribes keeps its start value too. A laminate whose span stands still
 //! is steady at any strains of its layers that pull as one: they move together
 //! from their start.
 
@@ -35,6 +36,41 @@ fn tied_layers(ode: &Ode, spec: &Spec) -> Vec<Option<usize>> {
     tied
 }
 
+/// (omega, r) of each roll being wound: the line's indices of its angular speed and its radius.
+fn wound_rolls(ode: &Ode) -> Vec<(usize, usize)> {
+    let net = ode.net.as_ref().expect("initialized");
+    let at = |part: usize, index: usize| net.states.iter().position(|s| s.part == part && s.index == index);
+    (0..net.len())
+        .filter_map(|k| {
+            let s = net.states[k];
+            let radius = ode.parts[s.part].wound_speed(s.index)?;
+            Some((k, at(s.part, radius)?))
+        })
+        .collect()
+}
+
+/// A roll's residual for a steady surface speed v = r*omega: omega' + omega*r'/r (= v'/r) in place
+/// of omega', and its row of the Jacobian to match (before the radius's row is replaced).
+fn steady_surfaces(rolls: &[(usize, usize)], x: &[f64], f: &mut [f64], mut jac: Option<&mut Band>) {
+    for &(w, r) in rolls {
+        let (omega, radius, radius_rate) = (x[w], x[r], f[r]);
+        f[w] += omega * radius_rate / radius;
+        if let Some(jac) = jac.as_deref_mut() {
+            let (kl, ku, n) = (jac.lower(), jac.upper(), jac.n());
+            for j in w.saturating_sub(kl)..(w + ku + 1).min(n) {
+                let mut d = jac.get(w, j) + omega / radius * jac.get(r, j);
+                if j == w {
+                    d += radius_rate / radius;
+                }
+                if j == r {
+                    d -= omega * radius_rate / (radius * radius);
+                }
+                jac.set(w, j, d);
+            }
+        }
+    }
+}
+
 /// Moves the line's states to its steady state, or says why there is none
 /// (the states are then as they were).
 pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
@@ -46,6 +82,7 @@ pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
     let (kl, ku) = (net.kl, net.ku);
     let frozen: Vec<bool> = net.states.iter().map(|s| ode.parts[s.part].held_at_steady_state(s.index)).collect();
     let tied = tied_layers(ode, spec);
+    let rolls = wound_rolls(ode);
     let size: Vec<f64> = (0..n).map(|k| ode.scratch.atol[k] / (ode.rtol * ode.scratch.rtol_scale[k])).collect();
     let x0 = ode.x.clone();
     // The parts as they are: a failed search leaves them where its last trial took them (a
@@ -62,6 +99,7 @@ pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
     let result = (|| {
         for _ in 0..MAX_ITERATIONS {
             residual_and_jacobian(ode, &x, &mut f, Some(&mut jac)).map_err(|e| e.into_message())?;
+            steady_surfaces(&rolls, &x, &mut f, Some(&mut jac));
             for i in 0..n {
                 if frozen[i] || tied[i].is_some() {
                     f[i] = held(i, &x);
@@ -85,6 +123,7 @@ pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
                 }
                 let ok = residual_and_jacobian(ode, &trial, &mut trial_f, None).is_ok();
                 if ok {
+                    steady_surfaces(&rolls, &trial, &mut trial_f, None);
                     for i in 0..n {
                         if frozen[i] || tied[i].is_some() {
                             trial_f[i] = held(i, &trial);

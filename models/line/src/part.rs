@@ -273,6 +273,15 @@ impl Part {
         matches!(self, Part::Roller(r) if r.held_at_steady_state(State::ALL[index]))
     }
 
+    /// Where state `index` is the angular speed of a roll being wound, its radius's state index: a
+    /// steady state holds that roll's surface speed, so omega moves with the radius ([R1], [R3]).
+    pub fn wound_speed(&self, index: usize) -> Option<usize> {
+        match self {
+            Part::Roller(r) if r.params.winding() && !r.speed_prescribed() && index == State::Omega.index() => Some(State::Radius.index()),
+            _ => None,
+        }
+    }
+
     /// A roller's load cell for a wrap angle with this cosine.
     pub fn load_cell(&self, cos_wrap: f64) -> FmiResult<f64> {
         match self {

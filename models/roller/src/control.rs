@@ -4,7 +4,7 @@
 //!
 //! [R10] e = s*(set - F_measured) (force loop), e = v_ref - v (speed loop; v_ref: the reference table, else loop.speed);
 //!       u = kp*e + I + tau_ff;   dI/dt = ki*e + (sat(u) - u)/T_t,  T_t = kp/ki (1 s if a gain is 0);
-//!       tau_ff = d(J*v_ref/r)/dt = J*a_ref/r + (J' - J*r'/r)*v_ref/r   (r', J' of [R3] at v_ref)
+//!       tau_ff = J*d(v_ref/r)/dt = J*a_ref/r - J*r'*v_ref/r^2   (r' of [R3] at v_ref)
 //! [R11] motor.torque = sat(u) (no lag), or d(motor.torque)/dt = (sat(u) - motor.torque)/T_m;
 //!       sat(u) = u for |u| <= L - w, else sign(u)*(L - w*exp(-(|u| - L + w)/w)),  w = L/20.
 //! [R13] a dancer loop: the speed loop of [R10] with v_ref + trim for v_ref,
@@ -34,16 +34,16 @@ pub fn limit(p: &Parameters, u: f64) -> (f64, f64) {
     (u.signum() * (l - w * decay), decay)
 }
 
-/// The feed-forward torque d(J*v_ref/r)/dt [R10] at radius r, inertia j (moving with r on a roll
-/// being wound [R3]), reference speed v and acceleration a.
+/// The feed-forward torque J*d(v_ref/r)/dt [R10] at radius r, inertia j (moving with r on a roll
+/// being wound [R3]), reference speed v and acceleration a: what [R1] needs for omega = v_ref/r.
 #[inline]
 pub fn feedforward<N: Number>(p: &Parameters, r: N, j: N, v: f64, a: f64) -> N {
     if !p.winding() {
         return j * a / r;
     }
-    // r' = c*v/r, J' = k*r^3*r' = k*c*v*r^2.
-    let (k, c) = (2.0 * PI * p.wound_density * p.wound_width, p.roll_sign() * p.wound_thickness / (2.0 * PI));
-    j * a / r + r * (k * c * v * v) - j * c * v * v / r.powi(3)
+    // r' = c*v/r.
+    let c = p.roll_sign() * p.wound_thickness / (2.0 * PI);
+    j * a / r - j * c * v * v / r.powi(3)
 }
 
 /// What the loop reads from the profile at a time: a force loop's set point (its table's, else

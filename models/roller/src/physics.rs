@@ -1,7 +1,7 @@
 //! The equations of a line part that is not a span (the Roller FMU's
 //! documentation numbers them):
 //!
-//! [R1]  d(J*omega)/dt = r*(F_b - F_a) + tau - b*omega     (F_a: sum of web_a*.F, F_b: sum of web_b*.F)
+//! [R1]  J*domega/dt = r*(F_b - F_a) + tau - b*omega       (F_a: sum of web_a*.F, F_b: sum of web_b*.F)
 //! [R2]  v = r*omega
 //! [R5]  1/(1+eps_b) = sum_i (m_i/M)/(1+eps_i), M = sum_i m_i          (several inlets: the merge)
 //!       evaluated as eps_b = sum_i q_i*eps_i / sum_i q_i, q_i = m_i/(1+eps_i)
@@ -11,7 +11,7 @@
 //! Over a piece of a communication step where the inputs are held and the
 //! profiles are linear in time, [R1] with r and J held is a linear ODE with
 //! forcing linear in time, stepped exactly here. [R3] moves r and J after the
-//! piece, keeping J*omega (physics docs: accurate to O(h*v*dt/r^2) per step).
+//! piece, keeping omega: the web that leaves or arrives carries its own angular momentum.
 
 use crate::number::Number;
 use crate::parameters::{ports, Inputs, Parameters, PORTS};
@@ -57,12 +57,13 @@ pub fn web_torque<N: Number>(p: &Parameters, radius: N, u: &Inputs<N>) -> N {
     radius * (u.pull_forward(p) - u.pull_back(p))
 }
 
-/// The torque sum of [R1], d(J*omega)/dt - J*omega' = J*omega': the webs' torque `web` ([R1]'s
-/// r*(F_b - F_a), or [R6]'s -r*f where the web may slip), the drive's `drive` (its table, loop,
-/// brake), the bearings' `bearing`, and J moving at `inertia_rate` (a roll being wound).
+/// The torque sum of [R1], J*omega': the webs' torque `web` ([R1]'s r*(F_b - F_a), or [R6]'s
+/// -r*f where the web may slip), the drive's `drive` (its table, loop, brake) and the bearings'
+/// `bearing`. No J'*omega: on a roll being wound that is the angular momentum the web carries off
+/// or brings (physics docs, "Winders and unwinders").
 #[inline]
-pub fn net_torque<N: Number>(web: N, drive: N, bearing: N, inertia_rate: N, omega: N) -> N {
-    web + drive + bearing - inertia_rate * omega
+pub fn net_torque<N: Number>(web: N, drive: N, bearing: N) -> N {
+    web + drive + bearing
 }
 
 /// d(omega)/dt of a surface that follows a speed v(t) with slope v' [R2]: omega = v/r, r moving at r'.
@@ -71,11 +72,11 @@ pub fn omega_rate_at_speed<N: Number>(slope: f64, speed: N, radius: N, radius_ra
     N::constant(slope) / radius - speed * radius_rate / (radius * radius)
 }
 
-/// The drive torque [R1] that makes the surface follow a speed table with slope v' (r and J
-/// held): `net_torque` = J*v'/r solved for the drive's share.
+/// The drive torque [R1] that makes the surface follow a speed table: `net_torque` = J*omega'
+/// solved for the drive's share, omega' the surface's (`omega_rate_at_speed`).
 #[inline]
-pub fn speed_drive_torque<N: Number>(inertia: N, radius: N, slope: f64, web: N, bearing: N) -> N {
-    inertia * slope / radius - bearing - web
+pub fn speed_drive_torque<N: Number>(inertia: N, omega_rate: N, web: N, bearing: N) -> N {
+    inertia * omega_rate - bearing - web
 }
 
 /// [R1] with r and J held over a piece of length h, the bearings' torque -b*omega

@@ -121,7 +121,10 @@ fn loop_law<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>,
 #[inline(always)]
 fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, t: &Torques<N>) -> N {
     match at.prescribed {
-        Some((_, slope)) => physics::speed_drive_torque(t.inertia, x.radius, slope, t.web, t.bearing),
+        Some((_, slope)) => {
+            let omega_rate = physics::omega_rate_at_speed(slope, t.surface_speed, x.radius, roll::radius_rate(p, x.radius, t.surface_speed));
+            physics::speed_drive_torque(t.inertia, omega_rate, t.web, t.bearing)
+        }
         None => commanded(p, at, x, u, t.loop_law.torque, t.surface_speed),
     }
 }
@@ -150,11 +153,11 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
     let (omega, r) = (x.omega, x.radius);
     let t = torques(p, at, x, u, modes);
     let (v, torque) = (t.surface_speed, drive_torque(p, at, x, u, &t));
-    let (radius_rate, inertia_rate) = roll::rates(p, r, v);
+    let radius_rate = roll::radius_rate(p, r, v);
     let (omega_rate, surface_rate) = match at.prescribed {
         Some((_, slope)) => (physics::omega_rate_at_speed(slope, v, r, radius_rate), N::constant(slope)),
         None => {
-            let rate = physics::net_torque(t.web, torque, t.bearing, inertia_rate, omega) / t.inertia;
+            let rate = physics::net_torque(t.web, torque, t.bearing) / t.inertia;
             (rate, r * rate + omega * radius_rate)
         }
     };

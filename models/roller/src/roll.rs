@@ -43,14 +43,14 @@ impl Roll {
     }
 }
 
-/// (dr/dt, dJ/dt) [R3] at radius r and surface speed v (0 where no roll winds).
+/// dr/dt [R3] at radius r and surface speed v (0 where no roll winds). J moves with r, but [R1]
+/// needs no dJ/dt: the web carries off (or brings) the angular momentum J'*omega itself.
 #[inline]
-pub fn rates<N: Number>(p: &Parameters, radius: N, speed: N) -> (N, N) {
+pub fn radius_rate<N: Number>(p: &Parameters, radius: N, speed: N) -> N {
     if !p.winding() {
-        return (N::default(), N::default());
+        return N::default();
     }
-    let radius_rate = speed * (p.roll_sign() * p.wound_thickness) / (radius * (2.0 * PI));
-    (radius_rate, radius.powi(3) * (2.0 * PI * p.wound_density * p.wound_width) * radius_rate)
+    speed * (p.roll_sign() * p.wound_thickness) / (radius * (2.0 * PI))
 }
 
 /// The bearings' torque on the roller [R1]: its viscous damping, -b*omega.

@@ -84,7 +84,12 @@ impl Roller {
             None => {
                 let (tau0, tau1) = self.torque_at(t);
                 let next = physics::rotation_step(p, &self.roll, &self.inputs, self.omega, damping, tau0, tau1, h);
-                (next, 0.5 * r * (self.omega.value() + next.value()) * h)
+                let mean = 0.5 * (self.omega.value() + next.value());
+                // At the piece's mean radius: r moves linearly at a steady omega [R3], so that a roll
+                // turning steadily winds exactly (one that would empty within the piece: its start's,
+                // and `wound_radius` says it ran empty).
+                let radius = Some(r + 0.5 * roll::radius_rate(p, r, r * mean) * h).filter(|&m| m > 0.0).unwrap_or(r);
+                (next, radius * mean * h)
             }
         };
         let (mut omega, mut roll) = (omega, self.roll);
@@ -93,11 +98,11 @@ impl Roller {
                 FmiError::discard(format!("the roll ran empty: its radius {r} m would fall to 0 after {travel} m of web; check R and wound.thickness"))
             })?;
             let inertia = roll.inertia_at(p, radius);
-            omega = match prescribed {
-                Some(_) => CompensatedSum::from_parts(omega.value() * r / radius, 0.0),
-                // [R1] keeps J*omega across the change of J.
-                None => CompensatedSum::from_parts(omega.value() * roll.inertia / inertia, 0.0),
-            };
+            // A prescribed surface keeps its speed; else [R1] keeps omega across the change of J
+            // (the web that left or arrived took its own angular momentum with it).
+            if prescribed.is_some() {
+                omega = CompensatedSum::from_parts(omega.value() * r / radius, 0.0);
+            }
             roll = Roll { radius, inertia, ..roll };
         }
         let carriage = if p.carriage {

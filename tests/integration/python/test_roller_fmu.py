@@ -88,7 +88,7 @@ def test_exports_the_44_functions(roller_path, tmp_path):
         so.write_bytes(z.read("binaries/linux64/Roller.so"))
         doc = z.read("documentation/index.html").decode()
     assert "<!--" not in doc.split("<body>")[1] or "VARIABLES" not in doc, "documentation placeholders left"
-    assert "d(J*omega)/dt = r*(F_b - F_a) + tau - b*omega" in doc
+    assert "J*domega/dt = r*(F_b - F_a) + tau - b*omega" in doc
     nm = shutil.which("nm")
     assert nm
     out = subprocess.run([nm, "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout

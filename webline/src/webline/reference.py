@@ -21,7 +21,9 @@ scene. States:
   summed over the spans that end at it (several at a nip, [M4]) and the spans
   that start at it (several at a slitter, [S3]); the web mass of a span
   before it (with includeMass) adds m_up*R^2: F_b = T + p + m*dv_b/dt and
-  v_b = R*omega;
+  v_b = R*omega; on a roll being wound J = J(R) moves, with no J'*omega: the web
+  leaving or arriving carries that angular momentum itself (docs/physics.md,
+  "Winders and unwinders");
 * each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0);
 * each drive's loop (docs/physics.md [R10]-[R11]): its integrator I, and its motor's torque tau_m where
   it lags (`loop_torque`);
@@ -171,9 +173,9 @@ class LineODE:
         """A drive's PI loop [R10] and its motor [R11] at (t, z): its torque, its rates into dz.
         e = sign*(set - measured), or v_ref - R*omega for a speed loop; u = kp*e + I + ff; I' = ki*e + (limit(u) - u)*ki/kp; the motor's torque
         limit(u), or with a lag tau_m' = (limit(u) - tau_m)/lag. The limit is the identity up to 95 % of
-        it and bends exponentially into it over the last 5 %; ff = d(J*v_ref/R)/dt, the inertia torque of
+        it and bends exponentially into it over the last 5 %; ff = J*d(v_ref/R)/dt, the inertia torque of
         the speed reference (its own for a speed loop, else the line's): J*a_ref/R, and on a roll being
-        wound (J_rate - J*R_rate/R)*v_ref/R with R_rate, J_rate of [R3] at v_ref."""
+        wound - J*R_rate*v_ref/R^2 with R_rate of [R3] at v_ref."""
         lp = node.drive.loop
         R = self.radius(node, z)
         J = self.roll_inertia(node, R) if node.name in self.i_r else self.inertia[node.name][0]
@@ -198,10 +200,8 @@ class LineODE:
             v_ref, a_ref = self.pv(reference, t), self.pslope(reference)
             ff = J * a_ref / R
             if node.name in self.i_r:
-                w = node.wound
-                R_rate = (-1.0 if node.type == "unwinder" else 1.0) * w.thickness * v_ref / (2.0 * np.pi * R)
-                J_rate = 2.0 * np.pi * w.density * w.width * R**3 * R_rate
-                ff += (J_rate - J * R_rate / R) * v_ref / R
+                R_rate = (-1.0 if node.type == "unwinder" else 1.0) * node.wound.thickness * v_ref / (2.0 * np.pi * R)
+                ff -= J * R_rate * v_ref / R**2
         i_int, i_motor = self.i_loop[node.name]
         u = lp.kp * e + z[i_int] + ff
         limited = u
@@ -274,15 +274,11 @@ class LineODE:
         for node in self.movers:
             J, R, b = self.inertia[node.name]
             omega = z[self.i_omega[node.name]]
-            J_rate = 0.0
-            if node.name in self.i_r:  # [R3]: d(r^2)/dt = s h v/pi, J(r); [R1] balances d(J omega)/dt
+            if node.name in self.i_r:  # [R3]: d(r^2)/dt = s h v/pi, J(r); [R1] balances J domega/dt
                 R = z[self.i_r[node.name]]
                 J = self.roll_inertia(node, R)
-                w = node.wound
                 sign = -1.0 if node.type == "unwinder" else 1.0
-                r_rate = sign * w.thickness * omega / (2.0 * np.pi)  # s h v/(2 pi r), v = r omega
-                dz[self.i_r[node.name]] = r_rate
-                J_rate = 2.0 * np.pi * w.density * w.width * R**3 * r_rate
+                dz[self.i_r[node.name]] = sign * node.wound.thickness * omega / (2.0 * np.pi)  # s h v/(2 pi r), v = r omega
             # Every web leaving pulls forward, every web arriving pulls back (a nip, a slitter: several).
             F_down = sum(q[sp.name]["T"] for sp in self.outs[node.name])
             F_up = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[node.name])
@@ -294,7 +290,7 @@ class LineODE:
             if node.name in self.i_loop:
                 q[node.name] = {"tau": tau + self.loop_torque(node, t, z, q, dz)}
                 tau = q[node.name]["tau"]
-            num = R * (F_down - F_up) + tau - b * omega - J_rate * omega
+            num = R * (F_down - F_up) + tau - b * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
             accel[node.name] = R * domega + omega * dz[self.i_r[node.name]] if node.name in self.i_r else R * domega
@@ -344,6 +340,15 @@ class LineODE:
 
     def rhs(self, t, z):
         return self.evaluate(t, z)[0]
+
+    def steady_rates(self, t, z):
+        """The rates a steady state zeroes: rhs, but for a roll being wound its surface's acceleration
+        over R, domega/dt + omega*R_rate/R: at a constant surface speed omega still moves with R."""
+        dz = self.rhs(t, z)
+        for name, i in self.i_r.items():
+            k = self.i_omega[name]
+            dz[k] += z[k] * dz[i] / z[i]
+        return dz
 
     def entries(self, sp, t, z):
         """1 + eps_a of each layer of span `sp` entering it forwards ([M6]): at the line's first roller its
@@ -397,7 +402,7 @@ class LineODE:
 
     def equilibrium(self, z0, t=0.0):
         """The state where every rate vanishes, from z0 (SciPy's root, 'hybr'), checked before it is
-        returned (`STEADY`). A dancer without a spring is steady at any position: its position is held
+        returned (`STEADY`); a roll being wound turns at a steady surface speed (`steady_rates`). A dancer without a spring is steady at any position: its position is held
         at its start and its carriage's balance of forces checked on its own, which names what is off.
         Where the web may slip, the line is solved first with the web held to every roller's surface,
         then with its speeds free from there: away from its steady tensions the friction saturates, and
@@ -462,7 +467,7 @@ class LineODE:
                 x[free] = u * scale[free]
                 for i, first in tied.items():
                     x[i] = z[i] + x[first] - z[first]
-                return self.rhs(t, x)[rows]
+                return self.steady_rates(t, x)[rows]
 
             sol = root(rates, z[free] / scale[free], method="hybr", options={"xtol": 1e-15})
             moved = sol.x * scale[free] - z[free]
@@ -481,12 +486,12 @@ class LineODE:
     def unsteadiness(self, t, z, scale):
         """Each rate at z relative to how much it changes when every state moves by its own size
         (the sum of |d rate/d state| * scale over the states, by central differences)."""
-        f = self.rhs(t, z)
+        f = self.steady_rates(t, z)
         size = np.zeros(self.n)
         for j in range(self.n):
             dz = np.zeros(self.n)
             dz[j] = 1e-6 * scale[j]
-            size += np.abs(self.rhs(t, z + dz) - self.rhs(t, z - dz)) / 2e-6
+            size += np.abs(self.steady_rates(t, z + dz) - self.steady_rates(t, z - dz)) / 2e-6
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(f == 0.0, 0.0, np.abs(f) / size)
 

@@ -457,18 +457,20 @@ def _roller(r, o_node, name, kind) -> Roller:
 
 
 def _fill_wound(scene):
-    """A roll's wound density and width, where the scene leaves them out: its web's (the span it
-    feeds or the span that feeds it), a laminate's mean density over its layers."""
+    """A roll's wound width and density, where the scene leaves them out: its web's width (the span it
+    feeds or the span that feeds it), and the density that holds the web's mass per length in a layer
+    of the wound thickness (air wound in included), rho_l/(width*thickness), so that the mass the roll
+    loses or gains is the mass the web carries ([R3])."""
     for c in scene.parts:
         w = getattr(c, "wound", None)
         if w is None:
             continue
         span = scene.spans_out(c)[0] if c.type == "unwinder" else scene.spans_in(c)[0]
         web = span.wp2
-        if w.density is None:
-            w.density = web.rho_l / web.area
         if w.width is None:
             w.width = web.width
+        if w.density is None:
+            w.density = web.rho_l / (w.width * w.thickness)
 
 
 def _traction(r, o, what, wrap) -> Traction:

@@ -154,7 +154,7 @@ class Loop:
     """A PI loop in a drive ([R10]-[R11] of the physics docs): the torque that holds a span's tension
     (`measure` = (span, "T")) or a load cell's (roller, "F") at `set`; gains in SI (N.m per N,
     N.m per N.s); the motor's torque `limit` (N.m, 0: none) and `lag` (s, 0: none); with
-    `feedforward` the torque d(J*v_ref/R)/dt of the line's speed reference (its first speed drive)."""
+    `feedforward` the torque J*d(v_ref/R)/dt of the line's speed reference (its first speed drive)."""
 
     measure: tuple | None  # None: a speed loop, on the roller's own surface speed
     set: Profile  # a force, or a speed loop's reference speed
@@ -212,7 +212,8 @@ class Traction:
 class Wound:
     """The web an unwinder's roll loses or a winder's gains [R3]: the roll's radius and inertia move
     with it. thickness is the build-up per turn (the web's caliper plus the air wound in with it);
-    density and width default to the roll's web (None until the line is read)."""
+    width defaults to the roll's web's, density to the web's mass per length over width*thickness
+    (None until the line is read)."""
 
     thickness: float
     density: float | None = None
