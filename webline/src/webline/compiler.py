@@ -15,7 +15,9 @@ first roller (web_b.eps); spans on a dancer take the height of their moving
 end from its tangent points (web_a.y, web_b.y; the x are constants).
 A nip where webs merge and a slitter that splits the web use the Roller's
 extra ports (web_a2..4, web_b2..4; docs/merge-split.md, "The FMUs' wiring"):
-there the strain goes through the roller (web_a<k>.eps in, web_b<j>.eps out).
+there the strain goes through the roller (web_a<k>.eps in, web_b<j>.eps out). A winder
+reads the strain of the web it winds (web_a.eps <- span.web_b.eps): its roll counts the web's
+unstretched length [R3].
 A span that carries a laminate is a ConvertingSpan per layer, `NAME.<label>`,
 side by side between the same rollers, each at a port of its own (the rollers
 `layered`: each outlet passes one inlet's strain on, [R6]); a layer takes its
@@ -406,7 +408,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
             else:
                 connect(before[0].name, "web_b.eps", name, "web_a.eps")
             connect(down.name, f"{b}.v", name, "web_b.v")
-            if through(down):
+            if through(down) or getattr(down, "wound", None) is not None:  # a roll winds the web's unstretched length [R3]
                 connect(name, "web_b.eps", down.name, f"{b}.eps")
             if isinstance(down, Dancer):
                 connect(down.name, "web_a.y", name, "frame_b.y")
