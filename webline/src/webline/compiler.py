@@ -359,9 +359,10 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
         ports[n.name] = roller_ports(scene, n)
         if _ports(scene, n, "web_a", ins) > 1:
             comp.start["inlets"] = len(ports[n.name][0])
-            if len(ins) > 1 and not any(sp.layered for sp in outs):  # webs merged into one [R5]
+            merged = len(ins) > 1 and not any(sp.layered for sp in outs)  # webs merged into one [R5]
+            if merged or getattr(n, "wound", None) is not None:  # [R5]'s weights: also the mass a roll winds [R3]
                 comp.start.update({f"{port('web_a', k)}.m": float(m) for k, m in enumerate(scene.inlet_masses(n), 1)})
-            else:  # the webs stay layers, each passed on at its port
+            if not merged:  # the webs stay layers, each passed on at its port
                 comp.start["layered"] = True
         if _ports(scene, n, "web_b", outs) > 1:
             comp.start["outlets"] = len(ports[n.name][1])
