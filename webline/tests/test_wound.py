@@ -1,9 +1,12 @@
 """Rolls that change in scenes ([R3] of docs/physics.md): an unwinder's or winder's `wound` web moves
 its radius and inertia in every engine, against closed forms.
 
-- The radius: d(r^2)/dt = s h v/pi, so r(t)^2 = r0^2 + s (h/pi) * (the integral of the roll's own
-  surface speed). The integral is the trapezoid of the recorded speed at 1 ms; the speed barely moves,
-  so the rule's error is far below the 1e-9 of r0 allowed (the Line FMU's tolerance is 1e-9).
+- The radius: d(r^2)/dt = s h v/(pi (1 + eps)), the roll counting the web's unstretched length (eps
+  the strain of the web at the roll: the unwinder's given 0, the winder's arriving span's), so
+  r(t)^2 = r0^2 + s (h/pi) * (the integral of v/(1 + eps)). The integral is the trapezoid of the
+  recorded values at 1 ms; they barely move, so the rule's error is far below the 1e-9 of r0 allowed
+  (the Line FMU's tolerance is 1e-9). Winding the stretched length instead would put the winder 3e-6
+  of r0 off (its strain is 1e-4).
 - The inertia: [R1] balances J domega/dt with J(r) = J0 + (pi/2) rho w (r^4 - r0^4) (the web leaving
   carries off the angular momentum J' omega itself), so an unwinder under tension control pulls
   T = T_set + (J omega' + b omega)/r. J is the closed form; omega' is the run's own, by central
@@ -33,7 +36,7 @@ def scene(roll, stop="1.5 s"):
         "line": [unwinder, {"type": "span", "name": "entry", "L": "2 m", "web": "board", "effects": ["includeDamping"]},
                  {"type": "roller", "name": "pull", "drive": {"speed": f"{V} m/s"}},
                  {"type": "span", "name": "exit", "L": "1 m", "web": "board", "effects": ["includeDamping"]}, winder],
-        "record": ["entry.T", "unwind.r", "unwind.omega", "unwind.v", "rewind.r", "rewind.v"]}), "wound.json")
+        "record": ["entry.T", "unwind.r", "unwind.omega", "unwind.v", "rewind.r", "rewind.v", "exit.eps"]}), "wound.json")
 
 
 WOUND = {"unwind": {"wound": {"thickness": "1 mm"}}, "rewind": {"wound": {"thickness": "1 mm", "density": "700 kg/m3"}}}
@@ -51,9 +54,9 @@ def runs(fmus):
 def test_the_radius_follows_the_web_wound_off_and_on(runs, engine, tol):
     r = runs[engine]
     t = r.time
-    for roll, sign, r0 in (("unwind", -1.0, R0), ("rewind", 1.0, 0.2)):
-        v = r.column(f"{roll}.v")
-        wound = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+    for roll, sign, r0, eps in (("unwind", -1.0, R0, 0.0), ("rewind", 1.0, 0.2, r.column("exit.eps"))):
+        q = r.column(f"{roll}.v") / (1.0 + eps)  # the web's unstretched flow at the roll
+        wound = np.concatenate([[0.0], np.cumsum(0.5 * (q[1:] + q[:-1]) * np.diff(t))])
         exact = np.sqrt(r0**2 + sign * H / np.pi * wound)
         err = np.max(np.abs(r.column(f"{roll}.r") - exact)) / r0
         print(f"{engine}: {roll}.r against the closed form {err:.1e} of r0 (moved {abs(exact[-1] - r0) * 1e3:.2f} mm)")

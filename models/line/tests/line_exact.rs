@@ -300,8 +300,9 @@ fn a_torque_set_without_evaluating_the_line_acts_as_one_evaluated() {
     assert!((get(&lazy, "idler.omega") - get(&initialized(&paper_line("equilibrium")), "idler.omega")).abs() > 1e-3);
 }
 
-/// A winder (its radius a state) taking web from a source through an idler and a nip where a
-/// second web from another source merges (two inlets), spans slack-clamped and damped.
+/// A winder (its radius a state, reading the strain of the web it winds) taking web from a source
+/// through an idler and a nip where a second web from another source merges (two inlets), spans
+/// slack-clamped and damped.
 fn winding_merge_line() -> Value {
     let mut src = prescribed("src", "source", json!([[0.0, 8.0]]));
     src["start"]["web_a.eps"] = json!(5e-4);
@@ -339,6 +340,8 @@ fn winding_merge_line() -> Value {
         connect("b", "web_b.eps", "nip", "web_a.eps"),
     ]);
     c.extend(chain(&["nip", "d", "wind"]));
+    // The winder reads the strain it winds at [R3] (as webline connects a wound roll).
+    c.push(connect("d", "web_b.eps", "wind", "web_a.eps"));
     line_spec(parts, c, "given")
 }
 
@@ -408,9 +411,20 @@ fn the_chained_jacobian_is_the_lines_own() {
             line.set_real(tau, 2.0).unwrap();
         }
         line.do_step(0.02).unwrap();
-        let (_, checked) = chained_against_differences(&mut line, name);
+        let (chained, checked) = chained_against_differences(&mut line, name);
         let n = line.states().len();
         assert!(checked >= 2 * n, "{name}: only {checked} entries");
+        if name == "winding merge" {
+            // The winder's r' = h*omega/(2*pi*(1 + eps)) [R3] (v = r*omega) reads the arriving span d's
+            // strain eps = L/x - 1: dr'/domega = h/(2*pi*(1 + eps)), dr'/dx = h*omega/(2*pi*L), so
+            // their ratio is omega*(1 + eps)/L, to rounding in the chain.
+            let net = line.network().unwrap();
+            let at = |part: usize, index: usize| net.states.iter().position(|s| s.part == part && s.index == index).unwrap();
+            let (r, omega, x) = (at(8, 1), at(8, 0), at(7, 0));
+            let expected = get(&line, "wind.omega") * (1.0 + get(&line, "d.eps")) / 1.5;
+            let ratio = chained.get(r, x) / chained.get(r, omega);
+            assert!((ratio - expected).abs() < 1e-12 * expected, "dr'/dx over dr'/domega: {ratio}, expected {expected}");
+        }
     }
 }
 

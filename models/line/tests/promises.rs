@@ -71,7 +71,8 @@ fn model_exchange_refuses_a_parameter_that_would_add_a_state() {
 
 /// Co-Simulation keeps its states' number: a roll's radius is one of them whether its web has
 /// a thickness or not, held while it has none. With one, the unwinder's radius follows
-/// r^2 = R^2 - thickness*travel/pi [R3], the travel the trapezoidal sum of unwind.v over 1 ms
+/// r^2 = R^2 - thickness*travel/(pi*(1 + eps)) [R3] with its web leaving at eps = 0 (the test line's
+/// unwind.web_a.eps), the travel the trapezoidal sum of unwind.v over 1 ms
 /// steps (its error, h^2/12 * v'' * t, is far below the 1e-4 of the 2e-5 m drop asked here).
 #[test]
 fn co_simulation_keeps_its_states_when_a_parameter_switches_one_on() {

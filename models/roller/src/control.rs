@@ -4,7 +4,7 @@
 //!
 //! [R10] e = s*(set - F_measured) (force loop), e = v_ref - v (speed loop; v_ref: the reference table, else loop.speed);
 //!       u = kp*e + I + tau_ff;   dI/dt = ki*e + (sat(u) - u)/T_t,  T_t = kp/ki (1 s if a gain is 0);
-//!       tau_ff = J*d(v_ref/r)/dt = J*a_ref/r - J*r'*v_ref/r^2   (r' of [R3] at v_ref)
+//!       tau_ff = J*d(v_ref/r)/dt = J*a_ref/r - J*r'*v_ref/r^2   (r' of [R3] at v_ref and the roll's strain)
 //! [R11] motor.torque = sat(u) (no lag), or d(motor.torque)/dt = (sat(u) - motor.torque)/T_m;
 //!       sat(u) = u for |u| <= L - w, else sign(u)*(L - w*exp(-(|u| - L + w)/w)),  w = L/20.
 //! [R13] a dancer loop: the speed loop of [R10] with v_ref + trim for v_ref,
@@ -12,7 +12,7 @@
 
 use crate::number::Number;
 use crate::parameters::{Kind, Parameters};
-use std::f64::consts::PI;
+use crate::roll;
 
 /// The share of the limit over which the torque bends into it: smooth (C1), so that Newton's
 /// method in the Line's implicit steps sees a slope everywhere, and exact inside.
@@ -35,15 +35,15 @@ pub fn limit(p: &Parameters, u: f64) -> (f64, f64) {
 }
 
 /// The feed-forward torque J*d(v_ref/r)/dt [R10] at radius r, inertia j (moving with r on a roll
-/// being wound [R3]), reference speed v and acceleration a: what [R1] needs for omega = v_ref/r.
+/// being wound [R3]), reference speed v and acceleration a, the web at the roll at strain `strain`:
+/// what [R1] needs for omega = v_ref/r.
 #[inline]
-pub fn feedforward<N: Number>(p: &Parameters, r: N, j: N, v: f64, a: f64) -> N {
+pub fn feedforward<N: Number>(p: &Parameters, r: N, j: N, strain: N, v: f64, a: f64) -> N {
     if !p.winding() {
         return j * a / r;
     }
-    // r' = c*v/r.
-    let c = p.roll_sign() * p.wound_thickness / (2.0 * PI);
-    j * a / r - j * c * v * v / r.powi(3)
+    let v = N::constant(v);
+    j * a / r - j * roll::radius_rate(p, r, v, strain) * v / (r * r)
 }
 
 /// What the loop reads from the profile at a time: a force loop's set point (its table's, else
@@ -64,13 +64,14 @@ pub struct Law<N> {
     pub dancer_rate: N,
 }
 
-/// What the loop sees of the roller: its speed, radius and inertia, the inputs it measures
-/// (loop.measured, dancer.y) and its own states (loop.I, motor.torque, dancer.I).
+/// What the loop sees of the roller: its speed, radius and inertia, the web's strain at its roll,
+/// the inputs it measures (loop.measured, dancer.y) and its own states (loop.I, motor.torque, dancer.I).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Seen<N> {
     pub omega: N,
     pub radius: N,
     pub inertia: N,
+    pub strain: N,
     pub measured: N,
     pub dancer_y: N,
     pub integrator: N,
@@ -98,7 +99,7 @@ pub fn law<N: Number>(p: &Parameters, reads: &Reads, x: &Seen<N>) -> Law<N> {
         }
     };
     let ff = match reads.reference {
-        Some((v, a)) if p.loop_feedforward => feedforward(p, x.radius, x.inertia, v, a),
+        Some((v, a)) if p.loop_feedforward => feedforward(p, x.radius, x.inertia, x.strain, v, a),
         _ => N::default(),
     };
     let u = e * p.loop_kp + x.integrator + ff;
@@ -146,6 +147,7 @@ pub fn refusal(p: &Parameters) -> Option<String> {
 mod tests {
     use super::*;
     use crate::number::Tangent;
+    use std::f64::consts::PI;
 
     fn limited(l: f64) -> Parameters {
         Parameters { motor_limit: l, loop_kp: 0.2, loop_ki: 2.0, ..Default::default() }
@@ -169,15 +171,23 @@ mod tests {
         assert_eq!(limit(&limited(0.0), 1e6), (1e6, 1.0));
     }
 
-    /// The feed-forward's slope in r against a central difference, on a roll being wound.
+    /// The feed-forward's slopes in r and in the web's strain against central differences, on a
+    /// roll being wound.
     #[test]
-    fn feedforward_slope_in_r() {
+    fn feedforward_slopes_in_r_and_strain() {
         let p = Parameters { roll: 1, wound_thickness: 1e-4, wound_density: 800.0, wound_width: 1.2, ..Default::default() };
-        let (r, v, a) = (0.6, 6.0, 0.4);
+        let (r, v, a, eps) = (0.6, 6.0, 0.4, 2e-3);
         let j = |r: f64| 40.0 + 0.5 * PI * 800.0 * 1.2 * (r.powi(4) - 0.6f64.powi(4));
-        let d = feedforward(&p, Tangent::new(r, 1.0), Tangent::new(j(r), 4.0 * 0.5 * PI * 800.0 * 1.2 * r.powi(3)), v, a).d;
+        let dj = 4.0 * 0.5 * PI * 800.0 * 1.2 * r.powi(3);
+        let d = feedforward(&p, Tangent::new(r, 1.0), Tangent::new(j(r), dj), Tangent::new(eps, 0.0), v, a).d;
         let h = 1e-6;
-        let fd = (feedforward(&p, r + h, j(r + h), v, a) - feedforward(&p, r - h, j(r - h), v, a)) / (2.0 * h);
+        let fd = (feedforward(&p, r + h, j(r + h), eps, v, a) - feedforward(&p, r - h, j(r - h), eps, v, a)) / (2.0 * h);
         assert!((d - fd).abs() < 1e-6 * fd.abs().max(1.0), "{d} vs {fd}");
+        let d = feedforward(&p, Tangent::new(r, 0.0), Tangent::new(j(r), 0.0), Tangent::new(eps, 1.0), v, a).d;
+        let fd = (feedforward(&p, r, j(r), eps + h, v, a) - feedforward(&p, r, j(r), eps - h, v, a)) / (2.0 * h);
+        assert!((d - fd).abs() < 1e-6 * fd.abs().max(1e-3), "{d} vs {fd}");
+        // -J r' v/r^2 with r' = -h v/(2 pi r (1 + eps)) of an unwinder.
+        let expected = j(r) * a / r + j(r) * 1e-4 * v * v / (2.0 * PI * r.powi(3) * (1.0 + eps));
+        assert!((feedforward(&p, r, j(r), eps, v, a) - expected).abs() < 1e-12 * expected);
     }
 }

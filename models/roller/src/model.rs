@@ -138,7 +138,7 @@ impl Roller {
 
     /// A table's value and slope at t, where the profile has it.
     #[inline(always)]
-    fn value(&self, key: Key, t: f64) -> Option<(f64, f64)> {
+    pub(crate) fn value(&self, key: Key, t: f64) -> Option<(f64, f64)> {
         self.table(key).map(|table| self.read(table, t))
     }
 
@@ -155,7 +155,7 @@ impl Roller {
     }
 
     /// What the equations read at time t with the roller at `x`: the tables, and the contact where
-    /// the web may slip (the leaving strain's table, which only an output reads: `linearize`).
+    /// the web may slip.
     #[inline(always)]
     pub(crate) fn point_at(&self, t: f64, x: &States) -> Point {
         self.reading(t, Some(x))
@@ -180,7 +180,7 @@ impl Roller {
             brake: self.value(Key::Brake, t).map(|(b, _)| b),
             control: control::Reads { set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x), reference: self.value(Key::Reference, t) },
             load: self.value(Key::Load, t).map_or(0.0, |(x, _)| x),
-            strain: None,
+            strain: self.value(Key::Strain, t).map(|(x, _)| x),
             slip,
         }
     }
@@ -408,7 +408,6 @@ impl Roller {
     pub fn linearize(&self) -> Linearization<'_> {
         let x = self.held();
         let mut point = self.point_at(self.time, &x);
-        point.strain = self.value(Key::Strain, self.time).map(|(x, _)| x);
         if let Some(s) = point.slip.as_mut() {
             s.used = Some(contact::traction_used(&self.params, &s.state, s.contact.mu_eff));
         }

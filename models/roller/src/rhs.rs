@@ -6,7 +6,7 @@
 
 use crate::contact::{self, Contact, Dual, Friction};
 use crate::number::{Number, Tangent};
-use crate::parameters::{Inputs, Parameters, PORTS};
+use crate::parameters::{Inputs, Parameters, PORTS, UNWINDER};
 use crate::physics;
 use crate::roll::{self, Roll};
 use crate::state::States;
@@ -26,7 +26,7 @@ pub struct Point {
     pub control: control::Reads,
     /// The carriage's load table [R4] (0 without one).
     pub load: f64,
-    /// The leaving strain's table, where there is one.
+    /// The leaving strain's table, where there is one (an unwinder's web leaves its roll at it).
     pub strain: Option<f64>,
     pub slip: Option<Slip>,
 }
@@ -108,6 +108,7 @@ fn loop_law<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>,
         omega: x.omega,
         radius: x.radius,
         inertia,
+        strain: roll_strain(p, at.strain, &u.strain_a),
         measured: u.measured,
         dancer_y: u.dancer_y,
         integrator: x.loop_integrator,
@@ -122,7 +123,7 @@ fn loop_law<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>,
 fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, t: &Torques<N>) -> N {
     match at.prescribed {
         Some((_, slope)) => {
-            let omega_rate = physics::omega_rate_at_speed(slope, t.surface_speed, x.radius, roll::radius_rate(p, x.radius, t.surface_speed));
+            let omega_rate = physics::omega_rate_at_speed(slope, t.surface_speed, x.radius, radius_rate(p, at, u, x.radius, t.surface_speed));
             physics::speed_drive_torque(t.inertia, omega_rate, t.web, t.bearing)
         }
         None => commanded(p, at, x, u, t.loop_law.torque, t.surface_speed),
@@ -153,7 +154,7 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
     let (omega, r) = (x.omega, x.radius);
     let t = torques(p, at, x, u, modes);
     let (v, torque) = (t.surface_speed, drive_torque(p, at, x, u, &t));
-    let radius_rate = roll::radius_rate(p, r, v);
+    let radius_rate = radius_rate(p, at, u, r, v);
     let (omega_rate, surface_rate) = match at.prescribed {
         Some((_, slope)) => (physics::omega_rate_at_speed(slope, v, r, radius_rate), N::constant(slope)),
         None => {
@@ -221,6 +222,28 @@ pub fn strain_leaving<N: Number>(p: &Parameters, table: Option<f64>, strain: &[N
         None if p.layered => strain[physics::layer_inlet(p, outlet)],
         None => physics::merged_strain(p, strain),
     }
+}
+
+/// The strain of the web where it meets the roll [R3] (0 where no roll winds): an unwinder's
+/// leaving strain (its table, else its inlet's), a winder's arriving web's, merged [R5] where several
+/// arrive, layers [R9] too: 1/(1+eps) is then the mass-weighted mean of the webs' 1/(1+eps_i), so the
+/// roll gains exactly their mass.
+#[inline]
+pub fn roll_strain<N: Number>(p: &Parameters, table: Option<f64>, strain: &[N; PORTS]) -> N {
+    match p.roll {
+        _ if !p.winding() => N::default(),
+        UNWINDER => strain_leaving(p, table, strain, 0),
+        _ => physics::merged_strain(p, strain),
+    }
+}
+
+/// dr/dt [R3] at the roller's point, radius r and surface speed v.
+#[inline(always)]
+fn radius_rate<N: Number>(p: &Parameters, at: &Point, u: &Inputs<N>, radius: N, speed: N) -> N {
+    if !p.winding() {
+        return N::default();
+    }
+    roll::radius_rate(p, radius, speed, roll_strain(p, at.strain, &u.strain_a))
 }
 
 /// The load cell's reading, load_cell.F: at its own wrap `load_cell.wrap` (0: none, F = 0).

@@ -1,7 +1,9 @@
 //! The roll on the roller and its bearings: [R3] (a roll being wound or unwound: r and J move
 //! with the web that passes) and the bearings' torque in [R1].
 //!
-//! [R3]  d(r^2)/dt = s*h_w*v/pi, J = J0 + (pi/2)*rho*w*(r^4 - r0^4)   (s = -1 unwinder, +1 winder)
+//! [R3]  d(r^2)/dt = s*h_w*v/(pi*(1+eps)), J = J0 + (pi/2)*rho*w*(r^4 - r0^4)   (s = -1 unwinder, +1 winder)
+//!       eps: the web's strain at the roll (`rhs::roll_strain`), so that the roll counts the web's
+//!       unstretched length and its mass rho*w*pi*r^2 moves at the web's mass flow rho_l*v/(1+eps).
 
 use crate::number::Number;
 use crate::parameters::Parameters;
@@ -43,14 +45,15 @@ impl Roll {
     }
 }
 
-/// dr/dt [R3] at radius r and surface speed v (0 where no roll winds). J moves with r, but [R1]
-/// needs no dJ/dt: the web carries off (or brings) the angular momentum J'*omega itself.
+/// dr/dt [R3] at radius r, surface speed v and the web's strain eps at the roll (0 where no roll
+/// winds). J moves with r, but [R1] needs no dJ/dt: the web carries off (or brings) the angular
+/// momentum J'*omega itself.
 #[inline]
-pub fn radius_rate<N: Number>(p: &Parameters, radius: N, speed: N) -> N {
+pub fn radius_rate<N: Number>(p: &Parameters, radius: N, speed: N, strain: N) -> N {
     if !p.winding() {
         return N::default();
     }
-    speed * (p.roll_sign() * p.wound_thickness) / (radius * (2.0 * PI))
+    speed * (p.roll_sign() * p.wound_thickness) / (radius * (strain + 1.0) * (2.0 * PI))
 }
 
 /// The bearings' torque on the roller [R1]: its viscous damping, -b*omega.
@@ -67,10 +70,10 @@ pub fn bearing_damping(p: &Parameters) -> Option<f64> {
     Some(p.damping)
 }
 
-/// [R3] after a piece in which the surface moved `travel` metres: the new
-/// radius squared (None: the roll ran empty).
-pub fn wound_radius(p: &Parameters, radius: f64, travel: f64) -> Option<f64> {
-    let r2 = radius * radius + p.roll_sign() * p.wound_thickness * travel / PI;
+/// [R3] after a piece in which the surface moved `travel` metres with the web at strain `strain`
+/// there (travel/(1+strain) metres of unstretched web): the new radius (None: the roll ran empty).
+pub fn wound_radius(p: &Parameters, radius: f64, travel: f64, strain: f64) -> Option<f64> {
+    let r2 = radius * radius + p.roll_sign() * p.wound_thickness * travel / ((1.0 + strain) * PI);
     (r2 > 0.0).then(|| r2.sqrt())
 }
 
@@ -80,11 +83,20 @@ mod tests {
     use crate::parameters::{UNWINDER, WINDER};
 
     #[test]
-    fn a_winder_grows_by_thickness_times_travel_over_pi() {
+    fn a_winder_grows_by_thickness_times_unstretched_travel_over_pi() {
         let p = Parameters { roll: WINDER, wound_thickness: 50e-6, inertia: 2.0, radius: 0.2, ..Parameters::default() };
-        let r = wound_radius(&p, 0.1, 100.0).unwrap();
-        assert!((r * r - (0.01 + 50e-6 * 100.0 / PI)).abs() < 1e-16);
+        // 100 m of surface at a strain of 0.25 is 80 m of unstretched web: r^2 grows by h*80/pi.
+        let r = wound_radius(&p, 0.1, 100.0, 0.25).unwrap();
+        assert!((r * r - (0.01 + 50e-6 * 80.0 / PI)).abs() < 1e-16);
         let q = Parameters { roll: UNWINDER, ..p };
-        assert_eq!(wound_radius(&q, 0.01, 100.0), None);
+        assert_eq!(wound_radius(&q, 0.01, 100.0, 0.0), None);
+    }
+
+    /// The rate is the piece's limit: d(r^2)/dt = 2 r r' = s h v/(pi (1 + eps)).
+    #[test]
+    fn the_radius_rate_is_the_unstretched_flow() {
+        let p = Parameters { roll: UNWINDER, wound_thickness: 1e-4, ..Parameters::default() };
+        let (r, v, eps) = (0.5, 10.0, 2e-3);
+        assert!((2.0 * r * radius_rate(&p, r, v, eps) + 1e-4 * v / (PI * (1.0 + eps))).abs() < 1e-18);
     }
 }

@@ -69,6 +69,8 @@ impl Roller {
             (self.integrator, self.motor, self.dancer, self.carriage) = (y[2], y[3], y[4], carriage);
             return Ok(());
         };
+        // The web's strain at the roll [R3]: the inputs are held, a table read at the piece's middle.
+        let strain = rhs::roll_strain(p, self.value(Key::Strain, t + 0.5 * h).map(|(x, _)| x), &self.inputs.strain_a);
         let (omega, travel) = match prescribed {
             _ if p.traction => {
                 // [R6]-[R7] are nonlinear and stiff (the friction's slope over the web's small mass):
@@ -88,13 +90,13 @@ impl Roller {
                 // At the piece's mean radius: r moves linearly at a steady omega [R3], so that a roll
                 // turning steadily winds exactly (one that would empty within the piece: its start's,
                 // and `wound_radius` says it ran empty).
-                let radius = Some(r + 0.5 * roll::radius_rate(p, r, r * mean) * h).filter(|&m| m > 0.0).unwrap_or(r);
+                let radius = Some(r + 0.5 * roll::radius_rate(p, r, r * mean, strain) * h).filter(|&m| m > 0.0).unwrap_or(r);
                 (next, radius * mean * h)
             }
         };
         let (mut omega, mut roll) = (omega, self.roll);
         if p.winding() {
-            let radius = roll::wound_radius(p, r, travel).ok_or_else(|| {
+            let radius = roll::wound_radius(p, r, travel, strain).ok_or_else(|| {
                 FmiError::discard(format!("the roll ran empty: its radius {r} m would fall to 0 after {travel} m of web; check R and wound.thickness"))
             })?;
             let inertia = roll.inertia_at(p, radius);

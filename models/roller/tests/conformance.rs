@@ -8,7 +8,8 @@ use fmi_testkit::conformance::{Hints, Point};
 /// and their strains the merged web_b.eps [R5]; a web that may slip on a wrap
 /// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides, running forward with
 /// the nip at the entry and back with it at the exit; a drive's loop; a brake;
-/// an ideal speed drive on its input; a dancer loop [R13], without a lag (its position reaches tau) and with one.
+/// an ideal speed drive on its input; a dancer loop [R13], without a lag (its position reaches tau) and with one;
+/// a speed-driven winder of four webs, whose r' reads their merged strain [R3] (it reaches tau).
 fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
     let nip = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/traction_nip.json");
@@ -59,6 +60,7 @@ fn hints() -> Hints {
             Point { values: lagged_loop, texts: vec![] },
             Point { values: vec![], texts: vec![("profile", speed_drive.into())] },
             Point { values: all_ports, texts: vec![("profile", speed_drive.into())] },
+            Point { values: vec![("roll", 2.0), ("wound.thickness", 1e-3), ("wound.density", 1000.0), ("inlets", 4.0)], texts: vec![("profile", speed_drive.into())] },
             Point { values: slipping.clone(), texts: vec![("profile", nip.into())] },
             // The same web running back, the nip at the exit: the air film forms at web_b [R8].
             Point { values: [slipping, vec![("v_start", -12.0), ("nip.side", 1.0)]].concat(), texts: vec![("profile", nip.into())] },

@@ -15,7 +15,9 @@ first roller (web_b.eps); spans on a dancer take the height of their moving
 end from its tangent points (web_a.y, web_b.y; the x are constants).
 A nip where webs merge and a slitter that splits the web use the Roller's
 extra ports (web_a2..4, web_b2..4; docs/merge-split.md, "The FMUs' wiring"):
-there the strain goes through the roller (web_a<k>.eps in, web_b<j>.eps out).
+there the strain goes through the roller (web_a<k>.eps in, web_b<j>.eps out). A winder
+reads the strain of the web it winds (web_a.eps <- span.web_b.eps): its roll counts the web's
+unstretched length [R3].
 A span that carries a laminate is a ConvertingSpan per layer, `NAME.<label>`,
 side by side between the same rollers, each at a port of its own (the rollers
 `layered`: each outlet passes one inlet's strain on, [R6]); a layer takes its
@@ -357,9 +359,10 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
         ports[n.name] = roller_ports(scene, n)
         if _ports(scene, n, "web_a", ins) > 1:
             comp.start["inlets"] = len(ports[n.name][0])
-            if len(ins) > 1 and not any(sp.layered for sp in outs):  # webs merged into one [R5]
+            merged = len(ins) > 1 and not any(sp.layered for sp in outs)  # webs merged into one [R5]
+            if merged or getattr(n, "wound", None) is not None:  # [R5]'s weights: also the mass a roll winds [R3]
                 comp.start.update({f"{port('web_a', k)}.m": float(m) for k, m in enumerate(scene.inlet_masses(n), 1)})
-            else:  # the webs stay layers, each passed on at its port
+            if not merged:  # the webs stay layers, each passed on at its port
                 comp.start["layered"] = True
         if _ports(scene, n, "web_b", outs) > 1:
             comp.start["outlets"] = len(ports[n.name][1])
@@ -406,7 +409,7 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
             else:
                 connect(before[0].name, "web_b.eps", name, "web_a.eps")
             connect(down.name, f"{b}.v", name, "web_b.v")
-            if through(down):
+            if through(down) or getattr(down, "wound", None) is not None:  # a roll winds the web's unstretched length [R3]
                 connect(name, "web_b.eps", down.name, f"{b}.eps")
             if isinstance(down, Dancer):
                 connect(down.name, "web_a.y", name, "frame_b.y")

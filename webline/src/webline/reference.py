@@ -156,6 +156,14 @@ class LineODE:
         w = node.wound
         return J + 0.5 * np.pi * w.density * w.width * (r**4 - R**4)
 
+    def radius_rate(self, node, t, z, R, v):
+        """dr/dt = s h v/(2 pi r (1 + eps)) [R3] of a roll whose surface moves at v: it counts the web's
+        unstretched length, eps the strain of the web where it meets the roll (an unwinder's leaving,
+        a winder's arriving, merged with the mass weights of [R5] where several arrive: `entry`), so
+        that the roll's mass moves at the web's mass flow rho_l v/(1 + eps)."""
+        sign = -1.0 if node.type == "unwinder" else 1.0
+        return sign * node.wound.thickness * v / (2.0 * np.pi * R * self.entry(node, t, z))
+
     def torque(self, node, t, z):
         d = getattr(node, "drive", None)
         if d is None:  # a dancer's roller is an idler
@@ -175,7 +183,7 @@ class LineODE:
         limit(u), or with a lag tau_m' = (limit(u) - tau_m)/lag. The limit is the identity up to 95 % of
         it and bends exponentially into it over the last 5 %; ff = J*d(v_ref/R)/dt, the inertia torque of
         the speed reference (its own for a speed loop, else the line's): J*a_ref/R, and on a roll being
-        wound - J*R_rate*v_ref/R^2 with R_rate of [R3] at v_ref."""
+        wound - J*R_rate*v_ref/R^2 with R_rate of [R3] at v_ref (and the strain the roll sees)."""
         lp = node.drive.loop
         R = self.radius(node, z)
         J = self.roll_inertia(node, R) if node.name in self.i_r else self.inertia[node.name][0]
@@ -200,8 +208,7 @@ class LineODE:
             v_ref, a_ref = self.pv(reference, t), self.pslope(reference)
             ff = J * a_ref / R
             if node.name in self.i_r:
-                R_rate = (-1.0 if node.type == "unwinder" else 1.0) * node.wound.thickness * v_ref / (2.0 * np.pi * R)
-                ff -= J * R_rate * v_ref / R**2
+                ff -= J * self.radius_rate(node, t, z, R, v_ref) * v_ref / R**2
         i_int, i_motor = self.i_loop[node.name]
         u = lp.kp * e + z[i_int] + ff
         limited = u
@@ -274,11 +281,10 @@ class LineODE:
         for node in self.movers:
             J, R, b = self.inertia[node.name]
             omega = z[self.i_omega[node.name]]
-            if node.name in self.i_r:  # [R3]: d(r^2)/dt = s h v/pi, J(r); [R1] balances J domega/dt
+            if node.name in self.i_r:  # [R3]: d(r^2)/dt = s h v/(pi (1 + eps)), J(r); [R1] balances J domega/dt
                 R = z[self.i_r[node.name]]
                 J = self.roll_inertia(node, R)
-                sign = -1.0 if node.type == "unwinder" else 1.0
-                dz[self.i_r[node.name]] = sign * node.wound.thickness * omega / (2.0 * np.pi)  # s h v/(2 pi r), v = r omega
+                dz[self.i_r[node.name]] = self.radius_rate(node, t, z, R, R * omega)
             # Every web leaving pulls forward, every web arriving pulls back (a nip, a slitter: several).
             F_down = sum(q[sp.name]["T"] for sp in self.outs[node.name])
             F_up = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[node.name])

@@ -211,7 +211,8 @@ class Traction:
 @dataclass
 class Wound:
     """The web an unwinder's roll loses or a winder's gains [R3]: the roll's radius and inertia move
-    with it. thickness is the build-up per turn (the web's caliper plus the air wound in with it);
+    with it. thickness is the build-up per turn (the web's caliper plus the air wound in with it) of
+    unstretched web: the roll counts the web's unstretched length;
     width defaults to the roll's web's, density to the web's mass per length over width*thickness
     (None until the line is read)."""
 
