@@ -5,7 +5,7 @@ use crate::description::{Real, DESCRIPTION};
 use crate::drive::{self, Drive};
 use crate::model::Roller;
 use crate::parameters::STATES;
-use crate::roll::Roll;
+use crate::roll::{self, Roll};
 use crate::state::States;
 use fmi_core::{Compiled, EventUpdate, Experiment, FmiError, FmiResult, Jacobian, Model, Resources, StateReader, StateWriter};
 use solver::CompensatedSum;
@@ -86,7 +86,7 @@ impl Model for Roller {
         };
         self.profile = profile;
         self.start(experiment.start_time);
-        Ok(unmatched.into_iter().collect())
+        Ok(unmatched.into_iter().chain(roll::massless_roll(&self.params)).collect())
     }
 
     fn provisional_state(&mut self) {

@@ -56,6 +56,20 @@ pub fn radius_rate<N: Number>(p: &Parameters, radius: N, speed: N, strain: N) ->
     speed * (p.roll_sign() * p.wound_thickness) / (radius * (strain + 1.0) * (2.0 * PI))
 }
 
+/// The warning for a roll that winds with no density: its radius moves while J stays J_start, so the
+/// angular momentum and mass the web carries are not the roll's ([R1], [R3]); legal (a massless wound
+/// web), but rarely meant.
+pub fn massless_roll(p: &Parameters) -> Option<String> {
+    (p.winding() && p.wound_density == 0.0).then(|| {
+        format!(
+            "wound.density = 0 with wound.thickness = {} m: the roll's radius moves but its inertia stays J = {} kg.m2, \
+             so the web it winds carries momentum and mass the roll does not lose or gain; give wound.density \
+             (the web's mass per length / (wound.width * wound.thickness) keeps both)",
+            p.wound_thickness, p.inertia
+        )
+    })
+}
+
 /// The bearings' torque on the roller [R1]: its viscous damping, -b*omega.
 #[inline]
 pub fn bearing_torque<N: Number>(p: &Parameters, omega: N) -> N {

@@ -160,6 +160,24 @@ fn a_free_winder_keeps_its_speed_as_its_inertia_grows() {
     assert!((r - exact).abs() < 1e-13 * exact, "{r} {exact}");
 }
 
+/// A roll that winds with no density keeps J while r moves: legal, but not the web's momentum or
+/// mass, so initialization says so (once, naming both parameters), and says nothing with a density.
+#[test]
+fn a_roll_that_winds_without_density_warns_when_initialized() {
+    let warnings = |density: f64| {
+        let mut m = Roller::at_start_values();
+        m.set_integer(Integer::roll.vr(), 1).unwrap();
+        for (var, x) in [(Real::wound_thickness, 1e-4), (Real::wound_density, density)] {
+            m.set_real(var.vr(), x).unwrap();
+        }
+        m.initialize(&Experiment::default(), &Resources::default()).unwrap()
+    };
+    let said = warnings(0.0);
+    assert_eq!(said.len(), 1, "{said:?}");
+    assert!(said[0].starts_with("wound.density = 0 with wound.thickness = 0.0001 m"), "{}", said[0]);
+    assert!(warnings(1390.0).is_empty());
+}
+
 #[test]
 fn a_dancer_carriage_follows_the_damped_oscillator() {
     // m y'' = load - F_a - F_b - d y' - k (y - y0); constant forces from rest.
