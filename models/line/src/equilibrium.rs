@@ -43,7 +43,7 @@ fn wound_rolls(ode: &Ode) -> Vec<(usize, usize)> {
     (0..net.len())
         .filter_map(|k| {
             let s = net.states[k];
-            let radius = ode.parts[s.part].wound_speed(s.index)?;
+            let radius = ode.parts[s.part].wound_roll_radius(s.index)?;
             Some((k, at(s.part, radius)?))
         })
         .collect()

@@ -275,7 +275,7 @@ impl Part {
 
     /// Where state `index` is the angular speed of a roll being wound, its radius's state index: a
     /// steady state holds that roll's surface speed, so omega moves with the radius ([R1], [R3]).
-    pub fn wound_speed(&self, index: usize) -> Option<usize> {
+    pub fn wound_roll_radius(&self, index: usize) -> Option<usize> {
         match self {
             Part::Roller(r) if r.params.winding() && !r.speed_prescribed() && index == State::Omega.index() => Some(State::Radius.index()),
             _ => None,

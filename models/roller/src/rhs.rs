@@ -240,9 +240,7 @@ pub fn roll_strain<N: Number>(p: &Parameters, table: Option<f64>, strain: &[N; P
 /// dr/dt [R3] at the roller's point, radius r and surface speed v.
 #[inline(always)]
 fn radius_rate<N: Number>(p: &Parameters, at: &Point, u: &Inputs<N>, radius: N, speed: N) -> N {
-    if !p.winding() {
-        return N::default();
-    }
+    // Both are 0 where no roll winds, and roll_strain returns before it merges anything.
     roll::radius_rate(p, radius, speed, roll_strain(p, at.strain, &u.strain_a))
 }
 
