@@ -66,20 +66,24 @@ impl Family {
 }
 
 /// The phases in which `fmi2Set*` may set a variable (FMI 2.0, 2.2.7, the
-/// table for co-simulation), one bit per `Phase`: inputs always; parameters
+/// table for co-simulation, and 3.2.3 for model exchange), one bit per `Phase`:
+/// inputs always, but in continuous-time mode only continuous ones; parameters
 /// before initialization when `initial` is exact or approx, during it when
-/// exact, afterwards only when tunable; constants and computed values never.
+/// exact, afterwards only when tunable, and never in continuous-time mode;
+/// constants and computed values never.
 pub const fn settable_in(causality: Causality, variability: Variability, initial: Initial) -> u8 {
     if matches!(variability, Variability::Constant) {
         return 0;
     }
+    let continuous = Phase::ContinuousTimeMode.bit();
     match causality {
-        Causality::Input => u8::MAX,
+        Causality::Input if matches!(variability, Variability::Continuous) => u8::MAX,
+        Causality::Input => u8::MAX & !continuous,
         Causality::Parameter => {
             let before = if matches!(initial, Initial::Exact | Initial::Approx) { Phase::Instantiated.bit() } else { 0 };
             let during = if matches!(initial, Initial::Exact) { Phase::InitializationMode.bit() } else { 0 };
             let after = if matches!(variability, Variability::Tunable) {
-                !(Phase::Instantiated.bit() | Phase::InitializationMode.bit())
+                !(Phase::Instantiated.bit() | Phase::InitializationMode.bit() | continuous)
             } else {
                 0
             };

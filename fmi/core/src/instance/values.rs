@@ -130,7 +130,7 @@ impl<M: Model> Instance<M> {
         if v.settable_in & self.phase.bit() != 0 {
             Ok(())
         } else {
-            Err(not_settable(call, v, self.standard.state(self.phase)))
+            Err(not_settable(call, v, self.phase, self.standard.state(self.phase)))
         }
     }
 
@@ -166,7 +166,7 @@ impl<M: Model> Instance<M> {
         for (&vr, &x) in vrs.iter().zip(values) {
             let slot = slot_in(d, call, vr, Family::Real)?;
             if slot.settable_in & self.phase.bit() == 0 {
-                return Err(not_settable(call, &d.variables[slot.row as usize], self.standard.state(self.phase)));
+                return Err(not_settable(call, &d.variables[slot.row as usize], self.phase, self.standard.state(self.phase)));
             }
             // Parameters are range-checked when initialization ends (they
             // may pass through odd values while a user sets them one by
@@ -286,8 +286,12 @@ fn wrong_variable(call: CallName, vr: u32, found: Option<&Variable>, family: Fam
 }
 
 #[cold]
-fn not_settable(call: CallName, v: &Variable, state: String) -> FmiError {
+fn not_settable(call: CallName, v: &Variable, phase: Phase, state: String) -> FmiError {
     let why = match v.causality {
+        Causality::Parameter if phase == Phase::ContinuousTimeMode => {
+            format!("it is a tunable parameter and cannot be set in {state} (in Model Exchange only in event mode)")
+        }
+        Causality::Input => format!("it is an input of variability {:?} and cannot be set in {state} (only continuous inputs can)", v.variability),
         Causality::Parameter => format!(
             "it is a {} parameter and cannot be set in {state} (only before initialization ends)",
             if v.variability == Variability::Fixed { "fixed" } else { "tunable" },

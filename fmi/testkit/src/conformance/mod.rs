@@ -92,6 +92,7 @@ macro_rules! conformance_tests {
             unknown_value_references_are_refused,
             wrong_type_is_refused,
             fixed_parameters_after_init_and_outputs_cannot_be_set,
+            model_exchange_sets_follow_event_and_continuous_time_mode,
             set_is_atomic,
         );
         $crate::__conformance_module!($model; stepping:

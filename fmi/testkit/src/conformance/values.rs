@@ -396,6 +396,33 @@ pub fn wrong_type_is_refused<M: Tested>() {
     }
 }
 
+/// Proves FMI 2.0's rule for sets in Model Exchange (3.2.3): in event mode inputs and tunable
+/// parameters may be set; in continuous-time mode only continuous inputs, every other input and
+/// every tunable parameter is refused with one line naming it and "continuous-time mode". Each
+/// set gives the variable its own value, so only the phase decides.
+pub fn model_exchange_sets_follow_event_and_continuous_time_mode<M: Tested>() {
+    if !M::description().model_exchange {
+        return;
+    }
+    let d = M::description();
+    let tunable = d.variables.iter().filter(|v| v.causality == Causality::Parameter && v.variability == Variability::Tunable);
+    let inputs = d.variables.iter().filter(|v| v.causality == Causality::Input);
+    for v in tunable.chain(inputs) {
+        let fmu = Fmu::<M>::with(&Setup { fmu_type: ME, ..Setup::default() });
+        fmu.init(0.0);
+        let value = fmu.get(&v.name).unwrap();
+        assert_eq!(set_any(&fmu, v, value), OK, "{} in event mode: {:?}", v.name, fmu.take_logs());
+        assert_eq!(fmu.call(Api::EnterContinuousTimeMode), OK);
+        fmu.take_logs();
+        if v.causality == Causality::Input && v.variability == Variability::Continuous {
+            assert_eq!(set_any(&fmu, v, value), OK, "{} in continuous-time mode: {:?}", v.name, fmu.take_logs());
+        } else {
+            assert_eq!(set_any(&fmu, v, value), ERROR, "{} in continuous-time mode", v.name);
+            assert_one_error(&fmu.take_logs(), &[&format!("cannot set {}", v.name), "continuous-time mode"]);
+        }
+    }
+}
+
 /// Sets `v` to a harmless value of its type.
 fn set_any<M: Tested>(fmu: &Fmu<M>, v: &Variable, x: f64) -> i32 {
     match v.kind {
