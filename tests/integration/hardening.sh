@@ -9,6 +9,7 @@
 #   bash tests/integration/hardening.sh --afl S    coverage-guided fuzzing with cargo-afl (AFL++)
 #                                      for S seconds, then its queue and crashes are
 #                                      replayed through the oracle
+#   bash tests/integration/hardening.sh --fuzz     the CI size's fuzzing alone (steps 3 and 9)
 #
 # What runs (sizes: CI / --full):
 #   1. the packaged FMU's .so: glibc <= 2.17, only glibc + libgcc_s, no test hook
@@ -16,7 +17,9 @@
 #   2. panic boundary through the C API (cargo test --features test-hooks)
 #   3. each model's fuzz target (the harness of fmi/fuzz; the span's in fuzz/, the
 #      Roller's in models/roller/fuzz), property-based, --strict: 50,000 / 1,000,000
-#      sequences; its FMI 3 mode (--fmi3): 5,000 / 1,000,000
+#      sequences; its FMI 3 mode (--fmi3): 5,000 / 1,000,000; the Roller's FMI 2.0 run
+#      fails with fewer than 100 stick<->slide transitions in Co-Simulation or in Model
+#      Exchange (--min-transitions)
 #   4. (--full) the same harness built with AddressSanitizer (LeakSanitizer
 #      included): 200,000 sequences; FMI 3: 100,000 (in CI, valgrind's run of
 #      step 5 and the ASan runs of step 6 watch the memory)
@@ -45,11 +48,13 @@ export RUST_BACKTRACE=0
 
 MODE=ci
 AFL_SECONDS=0
+FUZZ_ONLY=false
 case "${1:-}" in
     --full) MODE=full ;;
     --afl) MODE=afl; AFL_SECONDS="${2:?--afl needs a number of seconds}" ;;
+    --fuzz) FUZZ_ONLY=true ;;
     "") ;;
-    *) echo "usage: $0 [--full | --afl SECONDS]" >&2; exit 2 ;;
+    *) echo "usage: $0 [--full | --afl SECONDS | --fuzz]" >&2; exit 2 ;;
 esac
 if [ "$MODE" = full ]; then
     SEQ=1000000 SEQ_ASAN=200000 SEQ_VALGRIND=5000 CYCLES_VALGRIND=1000 PANIC_VALGRIND=200
@@ -74,6 +79,11 @@ START=$SECONDS
 MODELS=(span roller)
 declare -A FUZZ_TARGET=([span]=converting-span-fuzz [roller]=roller-fuzz)
 declare -A NAME=([span]=ConvertingSpan [roller]=Roller)
+# The Roller's fuzz target follows its web's contact (traction): its FMI 2.0 run must see it
+# stick and slide by turns, in both interfaces.
+declare -A TRANSITIONS=([span]="" [roller]="--min-transitions 100")
+# The lines of a run's totals the summary keeps.
+totals() { grep -E '^fuzzed|by state|random calls|^  Model Exchange:|stick<->slide' "$1" | sed 's/^ *//'; }
 fuzz_of() { echo "target/fuzz/fuzz/fuzz_sequences-$1"; }
 build_fuzz() { # MODEL: one target folder for both (their crates are shared), each binary copied aside
     cargo build --profile fuzz --quiet -p "${FUZZ_TARGET[$1]}" --target-dir target/fuzz
@@ -122,6 +132,7 @@ EOF
     exit 0
 fi
 
+if ! $FUZZ_ONLY; then
 step "1. portable binary (packaged FMU)"
 [ -n "${CONVERTING_SPAN_PACKAGED:-}" ] || python3 fmu/package.py # tests/run.sh has packaged
 "$PY" -m pytest tests/integration/hardening -q -s -p no:cacheprovider | tee "$OUT/portable.log"
@@ -133,15 +144,17 @@ step "2. panic boundary (test-only hook, separate target directory): the span, t
 # (the tests' profile: release speed without the LTO a test binary would redo; step 7 checks the LTO build)
 cargo test --profile cross-test --quiet --features test-hooks --target-dir target/test-hooks --test panic_boundary
 cargo test --profile cross-test --quiet -p roller --features test-hooks --target-dir target/test-hooks --test panic_boundary
+fi
 
 for model in "${MODELS[@]}"; do
     step "3. fuzz harness, strict (a non-finite output after accepted values fails too), ${NAME[$model]}: $SEQ sequences"
     build_fuzz "$model"
     fuzz=$(fuzz_of "$model")
-    "$fuzz" --sequences "$SEQ" --strict | tee "$OUT/fuzz-$model.log"
-    note "fuzz ${NAME[$model]}: $(grep '^fuzzed' "$OUT/fuzz-$model.log")"
+    # shellcheck disable=SC2086
+    "$fuzz" --sequences "$SEQ" --strict ${TRANSITIONS[$model]} | tee "$OUT/fuzz-$model.log"
+    note "fuzz ${NAME[$model]}: $(totals "$OUT/fuzz-$model.log")"
     "$fuzz" --fmi3 --sequences "$SEQ3" --strict | tee "$OUT/fuzz3-$model.log"
-    note "fuzz ${NAME[$model]}: $(grep '^fuzzed' "$OUT/fuzz3-$model.log")"
+    note "fuzz ${NAME[$model]}: $(totals "$OUT/fuzz3-$model.log")"
 
     [ "$MODE" = full ] || continue
     step "4. fuzz harness with AddressSanitizer, ${NAME[$model]}: $SEQ_ASAN sequences"
@@ -156,6 +169,7 @@ for model in "${MODELS[@]}"; do
     note "fuzz ${NAME[$model]} under ASan: $(grep '^fuzzed' "$OUT/fuzz3-asan-$model.log"), no ASan/LSan report"
 done
 
+if ! $FUZZ_ONLY; then
 VALGRIND=(valgrind --tool=memcheck --leak-check=full --show-leak-kinds=definite,indirect,possible
     --errors-for-leak-kinds=definite,indirect,possible --error-exitcode=99)
 valgrind_summary() { # log file -> one line
@@ -252,6 +266,8 @@ EOF
         "its own failed checks: $(grep -c '^check,.*,0$' "$OUT/importer.out" || true)"
 fi
 
+fi
+
 # The Line: its fuzz target line-fuzz in the Line's own workspace (models/line/fuzz;
 # in this one the span's `fmu` feature, its C API, would be unified into the Line),
 # over the Line's test line.
@@ -265,9 +281,9 @@ line_fuzz() { # PROFILE TARGET-DIR [cargo options...]
 line_fuzz cross-test target/line
 LINE_FUZZ=target/line/cross-test/fuzz_sequences
 "$LINE_FUZZ" --sequences "$LINE_SEQ" --strict | tee "$OUT/fuzz-line.log"
-note "fuzz Line: $(grep '^fuzzed' "$OUT/fuzz-line.log")"
+note "fuzz Line: $(totals "$OUT/fuzz-line.log")"
 "$LINE_FUZZ" --fmi3 --sequences "$LINE_SEQ3" --strict | tee "$OUT/fuzz3-line.log"
-note "fuzz Line: $(grep '^fuzzed' "$OUT/fuzz3-line.log")"
+note "fuzz Line: $(totals "$OUT/fuzz3-line.log")"
 if [ "$MODE" = full ]; then
     RUSTC_BOOTSTRAP=1 RUSTFLAGS="-Zsanitizer=address" line_fuzz fuzz target/fuzz-asan-line --target x86_64-unknown-linux-gnu
     asan=target/fuzz-asan-line/x86_64-unknown-linux-gnu/fuzz/fuzz_sequences

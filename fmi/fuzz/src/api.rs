@@ -48,6 +48,15 @@ unsafe extern "C" fn capture3(env: *mut c_void, status: i32, category: *const c_
     log.lines.lock().unwrap().push(line);
 }
 
+/// What fmi2NewDiscreteStates (fmi3UpdateDiscreteStates) answers that the harness uses.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Discrete {
+    /// newDiscreteStatesNeeded (discreteStatesNeedUpdate): iterate again.
+    pub needed: bool,
+    pub terminate: bool,
+    pub next_event: Option<f64>,
+}
+
 /// What `fmi3Instantiate*` is called with.
 pub struct Instantiate3<'a> {
     pub model_exchange: bool,
@@ -300,7 +309,36 @@ impl Api {
         }
     }
 
-    // Model Exchange, for an integrator's step (lib.rs, me_integration).
+    // Model Exchange, for the harness's integrator (model_exchange.rs).
+
+    pub unsafe fn enter_event_mode(self, c: Instance) -> i32 {
+        match self {
+            Api::Fmi2 => fmi2EnterEventMode(c),
+            Api::Fmi3 => c3::fmi3EnterEventMode(c),
+        }
+    }
+
+    /// fmi2NewDiscreteStates (fmi3UpdateDiscreteStates): the status and what it answered.
+    pub unsafe fn new_discrete_states(self, c: Instance) -> (i32, Discrete) {
+        match self {
+            Api::Fmi2 => {
+                let mut info = fmi2EventInfo::default();
+                let s = fmi2NewDiscreteStates(c, &mut info);
+                let d = Discrete {
+                    needed: info.newDiscreteStatesNeeded != 0,
+                    terminate: info.terminateSimulation != 0,
+                    next_event: (info.nextEventTimeDefined != 0).then_some(info.nextEventTime),
+                };
+                (s, d)
+            }
+            Api::Fmi3 => {
+                let (mut flags, mut next) = ([0xa5u8; 5], f64::NAN);
+                let [a, b, e, d, g] = &mut flags;
+                let s = c3::fmi3UpdateDiscreteStates(c, a, b, e, d, g, &mut next);
+                (s, Discrete { needed: flags[0] != 0, terminate: flags[1] != 0, next_event: (flags[4] != 0).then_some(next) })
+            }
+        }
+    }
 
     pub unsafe fn enter_continuous_time_mode(self, c: Instance) -> i32 {
         match self {
@@ -313,6 +351,13 @@ impl Api {
         match self {
             Api::Fmi2 => fmi2SetTime(c, t),
             Api::Fmi3 => c3::fmi3SetTime(c, t),
+        }
+    }
+
+    pub unsafe fn set_continuous_states(self, c: Instance, x: *const f64, n: usize) -> i32 {
+        match self {
+            Api::Fmi2 => fmi2SetContinuousStates(c, x, n),
+            Api::Fmi3 => c3::fmi3SetContinuousStates(c, x, n),
         }
     }
 
@@ -330,6 +375,13 @@ impl Api {
         }
     }
 
+    pub unsafe fn get_nominals(self, c: Instance, x: *mut f64, n: usize) -> i32 {
+        match self {
+            Api::Fmi2 => fmi2GetNominalsOfContinuousStates(c, x, n),
+            Api::Fmi3 => c3::fmi3GetNominalsOfContinuousStates(c, x, n),
+        }
+    }
+
     pub unsafe fn get_event_indicators(self, c: Instance, z: *mut f64, n: usize) -> i32 {
         match self {
             Api::Fmi2 => fmi2GetEventIndicators(c, z, n),
@@ -337,17 +389,20 @@ impl Api {
         }
     }
 
-    pub unsafe fn completed_integrator_step(self, c: Instance) -> i32 {
+    /// The status, and the flags enterEventMode and terminateSimulation.
+    pub unsafe fn completed_integrator_step(self, c: Instance) -> (i32, bool, bool) {
         match self {
             Api::Fmi2 => {
-                let mut flags = [0i32; 2];
+                let mut flags = [7i32; 2];
                 let [a, b] = &mut flags;
-                fmi2CompletedIntegratorStep(c, 1, a, b)
+                let s = fmi2CompletedIntegratorStep(c, 1, a, b);
+                (s, flags[0] != 0, flags[1] != 0)
             }
             Api::Fmi3 => {
-                let mut flags = [0u8; 2];
+                let mut flags = [0xa5u8; 2];
                 let [a, b] = &mut flags;
-                c3::fmi3CompletedIntegratorStep(c, 1, a, b)
+                let s = c3::fmi3CompletedIntegratorStep(c, 1, a, b);
+                (s, flags[0] != 0, flags[1] != 0)
             }
         }
     }

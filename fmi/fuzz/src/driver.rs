@@ -2,14 +2,17 @@
 //! seeded generator, one call sequence each (see lib.rs), on all cores. The
 //! `main` of every model's fuzz target (`fuzz_sequences`):
 //!
-//!   fuzz_sequences [--fmi3] [--sequences N] [--seed S] [--threads T] [--strict]
+//!   fuzz_sequences [--fmi3] [--sequences N] [--seed S] [--threads T] [--strict] [--min-transitions N]
 //!   fuzz_sequences [--fmi3] --replay FILE...  (one sequence per file, e.g. AFL crashes)
 //!
 //! `--fmi3` makes the calls through the FMI 3.0 C API instead of FMI 2.0's.
 //!
 //! Sequence k of a run is a function of (seed, k) alone, so a failure is
 //! reproduced by its file or by `--seed S --only k`. Exits 1 on a violation
-//! (and with --strict also on a finding), printing the call and the rule.
+//! (and with --strict also on a finding), printing the call and the rule;
+//! with `--min-transitions N` also where the contact of the fuzz target
+//! (`Fuzzed::contact`) made fewer than N stick<->slide transitions in
+//! Co-Simulation or in Model Exchange.
 
 use crate::{run, Api, Finding, Fuzzed, Outcome};
 use std::collections::BTreeMap;
@@ -44,7 +47,12 @@ struct Totals {
     steps_ok: u64,
     panics_caught: u64,
     deserialized_ok: u64,
-    by_state: [u64; 7],
+    by_state: [u64; 8],
+    random: [u64; 2],
+    transitions: [u64; 2],
+    /// Sequences whose Model Exchange instance went through event mode and integrator steps.
+    me_through: u64,
+    events: [u64; 3],
     findings: BTreeMap<Finding, (u64, String)>,
 }
 
@@ -58,9 +66,11 @@ impl Totals {
         self.steps_ok += o.steps_ok;
         self.panics_caught += o.panics_caught;
         self.deserialized_ok += o.deserialized_ok;
-        for k in 0..7 {
-            self.by_state[k] += o.by_state[k];
-        }
+        add(&mut self.by_state, &o.by_state);
+        add(&mut self.random, &o.random);
+        add(&mut self.transitions, &o.transitions);
+        add(&mut self.events, &o.events);
+        self.me_through += (o.me_event && o.me_step) as u64;
         let mut seen = std::collections::BTreeSet::new();
         for (f, example) in o.findings {
             if seen.insert(f.clone()) {
@@ -81,14 +91,27 @@ impl Totals {
         self.steps_ok += other.steps_ok;
         self.panics_caught += other.panics_caught;
         self.deserialized_ok += other.deserialized_ok;
-        for k in 0..7 {
-            self.by_state[k] += other.by_state[k];
-        }
+        add(&mut self.by_state, &other.by_state);
+        add(&mut self.random, &other.random);
+        add(&mut self.transitions, &other.transitions);
+        add(&mut self.events, &other.events);
+        self.me_through += other.me_through;
         for (f, (n, example)) in other.findings {
             let e = self.findings.entry(f).or_insert((0, example));
             e.0 += n;
         }
     }
+}
+
+fn add<const N: usize>(to: &mut [u64; N], from: &[u64; N]) {
+    for (a, b) in to.iter_mut().zip(from) {
+        *a += b;
+    }
+}
+
+/// Percent of `part` in `whole`.
+fn share(part: u64, whole: u64) -> f64 {
+    100.0 * part as f64 / whole.max(1) as f64
 }
 
 /// Runs the driver on `model` with the program's arguments; exits with its status.
@@ -127,6 +150,7 @@ pub fn main(model: &Fuzzed) {
         .map(|v| v.parse().expect("--threads T"))
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get() as u64));
     let failed_dir = value("--failures").unwrap_or_else(|| "target/fuzz/failures".into());
+    let min_transitions: Option<u64> = value("--min-transitions").map(|v| v.parse().expect("--min-transitions N"));
 
     let start = Instant::now();
     let stop = AtomicBool::new(false);
@@ -193,17 +217,45 @@ pub fn main(model: &Fuzzed) {
         t.statuses[0], t.statuses[1], t.statuses[2], t.statuses[3], t.steps_ok, t.panics_caught, t.deserialized_ok
     );
     let b = t.by_state;
+    let on_instances: u64 = b.iter().sum();
     println!(
-        "  calls on instances by state: {} instantiated, {} initialization mode, {} step complete, {} step failed, {} terminated, {} error, {} ME event/continuous-time mode",
-        b[0], b[1], b[2], b[3], b[4], b[5], b[6]
+        "  calls on instances by state: {} instantiated, {} initialization mode, {} step complete, {} step failed, {} terminated, {} error ({:.1} %), {} event mode, {} continuous-time mode",
+        b[0], b[1], b[2], b[3], b[4], b[5], share(b[5], on_instances), b[6], b[7]
     );
+    println!(
+        "  random calls on instances: {}, {:.1} % of them in the error state",
+        t.random[0],
+        share(t.random[1], t.random[0])
+    );
+    println!(
+        "  Model Exchange: {} sequences ({:.1} %) took an instance through event mode and integrator steps; events after initialization: {} time, {} state, {} step",
+        t.me_through,
+        share(t.me_through, t.sequences),
+        t.events[0],
+        t.events[1],
+        t.events[2]
+    );
+    if let Some(contact) = model.contact {
+        println!(
+            "  stick<->slide transitions of {}: {} in Co-Simulation, {} in Model Exchange",
+            contact.output, t.transitions[0], t.transitions[1]
+        );
+    }
     for (f, (count, example)) in &t.findings {
         println!("  finding {f:?}: in {count} sequences, e.g. {example}");
     }
     for v in &violations {
         println!("VIOLATION in {v}");
     }
-    let failed = !violations.is_empty() || (strict && !t.findings.is_empty());
+    let mut failed = !violations.is_empty() || (strict && !t.findings.is_empty());
+    if let Some(least) = min_transitions {
+        for (k, interface) in ["Co-Simulation", "Model Exchange"].iter().enumerate() {
+            if t.transitions[k] < least {
+                println!("TOO FEW stick<->slide transitions in {interface}: {}, required {least} (--min-transitions)", t.transitions[k]);
+                failed = true;
+            }
+        }
+    }
     println!("{} passed, {} failed", t.sequences, violations.len());
     std::process::exit(failed as i32);
 }

@@ -10,9 +10,15 @@
 //! changed and the checksum recomputed), instantiate/free cycles, and the
 //! test hook that makes a step panic.
 //!
-//! Beside it runs an oracle: an independent model of the FMI 2.0
-//! co-simulation state machine (FMI 2.0, section 4.2.4) and of the argument
-//! rules. After every call it checks
+//! Half of the sequences are driven: four operations in five are legal moves
+//! of an importer (`op_lifecycle_macro`): an instance of Co-Simulation or,
+//! two times in three, of Model Exchange through initialization, steps,
+//! events and integrator steps (model_exchange.rs), at times with the scene
+//! of the fuzz target (scene.rs); the random calls come between them.
+//!
+//! Beside it runs an oracle: an independent model of FMI 2.0's state
+//! machines, co-simulation's (section 4.2.4) and model exchange's (3.2.3),
+//! and of the argument rules. After every call it checks
 //!
 //! * the status: a call in a state where the standard does not allow it, or
 //!   with an invalid argument, must answer `fmi2Error` (and the instance is
@@ -25,9 +31,14 @@
 //!   (while its log category is on), and that the logger only ever gets
 //!   well-formed calls with a known category;
 //! * that every Real the FMU returns (outputs, parameters, the last
-//!   successful time) is finite, that `fmi2FreeFMUstate` sets the state to
+//!   successful time, states, derivatives, event indicators, nominals, the
+//!   next event time) is finite, that `fmi2FreeFMUstate` sets the state to
 //!   NULL, that a serialized state deserializes to one that serializes to
-//!   the same bytes, and that a restored state continues where it was saved.
+//!   the same bytes, and that a restored state continues where it was saved
+//!   (the last successful time; a Model Exchange instance's continuous states).
+//!
+//! Where the fuzz target names a contact (`Fuzzed::contact`), its mode is
+//! read after every step, and the stick<->slide transitions are counted.
 //!
 //! `run(Api::Fmi3, bytes)` makes the same calls through the `fmi3*` entry
 //! points (see api.rs) with FMI 3.0's own bad inputs beside: value counts that
@@ -48,6 +59,8 @@
 
 pub mod driver;
 mod api;
+mod model_exchange;
+mod scene;
 
 pub use api::Api;
 use api::{Instance, Int};
@@ -72,13 +85,60 @@ pub struct Fuzzed {
     pub resources: String,
     /// It cannot be instantiated without its resources (the Line's interface is in them).
     pub needs_resources: bool,
+    /// A contact whose stick/slide mode the harness follows (None: the model has none).
+    pub contact: Option<Contact>,
+    /// Values that make the contact work, taken by some of the driven instances.
+    pub scene: Option<Scene>,
 }
 
 impl Fuzzed {
     /// The model `M` (its description and whether it needs resources) with the resources folder.
     pub fn of<M: Tested>(resources: &str) -> Fuzzed {
-        Fuzzed { description: M::description(), resources: resources.to_string(), needs_resources: M::needs_resources() }
+        Fuzzed {
+            description: M::description(),
+            resources: resources.to_string(),
+            needs_resources: M::needs_resources(),
+            contact: None,
+            scene: None,
+        }
     }
+}
+
+/// A contact's mode, read from one of the model's outputs after every step: the harness counts
+/// the transitions between sticking and sliding in consecutive reads.
+#[derive(Clone, Copy, Debug)]
+pub struct Contact {
+    /// The output the mode is read from.
+    pub output: &'static str,
+    /// Whether a value of it means sliding.
+    pub sliding: fn(f64) -> bool,
+}
+
+/// Values for a driven instance to take: parameters set before initialization, and inputs that
+/// start at a value and are set again, as the instance runs, to values drawn in a range (in
+/// Co-Simulation before a step, in Model Exchange in event mode and continuous-time mode).
+/// They must be valid: an instance that takes them is still expected to initialize and step.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub parameters: Vec<(&'static str, Value)>,
+    /// (input, start value, lowest, highest)
+    pub inputs: Vec<(&'static str, f64, f64, f64)>,
+}
+
+/// A parameter's value in a scene.
+#[derive(Clone, Copy, Debug)]
+pub enum Value {
+    Real(f64),
+    Boolean(bool),
+}
+
+/// A name of the fuzzed model's interface, as a value reference (a fuzz target's own mistake
+/// stops the run).
+fn named(d: Desc, name: &str) -> &'static Variable {
+    d.variables
+        .iter()
+        .find(|v| v.name == name)
+        .unwrap_or_else(|| panic!("the fuzz target names {name:?}, which the model does not have"))
 }
 
 // ---------------------------------------------------------------- input
@@ -214,7 +274,7 @@ fn vr(d: Desc, src: &mut Source, want: impl std::ops::Fn(&Variable) -> bool) -> 
 
 // ---------------------------------------------------------------- oracle
 
-/// The co-simulation states of FMI 2.0 that this FMU can be in.
+/// The states of FMI 2.0 that this FMU can be in: co-simulation's, and model exchange's two.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum St {
     Instantiated,
@@ -223,7 +283,7 @@ pub enum St {
     StepFailed,
     Terminated,
     Error,
-    /// Model Exchange only (the oracle does not predict the ME state machine).
+    /// Model Exchange only.
     Event,
     Continuous,
 }
@@ -260,7 +320,18 @@ pub enum Fn {
     Set,
     StateOp,
     GetDirectionalDerivative,
-    ModelExchange,
+    /// Calls whose expected status each op decides alone (every state is the same to them).
+    Other,
+    // Model Exchange's functions (FMI 2.0, 3.2.3; FMI 3.0's alike).
+    EnterEventMode,
+    NewDiscreteStates,
+    EnterContinuousTimeMode,
+    CompletedIntegratorStep,
+    SetTime,
+    SetContinuousStates,
+    /// Derivatives, event indicators, continuous states.
+    GetComputed,
+    GetNominals,
     SetRealInputDerivatives,
     GetRealOutputDerivatives,
     DoStep,
@@ -268,28 +339,52 @@ pub enum Fn {
     GetStatus,
 }
 
-fn allowed(f: Fn, s: St) -> bool {
+/// Where the standard allows each call of an instance of Co-Simulation (FMI 2.0, 4.2.4) or of
+/// Model Exchange (`me`: FMI 2.0, 3.2.3; FMI 3.0's tables are the same for these calls).
+fn allowed(f: Fn, s: St, me: bool) -> bool {
     use St::*;
+    let cs = !me;
     match f {
-        Fn::SetDebugLogging | Fn::Reset | Fn::StateOp => true,
+        Fn::SetDebugLogging | Fn::Reset | Fn::StateOp | Fn::Other => true,
         Fn::SetupExperiment | Fn::EnterInit => s == Instantiated,
         Fn::ExitInit => s == Init,
+        Fn::Terminate if me => matches!(s, Event | Continuous),
         Fn::Terminate => matches!(s, StepComplete | StepFailed),
         Fn::Get | Fn::GetDirectionalDerivative => s != Instantiated,
-        Fn::Set | Fn::SetRealInputDerivatives => matches!(s, Instantiated | Init | StepComplete),
-        Fn::GetRealOutputDerivatives => matches!(s, StepComplete | StepFailed | Terminated | Error),
-        Fn::DoStep => s == StepComplete,
-        // Model Exchange functions: decided per call in op_unsupported.
-        Fn::ModelExchange => true,
+        Fn::Set if me => matches!(s, Instantiated | Init | Event | Continuous),
+        Fn::Set => matches!(s, Instantiated | Init | StepComplete),
+        Fn::SetRealInputDerivatives => cs && matches!(s, Instantiated | Init | StepComplete),
+        Fn::GetRealOutputDerivatives => cs && matches!(s, StepComplete | StepFailed | Terminated | Error),
+        Fn::DoStep => cs && s == StepComplete,
         Fn::CancelStep => false,
-        Fn::GetStatus => matches!(s, StepComplete | StepFailed | Terminated),
+        Fn::GetStatus => cs && matches!(s, StepComplete | StepFailed | Terminated),
+        Fn::EnterEventMode | Fn::SetTime => me && matches!(s, Event | Continuous),
+        Fn::NewDiscreteStates | Fn::EnterContinuousTimeMode => me && s == Event,
+        Fn::CompletedIntegratorStep | Fn::SetContinuousStates => me && s == Continuous,
+        Fn::GetComputed => me && matches!(s, Init | Event | Continuous | Terminated | Error),
+        Fn::GetNominals => me && matches!(s, Instantiated | Event | Continuous | Terminated | Error),
     }
 }
 
-/// May `v` be set in state `s`? FMI 2.0, section 2.2.7, for co-simulation.
+/// Whether an instance of this interface can be in state `s` at all: only bytes forged by the
+/// harness put it in one of the other interface's (its expected statuses are then loose).
+fn own_state(s: St, me: bool) -> bool {
+    match s {
+        St::StepComplete | St::StepFailed => !me,
+        St::Event | St::Continuous => me,
+        _ => true,
+    }
+}
+
+/// May `v` be set in state `s`? FMI 2.0, section 2.2.7 (co-simulation) and 3.2.3 (model
+/// exchange: inputs and tunable parameters in event mode, continuous inputs alone in
+/// continuous-time mode).
 fn settable(v: &Variable, s: St) -> bool {
     if v.variability == Variability::Constant {
         return false;
+    }
+    if s == St::Continuous {
+        return v.causality == Causality::Input && v.variability == Variability::Continuous;
     }
     match v.causality {
         Causality::Input => true,
@@ -334,6 +429,9 @@ struct StateInfo {
     initialized: bool,
     /// Saved by a Model Exchange instance.
     me: bool,
+    /// Its continuous states, where a Model Exchange instance had them (event and
+    /// continuous-time mode): a restored state must give them back.
+    x: Option<Vec<f64>>,
 }
 
 /// How far the oracle can predict model-dependent outcomes.
@@ -386,9 +484,15 @@ struct Slot {
     values: Values,
     /// Initialization ended since the instance was created or reset.
     initialized: bool,
-    /// A Model Exchange instance: the oracle checks arguments, statuses,
-    /// log lines, finiteness and memory, but not the ME state machine.
+    /// A Model Exchange instance (FMI 2.0's state machine of section 3.2.3).
     me: bool,
+    /// It took the model's scene (`Fuzzed::scene`).
+    scene: bool,
+    /// The contact's mode at the last read (None: not read since the instance started,
+    /// was reset or restored).
+    sliding: Option<bool>,
+    /// What the Model Exchange driver knows between its moves.
+    integration: model_exchange::Integration,
     poisoned: bool,
     armed: bool,
     /// Which of logStatusWarning/Discard/Error and logAll are on.
@@ -432,9 +536,19 @@ pub struct Outcome {
     pub panics_caught: u64,
     pub deserialized_ok: u64,
     pub findings: Vec<(Finding, String)>,
-    /// Calls made on an instance, per state it was in (St order; the last
-    /// counts the Model Exchange states).
-    pub by_state: [u64; 7],
+    /// Calls made on an instance, per state it was in (St order).
+    pub by_state: [u64; 8],
+    /// The random calls (`call_on`) made on an instance, and those of them on one in the error state.
+    pub random: [u64; 2],
+    /// Stick<->slide transitions between consecutive reads of the contact's mode
+    /// (`Fuzzed::contact`): in Co-Simulation, in Model Exchange.
+    pub transitions: [u64; 2],
+    /// A Model Exchange instance finished an event iteration, and an integrator step.
+    pub me_event: bool,
+    pub me_step: bool,
+    /// Events the Model Exchange driver handled after initialization: time events, state
+    /// events (an event indicator changed sign), step events (fmi2CompletedIntegratorStep asked).
+    pub events: [u64; 3],
 }
 
 struct Run {
@@ -453,9 +567,26 @@ struct Run {
     trace: bool,
     /// The messages the FMU logged in the last call checked by `after`.
     last_log: Vec<String>,
+    /// A driven sequence: mostly legal moves (`op_lifecycle_macro`), random calls between,
+    /// until `moves` are made (then as the others).
+    driven: bool,
+    moves: u32,
+    /// Integrator steps the Model Exchange driver has left in this sequence.
+    me_steps: u32,
+    /// Co-Simulation steps of a scene's instance left in this sequence (a sliding contact
+    /// costs its model many steps): then the instance is terminated, and reset without it.
+    scene_steps: u32,
 }
 
 const STEP_TOLERANCE: f64 = 1e-13;
+
+/// The legal moves of a driven sequence (`Run::moves`): enough to take an instance through
+/// initialization, events and steps, at a cost near the random calls' (the Line's moves are
+/// dear: each initialization solves for its steady state).
+const MOVES: u32 = 16;
+
+/// Co-Simulation steps of a scene's instances in one sequence (`Run::scene_steps`).
+const SCENE_STEPS: u32 = 16;
 
 fn fail<T>(msg: String) -> Result<T, Violation> {
     Err(Violation(msg))
@@ -568,8 +699,14 @@ pub fn run(model: &Fuzzed, api: Api, bytes: &[u8]) -> Result<Outcome, Violation>
         what: String::new(),
         trace: std::env::var_os("FUZZ_TRACE").is_some(),
         last_log: Vec::new(),
+        driven: false,
+        moves: MOVES,
+        me_steps: model_exchange::STEPS,
+        scene_steps: SCENE_STEPS,
     };
     let mut src = Source::new(bytes);
+    // Half of the sequences are driven: an importer's calls with random ones between.
+    r.driven = src.chance(128);
     let result = (|| {
         let mut ops = 0;
         while !src.is_empty() && ops < 400 {
@@ -605,6 +742,9 @@ fn new_slot(
         values: Values::Pristine,
         initialized: false,
         me: false,
+        scene: false,
+        sliding: None,
+        integration: Default::default(),
         poisoned: false,
         armed: false,
         status_log: [true; 3],
@@ -619,6 +759,18 @@ impl Slot {
         // logStatus* are on from the start whatever loggingOn says; logAll is off.
         self
     }
+
+    /// After a successful reset: the start values, as instantiated (a scene is set again).
+    fn reset(&mut self) {
+        self.st = St::Instantiated;
+        self.time = 0.0;
+        self.values = Values::Pristine;
+        self.initialized = false;
+        self.poisoned = false;
+        self.scene = false;
+        self.sliding = None;
+        self.integration = Default::default();
+    }
 }
 
 /// A component pointer for a call: mostly a live instance of a slot.
@@ -628,8 +780,18 @@ enum Target {
     Foreign,
 }
 
+/// Slot `i` holds an instance in the error state, or poisoned.
+fn failed(r: &Run, i: usize) -> bool {
+    r.slots[i].as_ref().is_some_and(|s| s.st == St::Error || s.poisoned)
+}
+
 fn target(r: &Run, src: &mut Source) -> Target {
-    let i = src.pick(2);
+    let mut i = src.pick(2);
+    // Most calls go to an instance that can still answer them: one in the error state gets a
+    // quarter of those it would (whose refusals are checked all the same).
+    if failed(r, i) && r.slots[1 - i].is_some() && !failed(r, 1 - i) && src.chance(192) {
+        i = 1 - i;
+    }
     match src.pick(32) {
         0 => Target::Null,
         1 => Target::Foreign,
@@ -677,23 +839,23 @@ where
         }
     };
     let (st, poisoned) = (r.slot(i).st, r.slot(i).poisoned);
-    r.out.by_state[(st as usize).min(6)] += 1;
+    r.out.by_state[st as usize] += 1;
+    r.out.random[0] += 1;
+    r.out.random[1] += (st == St::Error) as u64;
     let me = if r.slot(i).me { "ME " } else { "" };
     r.what = format!("{name} [slot {i}, {me}state {st:?}{}]", if poisoned { ", poisoned" } else { "" });
     let slot = r.slot(i);
     let expected = if slot.poisoned && f != Fn::Reset {
         vec![ERROR]
-    } else if slot.me || matches!(slot.st, St::Event | St::Continuous) {
-        // Model Exchange: invalid arguments must still give fmi2Error; a
-        // valid call may be refused for the (unpredicted) state it is in.
-        // (A co-simulation instance reaches these states only by forged
-        // bytes; FMI 3.0 allows sets in Event Mode.)
+    } else if !own_state(slot.st, slot.me) {
+        // Forged bytes put the instance in a state of the other interface: invalid arguments
+        // must still give fmi2Error; a valid call may be refused for that state.
         let mut e = expect(slot);
         if !e.contains(&ERROR) {
             e.push(ERROR);
         }
         e
-    } else if !allowed(f, slot.st) {
+    } else if !allowed(f, slot.st, slot.me) {
         vec![ERROR]
     } else {
         expect(slot)
@@ -723,7 +885,17 @@ fn maybe_null<T>(src: &mut Source, v: &[T]) -> *const T {
 }
 
 fn step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
+    // An instance in the error state is reset at once half of the time (the move picks it): what
+    // random calls find there is only refusals, which a few of them check.
+    if (failed(r, 0) || failed(r, 1)) && src.chance(128) {
+        return op_lifecycle_macro(r, src);
+    }
     let op = src.u8();
+    // A driven sequence makes a legal move 4 times in 5.
+    if r.driven && r.moves > 0 && op < 205 {
+        r.moves -= 1;
+        return op_lifecycle_macro(r, src);
+    }
     // Lifecycle and stepping calls are drawn more often than the rest, so
     // that sequences get past initialization and into stepping.
     match op % 64 {
@@ -1024,17 +1196,12 @@ fn op_simple(r: &mut Run, src: &mut Source, f: Fn) -> Result<(), Violation> {
                 }
             }
             Fn::ExitInit => {
-                slot.st = St::StepComplete;
+                // Model Exchange: initialization ends in event mode.
+                slot.st = if slot.me { St::Event } else { St::StepComplete };
                 slot.initialized = true;
             }
             Fn::Terminate => slot.st = St::Terminated,
-            _ => {
-                slot.st = St::Instantiated;
-                slot.time = 0.0;
-                slot.values = Values::Pristine;
-                slot.initialized = false;
-                slot.poisoned = false;
-            }
+            _ => slot.reset(),
         }
     }
     Ok(())
@@ -1494,6 +1661,7 @@ fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         if r.trace {
             eprintln!("  state {got:#x} to slot {i}");
         }
+        let x = model_exchange::saved_states(r, i)?;
         let slot = r.slot_mut(i);
         let info = StateInfo {
             ptr: got,
@@ -1502,6 +1670,7 @@ fn op_get_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             values: slot.values,
             initialized: slot.initialized,
             me: slot.me,
+            x,
         };
         match owned {
             Some(k) => slot.states[k] = info,
@@ -1541,9 +1710,15 @@ fn op_set_state(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         slot.time = info.time;
         slot.values = info.values;
         slot.initialized = info.initialized;
+        slot.sliding = None;
+        slot.integration = Default::default();
         // (fmi2OK means the interface matched.)
         // A restored state continues where it was saved.
-        if !info.me && allowed(Fn::GetStatus, info.st) {
+        if let Some(saved) = &info.x {
+            model_exchange::check_restored(r, i, saved)?;
+        }
+        let slot = r.slot_mut(i);
+        if !info.me && allowed(Fn::GetStatus, info.st, false) {
             let (s, t) = unsafe { api.last_successful_time(slot.c) };
             slot.log.take();
             if s != OK || t.to_bits() != info.time.to_bits() {
@@ -1840,6 +2015,7 @@ fn op_deserialize(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             values: Values::Forged,
             initialized: true,
             me: source_me,
+            x: None,
         },
     };
     if got == 0 || (initial != 0 && got != initial) {
@@ -1903,9 +2079,13 @@ fn op_do_step(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         _ => (time, true),
     };
     let h = match src.pick(8) {
+        // A sliding contact costs its model many steps: a scene's instance steps at most 10 ms.
+        _ if r.slot(i).scene && src.chance(240) => [1e-3, 0.01][src.pick(2)],
         0 => real(src),
         1 => [1e-9, 1e-6, 1e3, 1e6][src.pick(4)],
-        _ => [1e-3, 0.01, 0.1, 0.5][src.pick(4)],
+        // (Steps of a line cost it in proportion: sequences keep their instances out of the
+        // error state, so long steps are rarer than short ones.)
+        _ => [1e-3, 0.01, 0.01, 0.1][src.pick(4)],
     };
     let no_prior = boolean(src);
     // FMI 3.0's out-arguments are required.
@@ -2101,9 +2281,9 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     }
     let t = target(r, src);
     let which = src.pick(14);
-    let n = src.pick(4);
-    let vrs: Vec<u32> = (0..n).map(|_| vr(r.d(), src, |_| true)).collect();
-    let mut buf = vec![0.0f64; 8];
+    let n = me_count(r.d(), src, which);
+    let vrs: Vec<u32> = (0..n.min(4)).map(|_| vr(r.d(), src, |_| true)).collect();
+    let mut buf = vec![0.0f64; n.max(8)];
     // Values for fmi2SetContinuousStates: nasty ones, or near the start.
     for x in buf.iter_mut() {
         *x = if src.chance(128) { 1.0 - (src.u8() as f64) * 1e-5 } else { real(src) };
@@ -2113,47 +2293,42 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let mut info = fmi2EventInfo::default();
     let null = src.chance(64);
     let p = if null { null_mut() } else { buf.as_mut_ptr() };
-    let orders = vec![1i32; n];
+    let orders = vec![1i32; vrs.len()];
     let x = real(src);
     let (f, name) = match which {
         0 => (Fn::GetDirectionalDerivative, "fmi2GetDirectionalDerivative"),
         11 => (Fn::CancelStep, "fmi2CancelStep"),
         12 | 13 => (Fn::GetRealOutputDerivatives, "fmi2GetRealOutputDerivatives"),
-        _ => (Fn::ModelExchange, "a Model Exchange function"),
+        _ => (me_function(which), "a Model Exchange function"),
     };
-    let n_out = n.min(buf.len());
+    let n_out = vrs.len();
     let d = r.d();
+    let states_given = set_states[..n.min(set_states.len())].to_vec();
     let res = call_on(
         r,
         t,
         f,
         &format!("{name} (#{which}, n = {n}{})", if null { ", NULL array" } else { "" }),
         |slot| {
-            let nx = d.states.len();
-            let sized = !null || n == 0;
             if f == Fn::GetRealOutputDerivatives {
                 vec![OK, ERROR]
-            } else if f == Fn::GetDirectionalDerivative && n == 0 {
+            } else if f == Fn::GetDirectionalDerivative && n_out == 0 {
                 // Nothing asked: OK, or an error where outputs are not computable.
                 vec![OK, ERROR]
-            } else if slot.me && f == Fn::ModelExchange && (which <= 5 || (sized && n == nx) || (which == 8 && sized)) {
-                // Model Exchange calls with arrays of the right size (nx
-                // states, any number of event indicators checked by the FMU);
-                // a state that is no length of web is discarded.
-                vec![OK, DISCARD, ERROR]
+            } else if (1..=10).contains(&which) {
+                me_expected(d, slot, which, n, null, x, &states_given)
             } else {
                 vec![ERROR]
             }
         },
         |c| unsafe {
+            let terminate = if null { null_mut() } else { flags.as_mut_ptr().add(1) };
             match which {
-                0 => fmi2GetDirectionalDerivative(c, vrs.as_ptr(), n, vrs.as_ptr(), n, p, p),
+                0 => fmi2GetDirectionalDerivative(c, vrs.as_ptr(), n_out, vrs.as_ptr(), n_out, p, p),
                 1 => fmi2EnterEventMode(c),
                 2 => fmi2NewDiscreteStates(c, if null { null_mut() } else { &mut info }),
                 3 => fmi2EnterContinuousTimeMode(c),
-                4 => {
-                    fmi2CompletedIntegratorStep(c, 1, flags.as_mut_ptr(), flags.as_mut_ptr().add(1))
-                }
+                4 => fmi2CompletedIntegratorStep(c, 1, flags.as_mut_ptr(), terminate),
                 5 => fmi2SetTime(c, x),
                 6 => fmi2SetContinuousStates(c, p, n),
                 7 => fmi2GetDerivatives(c, p, n),
@@ -2166,8 +2341,11 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         },
     )?;
     if let Some((i, OK)) = res {
+        if which == 2 && info.nextEventTimeDefined != 0 {
+            r.finite(i, info.nextEventTime, "nextEventTime")?;
+        }
         let what = match which {
-            5 | 6 => return accepted_set(r, i, which, &set_states[..n.min(set_states.len())], x),
+            1..=6 => return me_accepted(r, i, which, &states_given, x),
             7 => "a derivative",
             8 => "an event indicator",
             9 => "a continuous state",
@@ -2175,11 +2353,87 @@ fn op_unsupported(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
             12 | 13 => "an output derivative",
             _ => return Ok(()),
         };
+        let count = if (7..=10).contains(&which) { n } else { n_out };
         if !null {
-            for &v in &buf[..n_out] {
+            for &v in &buf[..count] {
                 r.finite(i, v, what)?;
             }
         }
+    }
+    Ok(())
+}
+
+/// The number of values a Model Exchange call `which` (1 to 10) is given: mostly what the model
+/// has (states, event indicators), at times 0 to 3; a directional or output derivative's 0 to 3.
+fn me_count(d: Desc, src: &mut Source, which: usize) -> usize {
+    let (nx, nz) = (d.states.len(), d.number_of_event_indicators);
+    match which {
+        6 | 7 | 9 | 10 if src.chance(160) => nx,
+        8 if src.chance(160) => nz,
+        _ => src.pick(4),
+    }
+}
+
+/// Model Exchange's functions as the random calls number them (op_unsupported, op_unsupported3).
+fn me_function(which: usize) -> Fn {
+    match which {
+        1 => Fn::EnterEventMode,
+        2 => Fn::NewDiscreteStates,
+        3 => Fn::EnterContinuousTimeMode,
+        4 => Fn::CompletedIntegratorStep,
+        5 => Fn::SetTime,
+        6 => Fn::SetContinuousStates,
+        7..=9 => Fn::GetComputed,
+        10 => Fn::GetNominals,
+        _ => Fn::Other,
+    }
+}
+
+/// What Model Exchange's function `which` (1 to 10) answers where the standard allows it: given
+/// `n` values (`null`: a NULL array or out-argument), the time `x` (#5), the states `states` (#6).
+fn me_expected(d: Desc, slot: &Slot, which: usize, n: usize, null: bool, x: f64, states: &[f64]) -> Vec<i32> {
+    let (nx, nz) = (d.states.len(), d.number_of_event_indicators);
+    let sized = |count: usize| (!null || n == 0) && n == count;
+    match which {
+        1 | 3 => vec![OK],
+        2 | 4 => vec![if null { ERROR } else { OK }],
+        5 => vec![if x.is_finite() { OK } else { ERROR }],
+        6 if !sized(nx) || states.iter().any(|v| !v.is_finite()) => vec![ERROR],
+        // A state the model cannot hold (no length of web) is discarded, or refused.
+        6 => vec![OK, DISCARD, ERROR],
+        7 | 9 if !sized(nx) => vec![ERROR],
+        8 if !sized(nz) => vec![ERROR],
+        7..=9 => computed(slot),
+        _ if !sized(nx) => vec![ERROR],
+        // (The Line knows its nominals only once its network is joined, in initialization.)
+        _ if !slot.initialized => vec![OK, ERROR],
+        _ => vec![OK],
+    }
+}
+
+/// A computed value (a derivative, an event indicator, a state, an output) where the standard
+/// allows its read: defined for the start values and what the harness's driver sets; after other
+/// values, or in the error state of an instance that never initialized (the Line has no network
+/// before), the model may find it undefined, and say so.
+fn computed(slot: &Slot) -> Vec<i32> {
+    if slot.values == Values::Pristine && (slot.st != St::Error || slot.initialized) {
+        vec![OK]
+    } else {
+        vec![OK, DISCARD, ERROR]
+    }
+}
+
+/// What a Model Exchange call (1 to 6) that answered OK changed: the state, the time, the values.
+fn me_accepted(r: &mut Run, i: usize, which: usize, states: &[f64], x: f64) -> Result<(), Violation> {
+    let slot = r.slot_mut(i);
+    match which {
+        1 => slot.st = St::Event,
+        3 => slot.st = St::Continuous,
+        5 => slot.time = x,
+        _ => {}
+    }
+    if matches!(which, 5 | 6) {
+        accepted_set(r, i, which, states, x)?;
     }
     Ok(())
 }
@@ -2232,12 +2486,12 @@ fn op_unsupported3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         return Ok(());
     }
     let t = target(r, src);
-    let n = src.pick(4);
+    let n = me_count(r.d(), src, which);
     let m = src.pick(4);
     let unknowns: Vec<u32> = (0..n).map(|_| vr(r.d(), src, |v| v.causality == Causality::Output)).collect();
     let knowns: Vec<u32> = (0..m).map(|_| vr(r.d(), src, |v| v.causality == Causality::Input)).collect();
     let (n_seed, n_sens) = (count(Api::Fmi3, src, m), count(Api::Fmi3, src, n));
-    let mut buf = vec![0.0f64; 8];
+    let mut buf = vec![0.0f64; n.max(8)];
     for x in buf.iter_mut() {
         *x = if src.chance(128) { 1.0 - (src.u8() as f64) * 1e-5 } else { real(src) };
     }
@@ -2253,24 +2507,22 @@ fn op_unsupported3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         0 => (Fn::GetDirectionalDerivative, "fmi3GetDirectionalDerivative"),
         16 => (Fn::Get, "fmi3GetFloat32"),
         17 => (Fn::Set, "fmi3SetUInt8"),
-        _ => (Fn::ModelExchange, "another fmi3 function"),
+        _ => (me_function(which), "another fmi3 function"),
     };
     let (nx, nz) = (r.d().states.len(), r.d().number_of_event_indicators);
+    let d = r.d();
+    let states_given = set_states[..n.min(set_states.len())].to_vec();
     let res = call_on(
         r,
         t,
         f,
         &format!("{name} (#{which}, n = {n}, m = {m}{})", if null { ", NULL array" } else { "" }),
         |slot| {
-            let sized = !null || n == 0;
             match which {
                 0 if n_seed != m || n_sens != n || (null && n > 0) => vec![ERROR],
                 // Unknowns and knowns the FMU has no derivative of are refused.
                 0 => vec![OK, ERROR],
-                1..=10 if !slot.me => vec![ERROR],
-                2 | 4 if null => vec![ERROR],
-                1..=5 => vec![OK, DISCARD],
-                6..=10 if sized && (n == nx || (which == 8 && n == nz)) => vec![OK, DISCARD],
+                1..=10 => me_expected(d, slot, which, n, null, x, &states_given),
                 11 | 12 if slot.me && !null => vec![OK],
                 16 | 17 if n == 0 => vec![OK],
                 _ => vec![ERROR],
@@ -2316,8 +2568,11 @@ fn op_unsupported3(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
         },
     )?;
     if let Some((i, OK)) = res {
+        if which == 2 && flags[4] != 0 {
+            r.finite(i, next, "nextEventTime")?;
+        }
         let what = match which {
-            5 | 6 => return accepted_set(r, i, which, &set_states[..n.min(set_states.len())], x),
+            1..=6 => return me_accepted(r, i, which, &states_given, x),
             11 | 12 if number != [nx, nz][which - 11] => {
                 return fail(format!("{}: answered {number}", r.what));
             }
@@ -2485,8 +2740,6 @@ fn op_arm_panic(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     Ok(())
 }
 
-/// A legal move: instantiate, or the next lifecycle call of the state the
-/// slot is in, with sane arguments. Keeps random sequences going deep.
 /// Integer parameters with a small range (the Roller's inlets, outlets and
 /// kind of roll): their values in one valid fmi2SetInteger (fmi3SetInt32) in
 /// the instantiated state, so that sequences run through the configurations
@@ -2518,64 +2771,46 @@ fn configure(r: &mut Run, i: usize, src: &mut Source) -> Result<(), Violation> {
     Ok(())
 }
 
+/// A legal move: instantiate, or the next lifecycle call of the state the slot is in, with sane
+/// arguments (a reset from the error state, a step of Co-Simulation, the Model Exchange driver's
+/// move). Keeps random sequences going deep.
 fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
-    let i = src.pick(2);
+    let mut i = src.pick(2);
+    // An instance in the error state is reset first: the random calls meet it there briefly.
+    if failed(r, 1 - i) && !failed(r, i) {
+        i = 1 - i;
+    }
     let api = r.api;
     let Some(slot) = r.slots[i].as_ref() else {
-        let log = Box::<Log>::default();
-        let functions = Box::new(callbacks(&log));
-        let name = CString::new(format!("fuzz{i}")).unwrap();
-        let g = CString::new(r.d().guid.as_ref()).unwrap();
-        // No resources where the model can do without (as importers may pass none).
-        let (uri, path) = (CString::new(format!("file://{}", r.model.resources)).unwrap(), CString::new(r.model.resources.as_str()).unwrap());
-        let (uri, path) = if r.model.needs_resources { (uri.as_ptr(), path.as_ptr()) } else { (std::ptr::null(), std::ptr::null()) };
-        let c = unsafe {
-            match api {
-                Api::Fmi2 => fmi2Instantiate(name.as_ptr(), 1, g.as_ptr(), uri, &*functions, 0, 0),
-                Api::Fmi3 => api::instantiate3(&api::Instantiate3 {
-                    model_exchange: false,
-                    name: name.as_ptr(),
-                    token: g.as_ptr(),
-                    resource_path: path,
-                    logging_on: false,
-                    event_mode_used: false,
-                    required: &[],
-                    log: Some(&*log),
-                }),
-            }
-        };
-        r.out.calls += 1;
-        if c.is_null() {
-            return fail(format!(
-                "{} with valid arguments returned NULL: {:?}",
-                api.name("fmi2Instantiate", "fmi3InstantiateCoSimulation"),
-                log.take()
-            ));
-        }
-        log.take();
-        let functions = (api == Api::Fmi2).then_some(functions);
-        r.slots[i] = Some(new_slot(format!("fuzz{i}"), c, log, functions, false));
-        return Ok(());
+        return instantiate_valid(r, i, src);
     };
-    if slot.me && slot.st == St::StepComplete && !slot.poisoned {
-        return me_integration(r, i);
-    }
-    let (c, st, time, poisoned, pristine) = (
+    let (c, st, time, poisoned, pristine, me) = (
         slot.c,
         slot.st,
         slot.time,
         slot.poisoned,
         slot.values == Values::Pristine,
+        slot.me,
     );
-    r.what = format!("lifecycle move [slot {i}, state {st:?}]");
+    if !poisoned && me && matches!(st, St::Event | St::Continuous) {
+        return model_exchange::drive(r, i, src);
+    }
+    let label = format!("lifecycle move [slot {i}, {}state {st:?}]", if me { "ME " } else { "" });
+    r.what = label.clone();
+    r.out.by_state[st as usize] += 1;
+    // A step of 10 ms; 1 ms in a scene, whose contact slides (each slide costs the model many steps).
+    let h = if slot.scene { 1e-3 } else { 0.01 };
     let (s, expected, next): (i32, Vec<i32>, Option<St>) = unsafe {
-        if poisoned || matches!(st, St::Error | St::Terminated | St::StepFailed) {
+        if poisoned || matches!(st, St::Error | St::Terminated | St::StepFailed) || !own_state(st, me) {
             (api.reset(c), vec![OK], Some(St::Instantiated))
         } else {
             match st {
                 St::Instantiated => {
                     if src.chance(64) {
                         configure(r, i, src)?;
+                    } else if r.scene_steps > 0 && src.chance(128) {
+                        scene::take(r, i)?;
+                        r.what = label.clone();
                     }
                     if api == Api::Fmi2 {
                         let s = fmi2SetupExperiment(c, 0, 0.0, time, 0, 0.0);
@@ -2587,15 +2822,24 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                 St::Init => (
                     api.exit_init(c),
                     if pristine { vec![OK] } else { vec![OK, ERROR] },
-                    Some(St::StepComplete),
+                    // Model Exchange: initialization ends in event mode.
+                    Some(if me { St::Event } else { St::StepComplete }),
                 ),
+                _ if r.slot(i).scene && r.scene_steps == 0 => (api.terminate(c), vec![OK], Some(St::Terminated)),
                 _ => {
-                    // A few ordinary steps.
+                    // A few ordinary steps; the scene's inputs may change before.
+                    if r.slot(i).scene {
+                        r.scene_steps -= 1;
+                    }
+                    if src.chance(128) {
+                        scene::vary(r, i, src)?;
+                        r.what = label.clone();
+                    }
                     let armed = r.slot(i).armed;
-                    let (s, _) = api.do_step(c, time, 0.01, 1, false);
+                    let (s, _) = api.do_step(c, time, h, 1, false);
                     let expected = if armed {
                         vec![ERROR, DISCARD]
-                    } else if pristine {
+                    } else if r.slot(i).values == Values::Pristine {
                         vec![OK]
                     } else {
                         vec![OK, DISCARD, ERROR]
@@ -2610,20 +2854,15 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     let slot = r.slot_mut(i);
     if s == OK {
         match next {
-            Some(St::Instantiated) => {
-                slot.st = St::Instantiated;
-                slot.time = 0.0;
-                slot.values = Values::Pristine;
-                slot.initialized = false;
-                slot.poisoned = false;
-            }
+            Some(St::Instantiated) => slot.reset(),
             Some(n) => {
-                slot.initialized |= n == St::StepComplete;
+                slot.initialized |= n != St::Init;
                 slot.st = n
             }
             None => {
-                slot.time = time + 0.01;
+                slot.time = time + h;
                 r.out.steps_ok += 1;
+                scene::read_contact(r, i)?;
             }
         }
     } else if next.is_none() {
@@ -2638,61 +2877,49 @@ fn op_lifecycle_macro(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
     Ok(())
 }
 
-/// A Model Exchange instance after initialization: the calls an integrator
-/// makes for one explicit Euler step of 1 ms. Every answer OK or Error (the
-/// oracle does not predict the ME state machine); states, derivatives and
-/// event indicators that come back with OK must be finite.
-fn me_integration(r: &mut Run, i: usize) -> Result<(), Violation> {
-    let (c, api) = (r.slot(i).c, r.api);
-    let nx = r.d().states.len();
-    let nz = r.d().number_of_event_indicators;
-    let mut x = vec![f64::NAN; nx];
-    let mut dx = vec![f64::NAN; nx];
-    let mut z = vec![f64::NAN; nz];
-    let t = r.slot(i).time;
-    for k in 0..6 {
-        let (name, s) = unsafe {
-            match k {
-                0 => (
-                    api.name("fmi2EnterContinuousTimeMode", "fmi3EnterContinuousTimeMode"),
-                    api.enter_continuous_time_mode(c),
-                ),
-                1 => (api.name("fmi2SetTime", "fmi3SetTime"), api.set_time(c, t + 1e-3)),
-                2 => (
-                    api.name("fmi2GetContinuousStates", "fmi3GetContinuousStates"),
-                    api.get_continuous_states(c, x.as_mut_ptr(), nx),
-                ),
-                3 => (
-                    api.name("fmi2GetDerivatives", "fmi3GetContinuousStateDerivatives"),
-                    api.get_derivatives(c, dx.as_mut_ptr(), nx),
-                ),
-                4 => (
-                    api.name("fmi2GetEventIndicators", "fmi3GetEventIndicators"),
-                    api.get_event_indicators(c, z.as_mut_ptr(), nz),
-                ),
-                _ => (
-                    api.name("fmi2CompletedIntegratorStep", "fmi3CompletedIntegratorStep"),
-                    api.completed_integrator_step(c),
-                ),
-            }
-        };
-        r.what = format!("ME integration: {name}");
-        r.check_status(s, &[OK, DISCARD, ERROR])?;
-        r.after(i, s)?;
-        if s != OK {
-            return Ok(());
+/// An instance with valid arguments in slot `i`: of Model Exchange (where the model offers it)
+/// in two thirds of the driven sequences and a quarter of the others, else of Co-Simulation.
+fn instantiate_valid(r: &mut Run, i: usize, src: &mut Source) -> Result<(), Violation> {
+    let api = r.api;
+    let me = r.d().model_exchange && src.chance(if r.driven { 170 } else { 64 });
+    let log = Box::<Log>::default();
+    let functions = Box::new(callbacks(&log));
+    let name = CString::new(format!("fuzz{i}")).unwrap();
+    let g = CString::new(r.d().guid.as_ref()).unwrap();
+    // No resources where the model can do without (as importers may pass none).
+    let (uri, path) = (CString::new(format!("file://{}", r.model.resources)).unwrap(), CString::new(r.model.resources.as_str()).unwrap());
+    let (uri, path) = if r.model.needs_resources { (uri.as_ptr(), path.as_ptr()) } else { (std::ptr::null(), std::ptr::null()) };
+    let c = unsafe {
+        match api {
+            Api::Fmi2 => fmi2Instantiate(name.as_ptr(), if me { 0 } else { 1 }, g.as_ptr(), uri, &*functions, 0, 0),
+            Api::Fmi3 => api::instantiate3(&api::Instantiate3 {
+                model_exchange: me,
+                name: name.as_ptr(),
+                token: g.as_ptr(),
+                resource_path: path,
+                logging_on: false,
+                event_mode_used: false,
+                required: &[],
+                log: Some(&*log),
+            }),
         }
-        let values = match k {
-            2 => x.clone(),
-            3 => dx.clone(),
-            4 => z.clone(),
-            _ => Vec::new(),
-        };
-        for v in values {
-            r.finite(i, v, name)?;
-        }
+    };
+    r.out.calls += 1;
+    if c.is_null() {
+        return fail(format!(
+            "{} with valid arguments returned NULL: {:?}",
+            match (api, me) {
+                (Api::Fmi2, _) => "fmi2Instantiate",
+                (Api::Fmi3, true) => "fmi3InstantiateModelExchange",
+                (Api::Fmi3, false) => "fmi3InstantiateCoSimulation",
+            },
+            log.take()
+        ));
     }
-    r.slot_mut(i).time = t + 1e-3;
-    r.out.steps_ok += 1;
+    log.take();
+    let functions = (api == Api::Fmi2).then_some(functions);
+    let mut slot = new_slot(format!("fuzz{i}"), c, log, functions, false);
+    slot.me = me;
+    r.slots[i] = Some(slot);
     Ok(())
 }
