@@ -10,20 +10,12 @@
 //! Every call is valid, so the oracle expects fmi2OK where the values are the start values or
 //! the scene's (a trial state may be discarded), and checks that every number is finite.
 
-use super::*;
+use crate::api::{self, Api, Instance};
+use crate::newton::Newton;
 use crate::scene::{driven, read_contact, vary};
-use solver::band::{Band, BandLu};
+use crate::sequence::{computed, fail, Run, Source, St, Values, Violation};
+use fmi_testkit::{DISCARD, OK};
 
-/// What the driver keeps of an instance between its moves.
-#[derive(Default)]
-pub(crate) struct Integration {
-    /// The next time event the model named.
-    next_event: Option<f64>,
-    /// The event indicators after the last step (empty: none read since continuous-time mode began).
-    z: Vec<f64>,
-    /// The Newton iteration's matrix, kept from step to step while it converges.
-    newton: Option<Newton>,
-}
 
 /// The integrator steps of one sequence: enough for an instance to go through events, and for a
 /// contact to stick and slide, at a cost near the random calls' (an ME step makes about 12 calls).
@@ -154,23 +146,6 @@ fn enter_continuous(r: &mut Run, i: usize) -> Result<bool, Violation> {
     Ok(true)
 }
 
-/// A Newton iteration's matrix, 1/h I - J, with J by finite differences: kept while the
-/// iteration converges (factored again for another h), formed again where it does not.
-pub(crate) struct Newton {
-    jacobian: Band,
-    lu: BandLu,
-    /// The step size the factors are for (0: none).
-    h: f64,
-    /// `jacobian` holds J (false: form it at the next step).
-    fresh: bool,
-}
-
-impl Newton {
-    fn new(n: usize) -> Newton {
-        let w = n.saturating_sub(1);
-        Newton { jacobian: Band::zeros(n, w, w), lu: BandLu::new(n, w, w), h: 0.0, fresh: false }
-    }
-}
 
 /// What the states' calls answered: a value, or the status that stopped the step.
 type Answer<T> = Result<Result<T, i32>, Violation>;

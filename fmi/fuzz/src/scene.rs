@@ -3,7 +3,9 @@
 //! inputs set again as it runs) and the contact whose stick/slide mode is read after every step,
 //! with the transitions counted between consecutive reads.
 
-use super::*;
+use crate::api::Instance;
+use crate::sequence::{computed, named, settable, Run, Source, Value, Violation};
+use fmi_testkit::{ERROR, OK};
 
 /// One call the harness's drivers make on slot `i` with valid arguments in a state that allows
 /// it: counted by that state, its status checked against `expected` and its log lines checked.
