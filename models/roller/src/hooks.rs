@@ -60,6 +60,13 @@ impl Model for Roller {
         Ok(())
     }
 
+    fn check_real(&self, vr: u32, value: f64) -> FmiResult {
+        match control::set_point_refusal(&self.params, value) {
+            Some(why) if vr == Real::loop_set as u32 => Err(FmiError::error(why)),
+            _ => Ok(()),
+        }
+    }
+
     /// `canInterpolateInputs="false"`: the layer refuses input derivatives
     /// before they reach the model.
     fn set_input_derivative(&mut self, vr: u32, _value: f64) -> FmiResult {
@@ -84,6 +91,11 @@ impl Model for Roller {
             Ok(loaded) => (Some(loaded), None),
             Err(unmatched) => (None, unmatched),
         };
+        if profile.as_ref().is_none_or(|loaded| loaded.table(drive::Key::Set).is_none()) {
+            if let Some(why) = control::set_point_refusal(p, p.loop_set) {
+                return Err(FmiError::error(why));
+            }
+        }
         self.profile = profile;
         self.start(experiment.start_time);
         Ok(unmatched.into_iter().chain(roll::massless_roll(&self.params)).collect())

@@ -81,6 +81,8 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     else:
         start.update(J=float(node.J), R=float(node.R), b=float(node.b))
     start["v_start"] = float(scene.initial_speed(node))
+    if (node.name, "F") in scene.record:  # its load cell recorded: the Roller's load_cell.F at its wrap
+        start["load_cell.wrap"] = math.radians(node.wrap)
     if node.type in ROLL:
         start["roll"] = ROLL[node.type]
     wound = getattr(node, "wound", None)
@@ -145,6 +147,8 @@ def loop_values(loop) -> dict:
         "motor.limit": float(loop.limit),
         "motor.lag": float(loop.lag),
     }
+    if loop.compression:  # a set point <= 0 N is meant
+        values["loop.compression"] = True
     if loop.dancer is not None:  # a dancer loop [R13] on dancer.y, which the line wires from the dancer
         values.update({"dancer.set": float(loop.dancer.set), "dancer.kp": float(loop.dancer.kp), "dancer.ki": float(loop.dancer.ki)})
     return values

@@ -194,12 +194,8 @@ class LineODE:
                 e_d = d.sign * (z[self.i_y[d.dancer]] - d.set)
                 dz[i_trim] = d.ki * e_d
                 e += d.kp * e_d + z[i_trim]
-        elif lp.measure[1] == "F":  # a roller's load cell on the web forces it carries, as the Roller's pulls
-            cell = self.s.component(lp.measure[0])
-            F_a = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[cell.name])
-            F_b = sum(q[sp.name]["T"] for sp in self.outs[cell.name])
-            F = np.sqrt(max(F_a * F_a + F_b * F_b - 2.0 * F_a * F_b * np.cos(np.radians(cell.wrap)), 0.0))
-            e = lp.sign * (self.pv(lp.set, t) - F)
+        elif lp.measure[1] == "F":  # a roller's load cell
+            e = lp.sign * (self.pv(lp.set, t) - self.load_cell(self.s.component(lp.measure[0]), q))
         else:  # a span's tension
             e = lp.sign * (self.pv(lp.set, t) - q[lp.measure[0]]["T"])
         ff = 0.0
@@ -570,6 +566,12 @@ class LineODE:
             z[i] = v / R  # the same surface speed
         return z
 
+    def load_cell(self, cell, q) -> float:
+        """A roller's load cell: the resultant of the web forces it carries, as the Roller's pulls."""
+        F_a = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[cell.name])
+        F_b = sum(q[sp.name]["T"] for sp in self.outs[cell.name])
+        return float(np.sqrt(max(F_a * F_a + F_b * F_b - 2.0 * F_a * F_b * np.cos(np.radians(cell.wrap)), 0.0)))
+
     def record(self, t, z):
         dz, q, v = self.evaluate(t, z)
         row = []
@@ -593,6 +595,8 @@ class LineODE:
                 row.append(z[self.i_y[cname]])
             elif quantity == "y_dot":
                 row.append(z[self.i_y[cname] + 1])
+            elif quantity == "F":
+                row.append(self.load_cell(c, q))
         return row
 
 
