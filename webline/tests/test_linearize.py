@@ -260,3 +260,22 @@ def test_a_stable_loop_runs_without_a_warning(fmus, tmp_path, capsys):
     scene.write_text(json.dumps(d))
     assert main(["run", str(scene), "--out", str(tmp_path), "--no-plot", "--fmu-dir", str(fmus)]) == 0
     assert "warning" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("engine", ["line", "reference"])
+def test_a_run_whose_tension_runs_away_stops_at_the_bound(fmus, tmp_path, capsys, engine):
+    """The unstable tuning without the motor's torque limit (which holds it to a limit cycle of about 2 kN)
+    grows until the entry span's tension passes 10 % of its EA (48 kN on 80 um paper, 1.2 m wide): the
+    run stops there with exit code 2 and a message naming the span, the value, the time and the bound, in
+    the Line FMU's run and in the reference alike (bound.py)."""
+    d = unstable("12 s")
+    del d["line"][0]["drive"]["pi"]["limit"]
+    scene = tmp_path / "runaway.json"
+    scene.write_text(json.dumps(d))
+    assert main(["run", str(scene), "--engine", engine, "--out", str(tmp_path), "--no-plot", "--fmu-dir", str(fmus)]) == 2
+    err = capsys.readouterr().err
+    found = re.search(r"the tension of span '(entry|feed)' reached (-?[\d.e+]+) N at t = ([\d.]+) s, past the bound of "
+                      r"4\.8e\+04 N \(10 % of its web's EA", err)
+    assert found, err
+    assert abs(float(found.group(2))) == pytest.approx(48_000, rel=0.02) and 8.0 < float(found.group(3)) < 11.0
+    assert not (tmp_path / "rewind_ramp_loop.csv").exists()

@@ -147,7 +147,7 @@ pub fn refusal(p: &Parameters) -> Option<String> {
 /// `loop.compression` does not say that compression is meant. None if it fits.
 pub fn set_point_refusal(p: &Parameters, value: f64) -> Option<String> {
     (Kind::of(p) == Kind::Force && !p.loop_compression && !(value > 0.0)).then(|| {
-        format!("loop.set = {value} N: a force loop's set point must be > 0 N (a web in compression buckles); loop.compression = true allows it")
+        format!("loop.set = {value} N: a force loop's set point must be > 0 N (a web in compression buckles); loop.compression = true (a scene's \"compression\": true) allows it")
     })
 }
 

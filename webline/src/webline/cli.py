@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from . import installation, units
+from .bound import Runaway
 from .names import ARCHIVE_ENGINES, ENGINES, engine_name
 from .fmus import DEFAULT_FMU_DIR, FmuError
 from .linear import StabilityError
@@ -607,7 +608,7 @@ def main(argv=None):
             installation.require_platform(getattr(args, "fmu_dir", None))
         return args.func(args)
     except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError, LineFmuError, StabilityError,
-            StudyError, installation.PlatformError) as e:
+            StudyError, installation.PlatformError, Runaway) as e:
         print(f"webline: {e}", file=sys.stderr)
         return 2
     except ModuleNotFoundError as e:

@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .bound import tension_bounds
 from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile, span_effects
 from .master import Master, Options, settle_start_values
 from .profiles import Profile
@@ -447,7 +448,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
 
 def run_scene(scene, fmu_dir=None, **options) -> Result:
     """A scene compiled and run; the columns named as the scene records them ("film.T [N]")."""
-    result = Master(compile_scene(scene, fmu_dir), Options(**options)).run()
+    bounds = {part: bound for span, bound in tension_bounds(scene).items() for part in layer_parts(scene.component(span))}
+    result = Master(compile_scene(scene, fmu_dir), Options(bounds=bounds, **options)).run()
     result.scene = scene.name
     result.columns = scene.columns()
     return result

@@ -1,5 +1,5 @@
 """Never a silent loop: the line's modes at the start of a run and after each `set` event, and those that
-grow enough over the rest of the run to matter.
+grow enough over the rest of the run to matter (the bound past which a run's tensions stop it: `bound`).
 
 A mode lambda = sigma + j omega grows as exp(sigma t); over the time left in the run, t_left, it
 matters when it more than doubles: sigma > 0 (beyond what the derivatives resolve) and
