@@ -91,14 +91,11 @@ impl Model for Roller {
             Ok(loaded) => (Some(loaded), None),
             Err(unmatched) => (None, unmatched),
         };
-        if profile.as_ref().is_none_or(|loaded| loaded.table(drive::Key::Set).is_none()) {
-            if let Some(why) = control::set_point_refusal(p, p.loop_set) {
-                return Err(FmiError::error(why));
-            }
-        }
+        // A start value is only warned about: loop.kind = 1 alone leaves loop.set at its start, 0.
+        let set_point = profile.as_ref().is_none_or(|loaded| loaded.table(drive::Key::Set).is_none()).then(|| control::set_point_refusal(p, p.loop_set)).flatten();
         self.profile = profile;
         self.start(experiment.start_time);
-        Ok(unmatched.into_iter().chain(roll::massless_roll(&self.params)).collect())
+        Ok(unmatched.into_iter().chain(roll::massless_roll(&self.params)).chain(set_point).collect())
     }
 
     fn provisional_state(&mut self) {
