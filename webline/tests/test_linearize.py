@@ -4,7 +4,10 @@ On a line with one idler between two spans, A is checked against the Jacobian of
 physics.md's equations written here by hand, and the idler's mode against the
 closed form omega^2 = (R^2/J) (EA/L1 + EA/L2); on the paper rewind line, the
 modes a controls engineer found by hand, the files written, and A after a run
-to a time in the pull roll's ramp.
+to a time in the pull roll's ramp. A loop's margins (`--loop`) against the plant and
+its PI computed apart; the Bode and step-response files; a hidden unstable tuning
+warned before a run's results (`growth`), and a run that runs away stopped at its
+bound (`bound`).
 """
 
 import json

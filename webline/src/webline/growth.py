@@ -19,7 +19,7 @@ DOUBLING = math.log(2.0)
 def grows(m, duration: float) -> bool:
     """Whether mode `m` grows more than twofold over `duration` (s)."""
     sigma = m.eigenvalue.real
-    return sigma > m.error and sigma * duration > DOUBLING and not statespace._radius_mode(m)
+    return sigma > m.error and sigma * duration > DOUBLING and not statespace.radius_mode(m)
 
 
 def describe(m) -> str:

@@ -230,7 +230,7 @@ def report(ss: StateSpace, modes: list[LineMode]) -> str:
         eig = f"{lam.real:.5g}" + (f"{lam.imag:+.5g}j" if lam.imag > m.error else "")
         kind = "" if lam.imag > m.error else f" (no oscillation: time constant {1 / m.omega_n:.3g} s)"
         if lam.real > m.error:
-            kind += (" (a roll's radius: it drifts as the web winds)" if _radius_mode(m)
+            kind += (" (a roll's radius: it drifts as the web winds)" if radius_mode(m)
                      else f"  <- GROWS: doubles every {math.log(2.0) / lam.real:.3g} s")
         out.append(f"  {m.natural_frequency:>10.4g} {m.error / (2 * math.pi):>7.1g} {m.damping:>8.4f} "
                    f"{m.error / m.omega_n:>7.1g}  {eig:<20} {parts}{kind}")
@@ -262,12 +262,13 @@ SLOWEST_SHOWN = 1e-6
 def line_modes(modes: list[LineMode]) -> list[LineMode]:
     """The modes a plot spans: those resolved, without a roll's radius (it drifts over the roll's life,
     at 1e-7 Hz and below: not a dynamic a loop or a plot of the line is about) or an integrator."""
-    dynamic = [m for m in modes if m.resolved and not _radius_mode(m)]
+    dynamic = [m for m in modes if m.resolved and not radius_mode(m)]
     fastest = max((m.natural_frequency for m in dynamic), default=0.0)
     return [m for m in dynamic if m.natural_frequency >= SLOWEST_SHOWN * fastest]
 
 
-def _radius_mode(m: LineMode) -> bool:
+def radius_mode(m: LineMode) -> bool:
+    """A mode carried by rolls' radii alone: it drifts as the web winds, not a dynamic of the line."""
     return bool(m.parts) and all(states == ["r"] for _, _, states in m.parts)
 
 
