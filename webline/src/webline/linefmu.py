@@ -253,7 +253,9 @@ def watcher(scene: Scene, path: Path):
     limits = [bounds[n] for n in names]
 
     def step_finished(time, recorder):
-        for name, T, limit in zip(names, recorder.fmu.getReal(refs), limits):
+        fmu = recorder.fmu
+        values = fmu.getFloat64(refs) if hasattr(fmu, "getFloat64") else fmu.getReal(refs)  # FMI 3.0, 2.0
+        for name, T, limit in zip(names, values, limits):
             if abs(T) > limit:
                 step_finished.stopped = runaway(scene.name, name, T, limit, time)
                 return False
