@@ -1,4 +1,5 @@
-"""A line's state-space model from its Line FMU: A, B, C, D at a time, its modes, a frequency response.
+"""A line's state-space model from its Line FMU: A, B, C, D at a time, its modes, a frequency response
+(Bode plots as CSV and PNG) and a step response.
 
 The scene is exported as one Line FMU (`linefmu.export`), instantiated in Model
 Exchange, run there with FMPy's CVode to the time asked (from its start, the

@@ -292,7 +292,8 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
 
 
 def _loop(r: _Reader, node: Node, what: str) -> Loop:
-    """A drive's "pi": {"measure": "SPAN.T" or "ROLLER.F", "set", "kp", "ki", "limit", "lag", "feedforward"}.
+    """A drive's "pi": {"measure": "SPAN.T" or "ROLLER.F", "set", "kp", "ki", "limit", "lag", "feedforward",
+    "compression"}.
     Which parts it names is checked once the line is read (`check_loops`)."""
     o = r.keys(node, what, required=("measure", "set", "kp", "ki"), optional=("limit", "lag", "feedforward", "compression"))
     measure = r.string(o["measure"], f"{what}.measure")
