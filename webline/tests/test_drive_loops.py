@@ -409,3 +409,99 @@ def test_a_dancer_loop_names_a_dancer_and_the_parts_refuse_it(fmus):
     assert scene.line[-1].drive.loop.dancer.sign == 1.0, "the dancer upstream: more web stored calls for more speed"
     with pytest.raises(SceneError, match="has a loop in its drive"):
         run_scene(scene, "parts", fmu_dir=fmus)
+
+
+def test_a_tension_set_point_at_or_below_zero_is_refused_unless_compression_is_meant(fmus):
+    """A scene's "set" <= 0 N (a constant, a table that reaches it, an input's start) is refused with the key
+    and the value; "compression": true allows it (a span's tension only: a load cell reads a force's size)."""
+    good = {"kp": 0.2, "ki": 2.0}
+    for set_, value in (("-50 N", "-50"), ("0 N", "0"), ({"table": [["0 s", "400 N"], ["1 s", "-283 N"]]}, "-283"),
+                        ({"input": "-50 N"}, "-50")):
+        with pytest.raises(SceneError, match=rf"loop\.json:\d+:\d+: .*drive\.pi\.set(\.input)? = {value} N: a tension set "
+                                             r"point must be > 0 N .*\"compression\": true"):
+            looped({**good, "set": set_}, "10 m/s", "1 s")
+    scene = looped({**good, "set": "-50 N", "compression": True}, "10 m/s", "1 s")
+    assert scene.line[0].drive.loop.compression
+    with pytest.raises(SceneError, match="compression must be true or false"):
+        looped({**good, "set": "400 N", "compression": "yes"}, "10 m/s", "1 s")
+    with pytest.raises(SceneError, match="a load cell reads the size of a force"):
+        parse_scene(load_cell_looped({"wrap": "90 deg"}).replace('"kp": 0.2', '"compression": true, "kp": 0.2'), "x.json")
+
+
+def test_a_set_point_input_at_or_below_zero_is_an_fmi_error_naming_it(fmus, tmp_path, capsys):
+    """The Line FMU's input unwind.T_set set to -50 N after initialization: fmi2Error and one log line that
+    names the variable and the value (the instance is then in FMI's error state); with "compression": true
+    the same value is taken. The Roller FMU itself, FMI 2.0 and 3.0: loop.set <= 0 with loop.kind = 1 is
+    refused the same way when set after initialization; a start value of 0 is warned about when
+    initialization ends (loop.kind = 1 set alone leaves loop.set at its start, 0)."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.fmi3 import FMU3Slave
+
+    fmu = linefmu.export(looped({"set": {"input": "400 N"}, "kp": 0.2, "ki": 2.0}, "10 m/s", "1 s"), tmp_path / "loop.fmu", fmus)
+    capsys.readouterr()
+    with pytest.raises(FMICallException):
+        fmpy_run(fmu, {5: {"unwind.T_set": -50.0}}, stop=0.1)
+    lines = [line for line in capsys.readouterr().out.splitlines() if "T_set" in line]
+    assert len(lines) == 1 and "unwind.T_set = -50" in lines[0] and "must be > 0 N" in lines[0], lines
+    meant = looped({"set": {"input": "400 N"}, "kp": 0.2, "ki": 2.0, "compression": True}, "10 m/s", "1 s")
+    T, _ = fmpy_run(linefmu.export(meant, tmp_path / "compression.fmu", fmus), {5: {"unwind.T_set": -50.0}}, stop=0.1)
+    assert T[-1] < T[4], "compression meant: the set point is taken"
+
+    loop = {"loop.kind": 1, "loop.kp": 0.2, "loop.ki": 2.0, "loop.set": 400.0, "loop.measured": 400.0, "v_start": 5.0}
+    for standard in ("fmi2", "fmi3"):
+        path = str(fmus / "Roller.fmu") if standard == "fmi2" else str(fmus / "fmi3" / "Roller.fmu")
+        md = read_model_description(path)
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        unzipped = extract(path)
+        messages = []
+        for start, late in ((loop, -5.0), ({**loop, "loop.set": 0.0}, None)):
+            if standard == "fmi2":
+                fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier="Roller", instanceName="r")
+                fmu.instantiate(loggingOn=True)
+                fmu.setupExperiment(startTime=0.0)
+                fmu.enterInitializationMode()
+                set_real = fmu.setReal
+            else:
+                fmu = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzipped, modelIdentifier="Roller", instanceName="r")
+                fmu.instantiate(loggingOn=True, logMessage=lambda env, status, category, message: messages.append(message.decode()))
+                fmu.enterInitializationMode(startTime=0.0)
+                set_real = fmu.setFloat64
+            for name, value in start.items():
+                set_real([vr[name]], [float(value)]) if name != "loop.kind" else (
+                    fmu.setInteger([vr[name]], [value]) if standard == "fmi2" else fmu.setInt32([vr[name]], [value]))
+            try:
+                fmu.exitInitializationMode()
+                if late is not None:
+                    with pytest.raises(FMICallException):
+                        set_real([vr["loop.set"]], [late])
+            finally:
+                fmu.freeInstance()
+        text = capsys.readouterr().out + "\n".join(messages)
+        assert "loop.set = -5 N: a force loop's set point must be > 0 N" in text, (standard, text)
+        assert "loop.set = 0 N: a force loop's set point must be > 0 N" in text, (standard, text)
+
+
+def test_a_loop_on_an_idlers_load_cell_starts_in_equilibrium_and_stays_flat(fmus):
+    """The paper rewind line with a spring-loaded dancer (webline/tests/cases/rewind_spring_dancer.json), its
+    unwinder's loop on the idler's load cell ("idler.F", 120 deg of wrap) and the pull roll at a constant
+    5 m/s: the equilibrium start holds the load cell at its 693 N and, with no disturbance, it stays there
+    over 4 s to 1e-9 of it in both engines (the reference to 1e-11: its rtol 1e-10; the Line FMU's
+    integrator at 1e-9 gives 1e-8 N, bounded, not a drift). `record` takes "idler.F": the engines agree
+    on it, and it is the closed form of the two spans' tensions."""
+    d = json.loads((SCENES.parent / "tests" / "cases" / "rewind_spring_dancer.json").read_text())
+    for c in d["line"]:
+        if c["name"] == "unwind":
+            c["drive"] = {"pi": {"measure": "idler.F", "set": "693 N", "kp": 0.5, "ki": 2.0}}
+        if c["name"] == "pull":
+            c["drive"] = {"speed": "5 m/s"}
+    d.update(stop_time="4 s", record=["entry.T", "feed.T", "idler.F"])
+    scene = parse_scene(json.dumps(d), "rewind_load_cell_loop.json")
+    for engine, result in zip(("line", "reference"), both(scene, fmus)):
+        F, Ta, Tb = (result.column(c) for c in ("idler.F [N]", "entry.T [N]", "feed.T [N]"))
+        print(f"{engine}: idler.F within {np.max(np.abs(F - 693.0)):.3g} N of 693 N")
+        assert np.max(np.abs(F - 693.0)) < 1e-9 * 693.0
+        # The load cell on the web forces it carries [physics, a load cell]: T_a + its inertia's share p
+        # is zero in the steady state, so F = sqrt(Ta^2 + Tb^2 - 2 Ta Tb cos 120 deg).
+        np.testing.assert_allclose(F, np.sqrt(Ta**2 + Tb**2 + Ta * Tb), rtol=1e-9)

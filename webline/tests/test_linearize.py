@@ -4,9 +4,13 @@ On a line with one idler between two spans, A is checked against the Jacobian of
 physics.md's equations written here by hand, and the idler's mode against the
 closed form omega^2 = (R^2/J) (EA/L1 + EA/L2); on the paper rewind line, the
 modes a controls engineer found by hand, the files written, and A after a run
-to a time in the pull roll's ramp.
+to a time in the pull roll's ramp. A loop's margins (`--loop`) against the plant and
+its PI computed apart; the Bode and step-response files; a hidden unstable tuning
+warned before a run's results (`growth`), and a run that runs away stopped at its
+bound (`bound`).
 """
 
+import json
 import math
 import re
 
@@ -15,7 +19,7 @@ import pytest
 from scipy.io import loadmat
 
 from webline.cli import main
-from webline.scene import load_scene
+from webline.scene import load_scene, parse_scene
 from webline.statespace import linearize
 
 from .conftest import ROOT
@@ -109,3 +113,172 @@ def test_an_unknown_signal_is_refused_by_name(fmus, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "no output 'nothing.T'" in err and "second.T" in err
     assert not list(tmp_path.iterdir())
+
+
+# ------------------------------------------------------------------ a loop as a controls engineer reads it
+
+LOOP = ROOT / "webline" / "scenes" / "rewind_ramp_loop.json"
+PET = {"E": "4.5 GPa", "thickness": "50 um", "width": "1 m", "density": "1390 kg/m3", "d_r": "1 ms"}
+
+
+def unwinder_line(drive):
+    """An unwinder (8 kg.m2, 0.5 m) with `drive`, a 2 m span, a pull roll at 10 m/s (a sink)."""
+    return parse_scene(json.dumps({
+        "name": "loop", "stop_time": "1 s", "step": "10 ms", "start": "equilibrium", "webs": {"PET": PET},
+        "line": [
+            {"type": "unwinder", "name": "unwind", "J": "8 kg.m2", "R": "0.5 m", "b": "0.1 N.m.s", "strain": 0.0,
+             "v_start": "10 m/s", "drive": drive},
+            {"type": "span", "name": "entry", "L": "2 m", "web": "PET", "effects": ["includeDamping"]},
+            {"type": "sink", "name": "pull", "speed": "10 m/s"},
+        ],
+        "record": ["entry.T"]}), "loop.json")
+
+
+def crossings(hz, L):
+    """The margins read off L on a fine grid, by linear interpolation between its points (this test's own
+    reading): [(Hz, gain margin dB)] where arg L = -180 deg, [(Hz, phase margin deg)] where |L| = 1."""
+    db, deg = 20 * np.log10(np.abs(L)), np.degrees(np.angle(-L))  # arg(-L): 0 where arg L = -180
+    lf = np.log10(hz)
+    gain, phase = [], []
+    for j in np.nonzero(np.sign(deg[:-1]) != np.sign(deg[1:]))[0]:
+        if abs(deg[j] - deg[j + 1]) < 90:  # a crossing of 0, not the jump at +-180
+            s = deg[j] / (deg[j] - deg[j + 1])
+            gain.append((10 ** (lf[j] + s * (lf[j + 1] - lf[j])), -(db[j] + s * (db[j + 1] - db[j]))))
+    for j in np.nonzero(np.sign(db[:-1]) != np.sign(db[1:]))[0]:
+        s = db[j] / (db[j] - db[j + 1])
+        phase.append((10 ** (lf[j] + s * (lf[j + 1] - lf[j])), deg[j] + s * (deg[j + 1] - deg[j])))
+    return gain, phase
+
+
+@pytest.mark.parametrize("gains", [{"kp": 0.2, "ki": 2.0}, {"kp": 2.0, "ki": 20.0, "lag": "20 ms"}])
+def test_loop_margins_match_the_plant_and_the_pi_computed_apart(fmus, gains):
+    """`--loop` breaks the loop inside the Line FMU at its torque (margins.OpenLoop). Independently: the
+    plant alone (the same line with a torque drive holding the loop's steady torque, linearized on its own),
+    the PI C(s) = kp + ki/s in closed form and the motor's lag 1/(1 + s T_m), L = sign C(s) P(s) / (1 + s T_m) on a
+    grid of 20000 points a decade, its crossings interpolated: the margins agree to 0.5 deg and 0.1 dB, the
+    crossover frequencies to 1e-3 (the grid's spacing is 1.2e-4 of a frequency; the two linearizations
+    differ only by the derivatives' 1e-7)."""
+    from webline.margins import OpenLoop
+
+    pi = {"measure": "entry.T", "set": "400 N", **gains}
+    looped = unwinder_line({"pi": pi})
+    ss = linearize(looped, fmu_dir=fmus)
+    m = OpenLoop(ss, "unwind").margins()
+    assert m.phase, "a crossover of |L| = 1"
+
+    torque = float(ss.y[ss.output_index("unwind.tau")])
+    plant = linearize(unwinder_line({"torque": f"{torque!r} N.m"}), fmu_dir=fmus)
+    assert plant.y[plant.output_index("entry.T")] == pytest.approx(400.0, rel=1e-9), "the same operating point"
+    A, b = plant.A, plant.B[:, plant.input_index("unwind.tau_m")]
+    c, d = plant.C[plant.output_index("entry.T")], plant.D[plant.output_index("entry.T"), plant.input_index("unwind.tau_m")]
+    sign = looped.component("unwind").drive.loop.sign
+    lag = looped.component("unwind").drive.loop.lag
+    hz = np.geomspace(1e-2, 1e3, 5 * 20000)
+    s = 2j * np.pi * hz
+    n = A.shape[0]
+    P = np.array([c @ np.linalg.solve(si * np.eye(n) - A, b) + d for si in s])
+    # The loop's torque c = -sign C(s) T and T = P (c + d): c = -L (c + d) with L = sign C P.
+    L = sign * (gains["kp"] + gains["ki"] / s) * P / (1 + s * lag)
+    gain, phase = crossings(hz, L)
+    print(f"margins: {m}; apart: gain {gain}, phase {phase}")
+    assert len(phase) == len(m.phase) and len(gain) == len(m.gain)
+    for (f, pm), c_ in zip(phase, m.phase):
+        assert c_.margin == pytest.approx(pm, abs=0.5) and c_.frequency == pytest.approx(f, rel=1e-3)
+    for (f, gm), c_ in zip(gain, m.gain):
+        assert c_.margin == pytest.approx(gm, abs=0.1) and c_.frequency == pytest.approx(f, rel=1e-3)
+
+
+def test_bode_and_step_response_files(fmus, tmp_path, capsys):
+    """--bode writes (Hz, dB, deg) beside its PNG, over the line's modes (a decade around them, not down to
+    a roll's radius), --step-response a CSV and PNG whose end is the response at 0 Hz (its modes settled),
+    --loop prints the margins."""
+    assert main(["linearize", str(LOOP), "--loop", "unwind", "--bode", "unwind.tau_m:entry.T", "--step-response",
+                 "unwind.tau_m:entry.T", "--out", str(tmp_path), "--fmu-dir", str(fmus)]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"phase margin +\d+\.\d+ deg at the gain crossover \d", text), text
+    ss = linearize(load_scene(LOOP), fmu_dir=fmus)
+    bode = np.loadtxt(tmp_path / "rewind_ramp_loop_bode_unwind.tau_m_entry.T.csv", delimiter=",", skiprows=1)
+    header = (tmp_path / "rewind_ramp_loop_bode_unwind.tau_m_entry.T.csv").read_text().splitlines()[0]
+    assert header == "frequency [Hz],magnitude [dB],phase [deg]"
+    h = ss.response("unwind.tau_m", "entry.T", bode[:, 0])
+    np.testing.assert_allclose(bode[:, 1], 20 * np.log10(np.abs(h)), atol=1e-6)
+    np.testing.assert_allclose(np.cos(np.radians(bode[:, 2])), np.cos(np.angle(h)), atol=1e-6)
+    assert 1e-3 < bode[0, 0] < 0.1 and 100 < bode[-1, 0] < 2000, "a decade beyond the line's modes"
+    step = np.loadtxt(tmp_path / "rewind_ramp_loop_step_unwind.tau_m_entry.T.csv", delimiter=",", skiprows=1)
+    dc = ss.response("unwind.tau_m", "entry.T", [1e-7])[0].real
+    assert step[-1, 1] == pytest.approx(dc, abs=0.01 * np.max(np.abs(step[:, 1]))), "settled at the 0 Hz gain"
+    assert step[0, 1] == 0.0
+    for name in ("bode_unwind.tau_m_entry.T", "step_unwind.tau_m_entry.T", "loop_unwind"):
+        assert (tmp_path / f"rewind_ramp_loop_{name}.png").stat().st_size > 10_000
+
+
+def unstable(stop="4 s"):
+    """rewind_ramp_loop.json, its unwinder wound and its loop tuned kp 0.5, ki 5, no ramp: a mode near 4.6 Hz
+    grows; a set point 0.01 N up at 0.1 s starts it."""
+    d = json.loads(LOOP.read_text())
+    d["stop_time"] = stop
+    for c in d["line"]:
+        if c["name"] == "unwind":
+            c["wound"] = {"thickness": "80 um"}
+            c["drive"]["pi"].update(kp=0.5, ki=5.0, set={"table": [["0 s", "400 N"], ["0.1 s", "400 N"], ["0.1 s", "400.01 N"]]})
+        if c["name"] == "pull":
+            c["drive"] = {"speed": "5 m/s"}
+    return d
+
+
+def test_a_growing_loop_is_warned_before_the_results(fmus, tmp_path, capsys):
+    """`webline run` linearizes the line first and names the growing mode, its frequency to 4 digits, before
+    the run's summary; the run's own oscillation, its zero crossings over the last 2 s, has that frequency
+    to 1 %. `linearize` marks it."""
+    scene = tmp_path / "unstable.json"
+    scene.write_text(json.dumps(unstable()))
+    assert main(["run", str(scene), "--out", str(tmp_path), "--no-plot", "--fmu-dir", str(fmus)]) == 0
+    text = capsys.readouterr().out
+    warning = re.search(r"warning: the line is unstable at the start: an oscillation at ([\d.]+) Hz .*damping ratio (-[\d.]+).*"
+                        r"the states it moves most: (.*?);", text)
+    assert warning, text
+    assert text.index("warning: the line is unstable") < text.index("rewind_ramp_loop: engine"), "before the results"
+    assert "unwind.omega" in warning.group(3) and "unwind.loop.I" in warning.group(3)
+    csv = np.genfromtxt(tmp_path / "rewind_ramp_loop.csv", delimiter=",", names=True)
+    t, T = csv["time_s"], csv["entryT_N"] - 400.0
+    late = t > t[-1] - 2.0
+    zero = t[late][1:][np.sign(T[late][1:]) != np.sign(T[late][:-1])]
+    measured = (len(zero) - 1) / (2 * (zero[-1] - zero[0]))
+    print(f"warned {warning.group(1)} Hz, damping {warning.group(2)}; the run oscillates at {measured:.4g} Hz")
+    assert float(warning.group(1)) == pytest.approx(measured, rel=0.01)
+    assert np.max(np.abs(T[late])) > 100 * np.max(np.abs(T[(t > 0.1) & (t < 0.6)])), "it grows"
+
+    assert main(["linearize", str(scene), "--out", str(tmp_path), "--fmu-dir", str(fmus)]) == 0
+    grows = [r for r in capsys.readouterr().out.splitlines() if "GROWS" in r]
+    assert len(grows) == 1 and float(grows[0].split()[0]) == pytest.approx(4.6, abs=0.1)
+
+
+def test_a_stable_loop_runs_without_a_warning(fmus, tmp_path, capsys):
+    """The shipped loop's line at its own tuning: no mode grows, nothing is said; a wound roll's radius
+    drifts, which is not a loop's growth."""
+    d = json.loads(LOOP.read_text())
+    d["stop_time"] = "0.5 s"
+    d["line"][0]["wound"] = {"thickness": "80 um"}
+    scene = tmp_path / "stable.json"
+    scene.write_text(json.dumps(d))
+    assert main(["run", str(scene), "--out", str(tmp_path), "--no-plot", "--fmu-dir", str(fmus)]) == 0
+    assert "warning" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("engine", ["line", "reference"])
+def test_a_run_whose_tension_runs_away_stops_at_the_bound(fmus, tmp_path, capsys, engine):
+    """The unstable tuning without the motor's torque limit (which holds it to a limit cycle of about 2 kN)
+    grows until the entry span's tension passes 10 % of its EA (48 kN on 80 um paper, 1.2 m wide): the
+    run stops there with exit code 2 and a message naming the span, the value, the time and the bound, in
+    the Line FMU's run and in the reference alike (bound.py)."""
+    d = unstable("12 s")
+    del d["line"][0]["drive"]["pi"]["limit"]
+    scene = tmp_path / "runaway.json"
+    scene.write_text(json.dumps(d))
+    assert main(["run", str(scene), "--engine", engine, "--out", str(tmp_path), "--no-plot", "--fmu-dir", str(fmus)]) == 2
+    err = capsys.readouterr().err
+    found = re.search(r"the tension of span '(entry|feed)' reached (-?[\d.e+]+) N at t = ([\d.]+) s, past the bound of "
+                      r"4\.8e\+04 N \(10 % of its web's EA", err)
+    assert found, err
+    assert abs(float(found.group(2))) == pytest.approx(48_000, rel=0.02) and 8.0 < float(found.group(3)) < 11.0
+    assert not (tmp_path / "rewind_ramp_loop.csv").exists()

@@ -104,6 +104,14 @@ pub trait Model: Variables + Clone + 'static {
     fn save_state(&self, out: &mut StateWriter);
     fn load_state(&mut self, input: &mut StateReader) -> FmiResult;
 
+    /// A Real input's or tunable parameter's value that its range allows but the model's other
+    /// parameters do not (a force loop's set point <= 0 N without `loop.compression`), set after
+    /// initialization: checked with the ranges, before any value of the call applies.
+    #[inline(always)]
+    fn check_real(&self, _vr: u32, _value: f64) -> FmiResult {
+        Ok(())
+    }
+
     /// First derivative of a continuous Real input over the next
     /// communication step (`fmi2SetRealInputDerivatives`, order 1). The layer
     /// has checked that `vr` is a Real input and the value finite.

@@ -436,6 +436,17 @@ impl Model for Line {
         self.ode.settle()
     }
 
+    /// A part's own check of a value its range allows (a roller's T_set <= 0), named as the line names it.
+    fn check_real(&self, vr: u32, value: f64) -> FmiResult {
+        match self.binding(vr)? {
+            Binding::Real { part, vr: part_vr, .. } => self.ode.parts[part].check_real(part_vr, value).map_err(|e| {
+                let name = self.shared.description.variable(vr).map_or_else(|| format!("value reference {vr}"), |v| v.name.to_string());
+                e.prefixed(&format!("{name} = {value}"))
+            }),
+            _ => Ok(()),
+        }
+    }
+
     fn set_input_derivative(&mut self, vr: u32, value: f64) -> FmiResult {
         let Binding::Real { part, vr: part_vr, .. } = self.binding(vr)? else {
             return Err(FmiError::error(format!("value reference {vr} is not an input")));

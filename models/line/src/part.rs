@@ -106,6 +106,9 @@ impl Part {
     pub fn set_input_derivative(&mut self, vr: u32, x: f64) -> FmiResult {
         each!(self, m => m.set_input_derivative(vr, x))
     }
+    pub fn check_real(&self, vr: u32, x: f64) -> FmiResult {
+        each!(self, m => m.check_real(vr, x))
+    }
     pub fn save_variables(&self, out: &mut StateWriter) {
         each!(self, m => m.save_variables(out))
     }

@@ -143,6 +143,14 @@ pub fn refusal(p: &Parameters) -> Option<String> {
     None
 }
 
+/// A force loop's set point `loop.set` = `value` <= 0 N where `loop.compression` does not say that
+/// compression is meant: refused when set after initialization, warned about when it ends. None if it fits.
+pub fn set_point_refusal(p: &Parameters, value: f64) -> Option<String> {
+    (Kind::of(p) == Kind::Force && !p.loop_compression && !(value > 0.0)).then(|| {
+        format!("loop.set = {value} N: a force loop's set point must be > 0 N (a web in compression buckles); loop.compression = true (a scene's \"compression\": true) allows it")
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -60,6 +60,13 @@ impl Model for Roller {
         Ok(())
     }
 
+    fn check_real(&self, vr: u32, value: f64) -> FmiResult {
+        match control::set_point_refusal(&self.params, value) {
+            Some(why) if vr == Real::loop_set as u32 => Err(FmiError::error(why)),
+            _ => Ok(()),
+        }
+    }
+
     /// `canInterpolateInputs="false"`: the layer refuses input derivatives
     /// before they reach the model.
     fn set_input_derivative(&mut self, vr: u32, _value: f64) -> FmiResult {
@@ -84,9 +91,11 @@ impl Model for Roller {
             Ok(loaded) => (Some(loaded), None),
             Err(unmatched) => (None, unmatched),
         };
+        // A start value is only warned about: loop.kind = 1 alone leaves loop.set at its start, 0.
+        let set_point = profile.as_ref().is_none_or(|loaded| loaded.table(drive::Key::Set).is_none()).then(|| control::set_point_refusal(p, p.loop_set)).flatten();
         self.profile = profile;
         self.start(experiment.start_time);
-        Ok(unmatched.into_iter().chain(roll::massless_roll(&self.params)).collect())
+        Ok(unmatched.into_iter().chain(roll::massless_roll(&self.params)).chain(set_point).collect())
     }
 
     fn provisional_state(&mut self) {

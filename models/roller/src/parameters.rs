@@ -56,6 +56,8 @@ pub struct Parameters {
     pub loop_ki: f64,
     pub loop_sign: f64,
     pub loop_feedforward: bool,
+    /// A force loop's set point may be <= 0 N: compression is meant.
+    pub loop_compression: bool,
     /// An ideal speed drive on `loop.speed` (the Line's input v_ref), held over a step.
     pub speed_input: bool,
     /// The wrap angle its load cell sees, rad.

@@ -117,6 +117,7 @@ fmi_core::bind_variables! {
         includeTraction: param(params.traction),
         layered: param(params.layered),
         loop_feedforward: param(params.loop_feedforward),
+        loop_compression: param(params.loop_compression),
         speed_input: param(params.speed_input),
     }
     string {

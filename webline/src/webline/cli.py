@@ -5,7 +5,8 @@
     webline export SCENE.json -o LINE.ssp
     webline export SCENE.json --fmu [-o Line.fmu] [--fmi3]
     webline check SCENE_OR_SSP ... [--method auto|derivatives|differences]
-    webline linearize SCENE.json [--at TIME] [--bode INPUT:OUTPUT ...] [-o MODEL.mat]
+    webline linearize SCENE.json [--at TIME] [--loop NAME] [--bode INPUT:OUTPUT ...] [--step-response INPUT:OUTPUT ...]
+                                 [-o MODEL.mat]
     webline reference SCENE.json
     webline convergence SCENE.json [--engine parts|line] [--steps 2ms,1ms,0.5ms]
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--sample KEY=uniform(A, B) --n N] [--scheduler tcp://host:8786]
@@ -29,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from . import installation, units
+from .bound import Runaway
 from .names import ARCHIVE_ENGINES, ENGINES, engine_name
 from .fmus import DEFAULT_FMU_DIR, FmuError
 from .linear import StabilityError
@@ -244,6 +246,10 @@ def cmd_run(args):
         raise SceneError("--reference compares an engine with the reference; --engine reference is the reference itself")
     if args.force and engine != "parts":
         raise SceneError("--force runs the parts' co-simulation above its predicted stable step; it goes with --engine parts")
+    from .growth import check
+
+    for warning in check(scene, args.fmu_dir):  # before the run: a loop that grows is never silent
+        print(f"webline run: warning: {warning}", flush=True)
     result = run_scene(scene, engine, args.fmu_dir, args.step, force=args.force,
                        **master_options(args, engine or "line", progress))
     return report_run(args, scene, scene.name, result, None)
@@ -329,19 +335,36 @@ def bode_arg(text: str) -> tuple[str, str]:
 
 
 def cmd_linearize(args):
-    """The scene's Line FMU linearized at --at: the state-space model as a .mat, the modes, Bode plots."""
-    from .statespace import bode, linearize, report
+    """The scene's Line FMU linearized at --at: the state-space model as a .mat, the modes, the loops'
+    margins, Bode plots and step responses (each a CSV and a PNG)."""
+    from dataclasses import replace
+
+    from . import margins
+    from .statespace import bode, bode_plot, frequencies, linearize, report, step_plot
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
     ss = linearize(scene, args.at, args.fmu_dir)
-    for pair in args.bode or []:  # every name checked before anything is written
+    for pair in (args.bode or []) + (args.step_response or []):  # every name checked before anything is written
         ss.input_index(pair[0]), ss.output_index(pair[1])
+    loops = [margins.OpenLoop(ss, name) for name in args.loop or []]
     modes = ss.modes()
     print(report(ss, modes))
     out = Path(args.out)
     written = [str(ss.write_mat(args.output or out / f"{scene.name}_linear.mat"))]
+    for loop in loops:
+        m = loop.margins()
+        print(margins.report(m))
+        opened = replace(ss, A=loop.A).modes()  # L's resonances are the open loop's
+        hz = np.unique(np.concatenate([frequencies(opened)] + [[c.frequency] for c in m.gain + m.phase]))
+        marks = [(c.frequency, f"gain margin {c.margin:.1f} dB") for c in [m.gain_margin] if c]
+        marks += [(c.frequency, f"phase margin {c.margin:.1f} deg") for c in [m.phase_margin] if c]
+        written += map(str, bode_plot(hz, loop.response(hz), out / f"{scene.name}_loop_{loop.name}.png",
+                                      f"{ss.scene}: loop {loop.name} broken at its torque, L(j omega), at t = {ss.time:g} s",
+                                      "|L| [dB]", opened, marks))
     for i, o in args.bode or []:
-        written.append(str(bode(ss, i, o, out / f"{scene.name}_bode_{i}_{o}.png", modes)))
+        written += map(str, bode(ss, i, o, out / f"{scene.name}_bode_{i}_{o}.png", modes))
+    for i, o in args.step_response or []:
+        written += map(str, step_plot(ss, i, o, out / f"{scene.name}_step_{i}_{o}.png", modes))
     print("wrote " + ", ".join(written))
     return 0
 
@@ -513,7 +536,13 @@ def main(argv=None):
     p.add_argument("scene")
     p.add_argument("--at", type=time_arg, default=0.0, help="the time to linearize at (default 0: the start)")
     p.add_argument("--bode", type=bode_arg, action="append", metavar="INPUT:OUTPUT",
-                   help="a Bode plot from a Line input to a Line output, e.g. unwind.tau_m:entry.T (repeat for more)")
+                   help="a Bode plot from a Line input to a Line output, e.g. unwind.tau_m:entry.T, as a CSV (Hz, dB, deg) "
+                        "and a PNG (repeat for more)")
+    p.add_argument("--step-response", type=bode_arg, action="append", metavar="INPUT:OUTPUT",
+                   help="the response of a Line output to a unit step of a Line input, as a CSV and a PNG (repeat for more)")
+    p.add_argument("--loop", action="append", metavar="NAME",
+                   help="break roller NAME's drive loop at its torque output: the loop's gain and phase margins, their "
+                        "crossover frequencies, and its Bode plot (repeat for more)")
     p.add_argument("-o", "--output", type=Path, help="the model (default: OUT/SCENE_linear.mat)")
     p.add_argument("--fmu-dir", type=Path, default=DEFAULT_FMU_DIR)
     p.add_argument("--out", default=str(OUT), help="output folder (default: ./out)")
@@ -579,7 +608,7 @@ def main(argv=None):
             installation.require_platform(getattr(args, "fmu_dir", None))
         return args.func(args)
     except (SceneError, CoSimulationError, FmuError, SspError, FileNotFoundError, LineFmuError, StabilityError,
-            StudyError, installation.PlatformError) as e:
+            StudyError, installation.PlatformError, Runaway) as e:
         print(f"webline: {e}", file=sys.stderr)
         return 2
     except ModuleNotFoundError as e:

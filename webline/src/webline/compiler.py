@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .bound import tension_bounds
 from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, FmuFile, span_effects
 from .master import Master, Options, settle_start_values
 from .profiles import Profile
@@ -81,6 +82,8 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     else:
         start.update(J=float(node.J), R=float(node.R), b=float(node.b))
     start["v_start"] = float(scene.initial_speed(node))
+    if (node.name, "F") in scene.record:  # its load cell recorded: the Roller's load_cell.F at its wrap
+        start["load_cell.wrap"] = math.radians(node.wrap)
     if node.type in ROLL:
         start["roll"] = ROLL[node.type]
     wound = getattr(node, "wound", None)
@@ -145,6 +148,8 @@ def loop_values(loop) -> dict:
         "motor.limit": float(loop.limit),
         "motor.lag": float(loop.lag),
     }
+    if loop.compression:  # a set point <= 0 N is meant
+        values["loop.compression"] = True
     if loop.dancer is not None:  # a dancer loop [R13] on dancer.y, which the line wires from the dancer
         values.update({"dancer.set": float(loop.dancer.set), "dancer.kp": float(loop.dancer.kp), "dancer.ki": float(loop.dancer.ki)})
     return values
@@ -443,7 +448,8 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
 
 def run_scene(scene, fmu_dir=None, **options) -> Result:
     """A scene compiled and run; the columns named as the scene records them ("film.T [N]")."""
-    result = Master(compile_scene(scene, fmu_dir), Options(**options)).run()
+    bounds = {part: bound for span, bound in tension_bounds(scene).items() for part in layer_parts(scene.component(span))}
+    result = Master(compile_scene(scene, fmu_dir), Options(bounds=bounds, **options)).run()
     result.scene = scene.name
     result.columns = scene.columns()
     return result

@@ -212,13 +212,17 @@ def simulate(scene: Scene, path: Path, step: float | None = None, model_exchange
 
     h = step or scene.step
     outputs = [output(c, q) for c, q in scene.record]
+    watch = watcher(scene, path)
     t0 = clock.perf_counter()
     with fmpy_log.collecting() as (messages, logger):
         try:
             out = simulate_fmu(str(path), stop_time=scene.stop_time, step_size=h, output_interval=h, output=outputs,
-                               fmi_type="ModelExchange" if model_exchange else "CoSimulation", logger=logger)
+                               fmi_type="ModelExchange" if model_exchange else "CoSimulation", logger=logger,
+                               step_finished=watch)
         except Exception as e:  # FMPy's FMICallException names the call; the FMU's log says why
             raise LineFmuError(f"{scene.name}: {e}" + "".join(f"\n  {m}" for m in messages[-3:])) from e
+    if watch.stopped is not None:
+        raise watch.stopped
     wall = clock.perf_counter() - t0
     n = int(round(scene.stop_time / h))
     time = out["time"].astype(float)
@@ -233,6 +237,32 @@ def simulate(scene: Scene, path: Path, step: float | None = None, model_exchange
     return Result(scene=scene.name, columns=scene.columns(), time=time, data=data,
                   info={"method": f"Line FMU in FMPy, {how}", "step": h, "steps": n, "wall_time": wall,
                         "messages": messages})
+
+
+def watcher(scene: Scene, path: Path):
+    """FMPy's step_finished for a Line FMU's run: False, and the Runaway in `.stopped`, once a span's
+    tension passes its bound (bound.py)."""
+    from fmpy import read_model_description
+
+    from .bound import runaway, tension_bounds
+
+    bounds = tension_bounds(scene)
+    vrs = {v.name: v.valueReference for v in read_model_description(str(path)).modelVariables}
+    names = list(bounds)
+    refs = [vrs[f"{n}.T"] for n in names]
+    limits = [bounds[n] for n in names]
+
+    def step_finished(time, recorder):
+        fmu = recorder.fmu
+        values = fmu.getFloat64(refs) if hasattr(fmu, "getFloat64") else fmu.getReal(refs)  # FMI 3.0, 2.0
+        for name, T, limit in zip(names, values, limits):
+            if abs(T) > limit:
+                step_finished.stopped = runaway(scene.name, name, T, limit, time)
+                return False
+        return True
+
+    step_finished.stopped = None
+    return step_finished
 
 
 def run_libcosim(fmu: Path, outputs: list[str], step: float, stop: float):

@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .bound import runaway
 from .fmus import FmuError, FmuFile, Instance
 from .names import scene_columns
 from .result import Result
@@ -65,6 +66,7 @@ class Options:
     tolerance: float | None = 1e-12  # fmi2SetupExperiment's tolerance (None: not defined, as FMPy)
     progress: bool = False
     watch: bool = True  # stop a run whose tensions oscillate ever more (`Growth`); other engines do not watch
+    bounds: dict | None = None  # {span component: N}: a run stops where |F| of a span passes it (bound.py)
 
     @staticmethod
     def engine(**kwargs) -> "Options":
@@ -385,6 +387,9 @@ class Master:
                     stop = growth.see(t1, [self.sig[k].now for k in watched])
                     if stop:
                         raise CoSimulationError(f"{s.name}: {stop}")
+                for c, v in watched if self.opt.bounds else ():
+                    if abs(self.sig[(c, v)].now) > self.opt.bounds[c]:
+                        raise runaway(s.name, c, self.sig[(c, v)].now, self.opt.bounds[c], t1)
                 if t1 in bset:  # a kink or jump: extrapolate afresh
                     for sg in self.sig.values():
                         sg.has_prev = False

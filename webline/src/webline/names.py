@@ -7,7 +7,7 @@ a System's recorded variables are named back by `scene_columns`, an SSP archive'
 
 from __future__ import annotations
 
-from .scene import QUANTITIES, TRACTION_QUANTITIES
+from .scene import LOAD_CELL_QUANTITIES, QUANTITIES, TRACTION_QUANTITIES
 
 # The engines (engines.py runs them): the Line FMU, the reference, webline's co-simulation of the parts,
 # and an SSP archive in libcosim or FMPy.
@@ -19,7 +19,8 @@ ARCHIVE_ENGINES = ("parts", "libcosim", "fmpy")  # what runs an SSP archive (par
 # A scene's recorded quantity -> the FMU variable that holds it.
 SPAN_VARIABLES = {"T": "summary_Tension", "eps": "summary_Strain", "L": "summary_Length", "F_a": "web_a.F", "F_b": "web_b.F"}
 ROLLER_VARIABLES = {"v": "v", "omega": "omega", "tau": "tau", "r": "r", "y": "y", "y_dot": "y_dot", "eps": "web_b.eps",
-                    "v_web": "v_web", "slip": "slip", "traction": "traction", "mu_eff": "mu_eff", "h_air": "h_air"}
+                    "v_web": "v_web", "slip": "slip", "traction": "traction", "mu_eff": "mu_eff", "h_air": "h_air",
+                    "F": "load_cell.F"}
 
 
 def engine_name(text: str) -> str:
@@ -38,7 +39,8 @@ def scene_quantity(kind: str, variable: str):
         units = QUANTITIES["span"]
     else:
         names = {**{v: q for q, v in ROLLER_VARIABLES.items()}, "web_a.v": "v", "web_b.v": "v"}
-        units = {**QUANTITIES["dancer"], **QUANTITIES["winder"], **QUANTITIES["source"], **TRACTION_QUANTITIES}
+        units = {**QUANTITIES["dancer"], **QUANTITIES["winder"], **QUANTITIES["source"], **TRACTION_QUANTITIES,
+                 **LOAD_CELL_QUANTITIES}
     q = names.get(variable)
     return (q, units[q]) if q is not None else None
 

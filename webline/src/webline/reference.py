@@ -48,6 +48,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
+from .bound import runaway, tension_bounds
 from .result import Result
 from .scene import BRAKE_V_SLIP, STRAIN_RANGE, Dancer, Prescribed, Roller, Scene, SceneError, Span, span_layers
 
@@ -194,12 +195,8 @@ class LineODE:
                 e_d = d.sign * (z[self.i_y[d.dancer]] - d.set)
                 dz[i_trim] = d.ki * e_d
                 e += d.kp * e_d + z[i_trim]
-        elif lp.measure[1] == "F":  # a roller's load cell on the web forces it carries, as the Roller's pulls
-            cell = self.s.component(lp.measure[0])
-            F_a = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[cell.name])
-            F_b = sum(q[sp.name]["T"] for sp in self.outs[cell.name])
-            F = np.sqrt(max(F_a * F_a + F_b * F_b - 2.0 * F_a * F_b * np.cos(np.radians(cell.wrap)), 0.0))
-            e = lp.sign * (self.pv(lp.set, t) - F)
+        elif lp.measure[1] == "F":  # a roller's load cell
+            e = lp.sign * (self.pv(lp.set, t) - self.load_cell(self.s.component(lp.measure[0]), q))
         else:  # a span's tension
             e = lp.sign * (self.pv(lp.set, t) - q[lp.measure[0]]["T"])
         ff = 0.0
@@ -570,6 +567,19 @@ class LineODE:
             z[i] = v / R  # the same surface speed
         return z
 
+    def largest_excess(self, t, z, bounds) -> tuple:
+        """(span, its T, |T| - its bound) of the span whose tension comes nearest its bound (bound.py)."""
+        _, q, _ = self.evaluate(t, z)
+        span = max(bounds, key=lambda n: abs(q[n]["T"]) - bounds[n])
+        T = float(q[span]["T"])
+        return span, T, abs(T) - bounds[span]
+
+    def load_cell(self, cell, q) -> float:
+        """A roller's load cell: the resultant of the web forces it carries, as the Roller's pulls."""
+        F_a = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[cell.name])
+        F_b = sum(q[sp.name]["T"] for sp in self.outs[cell.name])
+        return float(np.sqrt(max(F_a * F_a + F_b * F_b - 2.0 * F_a * F_b * np.cos(np.radians(cell.wrap)), 0.0)))
+
     def record(self, t, z):
         dz, q, v = self.evaluate(t, z)
         row = []
@@ -593,6 +603,8 @@ class LineODE:
                 row.append(z[self.i_y[cname]])
             elif quantity == "y_dot":
                 row.append(z[self.i_y[cname] + 1])
+            elif quantity == "F":
+                row.append(self.load_cell(c, q))
         return row
 
 
@@ -690,6 +702,12 @@ def reference(scene: Scene, times=None, rtol=RTOL) -> Result:
         events.setdefault(ev.time, []).append(ev)
     z = ode.initial_state()
     atol = atol_of(ode, z)
+    bounds = tension_bounds(scene)
+
+    def runaway_event(t, z):  # > 0 while every tension is inside its bound (bound.py)
+        return -ode.largest_excess(t, z, bounds)[2]
+
+    runaway_event.terminal = True
     rows = []
     nfev = 0
     recorded = np.zeros(len(times), dtype=bool)
@@ -700,7 +718,11 @@ def reference(scene: Scene, times=None, rtol=RTOL) -> Result:
                 z = ode.apply_event(ev, z)
         ode.segment = (a, b)
         inside = np.nonzero((times >= a - 1e-12) & (times <= b + 1e-12) & ~recorded)[0]
-        sol = solve_ivp(ode.rhs, (a, b), z, method="Radau", rtol=rtol, atol=atol, dense_output=True)
+        sol = solve_ivp(ode.rhs, (a, b), z, method="Radau", rtol=rtol, atol=atol, dense_output=True, events=runaway_event)
+        if sol.status == 1:  # a tension passed its bound
+            t = float(sol.t_events[0][0])
+            span, T, _ = ode.largest_excess(t, sol.y_events[0][0], bounds)
+            raise runaway(scene.name, span, T, bounds[span], t)
         if not sol.success:
             raise RuntimeError(f"Radau failed on [{a}, {b}]: {sol.message}")
         nfev += sol.nfev

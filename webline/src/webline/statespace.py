@@ -1,4 +1,5 @@
-"""A line's state-space model from its Line FMU: A, B, C, D at a time, its modes, a frequency response.
+"""A line's state-space model from its Line FMU: A, B, C, D at a time, its modes, a frequency response
+(Bode plots as CSV and PNG) and a step response.
 
 The scene is exported as one Line FMU (`linefmu.export`), instantiated in Model
 Exchange, run there with FMPy's CVode to the time asked (from its start, the
@@ -216,7 +217,7 @@ def report(ss: StateSpace, modes: list[LineMode]) -> str:
     if moving:
         out.append("  the line is not steady here (A, B, C, D describe deviations from a moving point): "
                    + ", ".join(f"{s}' = {r:.4g} {_rate_unit(ss.units.get(s, ''))}" for s, r in moving))
-    out.append("  modes, slowest first: f_n = |lambda|/2 pi, damping ratio = -Re(lambda)/|lambda|, one eigenvalue of")
+    out.append("  modes, slowest first: f_n = |lambda|/2 pi, damping ratio = -Re(lambda)/|lambda| (< 0: the mode grows), one eigenvalue of")
     out.append("  each conjugate pair; ± how far a relative inaccuracy of "
                f"{DERIVATIVE_ACCURACY:g} in A's entries may move them; parts by their states' participation")
     out.append(f"  {'f_n [Hz]':>10} {'±':>7} {'damping':>8} {'±':>7}  {'eigenvalue [1/s]':<20} parts that move most")
@@ -229,6 +230,9 @@ def report(ss: StateSpace, modes: list[LineMode]) -> str:
             continue
         eig = f"{lam.real:.5g}" + (f"{lam.imag:+.5g}j" if lam.imag > m.error else "")
         kind = "" if lam.imag > m.error else f" (no oscillation: time constant {1 / m.omega_n:.3g} s)"
+        if lam.real > m.error:
+            kind += (" (a roll's radius: it drifts as the web winds)" if radius_mode(m)
+                     else f"  <- GROWS: doubles every {math.log(2.0) / lam.real:.3g} s")
         out.append(f"  {m.natural_frequency:>10.4g} {m.error / (2 * math.pi):>7.1g} {m.damping:>8.4f} "
                    f"{m.error / m.omega_n:>7.1g}  {eig:<20} {parts}{kind}")
     return "\n".join(out)
@@ -251,46 +255,176 @@ def _n_states(ss, part):
     return sum(s.startswith(part + ".") for s in ss.states)
 
 
+# A mode slower than this share of the line's fastest is an integrator's or a drift's, not a dynamic a
+# plot spans (an open loop's integrator is 0 to the derivatives' rounding, 1e-9 Hz).
+SLOWEST_SHOWN = 1e-6
+
+
+def line_modes(modes: list[LineMode]) -> list[LineMode]:
+    """The modes a plot spans: those resolved, without a roll's radius (it drifts over the roll's life,
+    at 1e-7 Hz and below: not a dynamic a loop or a plot of the line is about) or an integrator."""
+    dynamic = [m for m in modes if m.resolved and not radius_mode(m)]
+    fastest = max((m.natural_frequency for m in dynamic), default=0.0)
+    return [m for m in dynamic if m.natural_frequency >= SLOWEST_SHOWN * fastest]
+
+
+def radius_mode(m: LineMode) -> bool:
+    """A mode carried by rolls' radii alone: it drifts as the web winds, not a dynamic of the line."""
+    return bool(m.parts) and all(states == ["r"] for _, _, states in m.parts)
+
+
 def frequencies(modes: list[LineMode], per_decade: int = 100) -> np.ndarray:
-    """A Bode plot's frequencies (Hz): a decade below the slowest mode to a decade above the fastest,
-    with each mode's damped and natural frequency in it, so that no resonance peak falls between points."""
-    f = [m.natural_frequency for m in modes if m.resolved]
+    """A Bode plot's frequencies (Hz): a decade below the line's slowest mode to a decade above its
+    fastest (`line_modes`), with each mode's damped and natural frequency in it, so that no resonance
+    peak falls between points."""
+    shown = line_modes(modes)
+    f = [m.natural_frequency for m in shown]
     lo, hi = (min(f) / 10, max(f) * 10) if f else (0.1, 1000.0)
     grid = np.geomspace(lo, hi, int(per_decade * math.log10(hi / lo)) + 1)
-    peaks = [g for m in modes if m.resolved for g in (m.frequency, m.natural_frequency) if lo < g < hi]
+    peaks = [g for m in shown for g in (m.frequency, m.natural_frequency) if lo < g < hi]
     return np.unique(np.concatenate([grid, peaks]))
 
 
-def bode(ss: StateSpace, input: str, output: str, path, modes: list[LineMode]) -> Path:
-    """A PNG of the frequency response from `input` to `output`: magnitude and phase over frequency,
-    each mode's natural frequency marked and named by the part that moves most in it."""
+# Two mode labels closer than this share of the frequency axis (log) are written as one.
+LABEL_SPACING = 0.03
+
+
+def _labels(modes: list[LineMode], lo: float, hi: float) -> list[tuple[float, str]]:
+    """One label per group of modes whose frequencies lie within LABEL_SPACING of the axis of each
+    other, at the group's first: '3.12 Hz unwind, 3.3 Hz entry'."""
+    span = math.log10(hi / lo)
+    groups = []
+    for m in sorted((m for m in line_modes(modes) if lo <= m.natural_frequency <= hi), key=lambda m: m.natural_frequency):
+        text = f"{m.natural_frequency:.3g} Hz {m.parts[0][0] if m.parts else ''}".strip()
+        if groups and math.log10(m.natural_frequency / groups[-1][0]) < LABEL_SPACING * span:
+            groups[-1][1].append(text)
+        else:
+            groups.append((m.natural_frequency, [text]))
+    return [(f, ", ".join(texts)) for f, texts in groups]
+
+
+def write_curve(path, header: list[str], columns) -> Path:
+    """A CSV of equal-length columns under a header of names with units."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savetxt(path, np.column_stack(columns), delimiter=",", header=",".join(header), comments="", fmt="%.10g")
+    return path
+
+
+def bode(ss: StateSpace, input: str, output: str, path, modes: list[LineMode]) -> tuple[Path, Path]:
+    """The frequency response from `input` to `output`: a CSV (frequency [Hz], magnitude [dB], phase
+    [deg]) and beside it a PNG of magnitude and phase over the line's modes (`frequencies`)."""
+    hz = frequencies(modes)
+    h = ss.response(input, output, hz)
+    unit_in, unit_out = ss.units.get(input, ""), ss.units.get(output, "")
+    title = f"{ss.scene}: from {input} to {output}, linearized at t = {ss.time:g} s"
+    what = f"|{output} / {input}| [dB re 1 {unit_out or '1'} per {unit_in or '1'}]"
+    return bode_plot(hz, h, path, title, what, modes)
+
+
+def bode_plot(hz, h, path, title: str, what: str, modes: list[LineMode], marks=()) -> tuple[Path, Path]:
+    """`path` (.png) and its .csv: 20 log10 |h| and the unwrapped phase of h over `hz`, each mode's
+    frequency marked (labels that would overlap joined), and `marks`: [(Hz, text)] drawn in red."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    hz = frequencies(modes)
-    h = ss.response(input, output, hz)
-    unit_in, unit_out = ss.units.get(input, ""), ss.units.get(output, "")
+    db = 20.0 * np.log10(np.abs(h))
+    deg = np.degrees(np.unwrap(np.angle(h)))
+    path = Path(path)
+    csv = write_curve(path.with_suffix(".csv"), ["frequency [Hz]", "magnitude [dB]", "phase [deg]"], [hz, db, deg])
     fig, (mag, phase) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
-    mag.loglog(hz, np.abs(h), lw=1.3)
-    phase.semilogx(hz, np.degrees(np.unwrap(np.angle(h))), lw=1.3)
-    for m in modes:
-        if m.resolved and hz[0] <= m.natural_frequency <= hz[-1]:
-            for ax in (mag, phase):
-                ax.axvline(m.natural_frequency, color="0.6", lw=0.7, ls=":")
-            name = m.parts[0][0] if m.parts else ""
-            mag.annotate(f"{m.natural_frequency:.3g} Hz {name}", (m.natural_frequency, 1.0), xycoords=("data", "axes fraction"),
-                         rotation=90, va="top", ha="right", fontsize=7, color="0.35")
-    mag.set_ylabel(f"|{output} / {input}| [{unit_out or '1'} per {unit_in or '1'}]")
+    mag.semilogx(hz, db, lw=1.3)
+    phase.semilogx(hz, deg, lw=1.3)
+    for f, text in _labels(modes, hz[0], hz[-1]):
+        for ax in (mag, phase):
+            ax.axvline(f, color="0.6", lw=0.7, ls=":")
+        mag.annotate(text, (f, 1.0), xycoords=("data", "axes fraction"), rotation=90, va="top", ha="right",
+                     fontsize=7, color="0.35")
+    for f, text in marks:
+        for ax in (mag, phase):
+            ax.axvline(f, color="tab:red", lw=0.8, ls="--")
+        phase.annotate(text, (f, 0.02), xycoords=("data", "axes fraction"), rotation=90, va="bottom", ha="right",
+                       fontsize=7, color="tab:red")
+    mag.set_ylabel(what)
     phase.set_ylabel("phase [deg]")
     phase.set_xlabel("frequency [Hz]")
     for ax in (mag, phase):
         ax.grid(True, which="both", alpha=0.3)
-    fig.suptitle(f"{ss.scene}: from {input} to {output}, linearized at t = {ss.time:g} s", fontsize=10)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
-    return path
+    return csv, path
+
+
+# A step response runs this many of the slowest line mode's time constants (1/|Re lambda|), at least
+# this many periods of its slowest oscillation, with STEP_POINTS_PER_PERIOD points in a period of its
+# fastest (at least STEP_POINTS, at most STEP_POINTS_MAX: above, the fastest modes are sampled coarser).
+STEP_TIME_CONSTANTS = 5.0
+STEP_PERIODS = 3.0
+STEP_POINTS = 2000
+STEP_POINTS_PER_PERIOD = 16
+STEP_POINTS_MAX = 100_000
+
+
+def step_time(modes: list[LineMode]) -> tuple[float, int]:
+    """How long a step response runs (s), until the slowest of the line's modes has settled, and in
+    how many points."""
+    shown = line_modes(modes)
+    if not shown:
+        return 1.0, STEP_POINTS
+    decay = [STEP_TIME_CONSTANTS / -m.eigenvalue.real for m in shown if m.eigenvalue.real < -m.error]
+    oscillating = [m.frequency for m in shown if m.eigenvalue.imag > m.error]
+    t_end = max(decay + [STEP_PERIODS / f for f in oscillating] or [1.0])
+    points = STEP_POINTS_PER_PERIOD * t_end * max(oscillating, default=0.0)
+    return t_end, int(min(max(points, STEP_POINTS), STEP_POINTS_MAX))
+
+
+def step_response(ss: StateSpace, input: str, output: str, t_end: float, points: int = STEP_POINTS) -> tuple[np.ndarray, np.ndarray]:
+    """d output (t) after a unit step of `input` at t = 0 (the operating point before it): exact at the
+    points, the step held between them (the matrix exponential of [[A, b], [0, 0]] over a point's
+    interval: x_{k+1} = Phi x_k + Gamma)."""
+    from scipy.linalg import expm
+
+    i, o = ss.input_index(input), ss.output_index(output)
+    n = ss.A.shape[0]
+    t = np.linspace(0.0, t_end, points + 1)
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n], M[:n, n] = ss.A, ss.B[:, i]
+    E = expm(M * (t[1] - t[0]))
+    phi, gamma = E[:n, :n], E[:n, n]
+    x = np.zeros(n)
+    y = np.empty_like(t)
+    for k in range(len(t)):
+        y[k] = ss.C[o] @ x + ss.D[o, i]
+        x = phi @ x + gamma
+    return t, y
+
+
+def step_plot(ss: StateSpace, input: str, output: str, path, modes: list[LineMode]) -> tuple[Path, Path]:
+    """The step response from `input` to `output` (`step_response`) as a CSV (time [s], the output's
+    change per unit of the input) and beside it a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t, y = step_response(ss, input, output, *step_time(modes))
+    unit_in, unit_out = ss.units.get(input, "") or "1", ss.units.get(output, "") or "1"
+    path = Path(path)
+    what = f"d {output} [{unit_out}] per {unit_in} of {input}"
+    csv = write_curve(path.with_suffix(".csv"), ["time [s]", what], [t, y])
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    ax.plot(t, y, lw=1.3)
+    ax.set_xlabel("time after the step [s]")
+    ax.set_ylabel(what)
+    ax.grid(True, alpha=0.3)
+    ax.set_title(f"{ss.scene}: a unit step of {input} [{unit_in}] at t = {ss.time:g} s, {output}'s change", fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return csv, path

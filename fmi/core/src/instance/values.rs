@@ -180,6 +180,9 @@ impl<M: Model> Instance<M> {
             if self.phase.initialized() && v.causality == Causality::Parameter && !v.range.contains(x) {
                 return Err(out_of_range(v, x).prefixed(call));
             }
+            if self.phase.initialized() {
+                self.model.check_real(vr, x).map_err(|e| e.prefixed(call))?;
+            }
         }
         self.settled = false;
         for (&vr, &x) in vrs.iter().zip(values) {

@@ -86,6 +86,11 @@ class _Reader:
             raise self.err(node, f"{what} must be a non-empty string")
         return node.value
 
+    def boolean(self, node: Node, what: str) -> bool:
+        if not isinstance(node.value, bool):
+            raise self.err(node, f"{what} must be true or false, found {node.value!r}")
+        return node.value
+
     def quantity(self, node: Node, dimension, what: str, positive=False, nonnegative=False):
         try:
             x = units.parse_quantity(node.value, dimension)
@@ -287,9 +292,10 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
 
 
 def _loop(r: _Reader, node: Node, what: str) -> Loop:
-    """A drive's "pi": {"measure": "SPAN.T" or "ROLLER.F", "set", "kp", "ki", "limit", "lag", "feedforward"}.
+    """A drive's "pi": {"measure": "SPAN.T" or "ROLLER.F", "set", "kp", "ki", "limit", "lag", "feedforward",
+    "compression"}.
     Which parts it names is checked once the line is read (`check_loops`)."""
-    o = r.keys(node, what, required=("measure", "set", "kp", "ki"), optional=("limit", "lag", "feedforward"))
+    o = r.keys(node, what, required=("measure", "set", "kp", "ki"), optional=("limit", "lag", "feedforward", "compression"))
     measure = r.string(o["measure"], f"{what}.measure")
     part, _, quantity = measure.rpartition(".")
     if not part or quantity not in ("T", "F"):
@@ -305,10 +311,25 @@ def _loop(r: _Reader, node: Node, what: str) -> Loop:
         kp=r.quantity(o["kp"], units.DIMENSIONLESS, f"{what}.kp (N.m per N)", nonnegative=True),
         ki=r.quantity(o["ki"], units.DIMENSIONLESS, f"{what}.ki (N.m per N.s)", nonnegative=True),
     )
+    if "compression" in o:
+        loop.compression = r.boolean(o["compression"], f"{what}.compression")
+        if loop.compression and quantity == "F":
+            raise r.err(o["compression"], f"{what}.compression: a load cell reads the size of a force (>= 0); "
+                                          "only a span's tension (\"SPAN.T\") can be held in compression")
+    _set_point(r, set_node, loop, f"{what}.set" + (".input" if set_input else ""))
     _motor(r, o, what, loop)
     if "feedforward" in o:
         _feedforward(r, o["feedforward"], f"{what}.feedforward", loop)
     return loop
+
+
+def _set_point(r: _Reader, node: Node, loop: Loop, what: str):
+    """A tension set point is > 0 (a web pushed is no longer held by its tension), unless the loop
+    says it means compression ("compression": true)."""
+    low = min(v for _, v in loop.set.knots)
+    if low <= 0.0 and not loop.compression:
+        raise r.err(node, f"{what} = {low:g} N: a tension set point must be > 0 N (a web in compression buckles); "
+                          "give the loop \"compression\": true if it is meant")
 
 
 def _motor(r: _Reader, o, what: str, loop: Loop):

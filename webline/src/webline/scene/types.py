@@ -24,9 +24,15 @@ QUANTITIES = {
 TRACTION_QUANTITIES = {"v_web": "m/s", "slip": "m/s", "traction": "1", "mu_eff": "1", "h_air": "m"}
 
 
+# What a roller with a wrap records besides: its load cell (docs/physics.md, "A load cell").
+LOAD_CELL_QUANTITIES = {"F": "N"}
+
+
 def quantities_of(c) -> dict:
-    """What a component records: its type's quantities, and where the web may slip the traction's."""
-    return {**QUANTITIES[c.type], **(TRACTION_QUANTITIES if getattr(c, "traction", None) is not None else {})}
+    """What a component records: its type's quantities, where the web may slip the traction's, and a
+    roller's load cell where it has a wrap (every quantity a loop may measure)."""
+    return {**QUANTITIES[c.type], **(TRACTION_QUANTITIES if getattr(c, "traction", None) is not None else {}),
+            **(LOAD_CELL_QUANTITIES if getattr(c, "wrap", None) else {})}
 
 
 class SceneError(ValueError):
@@ -166,6 +172,7 @@ class Loop:
     sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
     set_input: bool = False  # the set point is the Line FMU's input <name>.T_set (<name>.v_ref), starting at `set`
     dancer: DancerLoop | None = None  # a speed loop's reference trimmed by a dancer's position loop [R13]
+    compression: bool = False  # a set point <= 0 N is meant: the loop holds the span in compression
 
     @property
     def speed(self) -> bool:
