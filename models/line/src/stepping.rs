@@ -325,15 +325,18 @@ fn profiles_tolerance(t: f64) -> f64 {
     1e-9 * t.abs().max(1.0)
 }
 
-/// Model Exchange: the parts apply what is due at the time set.
+/// Model Exchange: the parts apply what is due at the time set. At a time event (a table's break,
+/// a `set` entry) the right-hand side jumps or kinks: the update says the states changed, so that
+/// an importer restarts its integrator there instead of carrying its history across it.
 pub fn event_update(ode: &mut Ode) -> EventUpdate {
     let before = ode.x.clone();
+    let time_event = ode.next_event <= ode.time + profiles_tolerance(ode.time);
     if apply_events(ode).is_err() {
         return EventUpdate::default();
     }
     let _ = ode.settle();
     EventUpdate {
         next_event_time: ode.next_event.is_finite().then_some(ode.next_event),
-        states_changed: before != ode.x,
+        states_changed: time_event || before != ode.x,
     }
 }

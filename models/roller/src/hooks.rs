@@ -146,8 +146,10 @@ impl Model for Roller {
     }
 
     /// Time events: the profile's entries (a jump, or a kink the integrator
-    /// should not step over) and its `set` events.
+    /// should not step over) and its `set` events. At one the states are reported changed, so that
+    /// an importer restarts its integrator there (its history holds the right-hand side before it).
     fn event_update(&mut self) -> EventUpdate {
+        let time_event = self.profile.as_ref().and_then(|l| l.profile.next_break(self.events_at)).is_some_and(|b| profiles::due(b, self.time));
         let rolled = self.apply_due(self.time);
         let speed_drive = self.drive() == Drive::Speed;
         if speed_drive {
@@ -155,7 +157,7 @@ impl Model for Roller {
         }
         EventUpdate {
             next_event_time: self.profile.as_ref().and_then(|l| l.profile.next_break(self.time)),
-            states_changed: rolled || speed_drive,
+            states_changed: time_event || rolled || speed_drive,
         }
     }
 }
