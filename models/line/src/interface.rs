@@ -34,8 +34,9 @@ pub enum Binding {
 /// Part parameters the line does not offer: the line solves and starts the
 /// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side) and
 /// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
-/// measures) and a span's variable length are the line's structure, which line.json fixes.
-const NOT_OFFERED: [&str; 22] = [
+/// measures) and a span's variable length are the line's structure, which line.json fixes; a feed-forward's
+/// loop.acceleration the line sets from its reference (`feed`).
+const NOT_OFFERED: [&str; 23] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",
@@ -54,6 +55,7 @@ const NOT_OFFERED: [&str; 22] = [
     "loop.kind",
     "loop.sign",
     "loop.feedforward",
+    "loop.acceleration",
     "motor.lag",
     "speed.input",
     "load_cell.wrap",

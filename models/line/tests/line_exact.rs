@@ -960,3 +960,48 @@ fn an_ideal_speed_drive_follows_its_input_in_both_interfaces() {
     assert!(me.event_update().states_changed, "the event update moves omega");
     assert!((get(&me, "pull.omega") - 105.0).abs() < 1e-12, "omega {}", get(&me, "pull.omega"));
 }
+
+/// The looped paper line whose unwinder feeds its inertia forward on the pull roll's input v_ref (an
+/// ideal speed drive on it; line.json's feedforward_from).
+fn fed_forward_on_an_input() -> Value {
+    let mut spec = looped_line(json!([[0.0, 10.0]]), 0.0, 0.0);
+    spec["parts"][0]["start"]["loop.feedforward"] = json!(true);
+    spec["parts"][0]["start"]["loop.speed"] = json!(10.0);
+    spec["parts"][0]["feedforward_from"] = json!("pull");
+    spec["parts"][4].as_object_mut().unwrap().remove("profile");
+    spec["parts"][4]["start"] = json!({"J": 0.01, "R": 0.1, "b": 0.0, "speed.input": true, "loop.speed": 10.0});
+    spec["parts"][4]["speed_input"] = json!(true);
+    spec
+}
+
+/// A feed-forward on another part's input v_ref [R10]: in Co-Simulation the feeding roller reads the
+/// input as its loop.speed and, without an input derivative, the input's difference over the last step
+/// as its loop.acceleration (0 on the first step); Model Exchange, which has neither, is refused, naming
+/// the input. With the feed-forward the unwinder's torque changes by J*a/r the step the ramp starts.
+#[test]
+fn a_feedforward_on_an_input_reference_takes_its_difference_over_the_last_step() {
+    let spec = fed_forward_on_an_input();
+    let mut line = initialized(&spec);
+    let acceleration = |line: &Line| match &line.parts()[0] {
+        line::part::Part::Roller(r) => (r.params.loop_speed, r.params.loop_acceleration),
+        _ => unreachable!("the unwinder is a roller"),
+    };
+    let h = 0.01;
+    line.do_step(h).unwrap();
+    assert_eq!(acceleration(&line), (10.0, 0.0), "a constant reference has no slope");
+    let tau = get(&line, "unwind.tau");
+    line.set_real(vr(&line, "pull.v_ref"), 10.02).unwrap(); // 2 m/s2 over the last step
+    line.do_step(h).unwrap();
+    let (v, a) = acceleration(&line);
+    assert_eq!(v, 10.02);
+    assert!((a - 2.0).abs() < 1e-9, "the difference over the last step: {a}");
+    // J*a/r = 8*2/0.5 = 32 N.m more torque fed forward to speed the roll up (the loop's own share moves far less).
+    let fed = get(&line, "unwind.tau") - tau;
+    assert!(fed > 20.0, "the feed-forward moved the torque by {fed} N.m");
+    line.do_step(h).unwrap();
+    assert_eq!(acceleration(&line).1, 0.0, "the reference held since the last step");
+
+    let (mut me, r) = instantiate(&spec).unwrap();
+    let err = me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap_err();
+    assert!(err.message.contains("pull.v_ref") && err.message.contains("Model Exchange"), "{}", err.message);
+}

@@ -4,7 +4,8 @@
 //!
 //! [R10] e = s*(set - F_measured) (force loop), e = v_ref - v (speed loop; v_ref: the reference table, else loop.speed);
 //!       u = kp*e + I + tau_ff;   dI/dt = ki*e + (sat(u) - u)/T_t,  T_t = kp/ki (1 s if a gain is 0);
-//!       tau_ff = J*d(v_ref/r)/dt = J*a_ref/r - J*r'*v_ref/r^2   (r' of [R3] at v_ref and the roll's strain)
+//!       tau_ff = J*d(v_ref/r)/dt = J*a_ref/r - J*r'*v_ref/r^2   (r' of [R3] at v_ref and the roll's strain;
+//!       (v_ref, a_ref) the reference table's, else loop.speed and loop.acceleration)
 //! [R11] motor.torque = sat(u) (no lag), or d(motor.torque)/dt = (sat(u) - motor.torque)/T_m;
 //!       sat(u) = u for |u| <= L - w, else sign(u)*(L - w*exp(-(|u| - L + w)/w)),  w = L/20.
 //! [R13] a dancer loop: the speed loop of [R10] with v_ref + trim for v_ref,

@@ -170,7 +170,7 @@ impl Roller {
         let slip = contact_at.filter(|_| p.traction).map(|x| Slip::at(p, self.contact_state_at(t, prescribed, x.omega, x.web_speed)));
         if self.profile.is_none() {
             // No tables to read (an idler, most rollers of a line): what the parameters give.
-            let control = control::Reads { set: p.loop_set, reference: None };
+            let control = control::Reads { set: p.loop_set, reference: self.given_reference() };
             return Point { roll: self.roll, prescribed, control, slip, ..Point::default() };
         }
         Point {
@@ -178,11 +178,21 @@ impl Roller {
             prescribed,
             drive: self.drive_read(t).0,
             brake: self.value(Key::Brake, t).map(|(b, _)| b),
-            control: control::Reads { set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x), reference: self.value(Key::Reference, t) },
+            control: control::Reads {
+                set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x),
+                reference: self.value(Key::Reference, t).or_else(|| self.given_reference()),
+            },
             load: self.value(Key::Load, t).map_or(0.0, |(x, _)| x),
             strain: self.value(Key::Strain, t).map(|(x, _)| x),
             slip,
         }
+    }
+
+    /// A feed-forward's reference where no table gives it [R10]: loop.speed and its slope
+    /// loop.acceleration, as the importer sets them (the Line: from a part's input v_ref).
+    #[inline(always)]
+    fn given_reference(&self) -> Option<(f64, f64)> {
+        self.params.loop_feedforward.then_some((self.params.loop_speed, self.params.loop_acceleration))
     }
 
     /// What the equations read now.

@@ -56,6 +56,8 @@ pub struct Parameters {
     pub loop_ki: f64,
     pub loop_sign: f64,
     pub loop_feedforward: bool,
+    /// The slope of the feed-forward's reference `loop.speed` where no table gives it [R10].
+    pub loop_acceleration: f64,
     /// An ideal speed drive on `loop.speed` (the Line's input v_ref), held over a step.
     pub speed_input: bool,
     /// The wrap angle its load cell sees, rad.
@@ -241,6 +243,7 @@ impl Parameters {
             | Real::air_viscosity => self.traction,
             Real::loop_set => kind == Kind::Force && !s.setpoint_table && !s.set_input,
             Real::loop_speed => (speed_loop && !s.reference_table || self.speed_input) && !s.speed_input,
+            Real::loop_acceleration => self.loop_feedforward && !s.reference_table,
             Real::brake_v_slip => s.brake_table,
             Real::dancer_set | Real::dancer_kp | Real::dancer_ki => kind == Kind::Dancer,
             Real::loop_kp | Real::loop_ki | Real::motor_limit => kind != Kind::None,

@@ -104,6 +104,7 @@ fmi_core::bind_variables! {
         dancer_ki: param(params.dancer_ki),
         dancer_I: computed(dancer_integrator()),
         der_dancer_I: computed(rates().dancer_integrator),
+        loop_acceleration: param(params.loop_acceleration),
     }
     integer {
         roll: param(params.roll),

@@ -98,6 +98,10 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
             start["loop.speed"] = float(drive.loop.set.value(0.0))
         elif drive.loop.speed:  # its reference: the speed it holds, and the one it feeds forward
             profile["reference"] = table(drive.loop.set)
+        elif drive.loop.feedforward and scene.input_reference() is not None:
+            # The Line FMU's input v_ref: loop.speed and loop.acceleration, which the Line sets (line.json's
+            # feedforward_from); held at its start elsewhere, as the input is.
+            start["loop.speed"] = float(scene.speed_reference().value(0.0))
         elif drive.loop.feedforward:
             profile["reference"] = table(scene.speed_reference())
         if not drive.loop.speed and not drive.loop.set.is_constant():

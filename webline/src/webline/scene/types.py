@@ -463,6 +463,15 @@ class Scene:
         has none)."""
         return next((p for p in map(self.speed_or_reference, self.nodes) if p is not None), None)
 
+    def input_reference(self):
+        """The part whose input <name>.v_ref of the Line FMU is the line's speed reference (an ideal speed
+        drive or a speed loop on it); None where the reference is a profile or there is none."""
+        node = next((n for n in self.nodes if self.speed_or_reference(n) is not None), None)
+        drive = getattr(node, "drive", None)
+        loop = getattr(drive, "loop", None)
+        given = getattr(drive, "input", False) or (loop is not None and loop.speed and loop.set_input)
+        return node if given else None
+
     def speed_or_reference(self, node):
         """The speed a node follows: prescribed, or its speed loop's reference (None: neither)."""
         loop = getattr(getattr(node, "drive", None), "loop", None)
