@@ -113,3 +113,28 @@ def test_cvode_restarted_only_when_told_follows_the_line_across_the_splices_even
     except RuntimeError:  # CVode's error test fails after the new roll, its history the old roll's
         unrestarted = np.inf
     assert unrestarted > 1e-3, "never restarted, CVode carries the old right-hand side across the events"
+
+
+def test_the_fmi3_line_fmu_reports_its_states_changed_at_a_time_event(fmus, tmp_path):
+    """FMI 3.0's fmi3UpdateDiscreteStates gives the same flag: at the splice's first event (1 s) it
+    reports valuesOfContinuousStatesChanged and the next event (1.15 s); before it, nothing."""
+    from fmpy.fmi3 import FMU3Model
+
+    scene = load_scene(ROOT / "webline" / "scenes" / "splice.json", fmu_dir=fmus)
+    path = linefmu.export(scene, tmp_path / "splice3.fmu", fmus, fmi3=True, start=scene.start or "given")
+    md = read_model_description(str(path))
+    fmu = FMU3Model(guid=md.guid, unzipDirectory=extract(str(path)), modelIdentifier=md.modelExchange.modelIdentifier,
+                    instanceName="fmi3")
+    fmu.instantiate()
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.exitInitializationMode()
+    _, _, _, changed, defined, next_event = fmu.updateDiscreteStates()
+    assert not changed and defined and next_event == 1.0
+    fmu.enterContinuousTimeMode()
+    fmu.setTime(1.0)
+    fmu.enterEventMode()
+    _, _, _, changed, defined, next_event = fmu.updateDiscreteStates()
+    assert changed, "a time event where the right-hand side jumps: the importer must restart its integrator"
+    assert defined and abs(next_event - 1.15) < 1e-12
+    fmu.terminate()
+    fmu.freeInstance()
