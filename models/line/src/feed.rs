@@ -20,8 +20,9 @@ pub struct Feed {
     pub last: Option<(f64, f64)>,
     /// The importer's derivative of the reference for the step to come.
     pub derivative: Option<f64>,
-    /// The reference where the step under way started.
+    /// The reference where the step under way started, and the slope the roller had before it.
     pub start: f64,
+    pub slope_before: f64,
 }
 
 /// The feeds line.json asks for, checked: the reference a part's input v_ref, the feeding part a
@@ -36,7 +37,7 @@ pub fn from_spec(spec: &Spec, parts: &[Part]) -> Result<Vec<Feed>, String> {
         if !feeds_forward || ps.has_table("reference") {
             return Err(format!("{what}: needs a roller whose loop feeds forward (loop.feedforward = true) and has no reference table"));
         }
-        feeds.push(Feed { from, to, last: None, derivative: None, start: 0.0 });
+        feeds.push(Feed { from, to, last: None, derivative: None, start: 0.0, slope_before: 0.0 });
     }
     Ok(feeds)
 }
@@ -91,12 +92,20 @@ pub fn slopes(feeds: &mut [Feed], parts: &mut [Part], t: f64) -> FmiResult<bool>
             (None, Some((t0, v0))) if t > t0 => (v - v0) / (t - t0),
             _ => 0.0,
         };
-        if parts[f.to].get_real(acceleration)? != slope {
+        f.slope_before = parts[f.to].get_real(acceleration)?;
+        if f.slope_before != slope {
             parts[f.to].set_real(acceleration, slope)?;
             changed = true;
         }
     }
     Ok(changed)
+}
+
+/// A step failed: the feeding rollers' slopes as they were before it (a failed step changes nothing).
+pub fn undo(feeds: &[Feed], parts: &mut [Part]) {
+    for f in feeds {
+        let _ = parts[f.to].set_real(Real::loop_acceleration.vr(), f.slope_before);
+    }
 }
 
 /// A step from time t succeeded: its start is the last step's, and the importer's derivatives are used.

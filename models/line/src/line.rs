@@ -508,7 +508,16 @@ impl Model for Line {
                 net.parts_changed();
             }
         }
-        stepping::step(&mut self.ode, &self.shared.spec, h, self.profiled)?;
+        if let Err(e) = stepping::step(&mut self.ode, &self.shared.spec, h, self.profiled) {
+            if !self.feeds.is_empty() {
+                feed::undo(&self.feeds, &mut self.ode.parts);
+                if let Some(net) = self.ode.net.as_mut() {
+                    net.parts_changed();
+                }
+                let _ = self.ode.settle();
+            }
+            return Err(e);
+        }
         feed::stepped(&mut self.feeds, t);
         Ok(())
     }
