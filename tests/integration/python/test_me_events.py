@@ -138,3 +138,29 @@ def test_the_fmi3_line_fmu_reports_its_states_changed_at_a_time_event(fmus, tmp_
     assert defined and abs(next_event - 1.15) < 1e-12
     fmu.terminate()
     fmu.freeInstance()
+
+
+def test_the_span_fmu_reports_its_states_changed_at_a_web_change(fmu_path, tmp_path):
+    """The span FMU's own time event, a web change from its profile (a splice's new web): the event
+    update there says the states changed; one where nothing was due does not."""
+    profile = tmp_path / "splice.json"
+    profile.write_text('{"set": [{"time": 0.1, "wp2.thickness": 36e-6}]}')
+    md = read_model_description(str(fmu_path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU2Model(guid=md.guid, unzipDirectory=extract(str(fmu_path)), modelIdentifier=md.modelExchange.modelIdentifier,
+                    instanceName="span")
+    fmu.instantiate()
+    fmu.setString([vr["profile"]], [str(profile)])
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    _, _, _, changed, defined, next_event = fmu.newDiscreteStates()
+    assert not changed and defined and next_event == 0.1
+    fmu.enterContinuousTimeMode()
+    fmu.setTime(0.1)
+    fmu.enterEventMode()
+    _, _, _, changed, defined, _ = fmu.newDiscreteStates()
+    assert changed and not defined, "the new web: the importer must restart its integrator"
+    assert fmu.getReal([vr["wp2.thickness"]]) == [36e-6]
+    fmu.terminate()
+    fmu.freeInstance()
