@@ -1001,6 +1001,16 @@ fn a_feedforward_on_an_input_reference_takes_its_difference_over_the_last_step()
     line.do_step(h).unwrap();
     assert_eq!(acceleration(&line).1, 0.0, "the reference held since the last step");
 
+    // An FMU state carries the reference where the last step started: a restored copy takes the same difference.
+    line.set_real(vr(&line, "pull.v_ref"), 10.05).unwrap();
+    let saved = Snapshot { phase: Phase::StepComplete, time: line.time(), experiment: Experiment::default(), model: line.clone() };
+    let bytes = saved.to_bytes();
+    line.do_step(h).unwrap();
+    let mut copy = Snapshot::<Line>::from_bytes(&bytes, &line).unwrap().model;
+    copy.do_step(h).unwrap();
+    assert!((acceleration(&copy).1 - 3.0).abs() < 1e-9, "restored: {:?}", acceleration(&copy));
+    assert_eq!(copy.states(), line.states());
+
     let (mut me, r) = instantiate(&spec).unwrap();
     let err = me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap_err();
     assert!(err.message.contains("pull.v_ref") && err.message.contains("Model Exchange"), "{}", err.message);
