@@ -142,12 +142,31 @@ pub fn initialize(
     ode.scratch = scratch(ode, ode.x.len());
     apply_events(ode)?;
     if start_equilibrium {
+        // A sampled loop is steady where its continuous one is [R14]: solved continuous, then sampled there.
+        sampled_loops_restart(ode, t0);
         if let Err(why) = equilibrium::solve(ode, spec) {
             warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values"));
+        }
+        if sampled_loops_restart(ode, t0) {
+            apply_events(ode)?;
         }
     }
     ode.settle()?;
     Ok(warnings)
+}
+
+/// Every sampled loop starts again at t (`Part::restart_hold`); whether the line has one.
+fn sampled_loops_restart(ode: &mut Ode, t: f64) -> bool {
+    let mut any = false;
+    for part in &mut ode.parts {
+        any |= part.restart_hold(t);
+    }
+    if any {
+        if let Some(net) = ode.net.as_mut() {
+            net.parts_changed();
+        }
+    }
+    any
 }
 
 /// The values of every connected input, to see whether the parts settled.

@@ -1015,3 +1015,48 @@ fn a_feedforward_on_an_input_reference_takes_its_difference_over_the_last_step()
     let err = me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap_err();
     assert!(err.message.contains("pull.v_ref") && err.message.contains("Model Exchange"), "{}", err.message);
 }
+
+/// A sampled loop in the line [R14] (the unwinder's PI sampled at 2 ms, each sample applied 1 ms
+/// late): the equilibrium start is steady (solved with the loop continuous, then sampled there) and
+/// stays flat, the line's steps stop at the samples, and after the pull roll's ramp the loop takes the
+/// tension back to its set point as the continuous loop does, to 1e-6 N. In Model Exchange the samples
+/// and their applications are the line's time events.
+#[test]
+fn a_sampled_loop_in_the_line_starts_steady_and_holds_its_set_point() {
+    let mut spec = looped_line(json!([[0.0, 10.0], [0.5, 10.0], [1.5, 11.0]]), 0.0, 0.0);
+    spec["parts"][0]["start"]["loop.sample"] = json!(2e-3);
+    spec["parts"][0]["start"]["loop.delay"] = json!(1e-3);
+    let mut line = initialized(&spec);
+    let mut flat: f64 = 0.0;
+    for _ in 0..50 {
+        line.do_step(0.01).unwrap();
+        flat = flat.max((get(&line, "entry.T") - 400.0).abs());
+    }
+    assert!(flat < 1e-8, "the start moves by {flat} N before the ramp");
+    let mut worst: f64 = 0.0;
+    for _ in 0..2950 {
+        line.do_step(0.01).unwrap();
+        worst = worst.max((get(&line, "entry.T") - 400.0).abs());
+    }
+    assert!(worst > 0.1, "the ramp must move the tension (worst {worst} N)");
+    assert!((get(&line, "entry.T") - 400.0).abs() < 1e-6, "{} N off after 30 s", get(&line, "entry.T") - 400.0);
+
+    // The hold acts: through the ramp the sampled loop's tension is not the continuous one's.
+    let mut continuous = initialized(&looped_line(json!([[0.0, 10.0], [0.5, 10.0], [1.5, 11.0]]), 0.0, 0.0));
+    let mut sampled = initialized(&spec);
+    for _ in 0..70 {
+        continuous.do_step(0.01).unwrap();
+        sampled.do_step(0.01).unwrap();
+    }
+    let apart = (get(&continuous, "entry.T") - get(&sampled, "entry.T")).abs();
+    assert!(apart > 1e-4, "the hold must change the response: {apart} N apart at 0.7 s");
+
+    let (mut me, r) = instantiate(&spec).unwrap();
+    me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap();
+    let mut next = me.event_update().next_event_time;
+    for due in [2e-3, 3e-3, 4e-3] {
+        assert!((next.unwrap() - due).abs() < 1e-15, "next event {next:?}, expected {due}");
+        me.set_time(due);
+        next = me.event_update().next_event_time;
+    }
+}
