@@ -470,3 +470,73 @@ def test_a_feedforward_on_an_input_reference_acts_in_co_simulation_and_is_refuse
     with fmpy_log.collecting() as (messages, logger), pytest.raises(Exception):
         simulate_fmu(str(fmu), fmi_type="ModelExchange", stop_time=0.1, logger=logger)
     assert any("Model Exchange gives no input derivatives" in m for m in messages), messages
+
+
+def test_a_sampled_pi_loop_matches_the_reference_and_holds_its_set_point(fmus):
+    """"sample": "2 ms", "delay": "1 ms" [R14]: the loop's command through a zero-order hold, each
+    sample applied 1 ms late; the Line FMU stops at every sample and application, the reference
+    integrates between them, and both agree to 1e-6 of the tension (as the continuous loop). Through the
+    ramp the hold moves the tension otherwise than the continuous loop; at the end both hold 400 N to
+    1e-9 N (a roll without `wound`: the integral action leaves no error)."""
+    pull = {"ramp": {"start": "0.5 s", "duration": "1 s", "from": "10 m/s", "to": "11 m/s"}}
+    sampled = looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "sample": "2 ms", "delay": "1 ms"}, pull, "15 s")
+    assert (sampled.line[0].drive.loop.sample, sampled.line[0].drive.loop.delay) == (2e-3, 1e-3)
+    line, ref = both(sampled, fmus)
+    continuous = run_scene(looped({"set": "400 N", "kp": 0.2, "ki": 2.0}, pull, "15 s"), "line", fmu_dir=fmus)
+    T = line.column("entry.T [N]")
+    assert np.max(np.abs(T - continuous.column("entry.T [N]"))) > 1e-3, "the hold must change the response"
+    for result in (line, ref):
+        assert abs(result.column("entry.T [N]")[-1] - 400.0) < 1e-9
+    with pytest.raises(SceneError, match="delay = 0.003 s: a sampled loop's delay is at most"):
+        looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "sample": "2 ms", "delay": "3 ms"}, pull, "1 s")
+    with pytest.raises(SceneError, match="delay = 0.001 s"):
+        looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "delay": "1 ms"}, pull, "1 s")
+
+
+def phase_margin(A, k, g, hz):
+    """The loop broken at a loop's command c = k x, fed back through g (x' = A x + g c): L = -k (sI - A_o)^-1 g
+    with A_o = A - g k. (crossover frequency in Hz, phase margin in degrees), the first |L| = 1 on hz."""
+    A_o = A - np.outer(g, k)
+    n = A.shape[0]
+    L = np.array([-k @ np.linalg.solve(2j * np.pi * f * np.eye(n) - A_o, g) for f in hz])
+    i = np.nonzero((np.abs(L[:-1]) >= 1.0) & (np.abs(L[1:]) < 1.0))[0][0]
+    lo, hi = hz[i], hz[i + 1]
+    for _ in range(60):  # |L| falls through 1 between them: bisection on log f
+        mid = np.sqrt(lo * hi)
+        l_mid = -k @ np.linalg.solve(2j * np.pi * mid * np.eye(n) - A_o, g)
+        lo, hi = (mid, hi) if abs(l_mid) >= 1.0 else (lo, mid)
+    l_c = -k @ np.linalg.solve(2j * np.pi * lo * np.eye(n) - A_o, g)
+    return lo, 180.0 + np.degrees(np.angle(l_c))
+
+
+def test_a_sampled_loops_linearization_loses_the_phase_of_its_hold_and_delay(fmus):
+    """`webline linearize` takes a sampled loop's hold and delay as a first-order Padé approximation of
+    e^(-s (T/2 + delay)). The pull roll's speed loop, crossing over above 10 Hz, loses against the same
+    loop continuous the phase omega_c (T/2 + delay) at its crossover, within 10 % (the margins from the
+    two linearizations, the loop broken at its command: 11.38 against 11.41 degrees at 15.9 Hz)."""
+    from webline.statespace import hold_path, linearize
+
+    def pull_loop(sample=None):
+        scene = speed_looped(False)
+        loop = scene.line[2].drive.loop
+        loop.kp, loop.ki = 2500.0, 25000.0  # crossover at kp R / J = 100 rad/s
+        if sample:
+            loop.sample, loop.delay = sample
+        return scene
+
+    continuous = linearize(pull_loop(), fmu_dir=fmus)
+    b, k, _ = hold_path(continuous, "pull", 0.0)
+    hz = np.geomspace(0.1, 1000.0, 2000)
+    f_c, pm_c = phase_margin(continuous.A, k, b, hz)
+    assert f_c >= 10.0, f"the loop crosses over at {f_c:.3g} Hz"
+    for T, delay in [(2e-3, 1e-3), (4e-3, 0.0)]:
+        sampled = linearize(pull_loop((T, delay)), fmu_dir=fmus)
+        assert sampled.states[-1] == "pull.hold" and len(sampled.states) == len(continuous.states) + 1
+        # Broken at the command c = k x: it enters the rates through the Padé (x' gets -b c, the hold c).
+        k_s, g = np.append(k, 0.0), np.append(-b, 1.0)
+        f_s, pm_s = phase_margin(sampled.A, k_s, g, hz)
+        assert abs(f_s - f_c) < 1e-6 * f_c, "an all-pass keeps the crossover"
+        lost = pm_c - pm_s
+        expected = np.degrees(2 * np.pi * f_c * (T / 2 + delay))
+        print(f"T {T}, delay {delay}: crossover {f_c:.4g} Hz, margins {pm_c:.4g} and {pm_s:.4g} deg: lost {lost:.4g} deg, omega_c (T/2 + delay) = {expected:.4g} deg")
+        assert abs(lost - expected) <= 0.1 * expected, f"T {T}, delay {delay}: lost {lost:.4g} deg, omega_c (T/2 + delay) = {expected:.4g} deg"

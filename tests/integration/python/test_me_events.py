@@ -115,6 +115,16 @@ def test_cvode_restarted_only_when_told_follows_the_line_across_the_splices_even
     assert unrestarted > 1e-3, "never restarted, CVode carries the old right-hand side across the events"
 
 
+def around_event(fmu, update, at):
+    """(the event update that ends initialization, the one at the time event `at`) of an instance whose
+    initialization mode has just ended: the time set to `at` in continuous-time mode, then event mode."""
+    first = update()
+    fmu.enterContinuousTimeMode()
+    fmu.setTime(at)
+    fmu.enterEventMode()
+    return first, update()
+
+
 def test_the_fmi3_line_fmu_reports_its_states_changed_at_a_time_event(fmus, tmp_path):
     """FMI 3.0's fmi3UpdateDiscreteStates gives the same flag: at the splice's first event (1 s) it
     reports valuesOfContinuousStatesChanged and the next event (1.15 s); before it, nothing."""
@@ -128,12 +138,9 @@ def test_the_fmi3_line_fmu_reports_its_states_changed_at_a_time_event(fmus, tmp_
     fmu.instantiate()
     fmu.enterInitializationMode(startTime=0.0)
     fmu.exitInitializationMode()
-    _, _, _, changed, defined, next_event = fmu.updateDiscreteStates()
+    (_, _, _, changed, defined, next_event), after = around_event(fmu, fmu.updateDiscreteStates, 1.0)
     assert not changed and defined and next_event == 1.0
-    fmu.enterContinuousTimeMode()
-    fmu.setTime(1.0)
-    fmu.enterEventMode()
-    _, _, _, changed, defined, next_event = fmu.updateDiscreteStates()
+    _, _, _, changed, defined, next_event = after
     assert changed, "a time event where the right-hand side jumps: the importer must restart its integrator"
     assert defined and abs(next_event - 1.15) < 1e-12
     fmu.terminate()
@@ -154,12 +161,9 @@ def test_the_span_fmu_reports_its_states_changed_at_a_web_change(fmu_path, tmp_p
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
-    _, _, _, changed, defined, next_event = fmu.newDiscreteStates()
+    (_, _, _, changed, defined, next_event), after = around_event(fmu, fmu.newDiscreteStates, 0.1)
     assert not changed and defined and next_event == 0.1
-    fmu.enterContinuousTimeMode()
-    fmu.setTime(0.1)
-    fmu.enterEventMode()
-    _, _, _, changed, defined, _ = fmu.newDiscreteStates()
+    _, _, _, changed, defined, _ = after
     assert changed and not defined, "the new web: the importer must restart its integrator"
     assert fmu.getReal([vr["wp2.thickness"]]) == [36e-6]
     fmu.terminate()

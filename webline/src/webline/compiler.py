@@ -149,6 +149,8 @@ def loop_values(loop) -> dict:
         "motor.limit": float(loop.limit),
         "motor.lag": float(loop.lag),
     }
+    if loop.sample > 0.0:  # a zero-order hold on the command, each sample applied `delay` later [R14]
+        values.update({"loop.sample": float(loop.sample), "loop.delay": float(loop.delay)})
     if loop.dancer is not None:  # a dancer loop [R13] on dancer.y, which the line wires from the dancer
         values.update({"dancer.set": float(loop.dancer.set), "dancer.kp": float(loop.dancer.kp), "dancer.ki": float(loop.dancer.ki)})
     return values

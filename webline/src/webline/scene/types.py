@@ -165,6 +165,8 @@ class Loop:
     feedforward: bool = False
     sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
     set_input: bool = False  # the set point is the Line FMU's input <name>.T_set (<name>.v_ref), starting at `set`
+    sample: float = 0.0  # a zero-order hold's period on the loop's command (s, 0: continuous) [R14]
+    delay: float = 0.0  # each sample applied this much later (s, at most `sample`)
     dancer: DancerLoop | None = None  # a speed loop's reference trimmed by a dancer's position loop [R13]
 
     @property
