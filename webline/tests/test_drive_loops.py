@@ -491,6 +491,8 @@ def test_a_sampled_pi_loop_matches_the_reference_and_holds_its_set_point(fmus):
         looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "sample": "2 ms", "delay": "3 ms"}, pull, "1 s")
     with pytest.raises(SceneError, match="delay = 0.001 s"):
         looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "delay": "1 ms"}, pull, "1 s")
+    with pytest.raises(SceneError, match="sample = 1e-06 s: a sampled loop's period is at least 1e-05 s"):
+        looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "sample": "0.001 ms"}, pull, "1 s")
 
 
 def phase_margin(A, k, g, hz):

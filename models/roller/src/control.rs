@@ -17,6 +17,10 @@ use crate::number::Number;
 use crate::parameters::{Kind, Parameters};
 use crate::roll;
 
+/// The shortest sample period [R14]: a drive's loop samples at some kHz; periods far shorter would only
+/// cut the steps into pieces.
+pub const MIN_SAMPLE: f64 = 1e-5;
+
 /// The share of the limit over which the torque bends into it: smooth (C1), so that Newton's
 /// method in the Line's implicit steps sees a slope everywhere, and exact inside.
 const BEND: f64 = 0.05;
@@ -98,13 +102,16 @@ impl Hold {
         if profiles::due(self.next_sample(p), t) {
             let c = command();
             if p.loop_delay > 0.0 && self.engaged {
-                self.waiting = Some((self.next_sample(p) + p.loop_delay, c));
+                // Taken now where an importer moved the time past the sample's instant.
+                self.waiting = Some((self.next_sample(p).max(t) + p.loop_delay, c));
             } else {
                 // The first sample applies at once: the drive ran at it before the start.
                 self.applied = c;
                 moved = true;
             }
             self.engaged = true;
+            // The first sample after t (at once, however far an importer moved the time).
+            self.next = ((t - self.origin) / p.loop_sample).floor().max(0.0) as u64;
             while profiles::due(self.next_sample(p), t) {
                 self.next += 1;
             }
@@ -201,6 +208,9 @@ pub fn refusal(p: &Parameters) -> Option<String> {
     }
     if p.traction {
         return Some("loop.kind > 0 with includeTraction = true: a loop on a roller where the web may slip is not modelled".into());
+    }
+    if p.loop_sample > 0.0 && p.loop_sample < MIN_SAMPLE {
+        return Some(format!("loop.sample = {} s: a sampled loop's period is 0 (continuous) or at least {MIN_SAMPLE} s", p.loop_sample));
     }
     if p.loop_sample > 0.0 && p.loop_delay > p.loop_sample {
         return Some(format!("loop.delay = {} s with loop.sample = {} s: a sampled loop's delay is at most its period", p.loop_delay, p.loop_sample));

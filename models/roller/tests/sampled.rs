@@ -84,6 +84,12 @@ fn in_model_exchange_the_samples_and_their_delays_are_time_events() {
         t = due_next;
     }
     assert_eq!(get(&me, Real::tau), tau, "states unmoved: every sample commands the start's torque");
+    // An importer that moves the time far past the samples: the next sample follows at once, after it.
+    me.set_time(1000.0001);
+    let update = me.event_update();
+    assert!((update.next_event_time.unwrap() - 1000.0011).abs() < 1e-9, "{:?}", update.next_event_time);
+    me.set_time(1000.0011);
+    assert!((me.event_update().next_event_time.unwrap() - 1000.002).abs() < 1e-9);
 }
 
 #[test]
@@ -101,4 +107,6 @@ fn an_fmu_state_carries_the_waiting_sample() {
 fn a_delay_longer_than_the_period_is_refused() {
     let err = speed_loop(2e-3, 3e-3).unwrap_err();
     assert!(err.contains("loop.delay = 0.003") && err.contains("at most its period"), "{err}");
+    let err = speed_loop(1e-6, 0.0).unwrap_err();
+    assert!(err.contains("loop.sample = 0.000001 s") && err.contains("at least 0.00001 s"), "{err}");
 }

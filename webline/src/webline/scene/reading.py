@@ -40,6 +40,8 @@ FIRST = ("source", "unwinder")
 MIDDLE = ("roller", "dancer")
 LAST = ("sink", "winder")
 
+MIN_SAMPLE = 1e-5  # s: the Roller's shortest sample period [R14]
+
 
 class _Reader:
     def __init__(self, source: str, fmu_dir=None):
@@ -319,6 +321,9 @@ def _motor(r: _Reader, o, what: str, loop: Loop):
         loop.lag = r.quantity(o["lag"], units.TIME, f"{what}.lag", nonnegative=True)
     if "sample" in o:
         loop.sample = r.quantity(o["sample"], units.TIME, f"{what}.sample", positive=True)
+        if loop.sample < MIN_SAMPLE:
+            raise r.err(o["sample"], f"{what}.sample = {loop.sample:g} s: a sampled loop's period is at least {MIN_SAMPLE:g} s "
+                                     "(leave \"sample\" out for a continuous loop)")
     if "delay" in o:
         loop.delay = r.quantity(o["delay"], units.TIME, f"{what}.delay", nonnegative=True)
         if not loop.delay <= loop.sample:
