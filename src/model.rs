@@ -434,9 +434,13 @@ impl Model for ConvertingSpan {
         self.advance(h)
     }
 
+    /// A web change is a time event where the right-hand side jumps: the states are reported changed
+    /// there, so that an importer restarts its integrator.
     fn event_update(&mut self) -> fmi_core::EventUpdate {
+        let before = self.next_change;
         self.apply_due_changes();
-        fmi_core::EventUpdate { next_event_time: self.web_changes.get(self.next_change).map(|c| c.time), states_changed: false }
+        let changed = self.next_change != before;
+        fmi_core::EventUpdate { next_event_time: self.web_changes.get(self.next_change).map(|c| c.time), states_changed: changed }
     }
 
     /// A state saved with rollers transiently too close is still the model's

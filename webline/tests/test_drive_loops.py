@@ -9,6 +9,7 @@ FMU at its default 1e-9; both solve the same smooth equations, so they agree to 
 times the loop's gain, far below that)."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -505,3 +506,135 @@ def test_a_loop_on_an_idlers_load_cell_starts_in_equilibrium_and_stays_flat(fmus
         # The load cell on the web forces it carries [physics, a load cell]: T_a + its inertia's share p
         # is zero in the steady state, so F = sqrt(Ta^2 + Tb^2 - 2 Ta Tb cos 120 deg).
         np.testing.assert_allclose(F, np.sqrt(Ta**2 + Tb**2 + Ta * Tb), rtol=1e-9)
+
+
+CASES = Path(__file__).parent / "cases"
+
+
+def rewind_ramp(t):
+    """The winder's speed reference of `inputs_feedforward`: 2 m/s, ramped to 4 m/s over 1..3 s."""
+    return float(np.interp(t, [0.0, 1.0, 3.0], [2.0, 2.0, 4.0]))
+
+
+def inputs_feedforward(profiled):
+    """A user's rewind line (cases/rewind_inputs_feedforward.json): the unwinder's PI on the idler's load
+    cell feeds its inertia forward on the line's speed reference, the winder's speed loop's input
+    rewind.v_ref; `profiled`: the same ramp as the winder's profile, the set point a constant."""
+    raw = json.loads((CASES / "rewind_inputs_feedforward.json").read_text())
+    unwind, rewind = raw["line"][0], raw["line"][-1]
+    if profiled:
+        unwind["drive"]["pi"]["set"] = "283 N"
+        rewind["drive"]["speed"] = {"ramp": {"start": "1 s", "duration": "2 s", "from": "2 m/s", "to": "4 m/s"}}
+    return raw
+
+
+def test_a_feedforward_on_an_input_reference_acts_in_co_simulation_and_is_refused_in_model_exchange(fmus, tmp_path):
+    """"feedforward": "inertia" with the speed reference an input (the user's case): in Co-Simulation the
+    unwinder feeds forward the input's slope, from fmi2SetRealInputDerivatives where FMPy gives one, else
+    from the input's difference over the last step. The idler's load cell then swings within 1.1 times
+    its swing with the same ramp as a profile (measured: 45 N with the profile; the difference 0.99
+    times that, the derivative 1.00 times); without the feed-forward it swings 2.4 times as much (236 to
+    343 N). Model Exchange has neither a derivative nor steps: webline refuses the scene there, and so
+    does the FMU, saying why."""
+    h, stop = 2e-3, 6.0
+    n = int(round(stop / h))
+    changes = {k: {"rewind.v_ref": rewind_ramp(k * h)} for k in range(n)}
+    slopes = {k: {"rewind.v_ref": (rewind_ramp(k * h + h) - rewind_ramp(k * h)) / h} for k in range(n)}
+    after_start = slice(int(0.5 / h), None)  # the loop's first settling left out
+
+    def swing(raw, name, **given):
+        scene = parse_scene(json.dumps(raw), fmu_dir=fmus)
+        fmu = linefmu.export(scene, tmp_path / f"{name}.fmu", fmus)
+        rows, _ = fmpy_run(fmu, stop=stop, h=h, output="idler.F", **given)
+        return np.ptp(rows[after_start]), scene, fmu
+
+    profiled, _, _ = swing(inputs_feedforward(True), "profiled", changes={})
+    difference, scene, fmu = swing(inputs_feedforward(False), "difference", changes=changes)
+    derivative, _, _ = swing(inputs_feedforward(False), "derivative", changes=changes, slopes=slopes)
+    plain = inputs_feedforward(False)
+    del plain["line"][0]["drive"]["pi"]["feedforward"]
+    without, _, _ = swing(plain, "without", changes=changes)
+    assert difference <= 1.1 * profiled and derivative <= 1.1 * profiled, (difference, derivative, profiled)
+    assert without > 2.0 * profiled, f"the ramp barely moves the load cell without a feed-forward: {without} N vs {profiled} N"
+
+    with pytest.raises(linefmu.LineFmuError, match="Model Exchange gives no input derivatives"):
+        linefmu.simulate(scene, fmu, model_exchange=True)
+    from fmpy import simulate_fmu
+
+    from webline import fmpy_log
+
+    with fmpy_log.collecting() as (messages, logger), pytest.raises(Exception):
+        simulate_fmu(str(fmu), fmi_type="ModelExchange", stop_time=0.1, logger=logger)
+    assert any("Model Exchange gives no input derivatives" in m for m in messages), messages
+
+
+def test_a_sampled_pi_loop_matches_the_reference_and_holds_its_set_point(fmus):
+    """"sample": "2 ms", "delay": "1 ms" [R14]: the loop's command through a zero-order hold, each
+    sample applied 1 ms late; the Line FMU stops at every sample and application, the reference
+    integrates between them, and both agree to 1e-6 of the tension (as the continuous loop). Through the
+    ramp the hold moves the tension otherwise than the continuous loop; at the end both hold 400 N to
+    1e-9 N (a roll without `wound`: the integral action leaves no error)."""
+    pull = {"ramp": {"start": "0.5 s", "duration": "1 s", "from": "10 m/s", "to": "11 m/s"}}
+    sampled = looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "sample": "2 ms", "delay": "1 ms"}, pull, "15 s")
+    assert (sampled.line[0].drive.loop.sample, sampled.line[0].drive.loop.delay) == (2e-3, 1e-3)
+    line, ref = both(sampled, fmus)
+    continuous = run_scene(looped({"set": "400 N", "kp": 0.2, "ki": 2.0}, pull, "15 s"), "line", fmu_dir=fmus)
+    T = line.column("entry.T [N]")
+    assert np.max(np.abs(T - continuous.column("entry.T [N]"))) > 1e-3, "the hold must change the response"
+    for result in (line, ref):
+        assert abs(result.column("entry.T [N]")[-1] - 400.0) < 1e-9
+    with pytest.raises(SceneError, match="delay = 0.003 s: a sampled loop's delay is at most"):
+        looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "sample": "2 ms", "delay": "3 ms"}, pull, "1 s")
+    with pytest.raises(SceneError, match="delay = 0.001 s"):
+        looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "delay": "1 ms"}, pull, "1 s")
+    with pytest.raises(SceneError, match="sample = 1e-06 s: a sampled loop's period is at least 1e-05 s"):
+        looped({"set": "400 N", "kp": 0.2, "ki": 2.0, "sample": "0.001 ms"}, pull, "1 s")
+
+
+def phase_margin(A, k, g, hz):
+    """The loop broken at a loop's command c = k x, fed back through g (x' = A x + g c): L = -k (sI - A_o)^-1 g
+    with A_o = A - g k. (crossover frequency in Hz, phase margin in degrees), the first |L| = 1 on hz."""
+    A_o = A - np.outer(g, k)
+    n = A.shape[0]
+    L = np.array([-k @ np.linalg.solve(2j * np.pi * f * np.eye(n) - A_o, g) for f in hz])
+    i = np.nonzero((np.abs(L[:-1]) >= 1.0) & (np.abs(L[1:]) < 1.0))[0][0]
+    lo, hi = hz[i], hz[i + 1]
+    for _ in range(60):  # |L| falls through 1 between them: bisection on log f
+        mid = np.sqrt(lo * hi)
+        l_mid = -k @ np.linalg.solve(2j * np.pi * mid * np.eye(n) - A_o, g)
+        lo, hi = (mid, hi) if abs(l_mid) >= 1.0 else (lo, mid)
+    l_c = -k @ np.linalg.solve(2j * np.pi * lo * np.eye(n) - A_o, g)
+    return lo, 180.0 + np.degrees(np.angle(l_c))
+
+
+def test_a_sampled_loops_linearization_loses_the_phase_of_its_hold_and_delay(fmus):
+    """`webline linearize` takes a sampled loop's hold and delay as a first-order Padé approximation of
+    e^(-s (T/2 + delay)). The pull roll's speed loop, crossing over above 10 Hz, loses against the same
+    loop continuous the phase omega_c (T/2 + delay) at its crossover, within 10 % (the margins from the
+    two linearizations, the loop broken at its command: 11.38 against 11.41 degrees at 15.9 Hz)."""
+    from webline.statespace import hold_path, linearize
+
+    def pull_loop(sample=None):
+        scene = speed_looped(False)
+        loop = scene.line[2].drive.loop
+        loop.kp, loop.ki = 2500.0, 25000.0  # crossover at kp R / J = 100 rad/s
+        if sample:
+            loop.sample, loop.delay = sample
+        return scene
+
+    continuous = linearize(pull_loop(), fmu_dir=fmus)
+    b, k, _ = hold_path(continuous, "pull", 0.0)
+    hz = np.geomspace(0.1, 1000.0, 2000)
+    f_c, pm_c = phase_margin(continuous.A, k, b, hz)
+    assert f_c >= 10.0, f"the loop crosses over at {f_c:.3g} Hz"
+    for T, delay in [(2e-3, 1e-3), (4e-3, 0.0)]:
+        sampled = linearize(pull_loop((T, delay)), fmu_dir=fmus)
+        assert sampled.states[-1] == "pull.hold" and len(sampled.states) == len(continuous.states) + 1
+        # Broken at the command c = k x: it enters the rates through the Padé (x' gets -b c, the hold c).
+        k_s, g = np.append(k, 0.0), np.append(-b, 1.0)
+        f_s, pm_s = phase_margin(sampled.A, k_s, g, hz)
+        assert abs(f_s - f_c) < 1e-6 * f_c, "an all-pass keeps the crossover"
+        lost = pm_c - pm_s
+        expected = np.degrees(2 * np.pi * f_c * (T / 2 + delay))
+        print(f"T {T}, delay {delay}: crossover {f_c:.4g} Hz, margins {pm_c:.4g} and {pm_s:.4g} deg: lost {lost:.4g} deg, omega_c (T/2 + delay) = {expected:.4g} deg")
+        assert abs(lost - expected) <= 0.1 * expected, f"T {T}, delay {delay}: lost {lost:.4g} deg, omega_c (T/2 + delay) = {expected:.4g} deg"

@@ -34,7 +34,8 @@ pub enum Binding {
 /// Part parameters the line does not offer: the line solves and starts the
 /// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side) and
 /// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
-/// measures) and a span's variable length are the line's structure, which line.json fixes.
+/// measures) and a span's variable length are the line's structure, which line.json fixes; a feed-forward's
+/// loop.acceleration the line sets from its reference (`feed`).
 const NOT_OFFERED: [&str; 23] = [
     "startAtEquilibrium",
     "useSensor",
@@ -55,6 +56,7 @@ const NOT_OFFERED: [&str; 23] = [
     "loop.sign",
     "loop.feedforward",
     "loop.compression",
+    "loop.acceleration",
     "motor.lag",
     "speed.input",
     "load_cell.wrap",

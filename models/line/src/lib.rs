@@ -14,6 +14,7 @@
 //! * `equilibrium` — the steady state a line starts in;
 //! * `stepping` — initialization, a communication step (events at their times,
 //!   Rodas5P between), Model Exchange's events;
+//! * `feed` — a loop's feed-forward on another part's input v_ref: its slope at each step;
 //! * `interface` — the variables, `<part>.<variable>`, and what each is bound to;
 //! * `line` — the `Line`: the FMI model hooks, calling down;
 //! * `xml` — its modelDescription.xml (`line-description`).
@@ -22,6 +23,7 @@
 
 pub mod chain;
 pub mod equilibrium;
+pub mod feed;
 pub mod interface;
 pub mod laminate;
 pub mod line;

@@ -3,6 +3,7 @@
 //! where they stand are an `Ode`, which the hooks call down into: `stepping`
 //! for initialization, steps and events, the network for evaluations.
 
+use crate::feed::{self, Feed};
 use crate::interface::{self, Binding, Interface};
 use crate::laminate::Laminate;
 use crate::network::Network;
@@ -51,6 +52,8 @@ pub struct Line {
     model_exchange: bool,
     /// Initialization ended: a tunable parameter set now keeps the network.
     initialized: bool,
+    /// The loops that feed forward on another part's input v_ref, and its slope.
+    feeds: Vec<Feed>,
 }
 
 impl Line {
@@ -86,6 +89,10 @@ impl Line {
             }
             parts.push(part);
         }
+        let feeds = feed::from_spec(&spec, &parts).map_err(FmiError::error)?;
+        for f in &feeds {
+            feed::follow(&feeds, &mut parts, f.from)?;
+        }
         let active: Vec<Vec<usize>> = parts.iter().map(Part::active_states).collect();
         let start_equilibrium = spec.start == StartMode::Equilibrium;
         let Interface { description, bindings, laminates } = interface::build(&spec, &parts, &active, spec::guid(text), start_equilibrium);
@@ -99,6 +106,7 @@ impl Line {
             profiled,
             model_exchange: false,
             initialized: false,
+            feeds,
         })
     }
 
@@ -258,6 +266,7 @@ impl Variables for Line {
         match self.binding(vr)? {
             Binding::Real { part, vr: part_vr, port } => {
                 self.ode.parts[part].write(port, value)?;
+                feed::follow(&self.feeds, &mut self.ode.parts, part)?;
                 self.part_set(vr);
                 self.follow_speed_input(part);
                 // An input moves the outputs that depend on it; a failure shows when they are read.
@@ -379,6 +388,12 @@ impl Model for Line {
         for &x in &self.ode.scratch.rtol_scale {
             out.f64(x);
         }
+        for f in &self.feeds {
+            let (t, v) = f.last.unwrap_or((f64::NAN, f64::NAN));
+            out.bool(f.last.is_some());
+            out.f64(t);
+            out.f64(v);
+        }
     }
 
     fn load_state(&mut self, r: &mut StateReader) -> FmiResult {
@@ -400,6 +415,12 @@ impl Model for Line {
         let mut rtol_scale = Vec::new();
         for _ in 0..scales.max(0) {
             rtol_scale.push(r.finite("tolerance scale")?);
+        }
+        for f in &mut self.feeds {
+            let stepped = r.bool("feed-forward reference stepped")?;
+            let (t, v) = (r.f64("feed-forward reference time")?, r.f64("feed-forward reference")?);
+            f.last = stepped.then_some((t, v));
+            f.derivative = None;
         }
         if initialized {
             // The parameters set the network (a roll's radius is a state only while it is wound):
@@ -462,6 +483,9 @@ impl Model for Line {
             Some(r) => *r = (part, part_vr, base, value),
             None => self.ode.ramps.push((part, part_vr, base, value)),
         }
+        if part_vr == roller::description::Real::loop_speed.vr() {
+            feed::derivative(&mut self.feeds, &self.ode.parts, &mut self.ode.ramps, part, value)?;
+        }
         Ok(())
     }
 
@@ -469,6 +493,9 @@ impl Model for Line {
         let shared = self.shared.clone();
         for laminate in &shared.laminates {
             laminate.check(&shared.spec, &self.ode.parts)?;
+        }
+        if let Some(why) = experiment.model_exchange.then(|| feed::model_exchange_refusal(&shared.spec, &self.feeds)).flatten() {
+            return Err(FmiError::error(why));
         }
         let integrated = Line::integrated(&shared, experiment.model_exchange);
         let warnings = stepping::initialize(&mut self.ode, &shared.spec, integrated, self.tolerance, self.start_equilibrium, experiment, resources)?;
@@ -486,7 +513,24 @@ impl Model for Line {
     }
 
     fn do_step(&mut self, h: f64) -> FmiResult {
-        stepping::step(&mut self.ode, &self.shared.spec, h, self.profiled)
+        let t = self.ode.time;
+        if feed::slopes(&mut self.feeds, &mut self.ode.parts, t)? {
+            if let Some(net) = self.ode.net.as_mut() {
+                net.parts_changed();
+            }
+        }
+        if let Err(e) = stepping::step(&mut self.ode, &self.shared.spec, h, self.profiled) {
+            if !self.feeds.is_empty() {
+                feed::undo(&self.feeds, &mut self.ode.parts);
+                if let Some(net) = self.ode.net.as_mut() {
+                    net.parts_changed();
+                }
+                let _ = self.ode.settle();
+            }
+            return Err(e);
+        }
+        feed::stepped(&mut self.feeds, t);
+        Ok(())
     }
 
     fn event_update(&mut self) -> EventUpdate {

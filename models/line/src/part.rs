@@ -285,6 +285,18 @@ impl Part {
         }
     }
 
+    /// A roller's sampled loop starts again at t: continuous until its first sample, due at t [R14];
+    /// whether the part has one.
+    pub fn restart_hold(&mut self, t: f64) -> bool {
+        match self {
+            Part::Roller(r) if r.params.sampled() => {
+                r.restart_hold(t);
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// A roller's load cell for a wrap angle with this cosine.
     pub fn load_cell(&self, cos_wrap: f64) -> FmiResult<f64> {
         match self {

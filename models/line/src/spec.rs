@@ -141,6 +141,10 @@ pub struct PartSpec {
     /// (`speed.input`), as an input `<name>.v_ref` (m/s) instead of the tunable parameter `<name>.loop.speed`.
     #[serde(default)]
     pub speed_input: bool,
+    /// The part whose input `<part>.v_ref` is this roller's feed-forward reference [R10] (its
+    /// loop.speed and loop.acceleration, which the line sets: `feed`), instead of a reference table.
+    #[serde(default)]
+    pub feedforward_from: Option<String>,
     /// A load cell: the wrap angle of the web on the roller, degrees; the
     /// output `<name>.F` is the resultant of the two web forces on its bearings.
     #[serde(default)]

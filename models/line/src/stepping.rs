@@ -142,12 +142,31 @@ pub fn initialize(
     ode.scratch = scratch(ode, ode.x.len());
     apply_events(ode)?;
     if start_equilibrium {
+        // A sampled loop is steady where its continuous one is [R14]: solved continuous, then sampled there.
+        sampled_loops_restart(ode, t0);
         if let Err(why) = equilibrium::solve(ode, spec) {
             warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values"));
+        }
+        if sampled_loops_restart(ode, t0) {
+            apply_events(ode)?;
         }
     }
     ode.settle()?;
     Ok(warnings)
+}
+
+/// Every sampled loop starts again at t (`Part::restart_hold`); whether the line has one.
+fn sampled_loops_restart(ode: &mut Ode, t: f64) -> bool {
+    let mut any = false;
+    for part in &mut ode.parts {
+        any |= part.restart_hold(t);
+    }
+    if any {
+        if let Some(net) = ode.net.as_mut() {
+            net.parts_changed();
+        }
+    }
+    any
 }
 
 /// The values of every connected input, to see whether the parts settled.
@@ -325,15 +344,18 @@ fn profiles_tolerance(t: f64) -> f64 {
     1e-9 * t.abs().max(1.0)
 }
 
-/// Model Exchange: the parts apply what is due at the time set.
+/// Model Exchange: the parts apply what is due at the time set. At a time event (a table's break,
+/// a `set` entry) the right-hand side jumps or kinks: the update says the states changed, so that
+/// an importer restarts its integrator there instead of carrying its history across it.
 pub fn event_update(ode: &mut Ode) -> EventUpdate {
     let before = ode.x.clone();
+    let time_event = ode.next_event <= ode.time + profiles_tolerance(ode.time);
     if apply_events(ode).is_err() {
         return EventUpdate::default();
     }
     let _ = ode.settle();
     EventUpdate {
         next_event_time: ode.next_event.is_finite().then_some(ode.next_event),
-        states_changed: before != ode.x,
+        states_changed: time_event || before != ode.x,
     }
 }

@@ -960,3 +960,103 @@ fn an_ideal_speed_drive_follows_its_input_in_both_interfaces() {
     assert!(me.event_update().states_changed, "the event update moves omega");
     assert!((get(&me, "pull.omega") - 105.0).abs() < 1e-12, "omega {}", get(&me, "pull.omega"));
 }
+
+/// The looped paper line whose unwinder feeds its inertia forward on the pull roll's input v_ref (an
+/// ideal speed drive on it; line.json's feedforward_from).
+fn fed_forward_on_an_input() -> Value {
+    let mut spec = looped_line(json!([[0.0, 10.0]]), 0.0, 0.0);
+    spec["parts"][0]["start"]["loop.feedforward"] = json!(true);
+    spec["parts"][0]["start"]["loop.speed"] = json!(10.0);
+    spec["parts"][0]["feedforward_from"] = json!("pull");
+    spec["parts"][4].as_object_mut().unwrap().remove("profile");
+    spec["parts"][4]["start"] = json!({"J": 0.01, "R": 0.1, "b": 0.0, "speed.input": true, "loop.speed": 10.0});
+    spec["parts"][4]["speed_input"] = json!(true);
+    spec
+}
+
+/// A feed-forward on another part's input v_ref [R10]: in Co-Simulation the feeding roller reads the
+/// input as its loop.speed and, without an input derivative, the input's difference over the last step
+/// as its loop.acceleration (0 on the first step); Model Exchange, which has neither, is refused, naming
+/// the input. With the feed-forward the unwinder's torque changes by J*a/r the step the ramp starts.
+#[test]
+fn a_feedforward_on_an_input_reference_takes_its_difference_over_the_last_step() {
+    let spec = fed_forward_on_an_input();
+    let mut line = initialized(&spec);
+    let acceleration = |line: &Line| match &line.parts()[0] {
+        line::part::Part::Roller(r) => (r.params.loop_speed, r.params.loop_acceleration),
+        _ => unreachable!("the unwinder is a roller"),
+    };
+    let h = 0.01;
+    line.do_step(h).unwrap();
+    assert_eq!(acceleration(&line), (10.0, 0.0), "a constant reference has no slope");
+    let tau = get(&line, "unwind.tau");
+    line.set_real(vr(&line, "pull.v_ref"), 10.02).unwrap(); // 2 m/s2 over the last step
+    line.do_step(h).unwrap();
+    let (v, a) = acceleration(&line);
+    assert_eq!(v, 10.02);
+    assert!((a - 2.0).abs() < 1e-9, "the difference over the last step: {a}");
+    // J*a/r = 8*2/0.5 = 32 N.m more torque fed forward to speed the roll up (the loop's own share moves far less).
+    let fed = get(&line, "unwind.tau") - tau;
+    assert!(fed > 20.0, "the feed-forward moved the torque by {fed} N.m");
+    line.do_step(h).unwrap();
+    assert_eq!(acceleration(&line).1, 0.0, "the reference held since the last step");
+
+    // An FMU state carries the reference where the last step started: a restored copy takes the same difference.
+    line.set_real(vr(&line, "pull.v_ref"), 10.05).unwrap();
+    let saved = Snapshot { phase: Phase::StepComplete, time: line.time(), experiment: Experiment::default(), model: line.clone() };
+    let bytes = saved.to_bytes();
+    line.do_step(h).unwrap();
+    let mut copy = Snapshot::<Line>::from_bytes(&bytes, &line).unwrap().model;
+    copy.do_step(h).unwrap();
+    assert!((acceleration(&copy).1 - 3.0).abs() < 1e-9, "restored: {:?}", acceleration(&copy));
+    assert_eq!(copy.states(), line.states());
+
+    let (mut me, r) = instantiate(&spec).unwrap();
+    let err = me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap_err();
+    assert!(err.message.contains("pull.v_ref") && err.message.contains("Model Exchange"), "{}", err.message);
+}
+
+/// A sampled loop in the line [R14] (the unwinder's PI sampled at 2 ms, each sample applied 1 ms
+/// late): the equilibrium start is steady (solved with the loop continuous, then sampled there) and
+/// stays flat, the line's steps stop at the samples, and after the pull roll's ramp the loop takes the
+/// tension back to its set point as the continuous loop does, to 1e-6 N. In Model Exchange the samples
+/// and their applications are the line's time events.
+#[test]
+fn a_sampled_loop_in_the_line_starts_steady_and_holds_its_set_point() {
+    let mut spec = looped_line(json!([[0.0, 10.0], [0.5, 10.0], [1.5, 11.0]]), 0.0, 0.0);
+    spec["parts"][0]["start"]["loop.sample"] = json!(2e-3);
+    spec["parts"][0]["start"]["loop.delay"] = json!(1e-3);
+    let mut line = initialized(&spec);
+    let mut flat: f64 = 0.0;
+    for _ in 0..50 {
+        line.do_step(0.01).unwrap();
+        flat = flat.max((get(&line, "entry.T") - 400.0).abs());
+    }
+    assert!(flat < 1e-8, "the start moves by {flat} N before the ramp");
+    let mut worst: f64 = 0.0;
+    for _ in 0..2950 {
+        line.do_step(0.01).unwrap();
+        worst = worst.max((get(&line, "entry.T") - 400.0).abs());
+    }
+    assert!(worst > 0.1, "the ramp must move the tension (worst {worst} N)");
+    assert!((get(&line, "entry.T") - 400.0).abs() < 1e-6, "{} N off after 30 s", get(&line, "entry.T") - 400.0);
+
+    // The hold acts: through the ramp the sampled loop's tension is not the continuous one's.
+    let mut continuous = initialized(&looped_line(json!([[0.0, 10.0], [0.5, 10.0], [1.5, 11.0]]), 0.0, 0.0));
+    let mut sampled = initialized(&spec);
+    for _ in 0..70 {
+        continuous.do_step(0.01).unwrap();
+        sampled.do_step(0.01).unwrap();
+    }
+    let apart = (get(&continuous, "entry.T") - get(&sampled, "entry.T")).abs();
+    assert!(apart > 1e-4, "the hold must change the response: {apart} N apart at 0.7 s");
+
+    let (mut me, r) = instantiate(&spec).unwrap();
+    me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap();
+    let mut next = me.event_update().next_event_time;
+    for due in [2e-3, 3e-3, 4e-3] {
+        assert!((next.unwrap() - due).abs() < 1e-15, "next event {next:?}, expected {due}");
+        me.set_time(due);
+        next = me.event_update().next_event_time;
+    }
+}

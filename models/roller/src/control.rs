@@ -4,15 +4,22 @@
 //!
 //! [R10] e = s*(set - F_measured) (force loop), e = v_ref - v (speed loop; v_ref: the reference table, else loop.speed);
 //!       u = kp*e + I + tau_ff;   dI/dt = ki*e + (sat(u) - u)/T_t,  T_t = kp/ki (1 s if a gain is 0);
-//!       tau_ff = J*d(v_ref/r)/dt = J*a_ref/r - J*r'*v_ref/r^2   (r' of [R3] at v_ref and the roll's strain)
+//!       tau_ff = J*d(v_ref/r)/dt = J*a_ref/r - J*r'*v_ref/r^2   (r' of [R3] at v_ref and the roll's strain;
+//!       (v_ref, a_ref) the reference table's, else loop.speed and loop.acceleration)
 //! [R11] motor.torque = sat(u) (no lag), or d(motor.torque)/dt = (sat(u) - motor.torque)/T_m;
 //!       sat(u) = u for |u| <= L - w, else sign(u)*(L - w*exp(-(|u| - L + w)/w)),  w = L/20.
 //! [R13] a dancer loop: the speed loop of [R10] with v_ref + trim for v_ref,
 //!       e_d = loop.sign*(dancer.y - dancer.set);  trim = dancer.kp*e_d + dancer.I;  d(dancer.I)/dt = dancer.ki*e_d.
+//! [R14] a sampled loop (loop.sample = T > 0): sat(u) of [R11] is sampled at t_k = t_0 + k*T and applied,
+//!       held, from t_k + loop.delay on; the integrator integrates the continuous error exactly between.
 
 use crate::number::Number;
 use crate::parameters::{Kind, Parameters};
 use crate::roll;
+
+/// The shortest sample period [R14]: a drive's loop samples at some kHz; periods far shorter would only
+/// cut the steps into pieces.
+pub const MIN_SAMPLE: f64 = 1e-5;
 
 /// The share of the limit over which the torque bends into it: smooth (C1), so that Newton's
 /// method in the Line's implicit steps sees a slope everywhere, and exact inside.
@@ -52,6 +59,65 @@ pub fn feedforward<N: Number>(p: &Parameters, r: N, j: N, strain: N, v: f64, a: 
 pub struct Reads {
     pub set: f64,
     pub reference: Option<(f64, f64)>,
+    /// A sampled loop's held command [R14] (None: the loop's own, continuous).
+    pub held: Option<f64>,
+}
+
+/// A sampled loop's zero-order hold and delay [R14]: the command applied, a sample waiting out the
+/// delay (when it applies, its command), and the samples' clock t_0 + k*T (no drift over many).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Hold {
+    /// A sample was taken: `applied` holds; before the first the loop is continuous.
+    pub engaged: bool,
+    pub applied: f64,
+    pub waiting: Option<(f64, f64)>,
+    pub origin: f64,
+    pub next: u64,
+}
+
+impl Hold {
+    /// A hold whose first sample is due at t.
+    pub fn starting(t: f64) -> Hold {
+        Hold { origin: t, ..Hold::default() }
+    }
+
+    /// The time of its next sample.
+    pub fn next_sample(&self, p: &Parameters) -> f64 {
+        self.origin + self.next as f64 * p.loop_sample
+    }
+
+    /// Its next event: a sample, or a waiting sample's application.
+    pub fn next_event(&self, p: &Parameters) -> f64 {
+        let sample = self.next_sample(p);
+        self.waiting.map_or(sample, |(at, _)| at.min(sample))
+    }
+
+    /// At time t, with the loop's continuous command `command` there: applies a sample whose delay is
+    /// over, then takes the sample due (applied at once without a delay); whether the command moved.
+    pub fn due(&mut self, p: &Parameters, t: f64, command: impl Fn() -> f64) -> bool {
+        let mut moved = false;
+        if let Some((_, c)) = self.waiting.filter(|&(at, _)| profiles::due(at, t)) {
+            (self.applied, self.waiting, moved) = (c, None, true);
+        }
+        if profiles::due(self.next_sample(p), t) {
+            let c = command();
+            if p.loop_delay > 0.0 && self.engaged {
+                // Taken now where an importer moved the time past the sample's instant.
+                self.waiting = Some((self.next_sample(p).max(t) + p.loop_delay, c));
+            } else {
+                // The first sample applies at once: the drive ran at it before the start.
+                self.applied = c;
+                moved = true;
+            }
+            self.engaged = true;
+            // The first sample after t (at once, however far an importer moved the time).
+            self.next = ((t - self.origin) / p.loop_sample).floor().max(0.0) as u64;
+            while profiles::due(self.next_sample(p), t) {
+                self.next += 1;
+            }
+        }
+        moved
+    }
 }
 
 /// The loop's share of the roller's rates [R10]-[R11], [R13]: the torque its motor gives and the
@@ -59,6 +125,8 @@ pub struct Reads {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Law<N> {
     pub torque: N,
+    /// The loop's continuous command sat(u) [R11], which a sampled loop samples [R14].
+    pub command: N,
     pub integrator_rate: N,
     pub motor_rate: N,
     pub dancer_rate: N,
@@ -108,8 +176,9 @@ pub fn law<N: Number>(p: &Parameters, reads: &Reads, x: &Seen<N>) -> Law<N> {
         u.map(value, slope)
     };
     let integrator_rate = e * p.loop_ki + (sat - u) * tracking(p);
-    let (torque, motor_rate) = if p.motor_lag > 0.0 { (x.motor, (sat - x.motor) / p.motor_lag) } else { (sat, N::default()) };
-    Law { torque, integrator_rate, motor_rate, dancer_rate }
+    let applied = reads.held.map_or(sat, N::constant);
+    let (torque, motor_rate) = if p.motor_lag > 0.0 { (x.motor, (applied - x.motor) / p.motor_lag) } else { (applied, N::default()) };
+    Law { torque, command: sat, integrator_rate, motor_rate, dancer_rate }
 }
 
 /// A dancer loop's error e_d = loop.sign*(dancer.y - dancer.set) and speed trim [R13].
@@ -140,6 +209,12 @@ pub fn refusal(p: &Parameters) -> Option<String> {
     if p.traction {
         return Some("loop.kind > 0 with includeTraction = true: a loop on a roller where the web may slip is not modelled".into());
     }
+    if p.loop_sample > 0.0 && p.loop_sample < MIN_SAMPLE {
+        return Some(format!("loop.sample = {} s: a sampled loop's period is 0 (continuous) or at least {MIN_SAMPLE} s", p.loop_sample));
+    }
+    if p.loop_sample > 0.0 && p.loop_delay > p.loop_sample {
+        return Some(format!("loop.delay = {} s with loop.sample = {} s: a sampled loop's delay is at most its period", p.loop_delay, p.loop_sample));
+    }
     None
 }
 
@@ -149,6 +224,12 @@ pub fn set_point_refusal(p: &Parameters, value: f64) -> Option<String> {
     (Kind::of(p) == Kind::Force && !p.loop_compression && !(value > 0.0)).then(|| {
         format!("loop.set = {value} N: a force loop's set point must be > 0 N (a web in compression buckles); loop.compression = true (a scene's \"compression\": true) allows it")
     })
+}
+
+/// A warning where a continuous loop is given a delay, which only a sampled one has [R14].
+pub fn unsampled_delay(p: &Parameters) -> Option<String> {
+    (Kind::of(p) != Kind::None && p.loop_sample == 0.0 && p.loop_delay > 0.0)
+        .then(|| format!("loop.delay = {} s is not applied: only a sampled loop (loop.sample > 0) has a delay", p.loop_delay))
 }
 
 #[cfg(test)]

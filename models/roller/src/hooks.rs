@@ -27,6 +27,13 @@ impl Model for Roller {
         for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.v_web, self.integrator, self.motor, self.dancer, self.time, self.events_at] {
             out.f64(x);
         }
+        let h = &self.hold;
+        let (at, waiting) = h.waiting.unwrap_or((0.0, 0.0));
+        out.bool(h.engaged);
+        out.bool(h.waiting.is_some());
+        for x in [h.applied, at, waiting, h.origin, h.next as f64] {
+            out.f64(x);
+        }
         out.i32(self.next_event as i32);
         out.str(self.profile.as_ref().map_or("", |l| &l.text));
     }
@@ -46,6 +53,13 @@ impl Model for Roller {
         self.dancer = r.finite("dancer.I")?;
         self.time = r.finite("time")?;
         self.events_at = r.finite("events applied until")?;
+        let (engaged, has_waiting) = (r.bool("hold engaged")?, r.bool("hold waiting")?);
+        let (applied, at, waiting) = (r.finite("held command")?, r.finite("waiting's time")?, r.finite("waiting command")?);
+        let (origin, next) = (r.finite("samples' origin")?, r.finite("next sample")?);
+        if !(next >= 0.0 && next.fract() == 0.0) {
+            return Err(FmiError::error(format!("the FMU state's next sample {next} is not a count")));
+        }
+        self.hold = crate::control::Hold { engaged, applied, waiting: has_waiting.then_some((at, waiting)), origin, next: next as u64 };
         let next = r.i32("next event")?;
         let text = r.string("profile")?;
         self.profile = match text {
@@ -95,7 +109,7 @@ impl Model for Roller {
         let set_point = profile.as_ref().is_none_or(|loaded| loaded.table(drive::Key::Set).is_none()).then(|| control::set_point_refusal(p, p.loop_set)).flatten();
         self.profile = profile;
         self.start(experiment.start_time);
-        Ok(unmatched.into_iter().chain(roll::massless_roll(&self.params)).chain(set_point).collect())
+        Ok(unmatched.into_iter().chain(roll::massless_roll(&self.params)).chain(set_point).chain(control::unsampled_delay(&self.params)).collect())
     }
 
     fn provisional_state(&mut self) {
@@ -155,16 +169,19 @@ impl Model for Roller {
     }
 
     /// Time events: the profile's entries (a jump, or a kink the integrator
-    /// should not step over) and its `set` events.
+    /// should not step over) and its `set` events. At one the states are reported changed, so that
+    /// an importer restarts its integrator there (its history holds the right-hand side before it).
     fn event_update(&mut self) -> EventUpdate {
+        let time_event = self.profile.as_ref().and_then(|l| l.profile.next_break(self.events_at)).is_some_and(|b| profiles::due(b, self.time));
         let rolled = self.apply_due(self.time);
+        let sampled = self.hold_due(self.time);
         let speed_drive = self.drive() == Drive::Speed;
         if speed_drive {
             self.omega = CompensatedSum::from_parts(self.surface_speed() / self.roll.radius, 0.0);
         }
         EventUpdate {
-            next_event_time: self.profile.as_ref().and_then(|l| l.profile.next_break(self.time)),
-            states_changed: rolled || speed_drive,
+            next_event_time: self.next_event_after(self.time),
+            states_changed: time_event || rolled || speed_drive || sampled,
         }
     }
 }

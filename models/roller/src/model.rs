@@ -36,6 +36,8 @@ pub struct Roller {
     pub(crate) motor: f64,
     /// A dancer loop's integrator [R13], a speed trim (0 without one).
     pub(crate) dancer: f64,
+    /// A sampled loop's hold [R14] (unused by a continuous loop).
+    pub(crate) hold: control::Hold,
     pub(crate) profile: Option<Loaded>,
 }
 
@@ -170,7 +172,7 @@ impl Roller {
         let slip = contact_at.filter(|_| p.traction).map(|x| Slip::at(p, self.contact_state_at(t, prescribed, x.omega, x.web_speed)));
         if self.profile.is_none() {
             // No tables to read (an idler, most rollers of a line): what the parameters give.
-            let control = control::Reads { set: p.loop_set, reference: None };
+            let control = control::Reads { set: p.loop_set, reference: self.given_reference(), held: self.held_command() };
             return Point { roll: self.roll, prescribed, control, slip, ..Point::default() };
         }
         Point {
@@ -178,11 +180,51 @@ impl Roller {
             prescribed,
             drive: self.drive_read(t).0,
             brake: self.value(Key::Brake, t).map(|(b, _)| b),
-            control: control::Reads { set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x), reference: self.value(Key::Reference, t) },
+            control: control::Reads {
+                set: self.value(Key::Set, t).map_or(p.loop_set, |(x, _)| x),
+                reference: self.value(Key::Reference, t).or_else(|| self.given_reference()),
+                held: self.held_command(),
+            },
             load: self.value(Key::Load, t).map_or(0.0, |(x, _)| x),
             strain: self.value(Key::Strain, t).map(|(x, _)| x),
             slip,
         }
+    }
+
+    /// A feed-forward's reference where no table gives it [R10]: loop.speed and its slope
+    /// loop.acceleration, as the importer sets them (the Line: from a part's input v_ref).
+    #[inline(always)]
+    fn given_reference(&self) -> Option<(f64, f64)> {
+        self.params.loop_feedforward.then_some((self.params.loop_speed, self.params.loop_acceleration))
+    }
+
+    /// A sampled loop's command as its hold applies it [R14] (None: continuous, or before its first sample).
+    #[inline(always)]
+    fn held_command(&self) -> Option<f64> {
+        (self.params.sampled() && self.hold.engaged).then_some(self.hold.applied)
+    }
+
+    /// Lets a sampled loop's hold apply what is due at t [R14]; whether the command it applies moved.
+    pub(crate) fn hold_due(&mut self, t: f64) -> bool {
+        if !self.params.sampled() {
+            return false;
+        }
+        let x = self.held();
+        let mut hold = self.hold;
+        let moved = hold.due(&self.params, t, || rhs::loop_command(&self.params, &self.point_at(t, &x), &x, &self.inputs));
+        self.hold = hold;
+        moved
+    }
+
+    /// A sampled loop's next sample or application [R14] (None: no sampled loop).
+    pub(crate) fn next_hold_event(&self) -> Option<f64> {
+        self.params.sampled().then(|| self.hold.next_event(&self.params))
+    }
+
+    /// A sampled loop starts again at t [R14]: continuous until its first sample, due at t (the Line
+    /// solves its steady state with the loop continuous, then samples it).
+    pub fn restart_hold(&mut self, t: f64) {
+        self.hold = control::Hold::starting(t);
     }
 
     /// What the equations read now.

@@ -58,6 +58,11 @@ pub struct Parameters {
     pub loop_feedforward: bool,
     /// A force loop's set point may be <= 0 N: compression is meant.
     pub loop_compression: bool,
+    /// The slope of the feed-forward's reference `loop.speed` where no table gives it [R10].
+    pub loop_acceleration: f64,
+    /// A sampled loop's hold period (0: continuous) and transport delay [R14], s.
+    pub loop_sample: f64,
+    pub loop_delay: f64,
     /// An ideal speed drive on `loop.speed` (the Line's input v_ref), held over a step.
     pub speed_input: bool,
     /// The wrap angle its load cell sees, rad.
@@ -112,6 +117,11 @@ pub const UNWINDER: i32 = 1;
 pub const WINDER: i32 = 2;
 
 impl Parameters {
+    /// The loop's command goes through a zero-order hold [R14].
+    pub fn sampled(&self) -> bool {
+        Kind::of(self) != Kind::None && self.loop_sample > 0.0
+    }
+
     /// The sign of a tension drive's torque and of the radius change: the
     /// web pulls an unwinder back and a winder forward.
     pub fn roll_sign(&self) -> f64 {
@@ -243,6 +253,8 @@ impl Parameters {
             | Real::air_viscosity => self.traction,
             Real::loop_set => kind == Kind::Force && !s.setpoint_table && !s.set_input,
             Real::loop_speed => (speed_loop && !s.reference_table || self.speed_input) && !s.speed_input,
+            Real::loop_acceleration => self.loop_feedforward && !s.reference_table,
+            Real::loop_sample | Real::loop_delay => kind != Kind::None,
             Real::brake_v_slip => s.brake_table,
             Real::dancer_set | Real::dancer_kp | Real::dancer_ki => kind == Kind::Dancer,
             Real::loop_kp | Real::loop_ki | Real::motor_limit => kind != Kind::None,

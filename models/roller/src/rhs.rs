@@ -117,6 +117,11 @@ fn loop_law<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>,
     })
 }
 
+/// The loop's continuous command sat(u) [R11] at the roller's point: what a sampled loop samples [R14].
+pub fn loop_command(p: &Parameters, at: &Point, x: &States, u: &Inputs) -> f64 {
+    loop_law(p, at, x, u, at.roll.inertia(p, x.radius)).command
+}
+
 /// The drive's torque: its table and tau_m, its loop, a brake; where the surface follows a
 /// speed, the torque [R1] needs for it.
 #[inline(always)]

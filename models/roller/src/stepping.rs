@@ -167,7 +167,8 @@ impl Roller {
         let mut t = self.time;
         loop {
             self.apply_due(t);
-            let stop = self.profile.as_ref().and_then(|l| l.profile.next_break(t)).filter(|&b| b < last).unwrap_or(end);
+            self.hold_due(t);
+            let stop = self.next_event_after(t).filter(|&b| b < last).unwrap_or(end);
             if stop > t {
                 self.piece(t, stop - t)?;
             }
@@ -181,6 +182,12 @@ impl Roller {
         // there (its `set` events still apply when the next step starts).
         self.events_at = end;
         Ok(())
+    }
+
+    /// The next time event after t: a profile's break or `set` event, a sampled loop's sample or
+    /// application [R14].
+    pub(crate) fn next_event_after(&self, t: f64) -> Option<f64> {
+        self.profile.as_ref().and_then(|l| l.profile.next_break(t)).into_iter().chain(self.next_hold_event()).reduce(f64::min)
     }
 
     pub(crate) fn start(&mut self, time: f64) {
@@ -198,6 +205,7 @@ impl Roller {
         self.events_at = time;
         self.next_event = 0;
         (self.integrator, self.motor, self.dancer) = (0.0, 0.0, 0.0);
+        self.restart_hold(time);
     }
 }
 

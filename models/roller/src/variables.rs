@@ -104,6 +104,9 @@ fmi_core::bind_variables! {
         dancer_ki: param(params.dancer_ki),
         dancer_I: computed(dancer_integrator()),
         der_dancer_I: computed(rates().dancer_integrator),
+        loop_acceleration: param(params.loop_acceleration),
+        loop_sample: param(params.loop_sample),
+        loop_delay: param(params.loop_delay),
     }
     integer {
         roll: param(params.roll),

@@ -89,6 +89,23 @@ fn at_a_break_not_yet_applied_the_table_is_read_before_it() {
     }
 }
 
+/// Model Exchange: a table's break is a time event where the right-hand side kinks or jumps; the
+/// event update there says the states changed, so that an importer restarts its integrator, and one
+/// where nothing was due does not.
+#[test]
+fn a_time_event_reports_the_states_changed() {
+    let text = r#"{"torque": [[0.1, 0], [0.6, 2]]}"#;
+    let mut me = roller(&[(Real::J, 0.5), (Real::b, 0.2), (Real::R, 1.0)], Some(text), |_| {}).unwrap();
+    let start = me.event_update();
+    assert!(!start.states_changed, "nothing is due at the start");
+    assert_eq!(start.next_event_time, Some(0.1));
+    me.set_time(0.1);
+    let at = me.event_update();
+    assert!(at.states_changed, "the ramp starts: the torque's slope jumps");
+    assert_eq!(at.next_event_time, Some(0.6));
+    assert!(!me.event_update().states_changed, "the event was applied");
+}
+
 #[test]
 fn a_torque_ramp_is_integrated_exactly_across_steps_and_breakpoints() {
     // J w' = tau(t) - b w, tau a ramp from 0 to 2 N.m over [0.1, 0.6] s, then held.

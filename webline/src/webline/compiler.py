@@ -101,6 +101,10 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
             start["loop.speed"] = float(drive.loop.set.value(0.0))
         elif drive.loop.speed:  # its reference: the speed it holds, and the one it feeds forward
             profile["reference"] = table(drive.loop.set)
+        elif drive.loop.feedforward and scene.input_reference() is not None:
+            # The Line FMU's input v_ref: loop.speed and loop.acceleration, which the Line sets (line.json's
+            # feedforward_from); held at its start elsewhere, as the input is.
+            start["loop.speed"] = float(scene.speed_reference().value(0.0))
         elif drive.loop.feedforward:
             profile["reference"] = table(scene.speed_reference())
         if not drive.loop.speed and not drive.loop.set.is_constant():
@@ -150,6 +154,8 @@ def loop_values(loop) -> dict:
     }
     if loop.compression:  # a set point <= 0 N is meant
         values["loop.compression"] = True
+    if loop.sample > 0.0:  # a zero-order hold on the command, each sample applied `delay` later [R14]
+        values.update({"loop.sample": float(loop.sample), "loop.delay": float(loop.delay)})
     if loop.dancer is not None:  # a dancer loop [R13] on dancer.y, which the line wires from the dancer
         values.update({"dancer.set": float(loop.dancer.set), "dancer.kp": float(loop.dancer.kp), "dancer.ki": float(loop.dancer.ki)})
     return values

@@ -179,6 +179,9 @@ def model_exchange_start(component):
         if start.get("includeDamping") and start.get("variableLength"):
             start["includeDamping"] = False
             notes.append(f"{component.name}: linearized without includeDamping (with variableLength it needs dL/dt)")
+    if start.get("loop.sample"):  # held in Model Exchange, a sampled loop's torque would not feed back at all
+        start["loop.sample"], start["loop.delay"] = 0.0, 0.0
+        notes.append(f"{component.name}: its sampled loop linearized continuous (the hold's lag, T/2 + delay, left out)")
     return start, notes
 
 

@@ -79,6 +79,8 @@ def line_spec(scene: Scene, fmu_dir=None, start: str | None = None, settle=True)
                     part["speed_input" if loop.speed else "set_input"] = True
                 if getattr(getattr(c, "drive", None), "input", False):  # an ideal speed drive on v_ref
                     part["speed_input"] = True
+                if loop is not None and loop.feedforward and not loop.speed and scene.input_reference() is not None:
+                    part["feedforward_from"] = scene.input_reference().name
                 wrap = getattr(c, "wrap", None)
                 if wrap is not None:
                     part["wrap"] = float(wrap)
@@ -201,6 +203,19 @@ def run(scene: Scene, fmu_dir=None, step: float | None = None, model_exchange=Fa
         return simulate(scene, path, step, model_exchange)
 
 
+def model_exchange_refusal(scene: Scene) -> str | None:
+    """Why the scene's Line FMU cannot run in Model Exchange (None: it can): a loop feeds forward the
+    slope of a reference the importer gives as an input, which only Co-Simulation's steps give."""
+    ref = scene.input_reference()
+    fed = [c.name for c in scene.nodes if getattr(getattr(getattr(c, "drive", None), "loop", None), "feedforward", False)
+           and not c.drive.loop.speed]
+    if ref is None or not fed:
+        return None
+    return (f"{fed[0]}'s feed-forward takes the slope of its reference, the input {ref.name}.v_ref: Model Exchange gives "
+            "no input derivatives and has no steps to take a difference over, so it would feed forward nothing; run the "
+            "line in Co-Simulation, or give the reference as a profile")
+
+
 def simulate(scene: Scene, path: Path, step: float | None = None, model_exchange=False):
     """A scene's Line FMU at `path` in FMPy (see `run`); info["messages"] holds what the FMU logged."""
     import time as clock
@@ -211,6 +226,9 @@ def simulate(scene: Scene, path: Path, step: float | None = None, model_exchange
     from .result import Result
 
     h = step or scene.step
+    why = model_exchange and model_exchange_refusal(scene)
+    if why:
+        raise LineFmuError(f"{scene.name}: {why}")
     outputs = [output(c, q) for c, q in scene.record]
     watch = watcher(scene, path)
     t0 = clock.perf_counter()

@@ -63,6 +63,7 @@ class EquilibriumError(SceneError):
 # state moves by its own size (the rates' own scale: a dancer's acceleration from forces of 800 N
 # rounds to 1e-14 m/s^2, which no fraction of its speed's size would accept).
 STEADY = 1e-9
+DUE = 1e-9  # s: two times this close are one event (the parts' profiles' tolerance)
 GIVEN = '"start": "given" in the scene starts every part from its given values instead'
 
 
@@ -127,6 +128,12 @@ class LineODE:
         # The dancers whose position a dancer loop holds: steady at its set point, spring or not.
         self.held_by_loop = {c.drive.loop.dancer.dancer for c in trims}
         self.n = first + len(trims)
+        # A sampled loop's hold [R14]: the command it applies (None before its first sample: continuous),
+        # a sample waiting out the delay (when it applies, its command), the last continuous command.
+        self.sampled = {c.name: c.drive.loop for c in self.loops if c.drive.loop.sample > 0.0}
+        self.held = dict.fromkeys(self.sampled)
+        self.waiting = {}
+        self.commands = {}
         # The line's shape, once: each span's rollers, each roller's spans in and out.
         self.up = {sp.name: scene.upstream(sp) for sp in self.spans}
         self.down = {sp.name: scene.downstream(sp) for sp in self.spans}
@@ -215,10 +222,37 @@ class LineODE:
                 limited = np.sign(u) * (lp.limit - 0.05 * lp.limit * np.exp(-(abs(u) - knee) / (0.05 * lp.limit)))
         tracking = lp.ki / lp.kp if lp.kp > 0.0 and lp.ki > 0.0 else 1.0
         dz[i_int] = lp.ki * e + (limited - u) * tracking
+        self.commands[node.name] = limited
+        applied = limited if self.held.get(node.name) is None else self.held[node.name]  # a sampled loop's hold [R14]
         if i_motor is None:
-            return limited
-        dz[i_motor] = (limited - z[i_motor]) / lp.lag
+            return applied
+        dz[i_motor] = (applied - z[i_motor]) / lp.lag
         return z[i_motor]
+
+    def sample_times(self):
+        """The sampled loops' samples k*T and their applications k*T + delay in (0, stop) [R14]."""
+        times = set()
+        for lp in self.sampled.values():
+            k = np.arange(int(np.ceil(self.s.stop_time / lp.sample)) + 1) * lp.sample
+            times.update(float(t) for t in np.concatenate([k, k + lp.delay]) if 0.0 < t < self.s.stop_time)
+        return times
+
+    def hold(self, t, z):
+        """At time t (z the line there): each sampled loop applies a sample whose delay is over, then
+        takes the sample due, the command of its continuous loop at (t, z) [R14]."""
+        if not self.sampled:
+            return
+        self.evaluate(t, z)  # the continuous commands at (t, z), in self.commands
+        for name, lp in self.sampled.items():
+            waiting = self.waiting.get(name)
+            if waiting is not None and waiting[0] <= t + DUE:
+                self.held[name] = self.waiting.pop(name)[1]
+            k = round(t / lp.sample)
+            if abs(t - k * lp.sample) <= DUE:
+                if lp.delay > 0.0 and self.held[name] is not None:
+                    self.waiting[name] = (k * lp.sample + lp.delay, self.commands[name])
+                else:  # the first sample applies at once: the drive ran at it before the start
+                    self.held[name] = self.commands[name]
 
     def speed(self, node, t, z):
         if isinstance(node, Prescribed):
@@ -686,6 +720,16 @@ def traction_used(T_a, T_b, n, w):
     return abs(brentq(phi, lo, hi, xtol=1e-15))
 
 
+def merged(cuts):
+    """Times within DUE of the one before dropped (a sample on a breakpoint is one event), in order."""
+    out = []
+    for t in cuts:
+        if not out or t - out[-1] > DUE:
+            out.append(t)
+    out[-1] = cuts[-1]  # the stop
+    return out
+
+
 def reference(scene: Scene, times=None, rtol=RTOL) -> Result:
     """The line integrated by Radau, sampled at `times` (default: the scene's
     communication points, breakpoints included)."""
@@ -696,7 +740,7 @@ def reference(scene: Scene, times=None, rtol=RTOL) -> Result:
 
         times = scene_grid(scene)
     times = np.asarray(times, dtype=float)
-    cuts = sorted(set([0.0, scene.stop_time] + scene.breakpoints()))
+    cuts = merged(sorted(set([0.0, scene.stop_time] + scene.breakpoints()) | ode.sample_times()))
     events = {}
     for ev in scene.events:
         events.setdefault(ev.time, []).append(ev)
@@ -717,6 +761,7 @@ def reference(scene: Scene, times=None, rtol=RTOL) -> Result:
             for ev in events[a]:
                 z = ode.apply_event(ev, z)
         ode.segment = (a, b)
+        ode.hold(a, z)
         inside = np.nonzero((times >= a - 1e-12) & (times <= b + 1e-12) & ~recorded)[0]
         sol = solve_ivp(ode.rhs, (a, b), z, method="Radau", rtol=rtol, atol=atol, dense_output=True, events=runaway_event)
         if sol.status == 1:  # a tension passed its bound

@@ -15,6 +15,8 @@ of A's entries can move its eigenvalue by (`LineMode.error`).
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import math
 import shutil
 import tempfile
@@ -156,6 +158,68 @@ def _eigenvalue_error(A, left, right) -> float:
 
 
 def linearize(scene, at: float = 0.0, fmu_dir=None) -> StateSpace:
+    """The scene's Line FMU linearized at time `at` (s) after its start; a sampled loop's hold and
+    delay as a first-order Padé approximation of e^(-s (T/2 + delay)) (`with_holds`)."""
+    sampled = {c.name: c.drive.loop for c in scene.nodes
+               if getattr(getattr(c, "drive", None), "loop", None) is not None and c.drive.loop.sample > 0.0}
+    if not sampled:
+        return _linearized(scene, at, fmu_dir)
+    continuous = copy.deepcopy(scene)
+    for c in continuous.nodes:
+        if c.name in sampled:
+            c.drive.loop.sample = c.drive.loop.delay = 0.0
+    ss = _linearized(continuous, at, fmu_dir)
+    for name, lp in sampled.items():
+        ss = with_hold(ss, name, lp.sample / 2 + lp.delay, lp.lag)
+    return ss
+
+
+def hold_path(ss: StateSpace, part: str, lag: float):
+    """Where a loop's command enters and what it is, in ss: the rates' column b of the torque it
+    applies (its motor torque input's column; with a lag, 1/lag into the lag's state) and the command's
+    rows (k over the states, k_u over the inputs): the torque output without tau_m's share, or with a
+    lag the lag's input, lag*motor.torque' + motor.torque."""
+    tau_m = ss.input_index(f"{part}.tau_m")
+    if lag > 0.0:
+        m = ss.states.index(f"{part}.motor.torque")
+        b = np.zeros(len(ss.states))
+        b[m] = 1.0 / lag
+        k, k_u = lag * ss.A[m] + np.eye(len(ss.states))[m], lag * ss.B[m]
+    else:
+        b = ss.B[:, tau_m]
+        o = ss.output_index(f"{part}.tau")
+        k, k_u = ss.C[o].copy(), ss.D[o].copy()
+        k_u[tau_m] -= 1.0
+    return b, k, k_u
+
+
+def with_hold(ss: StateSpace, part: str, tau: float, lag: float = 0.0) -> StateSpace:
+    """ss with `part`'s loop command delayed by tau (s) on its way to the torque it applies [R14]: a
+    first-order Padé approximation (1 - s tau/2)/(1 + s tau/2) of e^(-s tau), one more state. A zero-
+    order hold of period T lags by T/2 on average (its phase, -w T/2, at frequencies below 1/T), so a
+    sampled loop's tau is T/2 + its delay. Applied torque a = P c: x' = A x + b (a - c), w' = -2/tau w + c,
+    a = -c + 4/tau w."""
+    b, k, k_u = hold_path(ss, part, lag)
+    n = len(ss.states)
+    A = np.zeros((n + 1, n + 1))
+    A[:n, :n] = ss.A - 2.0 * np.outer(b, k)
+    A[:n, n] = b * 4.0 / tau
+    A[n, :n], A[n, n] = k, -2.0 / tau
+    B = np.vstack([ss.B - 2.0 * np.outer(b, k_u), k_u])
+    C, D = np.hstack([ss.C, np.zeros((len(ss.outputs), 1))]), ss.D.copy()
+    if lag == 0.0:  # the torque output is the torque applied
+        o = ss.output_index(f"{part}.tau")
+        C[o, :n] -= 2.0 * k
+        C[o, n] = 4.0 / tau
+        D[o] -= 2.0 * k_u
+    state = f"{part}.hold"
+    return dataclasses.replace(ss, A=A, B=B, C=C, D=D, states=ss.states + [state], x=np.append(ss.x, 0.0), dx0=np.append(ss.dx0, 0.0),
+                               units={**ss.units, state: "N.m.s"},
+                               messages=ss.messages + [f"{part}: its sampled loop's hold and delay as a first-order Padé "
+                                                       f"approximation of a delay of {tau:g} s (T/2 + delay)"])
+
+
+def _linearized(scene, at: float = 0.0, fmu_dir=None) -> StateSpace:
     """The scene's Line FMU linearized at time `at` (s) after its start."""
     from fmpy import extract, read_model_description, simulate_fmu
     from fmpy.simulation import instantiate_fmu

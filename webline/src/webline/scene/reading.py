@@ -40,6 +40,8 @@ FIRST = ("source", "unwinder")
 MIDDLE = ("roller", "dancer")
 LAST = ("sink", "winder")
 
+MIN_SAMPLE = 1e-5  # s: the Roller's shortest sample period [R14]
+
 
 class _Reader:
     def __init__(self, source: str, fmu_dir=None):
@@ -259,7 +261,7 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
         return Drive("speed", Profile.constant(r.quantity(start, units.SPEED, f"{what}.speed.input")), input=True)
     if "speed" in kinds and "speed" in o and "loop" in o:  # a speed loop on a real motor
         o = r.keys(node, what, required=("speed", "loop"), optional=("feedforward", "dancer"))
-        g = r.keys(o["loop"], f"{what}.loop", required=("kp", "ki"), optional=("limit", "lag"))
+        g = r.keys(o["loop"], f"{what}.loop", required=("kp", "ki"), optional=("limit", "lag", "sample", "delay"))
         speed_node, speed_input = o["speed"], False
         if isinstance(speed_node.value, Obj) and "input" in speed_node.value:  # the Line FMU's input <name>.v_ref
             speed_node, speed_input = r.keys(speed_node, f"{what}.speed", required=("input",))["input"], True
@@ -293,9 +295,10 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
 
 def _loop(r: _Reader, node: Node, what: str) -> Loop:
     """A drive's "pi": {"measure": "SPAN.T" or "ROLLER.F", "set", "kp", "ki", "limit", "lag", "feedforward",
-    "compression"}.
+    "compression", "sample", "delay"}.
     Which parts it names is checked once the line is read (`check_loops`)."""
-    o = r.keys(node, what, required=("measure", "set", "kp", "ki"), optional=("limit", "lag", "feedforward", "compression"))
+    o = r.keys(node, what, required=("measure", "set", "kp", "ki"),
+               optional=("limit", "lag", "feedforward", "compression", "sample", "delay"))
     measure = r.string(o["measure"], f"{what}.measure")
     part, _, quantity = measure.rpartition(".")
     if not part or quantity not in ("T", "F"):
@@ -333,11 +336,21 @@ def _set_point(r: _Reader, node: Node, loop: Loop, what: str):
 
 
 def _motor(r: _Reader, o, what: str, loop: Loop):
-    """A loop's motor: its torque "limit" and "lag"."""
+    """A loop's motor: its torque "limit" and "lag"; a sampled loop's hold "sample" and "delay" [R14]."""
     if "limit" in o:
         loop.limit = r.quantity(o["limit"], units.TORQUE, f"{what}.limit", positive=True)
     if "lag" in o:
         loop.lag = r.quantity(o["lag"], units.TIME, f"{what}.lag", nonnegative=True)
+    if "sample" in o:
+        loop.sample = r.quantity(o["sample"], units.TIME, f"{what}.sample", positive=True)
+        if loop.sample < MIN_SAMPLE:
+            raise r.err(o["sample"], f"{what}.sample = {loop.sample:g} s: a sampled loop's period is at least {MIN_SAMPLE:g} s "
+                                     "(leave \"sample\" out for a continuous loop)")
+    if "delay" in o:
+        loop.delay = r.quantity(o["delay"], units.TIME, f"{what}.delay", nonnegative=True)
+        if not loop.delay <= loop.sample:
+            raise r.err(o["delay"], f"{what}.delay = {loop.delay:g} s: a sampled loop's delay is at most its \"sample\" "
+                                    f"period ({loop.sample:g} s; a loop without one has no delay)")
 
 
 def _feedforward(r: _Reader, node: Node, what: str, loop: Loop):

@@ -171,6 +171,8 @@ class Loop:
     feedforward: bool = False
     sign: float = 1.0  # +1: more torque raises the measured force (it is upstream of the drive), -1: lowers it
     set_input: bool = False  # the set point is the Line FMU's input <name>.T_set (<name>.v_ref), starting at `set`
+    sample: float = 0.0  # a zero-order hold's period on the loop's command (s, 0: continuous) [R14]
+    delay: float = 0.0  # each sample applied this much later (s, at most `sample`)
     dancer: DancerLoop | None = None  # a speed loop's reference trimmed by a dancer's position loop [R13]
     compression: bool = False  # a set point <= 0 N is meant: the loop holds the span in compression
 
@@ -469,6 +471,15 @@ class Scene:
         """The line's speed reference: the profile of its first speed-driven part or speed loop (None: it
         has none)."""
         return next((p for p in map(self.speed_or_reference, self.nodes) if p is not None), None)
+
+    def input_reference(self):
+        """The part whose input <name>.v_ref of the Line FMU is the line's speed reference (an ideal speed
+        drive or a speed loop on it); None where the reference is a profile or there is none."""
+        node = next((n for n in self.nodes if self.speed_or_reference(n) is not None), None)
+        drive = getattr(node, "drive", None)
+        loop = getattr(drive, "loop", None)
+        given = getattr(drive, "input", False) or (loop is not None and loop.speed and loop.set_input)
+        return node if given else None
 
     def speed_or_reference(self, node):
         """The speed a node follows: prescribed, or its speed loop's reference (None: neither)."""
