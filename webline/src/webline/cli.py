@@ -142,8 +142,10 @@ def traction_report(c, time, used, slip, mu_eff=None, v_web=None) -> str:
     the kinetic limit) and when; where it slid, when, how fast at most and how much web slid over it
     (the integral of |slip|); where an air film leaves its wrap no friction (mu_eff = 0) and no nip
     presses, that it rides on air from which web speed, instead of a share of nothing."""
+    from .reference import stribeck
+
     tr = c.traction
-    psi = 1.0 + (tr.static - 1.0) * np.exp(-np.square(slip / tr.v_slip))
+    psi = stribeck(slip, tr.v_slip, tr.static)
     floating = np.zeros(len(time), dtype=bool)
     if mu_eff is not None and tr.nip_load is None:
         floating = mu_eff == 0.0
@@ -161,7 +163,7 @@ def traction_report(c, time, used, slip, mu_eff=None, v_web=None) -> str:
                      f"{float(np.sum(dt[floating])):.3g} s in all): its air film leaves the wrap no friction")
     if sliding.any():
         fastest = float(np.max(np.abs(slip[sliding])))
-        slid = float(np.trapezoid(np.abs(slip), time))
+        slid = float(np.trapezoid(np.where(sliding, np.abs(slip), 0.0), time))
         parts.append(f"it slid from t = {time[sliding][0]:.3g} s to {time[sliding][-1]:.3g} s "
                      f"({float(np.sum(dt[sliding])):.3g} s in all), at up to {fastest:.3g} m/s, "
                      f"{slid:.3g} m of web slid over it")

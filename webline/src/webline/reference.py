@@ -496,7 +496,7 @@ class LineODE:
 
         k = c.traction.static
         lo, hi = balance(-k), balance(k)  # f falls with u: the balance too
-        if lo == 0.0 and hi == 0.0:  # a contact that carries nothing (an air film): any grip, 0
+        if lo == hi and abs(lo) <= STEADY * max(abs(T_a), abs(T_b)):  # it carries nothing (on air), nor needs to
             return 0.0
         if lo >= 0.0 >= hi:
             return brentq(balance, -k, k, xtol=1e-15, rtol=4 * np.finfo(float).eps)
@@ -626,6 +626,7 @@ class LineODE:
             z[self.i_y[d.name]] = d.y_start
         for c in self.slippers:
             z[self.i_vw[c.name]] = s.initial_speed(c, t) + c.traction.slip_start
+            z[self.i_grip[c.name]] = start_grip(c.traction)
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
             first = self.i_eps[sp.name]
             if sp.eps_start is not None:  # every layer of a laminate at it
@@ -716,9 +717,24 @@ def grip(u, s, v_slip, creep, static):
     deflection rate du/dt = (s - |s| u/psi(s))/creep, psi(s) = 1 + (static - 1) exp(-(s/v_slip)^2) the
     Stribeck limit, and g = u + (s - |s| u/psi(s))/v_slip the share of the kinetic limit the contact
     carries (bristle and damping). Steady, s = 0 where |u| < psi(0) (it sticks) or u = psi(s) sign(s)."""
-    psi = 1.0 + (static - 1.0) * math.exp(-((s / v_slip) ** 2))
-    rate = s - abs(s) * u / psi
+    rate = s - abs(s) * u / stribeck(s, v_slip, static)
     return rate / creep, u + rate / v_slip
+
+
+def stribeck(s, v_slip, static):
+    """psi(s) = 1 + (static - 1) exp(-(s/v_slip)^2): the grip's limit at slip s, static at rest, 1 sliding."""
+    return 1.0 + (static - 1.0) * np.exp(-np.square(s / v_slip))
+
+
+def start_grip(tr):
+    """A given start's grip: 0 where the web starts at the surface's speed; where it starts sliding
+    (slip_start s0 != 0), the grip of a steady slide, psi(s0) sign(s0). From 0 there, g's damping term
+    s0/v_slip (5000 at 5 m/s) would ask e^1000 times the kinetic limit of the wrap for the nanoseconds
+    the bristles take to deflect (docs/physics.md, "Contacts that stick")."""
+    s0 = tr.slip_start
+    if s0 == 0.0:
+        return 0.0
+    return math.copysign(stribeck(s0, tr.v_slip, tr.static), s0)
 
 
 def friction(tr, R, wrap_deg, web, v_w, v_s, T_a, T_b, load, u) -> dict:
