@@ -137,7 +137,7 @@ BRAKE_V_SLIP = 0.01  # m/s
 # The presliding displacements (the bristle's creep, docs/physics.md "Contacts that stick"): the web's travel
 # over a traction contact, and a brake's surface travel, that loads its grip from 0 to the kinetic limit.
 TRACTION_CREEP = 5e-8  # m
-BRAKE_CREEP = 5e-8  # m
+BRAKE_CREEP = 1e-6  # m
 
 
 @dataclass
