@@ -1,17 +1,21 @@
-"""The contact laws of a roller the web may slip on (docs/physics.md, "Rollers that slip"), each
-against its closed form: the nip on either side of the wrap, the web's centripetal force relieving
-the wrap, and the air film at the entry tension. In the Line FMU (FMI 2.0 and 3.0 Co-Simulation at
-1 ms and 10 ms, FMI 2.0 Model Exchange under FMPy's CVode at rtol 1e-10) and in webline's reference.
+"""The contact laws of a roller the web may slip on (docs/physics.md, "Rollers that slip", "Contacts
+that stick"), each against its closed form: the nip on either side of the wrap, the web's centripetal
+force relieving the wrap, the air film at the entry tension; contacts that stick (the mass balance
+through a roll or nip that holds, the user's pull roll and nip that hold and slide) and a brake that
+holds a stopped line. In the Line FMU (FMI 2.0 and 3.0 Co-Simulation at 1 ms and 10 ms, FMI 2.0 Model
+Exchange under FMPy's CVode at rtol 1e-10), in webline's reference, and for the brake in the Roller FMU
+(the parts' co-simulation). The FMU engines skip, saying why, where the packaged Roller predates the
+contact law that sticks (its traction.creep).
 
-The lines: a source at 5 m/s feeding a strain of 1e-3, a damped PET span (EA = 225 kN, rho_l =
-0.0695 kg/m), a roll driven at a speed clearly off the web's (so the web slides at |s| >= 50 v_slip,
-where tanh is 1 to the last bit), a second damped span and a sink. At steady state the mass balance
-of the span after the roll, 1 + eps_b = (v_snk/v_src)(1 + eps_src), fixes T_b = EA eps_b; the roll's
-law then fixes T_a, and the span before it carries the web to the roll at v_w = v_src (1 + eps_a)/
-(1 + eps_src). Tolerance 1e-6 of the tension: the reference integrates at rtol 1e-10, the Line FMU
-at its default tolerance (1e-9 on strains and speeds), and the lines start at their equilibrium, so
-what is left is the integrators' error, far below it; the web's mass on the wrap (m_w dv_w/dt) is 0
-at steady state.
+The sliding lines: a source at 5 m/s feeding a strain of 1e-3, a damped PET span (EA = 225 kN,
+rho_l = 0.0695 kg/m), a roll driven at a speed clearly off the web's (so the web slides at |s| >= 50
+v_slip, its grip at the kinetic limit), a second damped span and a sink. At steady state the mass
+balance of the span after the roll, 1 + eps_b = (v_snk/v_src)(1 + eps_src), fixes T_b = EA eps_b; the
+roll's law then fixes T_a, and the span before it carries the web to the roll at v_w = v_src (1 +
+eps_a)/(1 + eps_src). They start given at that state (an equilibrium start holds the web to the roll).
+Tolerance 1e-6 of the tension: the reference integrates at rtol 1e-10, the Line FMU at its default
+tolerance (1e-9 on strains and speeds), so what is left is the integrators' error, far below it; the
+web's mass on the wrap (m_w dv_w/dt) is 0 at steady state.
 """
 
 import json
