@@ -30,7 +30,7 @@ from webline import linefmu
 from webline.cli import main as webline_main
 from webline.engines import run_scene
 from webline.reference import reference
-from webline.scene import parse_scene
+from webline.scene import SceneError, parse_scene
 
 from .conftest import require_sticking_contacts
 
@@ -379,3 +379,57 @@ def test_a_braked_stopped_line_holds_its_tension(how, where):
     assert T[0] > 10.0, f"{how}: {T[0]} N at 1 s after the stop"
     assert np.max(np.abs(T / T[0] - 1.0)) < 1e-6, f"{how}: {T.min()}..{T.max()} N"
     assert np.max(np.abs(r["unwind.tau"])) <= 20.0 * (1.0 + 1e-9), how
+
+
+@pytest.mark.parametrize("how", HOW)
+def test_static_friction_holds_past_the_kinetic_limit_up_to_mu_s(how, where):
+    """The pull roll with "static": 1.2 (mu_s = 1.2 mu) against a winder holding T_b = m + (100 - m)
+    e^(1.1 mu pi), m = rho_l v^2: holding it needs g = 1.1, past the kinetic limit but within the
+    static one psi(0) = 1.2, so the web sticks (zero slip: span up keeps the source's 100 N draw) and
+    the share in use is 1.1; to 1e-6 (the integrators' error is far below; the line starts steady).
+    Without "static" (1) the same line asks more than its limit, and the start is refused."""
+    m = RHO_L * 0.2 ** 2
+    t_a = EA * (0.2 / 0.19991115059973347 - 1.0)
+    t_b = m + (t_a - m) * math.exp(1.1 * MU * math.pi)
+    scene = json.loads((USER_CASES / "pull_roll_sticks_slow.json").read_text())
+    scene["line"][4]["drive"] = {"tension": f"{t_b!r} N"}
+    scene["line"][2]["traction"]["static"] = 1.2
+    r = run(parse_scene(json.dumps(scene), "static.json"), how, where)
+    assert np.max(np.abs(r["up.T"] / t_a - 1.0)) <= 1e-6, how
+    assert np.max(np.abs(r["pull.traction"] - 1.1)) <= 1e-6, f"{how}: {r['pull.traction'].max()}"
+    assert np.max(np.abs(r["pull.slip"])) <= 1e-9, how
+    del scene["line"][2]["traction"]["static"]
+    with pytest.raises(SceneError, match="pull: needs .* N downstream, its capstan limit is"):
+        run(parse_scene(json.dumps(scene), "kinetic.json"), how, where)
+
+
+def test_a_sticking_contacts_own_mode_is_overdamped_as_its_closed_form_says():
+    """A contact that sticks is a spring F'/delta in parallel with a damper F'/v_slip between the web's
+    mass on the wrap m_w = rho_l R theta and the roll, F' = df/dg the friction's slope in the grip; its
+    mode's roots m_w s^2 + (F'/v_slip) s + F'/delta = 0 are real where zeta = sqrt(F' delta/m_w)/(2 v_slip)
+    > 1. The user's pull roll holding 100 N against 200 N (wrap: F' = sqrt(T'_a T'_b) mu theta
+    cosh(mu theta g/2) = 141 N, m_w = 0.0218 kg, delta = 50 nm, v_slip = 1 mm/s): zeta = 9.0, roots
+    -6.46e6 /s and -1.99e4 /s. The reference's Jacobian at its steady state (central differences, which
+    take |s|'s slope at s = 0 as 0, as the closed form does) has both, real, to 1 %: the spans in series
+    add their stiffness 2 EA/L (1.6e-4 of F'/delta) and damping 2 d_r EA/L (0.3 % of F'/v_slip)."""
+    from webline.reference import LineODE
+    from webline.scene import TRACTION_CREEP
+
+    ode = LineODE(user_case("pull_roll_sticks_slow"))
+    z = ode.initial_state()
+    steps = np.maximum(np.abs(z), 1e-3) * 1e-7
+    steps[ode.i_vw["pull"]] = 1e-9
+    jacobian = np.column_stack([(ode.rhs(0.0, z + np.eye(ode.n)[j] * h) - ode.rhs(0.0, z - np.eye(ode.n)[j] * h)) / (2 * h)
+                                for j, h in enumerate(steps)])
+    roots = sorted(np.linalg.eigvals(jacobian), key=lambda x: x.real)[:2]
+    contact = ode.evaluate(0.0, z)[1]["pull"]
+    m = RHO_L * 0.2 ** 2
+    a, b, w, g = 100.0 - m, 200.0 - m, MU * math.pi, contact["traction"]
+    slope = math.sqrt(a * b) * w * math.cosh(w * g / 2.0)
+    m_w, delta = contact["m_w"], TRACTION_CREEP
+    zeta = math.sqrt(slope * delta / m_w) / (2.0 * V_SLIP)
+    c, k = slope / V_SLIP, slope / delta
+    expected = sorted([(-c - math.sqrt(c * c - 4 * m_w * k)) / (2 * m_w), (-c + math.sqrt(c * c - 4 * m_w * k)) / (2 * m_w)])
+    assert zeta > 1.0 and abs(zeta - 9.0) < 0.05, zeta
+    for got, want in zip(roots, expected):
+        assert abs(got.imag) == 0.0 and abs(got.real / want - 1.0) < 1e-2, f"{got} vs {want}"
