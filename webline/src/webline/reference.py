@@ -627,6 +627,8 @@ class LineODE:
         for c in self.slippers:
             z[self.i_vw[c.name]] = s.initial_speed(c, t) + c.traction.slip_start
             z[self.i_grip[c.name]] = start_grip(c.traction)
+        for b in self.brakes:  # a brake that starts turning starts sliding, as a web that starts slipping
+            z[self.i_brake[b.name]] = np.sign(s.initial_speed(b, t))
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
             first = self.i_eps[sp.name]
             if sp.eps_start is not None:  # every layer of a laminate at it
