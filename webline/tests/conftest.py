@@ -11,7 +11,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "fmu"))
-from packaged import fmu_path, fmus  # noqa: E402, F401 (fmu_path and fmus are fixtures)
+from packaged import fmu_path, fmus, require_sticking_contacts  # noqa: E402, F401 (fmu_path and fmus are fixtures)
 
 # The web-line scenes of the webline runner.
 SCENES = ROOT / "webline" / "scenes"

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import shutil
 import sys
 import tempfile
@@ -122,7 +123,8 @@ def summary(scene, result: Result) -> str:
         y = result.column(f"{d.name}.y")
         lines.append(f"  dancer {d.name}: position {y[0]:.4f} m at start, {y.min():.4f} .. {y.max():.4f} m, {y[-1]:.4f} m at the end")
     for c in [c for c in scene.parts if getattr(c, "traction", None) is not None and f"{c.name}.traction" in keys]:
-        lines.append(f"  {traction_report(c.name, result.time, result.column(f'{c.name}.traction'))}")
+        column = lambda q: result.column(f"{c.name}.{q}") if f"{c.name}.{q}" in keys else None  # noqa: E731
+        lines.append(f"  {traction_report(c, result.time, column('traction'), column('slip'), column('mu_eff'), column('v_web'))}")
         floating = floating_report(scene, c, result)
         if floating is not None:
             lines.append(f"  {floating}")
@@ -131,27 +133,53 @@ def summary(scene, result: Result) -> str:
     return "\n".join(lines)
 
 
-# The share of its traction at which a roller counts as sliding (docs/physics.md, "Rollers that slip").
-SLIDING = 0.99
+# A contact slides where its grip sits on its limit, |g| >= psi(s) (1 - ON_LIMIT), or it slips faster
+# than its v_slip (docs/physics.md, "Contacts that stick"): a slide at a slip far below v_slip still
+# counts (a grip that holds sits below psi(0) at zero slip).
+ON_LIMIT = 1e-6
 
 
-def traction_report(name: str, time, used) -> str:
-    """Will it slip? The most traction a roller used, and when; and where it used SLIDING or more, when
-    it first slid, when it last did and for how long in all."""
-    k = int(np.argmax(used))
-    text = f"{name}: {100 * used[k]:.0f} % of its traction at most (t = {time[k]:.3g} s)"
-    sliding = used >= SLIDING
-    if not sliding.any():
-        return text + "; it never slid"
+def traction_report(c, time, used, slip, mu_eff=None, v_web=None) -> str:
+    """Will it slip? The most traction a roller used while it held (|g|, the friction it needs over
+    the kinetic limit) and when; where it slid, when, how fast at most and how much web slid over it
+    (the integral of |slip|); where an air film leaves its wrap no friction (mu_eff = 0) and no nip
+    presses, that it rides on air from which web speed, instead of a share of nothing."""
+    from .reference import stribeck
+
+    tr = c.traction
+    psi = stribeck(slip, tr.v_slip, tr.static)
+    floating = np.zeros(len(time), dtype=bool)
+    if mu_eff is not None and tr.nip_load is None:
+        floating = mu_eff == 0.0
+    sliding = ((used >= psi * (1.0 - ON_LIMIT)) | (np.abs(slip) > tr.v_slip)) & ~floating
+    held = ~sliding & ~floating
+    parts = []
+    if held.any():
+        k = int(np.argmax(np.where(held, used, -np.inf)))
+        parts.append(f"{100 * used[k]:.0f} % of its traction at most while it held (t = {time[k]:.3g} s)")
     dt = np.diff(time, prepend=time[0])
-    first, last = time[sliding][0], time[sliding][-1]
-    return text + f"; it slid from t = {first:.3g} s to {last:.3g} s, {float(np.sum(dt[sliding])):.3g} s in all"
+    if floating.any():
+        first = int(np.argmax(floating))
+        speed = f"{v_web[first]:.4g} m/s" if v_web is not None else f"t = {time[first]:.3g} s"
+        parts.append(f"it rides on air from {speed} (t = {time[first]:.3g} s to {time[floating][-1]:.3g} s, "
+                     f"{float(np.sum(dt[floating])):.3g} s in all): its air film leaves the wrap no friction")
+    if sliding.any():
+        fastest = float(np.max(np.abs(slip[sliding])))
+        slid = float(np.trapezoid(np.where(sliding, np.abs(slip), 0.0), time))
+        parts.append(f"it slid from t = {time[sliding][0]:.3g} s to {time[sliding][-1]:.3g} s "
+                     f"({float(np.sum(dt[sliding])):.3g} s in all), at up to {fastest:.3g} m/s, "
+                     f"{slid:.3g} m of web slid over it")
+    elif not floating.any():
+        parts.append("it never slid")
+    return f"{c.name}: " + "; ".join(parts)
 
 
 def traction_columns(scene, c) -> list:
-    """What a roller the web may slip on records for the summary: its traction in use, and for
-    `floating_report` the web's speed over it and the tensions of the spans on either side."""
-    return [(c.name, "traction"), (c.name, "v_web"), (scene.span_before(c).name, "T"), (scene.span_after(c).name, "T")]
+    """What a roller the web may slip on records for the summary: its traction in use, its slip and
+    mu_eff for `traction_report`, and for `floating_report` the web's speed over it and the tensions
+    of the spans on either side."""
+    return [(c.name, "traction"), (c.name, "slip"), (c.name, "mu_eff"), (c.name, "v_web"), (scene.span_before(c).name, "T"),
+            (scene.span_after(c).name, "T")]
 
 
 def floating_report(scene, c, result) -> str | None:
@@ -255,6 +283,12 @@ def cmd_run(args):
     return report_run(args, scene, scene.name, result, None)
 
 
+def first_sentence(text: str) -> str:
+    """Up to the full stop that ends the first sentence: one before a space or the end ("0.2 m/s" and
+    "N.m" keep their points)."""
+    return re.split(r"[.](?:\s|$)", text, maxsplit=1)[0]
+
+
 def report_run(args, scene, name, result, text):
     """CSV, the summary (with the reference's errors when asked) and the PNG of a run."""
     out = Path(args.out)
@@ -280,7 +314,7 @@ def report_run(args, scene, name, result, text):
 
         png = out / f"{name}.png"
         described = scene is not None and scene.description
-        plot(result, png, title=f"{name}: {scene.description.split('.')[0]}" if described else None, reference=ref)
+        plot(result, png, title=f"{name}: {first_sentence(scene.description)}" if described else None, reference=ref)
         written.append(str(png))
     print("wrote " + ", ".join(written))
     return 0

@@ -94,7 +94,7 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if drive is not None and drive.kind in ("torque", "tension", "brake"):
         profile[drive.kind] = table(drive.profile)
     if drive is not None and drive.kind == "brake":
-        start["brake.v_slip"] = BRAKE_V_SLIP
+        start.update({"brake.v_slip": BRAKE_V_SLIP, "brake.creep": float(drive.creep)})
     if drive is not None and drive.loop is not None:
         start.update(loop_values(drive.loop))
         if drive.loop.speed and drive.loop.set_input:  # the Line FMU's input v_ref, starting there
@@ -171,6 +171,8 @@ def traction_values(scene: Scene, node) -> dict:
         "traction.mu": float(t.mu),
         "traction.wrap": math.radians(node.wrap or 0.0),
         "traction.v_slip": float(t.v_slip),
+        "traction.static": float(t.static),
+        "traction.creep": float(t.creep),
         "traction.width": float(web.width),
         "traction.slip_start": float(t.slip_start),
         "web_a.m": float(web.rho_l),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -47,7 +49,7 @@ def plot(result: Result, path, title=None, reference: Result | None = None):
     sub = f"{info.get('method', '')}, step {info.get('step', 0) * 1e3:g} ms" if info else ""
     if reference is not None:
         sub += "; dashed: monolithic reference"
-    fig.suptitle(f"{title or result.scene}\n{sub}", fontsize=10)
+    fig.suptitle(f"{textwrap.fill(title or result.scene, 100)}\n{sub}", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

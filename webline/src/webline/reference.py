@@ -29,7 +29,9 @@ scene. States:
   it lags (`loop_torque`);
 * where the web may slip on a roller or dancer (docs/physics.md, "Rollers that slip"), the web's
   speed over it v_w: m_w dv_w/dt = T_b - T_a + f, the spans on both sides see v_w, and the roller
-  turns by -R*f instead of R*(T_b - T_a) (`friction`).
+  turns by -R*f instead of R*(T_b - T_a) (`friction`); and the contact's grip u, the bristles' share
+  of the kinetic limit (docs/physics.md, "Contacts that stick"; `grip`), which a brake has too, on the
+  roll's surface speed.
 
 Tension: T = EA*(eps + d_r*deps/dt) (damping), or for a web record's
 stress-strain table T = A*(sigma(eps) + d_r*dsigma/deps*deps/dt); clamped at
@@ -41,12 +43,13 @@ a roller's surface speed).
 
 from __future__ import annotations
 
+import math
 import time as clock
 from itertools import accumulate
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.optimize import root
+from scipy.optimize import brentq, root
 
 from .bound import runaway, tension_bounds
 from .result import Result
@@ -111,9 +114,14 @@ class LineODE:
         self.i_omega = {m.name: n_s + i for i, m in enumerate(self.movers)}
         self.i_y = {d.name: n_s + n_m + 2 * i for i, d in enumerate(self.dancers)}
         self.i_vw = {c.name: n_s + n_m + 2 * n_d + i for i, c in enumerate(self.slippers)}
+        # Each contact's grip, then each brake's.
+        self.i_grip = {c.name: n_s + n_m + 2 * n_d + len(self.slippers) + i for i, c in enumerate(self.slippers)}
+        self.brakes = [m for m in self.movers if getattr(getattr(m, "drive", None), "kind", None) == "brake"]
+        first_brake = n_s + n_m + 2 * n_d + 2 * len(self.slippers)
+        self.i_brake = {m.name: first_brake + i for i, m in enumerate(self.brakes)}
         # A roll whose web winds off or on: its radius is a state [R3].
         self.rolls = [m for m in self.movers if getattr(m, "wound", None) is not None]
-        first_roll = n_s + n_m + 2 * n_d + len(self.slippers)
+        first_roll = first_brake + len(self.brakes)
         self.i_r = {m.name: first_roll + i for i, m in enumerate(self.rolls)}
         # A drive's loop: its integrator, then its motor's torque where it lags.
         self.loops = [c for c in self.movers if getattr(getattr(c, "drive", None), "loop", None) is not None]
@@ -181,9 +189,13 @@ class LineODE:
         if d.kind == "tension":
             R = self.radius(node, z)
             return (-R if node.type == "unwinder" else R) * self.pv(d.profile, t)
-        if d.kind == "brake":  # a powder brake opposes the surface's motion, through 0 at rest [R12]
-            return -self.pv(d.profile, t) * np.tanh(self.speed(node, t, z) / BRAKE_V_SLIP)
+        if d.kind == "brake":  # a powder brake: its grip on the surface's speed carries up to its rating [R12]
+            return -self.pv(d.profile, t) * self.brake_grip(node, t, z)[1]
         return 0.0
+
+    def brake_grip(self, node, t, z):
+        """(du_b/dt, g_b) of a brake's grip on its roll's surface speed (k_s = 1, `grip`)."""
+        return grip(z[self.i_brake[node.name]], self.speed(node, t, z), BRAKE_V_SLIP, node.drive.creep, 1.0)
 
     def loop_torque(self, node, t, z, q, dz):
         """A drive's PI loop [R10] and its motor [R11] at (t, z): its torque, its rates into dz.
@@ -268,7 +280,8 @@ class LineODE:
         R = self.inertia[node.name][1] if node.name in self.inertia else node.R
         tr = node.traction
         load = self.pv(tr.nip_load, t) if tr.nip_load is not None else 0.0
-        return friction(tr, R, node.wrap or 0.0, web, z[self.i_vw[node.name]], v[node.name], q[up.name]["T"], q[down.name]["T"], load)
+        return friction(tr, R, node.wrap or 0.0, web, z[self.i_vw[node.name]], v[node.name], q[up.name]["T"], q[down.name]["T"],
+                        load, z[self.i_grip[node.name]])
 
     def evaluate(self, t, z):
         """Rates and every quantity of the line at (t, z)."""
@@ -324,6 +337,8 @@ class LineODE:
                 contact = self.contact(node, t, z, v, q)
                 F_down, F_up = -contact["f"], 0.0
             tau = self.torque(node, t, z)
+            if node.name in self.i_brake:
+                dz[self.i_brake[node.name]] = self.brake_grip(node, t, z)[0]
             if node.name in self.i_loop:
                 q[node.name] = {"tau": tau + self.loop_torque(node, t, z, q, dz)}
                 tau = q[node.name]["tau"]
@@ -344,6 +359,7 @@ class LineODE:
             contact = self.contact(c, t, z, v, q)
             (up,), (down,) = self.ins[c.name], self.outs[c.name]
             dz[self.i_vw[c.name]] = (q[down.name]["T"] - q[up.name]["T"] + contact["f"]) / contact["m_w"]
+            dz[self.i_grip[c.name]] = contact["du"]
             q[c.name] = contact
         for d in self.dancers:
             i = self.i_y[d.name]
@@ -441,9 +457,10 @@ class LineODE:
         """The state where every rate vanishes, from z0 (SciPy's root, 'hybr'), checked before it is
         returned (`STEADY`); a roll being wound turns at a steady surface speed (`steady_rates`). A dancer without a spring is steady at any position: its position is held
         at its start and its carriage's balance of forces checked on its own, which names what is off.
-        Where the web may slip, the line is solved first with the web held to every roller's surface,
-        then with its speeds free from there: away from its steady tensions the friction saturates, and
-        a search through such states stalls."""
+        Where the web may slip, the line is solved with the web held to every roller's surface, and each
+        contact's grip from its force balance at zero slip (`hold`): a contact that cannot carry its
+        demand there is refused in plain words. A brake's grip is solved with its roll at rest, where it
+        stands still at the start, and is its kinetic limit (u_b = sign(v)) where it turns."""
         springless = [d for d in self.dancers if d.stiffness == 0.0 and d.name not in self.held_by_loop]
         held = [self.i_y[d.name] for d in springless]  # their positions: held
         balance = [i + 1 for i in held]  # their accelerations: checked afterwards
@@ -453,17 +470,27 @@ class LineODE:
         # A laminate at rest is steady at any strains of its layers that pull as one: its layers move
         # together from their start (each layer's rate is zero whatever its strain; [M6]).
         tied = {first + i: first for first, k in self.resting_laminates(t, z0) for i in range(1, k)}
-        slips = list(self.i_vw.values())
         z = z0.copy()
-        if slips:
-            self.stuck = True
-            try:
-                z, _ = self._solve(t, z0, z, held + slips, balance + slips, tied)
-            finally:
-                self.stuck = False
-            for c in self.slippers:
-                z[self.i_vw[c.name]] = self.speed(c, t, z)
-        z, scale = self._solve(t, z0, z, held, balance, tied)
+        # A brake at rest holds its roll with the torque its grip solves for; turning, it slides at its rating.
+        resting = [b for b in self.brakes if self.speed(b, t, z0) == 0.0]
+        for b in self.brakes:
+            if b not in resting:
+                z[self.i_brake[b.name]] = np.sign(self.speed(b, t, z0))
+        brake_held = [self.i_omega[b.name] if b in resting else self.i_brake[b.name] for b in self.brakes]
+        held, skipped = held + brake_held, balance + list(self.i_brake.values())
+        contact = list(self.i_vw.values()) + list(self.i_grip.values())
+        self.stuck = bool(contact)
+        try:
+            z, scale = self._solve(t, z0, z, held + contact, skipped + contact, tied)
+        finally:
+            self.stuck = False
+        for c in self.slippers:
+            z[self.i_vw[c.name]] = self.speed(c, t, z)
+            z[self.i_grip[c.name]] = self.hold(c, t, z)
+            scale[self.i_vw[c.name]], scale[self.i_grip[c.name]] = c.traction.v_slip, 1.0
+        for b in self.brakes:
+            self.check_brake(b, t, z, b in resting)
+            scale[self.i_brake[b.name]] = 1.0
         off = self.unsteadiness(t, z, scale)
         rows = np.array([i for i in range(self.n) if i not in balance], dtype=int)
         if len(rows) and not np.max(off[rows]) < STEADY:
@@ -486,6 +513,60 @@ class LineODE:
                     f"difference), or {GIVEN}")
         return z
 
+    def hold(self, c, t, z):
+        """The grip u of contact `c` at zero slip (g = u) that balances its web, T_b - T_a + f(u) = 0, within
+        its static limit |u| <= k_s; where none does, the demand exceeds the limit: refused in plain words."""
+        _, q, v = self.evaluate(t, z)
+        (up,), (down,) = self.ins[c.name], self.outs[c.name]
+        T_a, T_b = q[up.name]["T"], q[down.name]["T"]
+
+        def balance(u):
+            x = z.copy()
+            x[self.i_grip[c.name]] = u
+            return T_b - T_a + self.contact(c, t, x, v, q)["f"]
+
+        k = c.traction.static
+        lo, hi = balance(-k), balance(k)  # f falls with u: the balance too
+        if lo == hi and abs(lo) <= STEADY * max(abs(T_a), abs(T_b)):  # it carries nothing (on air), nor needs to
+            return 0.0
+        if lo >= 0.0 >= hi:
+            return brentq(balance, -k, k, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        raise EquilibriumError(self.demand_message(c, t, z, q, v, T_a, T_b))
+
+    def demand_message(self, c, t, z, q, v, T_a, T_b):
+        """What a contact that cannot hold its steady tensions at the start needs, and its limit."""
+        tr = c.traction
+        contact = self.contact(c, t, z, v, q)
+        relief = self.web[self.ins[c.name][0].name][1].rho_l * v[c.name] ** 2
+        load = self.pv(tr.nip_load, t) if tr.nip_load is not None else 0.0
+        side, high, low = ("downstream", T_b, T_a) if T_b > T_a else ("upstream", T_a, T_b)
+        nip_low = (tr.nip_side == "entry") == (T_b > T_a)
+        limit = holding_limit(contact["mu_eff"] * np.radians(c.wrap or 0.0), tr.nip_mu * load, tr.static, relief, low, nip_low)
+        kinds, what = [], []
+        if tr.mu > 0.0:
+            kinds.append("capstan")
+            what.append(f"mu {contact['mu_eff']:g}{' on its air film' if contact['mu_eff'] != tr.mu else ''}, {c.wrap:g} deg")
+        if tr.nip_load is not None:
+            kinds.append("nip")
+            what.append(f"nip mu {tr.nip_mu:g}, {load:g} N")
+        if tr.static != 1.0:
+            what.append(f"static {tr.static:g}")
+        other = "upstream" if side == "downstream" else "downstream"
+        return (f"{c.where}: {c.name}: needs {high:.4g} N {side}, its {' and '.join(kinds)} limit is {limit:.4g} N "
+                f"({'; '.join(what)}): the web slides from the start; use \"start\": \"given\" (the limit with the "
+                f"{low:.4g} N {other} that the line's steady draws give)")
+
+    def check_brake(self, b, t, z, resting):
+        """A brake at rest holds its roll within its rating; one turning keeps turning the way it started."""
+        u = z[self.i_brake[b.name]]
+        rating = self.pv(b.drive.profile, t)
+        if resting and not abs(u) <= 1.0:
+            raise EquilibriumError(f"{b.where}: {b.type} {b.name!r}: its brake must hold {abs(u) * rating:.4g} N.m at "
+                                   f"rest, its rating is {rating:.4g} N.m: the roll turns from the start; use \"start\": \"given\"")
+        if not resting and np.sign(self.speed(b, t, z)) != u:
+            raise EquilibriumError(f"{b.where}: {b.type} {b.name!r}: its brake slides at its rating the way the roll "
+                                   f"starts, but the steady line turns it the other way; {GIVEN}")
+
     def _solve(self, t, z0, z, held, skipped, tied):
         """SciPy's root on the rates but `skipped`, over the states but `held`, from z; a tied state
         {i: first} moves with the state it is tied to and has no rate of its own to solve. (z, scale)."""
@@ -496,8 +577,11 @@ class LineODE:
         # by its tolerance at first, a thousand times below its steady value, and hybr stalls there.
         for _ in range(2):
             scale = np.maximum(np.abs(z), atol_of(self, z0) * 1e6)
-            for c in self.slippers:  # the web's speed over a roller moves on the scale of its slip
+            for c in self.slippers:  # the web's speed over a roller moves on the scale of its slip, a grip on 1
                 scale[self.i_vw[c.name]] = c.traction.v_slip
+                scale[self.i_grip[c.name]] = 1.0
+            for i in self.i_brake.values():
+                scale[i] = 1.0
 
             def rates(u, scale=scale, z=z):
                 x = z.copy()
@@ -547,6 +631,10 @@ class LineODE:
             names[i], names[i + 1] = f"dancer {k!r}'s position", f"dancer {k!r}'s carriage speed"
         for k, i in self.i_vw.items():
             names[i] = f"the web's speed over {k!r}"
+        for k, i in self.i_grip.items():
+            names[i] = f"{k!r}'s grip"
+        for k, i in self.i_brake.items():
+            names[i] = f"{k!r}'s brake grip"
         for k, i in self.i_r.items():
             names[i] = f"roll {k!r}'s radius"
         for k, (i, m) in self.i_loop.items():
@@ -569,6 +657,9 @@ class LineODE:
             z[self.i_y[d.name]] = d.y_start
         for c in self.slippers:
             z[self.i_vw[c.name]] = s.initial_speed(c, t) + c.traction.slip_start
+            z[self.i_grip[c.name]] = start_grip(c.traction)
+        for b in self.brakes:  # a brake that starts turning starts sliding, as a web that starts slipping
+            z[self.i_brake[b.name]] = np.sign(s.initial_speed(b, t))
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
             first = self.i_eps[sp.name]
             if sp.eps_start is not None:  # every layer of a laminate at it
@@ -652,6 +743,8 @@ def atol_of(ode: LineODE, z0):
         a[i + 1] = 1e-12
     for name, i in ode.i_vw.items():
         a[i] = 1e-11
+    for i in list(ode.i_grip.values()) + list(ode.i_brake.values()):  # shares of a limit
+        a[i] = 1e-11
     for name, i in ode.i_r.items():
         a[i] = 1e-13
     for name, (i, m) in ode.i_loop.items():  # torques
@@ -667,15 +760,41 @@ def atol_of(ode: LineODE, z0):
 THETA_MIN = np.radians(5.0)
 
 
-def friction(tr, R, wrap_deg, web, v_w, v_s, T_a, T_b, load) -> dict:
+def grip(u, s, v_slip, creep, static):
+    """(du/dt, g) of a contact's grip u at slip s (docs/physics.md, "Contacts that stick"): the bristles'
+    deflection rate du/dt = (s - |s| u/psi(s))/creep, psi(s) = 1 + (static - 1) exp(-(s/v_slip)^2) the
+    Stribeck limit, and g = u + (s - |s| u/psi(s))/v_slip the share of the kinetic limit the contact
+    carries (bristle and damping). Steady, s = 0 where |u| < psi(0) (it sticks) or u = psi(s) sign(s)."""
+    rate = s - abs(s) * u / stribeck(s, v_slip, static)
+    return rate / creep, u + rate / v_slip
+
+
+def stribeck(s, v_slip, static):
+    """psi(s) = 1 + (static - 1) exp(-(s/v_slip)^2): the grip's limit at slip s, static at rest, 1 sliding."""
+    return 1.0 + (static - 1.0) * np.exp(-np.square(s / v_slip))
+
+
+def start_grip(tr):
+    """A given start's grip: 0 where the web starts at the surface's speed; where it starts sliding
+    (slip_start s0 != 0), the grip of a steady slide, psi(s0) sign(s0). From 0 there, g's damping term
+    s0/v_slip (5000 at 5 m/s) would ask e^1000 times the kinetic limit of the wrap for the nanoseconds
+    the bristles take to deflect (docs/physics.md, "Contacts that stick")."""
+    s0 = tr.slip_start
+    if s0 == 0.0:
+        return 0.0
+    return math.copysign(stribeck(s0, tr.v_slip, tr.static), s0)
+
+
+def friction(tr, R, wrap_deg, web, v_w, v_s, T_a, T_b, load, u) -> dict:
     """The contact of a web that may slip (docs/physics.md, [R6]-[R8]): the friction f on the web along
-    its motion, from the capstan law on the wrap and a nip on its entry or exit side, both regularized
-    in the slip's direction g = tanh(s/v_slip), the wrap's law on T - rho_l v_w^2 (the pressure its
-    centripetal force leaves), under Knox and Sweeney's air film at the entry tension; with what a
-    roller with traction reports."""
-    theta = np.radians(wrap_deg)
+    its motion, from the capstan law on the wrap and a nip on its entry or exit side, both carrying the
+    share g of their kinetic limit that the contact's grip u gives (`grip`), the wrap's law on
+    T - rho_l v_w^2 (the pressure its centripetal force leaves), under Knox and Sweeney's air film at
+    the entry tension; with the grip's rate and what a roller with traction reports (|g|, the friction
+    in use over the kinetic limit)."""
+    theta = math.radians(wrap_deg)
     s = v_w - v_s
-    g = np.tanh(s / tr.v_slip)
+    du, g = grip(u, s, tr.v_slip, tr.creep, tr.static)
     mu, h = tr.mu, 0.0
     if tr.roughness > 0.0:
         # The film forms where both surfaces drag the air in: T_a's side running forward, T_b's back.
@@ -691,33 +810,33 @@ def friction(tr, R, wrap_deg, web, v_w, v_s, T_a, T_b, load) -> dict:
     relief = web.rho_l * v_w * v_w
     A, B = T_a - relief, T_b - relief
     T_in, T_out = (A - f_nip, B) if tr.nip_side == "entry" else (A, B + f_nip)
-    f_wrap = -2.0 * np.sqrt(max(T_in, 0.0) * max(T_out, 0.0)) * np.sinh(mu * theta * g / 2.0)
-    used = traction_used(A, B, n, mu * theta) if tr.nip_side == "entry" else traction_used(B, A, n, mu * theta)
-    return {"f": f_nip + f_wrap, "m_w": web.rho_l * R * max(theta, THETA_MIN), "v_web": v_w, "slip": s,
-            "traction": used, "mu_eff": mu, "h_air": h}
+    f_wrap = -2.0 * math.sqrt(max(T_in, 0.0) * max(T_out, 0.0)) * bounded_sinh(mu * theta * g / 2.0)
+    return {"f": f_nip + f_wrap, "du": du, "m_w": web.rho_l * R * max(theta, THETA_MIN), "v_web": v_w, "slip": s,
+            "traction": abs(g), "mu_eff": mu, "h_air": h}
 
 
-def traction_used(T_a, T_b, n, w):
-    """The share of the traction in use: g solving T_b = (T_a + n g) exp(w g), |g|, the tensions less
-    rho_l v^2 and the nip on T_a's side (docs/physics.md); a slack side leaves the nip alone."""
-    if T_a <= 0.0 or T_b <= 0.0:
-        if n > 0.0:
-            return abs(T_b - T_a) / n
-        return 0.0 if T_a == T_b else 1.0
-    if n == 0.0 and w == 0.0:
-        return 0.0 if T_a == T_b else 1.0
-    if n == 0.0:
-        return abs(np.log(T_b / T_a)) / w
-    if w == 0.0:
-        return abs(T_b - T_a) / n
-    from scipy.optimize import brentq
+# sinh's argument beyond which the wrap's law goes on linearly (sinh(300) = 1e130; a float overflows past
+# 710, and products with it sooner): a wrap that far in holds more than any tension, so its friction
+# there only has to stay finite and rising (mu = 1e6 in a trial state of the integrator).
+SINH_MAX = 300.0
 
-    lo = -T_a / n * (1.0 - 1e-15)  # T_a + n g > 0 there
-    phi = lambda g: np.log(T_a + n * g) + w * g - np.log(T_b)
-    hi = 1.0
-    while phi(hi) < 0.0:
-        hi *= 2.0
-    return abs(brentq(phi, lo, hi, xtol=1e-15))
+
+def bounded_sinh(x):
+    """sinh(x), continued linearly past +-SINH_MAX (a huge mu theta: no overflow in a trial state)."""
+    if abs(x) <= SINH_MAX:
+        return math.sinh(x)
+    return math.copysign(math.sinh(SINH_MAX) * (1.0 + abs(x) - SINH_MAX), x)
+
+
+def holding_limit(w, n, static, relief, low, nip_low):
+    """The highest tension a contact holds on its high side against `low` on the other, at its static limit
+    g = static: the wrap (w = mu_eff theta) multiplies T - rho_l v^2 by exp(w static), the nip adds
+    n static before it (on the low side) or after it (docs/physics.md, "Rollers that slip")."""
+    grow = math.exp(min(w * static, SINH_MAX))
+    if nip_low:
+        wrapped = low - relief + n * static
+        return relief + wrapped * grow if wrapped > 0.0 else low + n * static
+    return (relief + (low - relief) * grow if low > relief else low) + n * static
 
 
 def merged(cuts):

@@ -26,7 +26,7 @@ class Kind:
 
 
 DIMENSIONLESS = Kind("dimensionless (a plain number, or %)", "1", ("1", "%"))
-LENGTH = Kind("a length", "m", ("m", "mm", "cm", "um", "µm", "in", "ft"))
+LENGTH = Kind("a length", "m", ("m", "mm", "cm", "um", "µm", "nm", "in", "ft"))
 TIME = Kind("a time", "s", ("s", "ms", "us", "min"))
 MASS = Kind("a mass", "kg", ("kg", "g"))
 SPEED = Kind("a speed", "m/s", ("m/s", "m/min", "mm/s", "ft/min", "ft/s"))

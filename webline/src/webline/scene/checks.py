@@ -18,11 +18,16 @@ def check_traction(r, scene: Scene, raw):
     """A roller the web may slip on moves the web on its wrap as a mass [R6]: the mode of that mass
     between the two spans (about a kilohertz for a thin film) is damped by their Kelvin-Voigt damping
     only, so both need includeDamping with a retardation time d_r > 0. Web mass (includeMass) next to
-    it is not modelled."""
+    it is not modelled. A traction's slip_start is a given start's: an equilibrium start solves the web's speed
+    over the roller (at zero slip where it sticks), so one given there would be ignored: it is refused."""
     for node in scene.nodes:
         if getattr(node, "traction", None) is None:
             continue
         what = f"{node.type} {node.name!r}"
+        if node.traction.slip_start_given and scene.start == "equilibrium":
+            raise r.err(raw[node.name], f"{what}: traction: slip_start is the web's slip at a given start; with "
+                                        "\"start\": \"equilibrium\" the line starts steady, where the slip is solved (0 where the "
+                                        "web sticks), so slip_start would be ignored: remove it, or use \"start\": \"given\"")
         for sp in scene.spans_in(node) + scene.spans_out(node):
             if "includeDamping" not in sp.effects or not sp.wp2.d_r > 0:
                 raise r.err(raw[sp.name], f"span {sp.name!r} next to {what}, which has traction, needs the effect includeDamping "

@@ -289,8 +289,28 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
     kind, body = next(iter(o.items.items()))
     if kind == "pi":
         return Drive("pi", None, _loop(r, body, f"{what}.pi"))
-    dim = {"torque": units.TORQUE, "tension": units.FORCE, "speed": units.SPEED, "brake": units.TORQUE}[kind]
+    if kind == "brake":
+        return _brake(r, body, f"{what}.brake")
+    dim = {"torque": units.TORQUE, "tension": units.FORCE, "speed": units.SPEED}[kind]
     return Drive(kind, r.profile(body, dim, f"{what}.{kind}"))
+
+
+def _brake(r: _Reader, node: Node, what: str) -> Drive:
+    """A powder brake: its rated torque (a profile, N.m >= 0), or {"torque": profile, "creep": length},
+    creep its presliding surface travel delta_b (docs/physics.md, "Contacts that stick")."""
+    drive = Drive("brake")
+    torque = node
+    if isinstance(node.value, Obj) and "torque" in node.value:
+        o = r.keys(node, what, required=("torque",), optional=("creep",))
+        torque = o["torque"]
+        if "creep" in o:
+            drive.creep = r.quantity(o["creep"], units.LENGTH, f"{what}: creep", positive=True)
+    drive.profile = r.profile(torque, units.TORQUE, f"{what}" if torque is node else f"{what}: torque")
+    negative = next(((t, v) for t, v in drive.profile.knots if v < 0), None)
+    if negative is not None:
+        raise r.err(torque, f"{what}: {negative[1]:g} N.m at t = {negative[0]:g} s: a brake's rated torque is >= 0 "
+                            "(it opposes the roll's motion whichever way it turns)")
+    return drive
 
 
 def _loop(r: _Reader, node: Node, what: str) -> Loop:
@@ -473,7 +493,8 @@ def _roller(r, o_node, name, kind) -> Roller:
                             f"{what}: traction or a nip on {why} is not modelled: the web slips only on a roller with one web in and one out")
         if kind != "roller":
             raise r.err(r.key_pos(o["traction" if "traction" in o else "nip"]),
-                        f"{what}: traction or a nip on an {kind} is not modelled (its roll's radius changes): put it on a roller or a dancer")
+                        f"{what}: traction or a nip on {'an' if kind == 'unwinder' else 'a'} {kind} is not modelled (its roll's radius "
+                        "changes): put it on a roller or a dancer")
         c.traction = _traction(r, o, what, c.wrap)
     if "wound" in o:
         if kind == "roller":
@@ -511,14 +532,23 @@ def _traction(r, o, what, wrap) -> Traction:
     """The keys "traction" (friction on the wrap, which needs "wrap") and "nip" of a roller or dancer."""
     t = Traction()
     if "traction" in o:
-        tr = r.keys(o["traction"], f"{what}: traction", required=("mu",), optional=("v_slip", "air", "slip_start"))
+        tr = r.keys(o["traction"], f"{what}: traction", required=("mu",),
+                    optional=("v_slip", "static", "creep", "air", "slip_start"))
         if wrap is None or wrap == 0.0:
             raise r.err(r.key_pos(o["traction"]), f"{what}: traction acts on the web's wrap: give the roller a \"wrap\" angle")
         t.mu = r.quantity(tr["mu"], units.DIMENSIONLESS, f"{what}: traction: mu", nonnegative=True)
         if "v_slip" in tr:
             t.v_slip = r.quantity(tr["v_slip"], units.SPEED, f"{what}: traction: v_slip", positive=True)
+        if "static" in tr:
+            t.static = r.quantity(tr["static"], units.DIMENSIONLESS, f"{what}: traction: static", positive=True)
+            if t.static < 1.0:
+                raise r.err(tr["static"], f"{what}: traction: static {t.static:g}: it is mu_s/mu, the static limit over "
+                                          "the kinetic one, and must be >= 1")
+        if "creep" in tr:
+            t.creep = r.quantity(tr["creep"], units.LENGTH, f"{what}: traction: creep", positive=True)
         if "slip_start" in tr:
             t.slip_start = r.quantity(tr["slip_start"], units.SPEED, f"{what}: traction: slip_start")
+            t.slip_start_given = True
         if "air" in tr:
             air = r.keys(tr["air"], f"{what}: traction: air", required=("roughness",), optional=("viscosity",))
             t.roughness = r.quantity(air["roughness"], units.LENGTH, f"{what}: traction: air: roughness", positive=True)

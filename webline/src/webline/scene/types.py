@@ -138,8 +138,12 @@ def span_layers(wp1: Web, wp2: Web) -> list[tuple[Web, Web]]:
     return list(zip(wp1.plies, wp2.plies))
 
 
-# A powder brake's speed scale [R12]: its torque passes through 0 at rest over about this surface speed.
+# A powder brake's speed scale [R12]: the damping of its grip and its Stribeck speed (docs/physics.md).
 BRAKE_V_SLIP = 0.01  # m/s
+# The presliding displacements (the bristle's creep, docs/physics.md "Contacts that stick"): the web's travel
+# over a traction contact, and a brake's surface travel, that loads its grip from 0 to the kinetic limit.
+TRACTION_CREEP = 5e-8  # m
+BRAKE_CREEP = 1e-6  # m
 
 
 @dataclass
@@ -188,12 +192,13 @@ class Drive:
     end roller's motor holds a tension: tau = -R*T at an unwinder, +R*T at a
     winder), 'speed' (an ideal speed drive: the surface speed follows the
     profile; no Roller FMU), 'pi' (a tension loop, `loop`), 'speed loop' (a real motor's, `loop`)
-    or 'brake' (a powder brake: -B*tanh(v/BRAKE_V_SLIP), B the profile, [R12])."""
+    or 'brake' (a powder brake: -B*g_b, B the profile, g_b its grip's law, [R12]; `creep` its delta_b)."""
 
     kind: str
     profile: Profile | None = None
     loop: Loop | None = None
     input: bool = False  # an ideal speed drive on the Line FMU's input <name>.v_ref, `profile` its start value
+    creep: float = BRAKE_CREEP  # a brake's presliding surface travel, m
 
 
 # The sides of the wrap a nip may press on, in the direction of travel (web_a to web_b), each at the
@@ -208,13 +213,16 @@ class Traction:
     film (roughness)."""
 
     mu: float = 0.0
-    v_slip: float = 1e-3
+    v_slip: float = 1e-3  # the grip's damping and Stribeck speed
+    static: float = 1.0  # k_s = mu_s/mu >= 1, the static limit over the kinetic one
+    creep: float = TRACTION_CREEP  # the presliding displacement delta, m
     roughness: float = 0.0
     viscosity: float = 1.81e-5
     nip_mu: float = 0.0
     nip_load: Profile | None = None
     nip_side: str = "entry"  # the side of the wrap the nip presses on, one of NIP_SIDES
     slip_start: float = 0.0  # the web's speed over the roller at a given start, minus the surface's
+    slip_start_given: bool = False  # the scene set slip_start (refused under an equilibrium start)
 
 
 @dataclass
