@@ -3,15 +3,17 @@
 //!
 //! [R6]  m_w dv_w/dt = T_b - T_a + f,   J domega/dt = -r f + tau - b omega     (s = v_w - r omega)
 //!       m_w = m_web * r * max(theta, THETA_MIN): the web's mass on the wrap
-//! [R7]  f = f_nip + f_wrap,  g = tanh(s/v_slip),  T' = T - m_web v_w^2 (the pressure left after the
-//!       web's centripetal force)
+//! [R7]  f = f_nip + f_wrap,  T' = T - m_web v_w^2 (the pressure left after the web's centripetal force),
+//!       g the bristles' share of the kinetic limit (`bristle`, the grip u a state):
+//!       du/dt = (s - |s| u/psi(s))/delta,  g = u + (s - |s| u/psi(s))/v_slip,
+//!       psi(s) = 1 + (k_s - 1) exp(-(s/v_slip)^2)
 //!       f_nip  = -mu_nip N g                                       (the nip line, on the wrap's entry or exit)
 //!       f_wrap = -2 sqrt(T'_in+ T'_out+) sinh(mu_eff theta g / 2)  (the wrap between the nip and the other side)
 //!       nip at the entry (`nip.side` 0): T'_in = T'_a - f_nip, T'_out = T'_b
 //!       nip at the exit  (`nip.side` 1): T'_in = T'_a,         T'_out = T'_b + f_nip
 //!       at rest (m_w dv_w/dt = 0): T'_b = (T'_a + mu_nip N g) exp(mu_eff theta g) (entry), or
-//!       T'_b = T'_a exp(mu_eff theta g) + mu_nip N g (exit): the capstan law with the regularized
-//!       direction g of the slip; a side where T' <= 0 leaves the wrap no traction
+//!       T'_b = T'_a exp(mu_eff theta g) + mu_nip N g (exit): the capstan law with the share g in use
+//!       (|g| = 1 sliding); a side where T' <= 0 leaves the wrap no traction
 //! [R8]  h = 0.643 r (12 eta V / T_w)^(2/3),  V = |v_w + r omega|/2,  T_w = T_entry / W, T_entry the
 //!       tension of the side the air is dragged in from: T_a where v_w + r omega >= 0, else T_b
 //!       mu_eff = mu * clamp((3 sigma - h)/(2 sigma), 0, 1)   (sigma > 0; without air mu_eff = mu)
@@ -19,15 +21,19 @@
 //! Each result is a value with its gradient in the contact's knowns (`Dual`): the tangents are the
 //! equations' own, differentiated once, here, and formed once per point for every direction.
 
-use crate::number::Number;
+use crate::bristle;
+use crate::number::{Lanes, Number};
 use crate::parameters::Parameters;
 
-/// How the web meets the roller: today always by [R7]'s regularized friction, which covers
-/// sticking (|s| << v_slip) and sliding alike.
+/// How the web meets the roller: by [R7]'s bristle, which covers sticking and sliding alike; or,
+/// where a line solves the steady state it starts in, held (`Held`): the grip's rate is then the
+/// slip itself, s/delta, so that the steady state is the sticking one (s = 0, the grip solved
+/// from the force balance) whatever the grip needs, and a grip beyond its limit is found and refused.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Friction {
     #[default]
-    Regularized,
+    Bristle,
+    Held,
 }
 
 /// Which side of the wrap the nip presses on (`nip.side`), named for the web running from web_a
@@ -59,13 +65,15 @@ impl NipSide {
 pub const THETA_MIN: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
 /// The contact's knowns, the components of a gradient: the web's speed, the surface's, the
-/// tensions T_a and T_b, the radius.
+/// tensions T_a and T_b, the radius, the grip.
 pub const V_WEB: usize = 0;
 pub const V_SURFACE: usize = 1;
 pub const T_A: usize = 2;
 pub const T_B: usize = 3;
 pub const RADIUS: usize = 4;
-pub type Gradient = [f64; 5];
+pub const GRIP: usize = 5;
+pub const KNOWNS: usize = 6;
+pub type Gradient = [f64; KNOWNS];
 
 /// A value and its gradient in the knowns.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -76,11 +84,11 @@ pub struct Dual {
 
 impl Dual {
     pub const fn constant(x: f64) -> Dual {
-        Dual { x, d: [0.0; 5] }
+        Dual { x, d: [0.0; KNOWNS] }
     }
 
     fn known(x: f64, i: usize) -> Dual {
-        let mut d = [0.0; 5];
+        let mut d = [0.0; KNOWNS];
         d[i] = 1.0;
         Dual { x, d }
     }
@@ -91,10 +99,10 @@ impl Dual {
         self.d.iter().zip(direction).map(|(g, d)| g * d).sum()
     }
 
-    /// This result in the roller's number, the knowns (v_web, v_surface, T_a, T_b, r) in it: the
-    /// contact's own gradient, chained.
+    /// This result in the roller's number, the knowns (v_web, v_surface, T_a, T_b, r, grip) in it:
+    /// the contact's own gradient, chained.
     #[inline]
-    pub fn lift<N: Number>(&self, knowns: &[N; 5]) -> N {
+    pub fn lift<N: Number>(&self, knowns: &[N; KNOWNS]) -> N {
         N::chain(self.x, &self.d, knowns)
     }
 
@@ -118,6 +126,15 @@ impl Dual {
     fn scaled(self, a: f64) -> Dual {
         self.map(a * self.x, a)
     }
+
+    /// As a number of the roller's equations: its gradient the lanes.
+    fn lanes(self) -> Lanes<KNOWNS> {
+        Lanes { x: self.x, d: self.d }
+    }
+
+    fn of(x: Lanes<KNOWNS>) -> Dual {
+        Dual { x: x.x, d: x.d }
+    }
 }
 
 /// What the contact needs from the roller now.
@@ -130,6 +147,8 @@ pub struct State {
     /// The nip's load N (a table of time: no known of the contact).
     pub nip_load: f64,
     pub radius: f64,
+    /// The bristles' grip u [R7].
+    pub grip: f64,
 }
 
 /// The contact's results [R6]–[R8], each with its gradient.
@@ -137,6 +156,8 @@ pub struct State {
 pub struct Contact {
     /// The friction force on the web, along its motion.
     pub force: Dual,
+    /// The grip's rate du/dt [R7].
+    pub grip_rate: Dual,
     pub mu_eff: Dual,
     pub h_air: Dual,
 }
@@ -187,7 +208,7 @@ fn air(p: &Parameters, s: &State) -> (Dual, Dual) {
     }
     // h = 0.643 r (12 eta v / t_w)^(2/3): d ln h = d ln r + (2/3)(d ln v - d ln t_w).
     let h = 0.643 * s.radius * (12.0 * p.air_viscosity * v.x / tw.x).powf(2.0 / 3.0);
-    let mut d = [0.0; 5];
+    let mut d = [0.0; KNOWNS];
     for (i, di) in d.iter_mut().enumerate() {
         *di = h * ((2.0 / 3.0) * (v.d[i] / v.x - tw.d[i] / tw.x));
     }
@@ -214,10 +235,9 @@ fn relieved(p: &Parameters, s: &State) -> (Dual, Dual) {
 /// [R7] and [R8] at the contact's state.
 pub fn contact(p: &Parameters, s: &State) -> Contact {
     let slip = Dual::known(s.v_web, V_WEB).minus(Dual::known(s.v_surface, V_SURFACE));
-    let g = {
-        let g = (slip.x / p.traction_v_slip).tanh();
-        slip.map(g, (1.0 - g * g) / p.traction_v_slip)
-    };
+    let grip = Dual::known(s.grip, GRIP);
+    let bristle = bristle::grip(slip.lanes(), grip.lanes(), p.traction_static, p.traction_v_slip, p.traction_creep);
+    let (g, grip_rate) = (Dual::of(bristle.share), Dual::of(bristle.rate));
     let (h_air, mu_eff) = air(p, s);
     let f_nip = g.scaled(-p.nip_mu * s.nip_load);
     let (t_a, t_b) = relieved(p, s);
@@ -232,7 +252,7 @@ pub fn contact(p: &Parameters, s: &State) -> Contact {
     let kg = mu_eff.scaled(0.5 * p.traction_wrap).times(g);
     let sinh = kg.map(kg.x.sinh(), kg.x.cosh());
     let f_wrap = root.times(sinh).scaled(-2.0);
-    Contact { force: f_nip.plus(f_wrap), mu_eff, h_air }
+    Contact { force: f_nip.plus(f_wrap), grip_rate, mu_eff, h_air }
 }
 
 /// The share of the available traction the tensions use: the direction g in [R7]'s law at rest,
@@ -306,6 +326,8 @@ mod tests {
             traction_mu: 0.3,
             traction_wrap: std::f64::consts::FRAC_PI_2,
             traction_v_slip: 1e-3,
+            traction_static: 1.0,
+            traction_creep: 5e-8,
             traction_width: 1.0,
             air_viscosity: 1.81e-5,
             mass_a: [0.0167, 1.0, 1.0, 1.0],
@@ -313,8 +335,11 @@ mod tests {
         }
     }
 
+    /// Steady sliding where the web slips (the grip at its limit, sign(s)), at rest where it does not.
     fn state(v_web: f64, v_surface: f64, t_a: f64, t_b: f64) -> State {
-        State { v_web, v_surface, t_a, t_b, nip_load: 0.0, radius: 0.05 }
+        let s = v_web - v_surface;
+        let grip = if s == 0.0 { 0.0 } else { s.signum() };
+        State { v_web, v_surface, t_a, t_b, nip_load: 0.0, radius: 0.05, grip }
     }
 
     /// A web too light for its centripetal force to count (m = 0).
@@ -383,7 +408,7 @@ mod tests {
             for s in [0.5, -0.5, 1e-4] {
                 let c = contact(&p, &state(20.0, 20.0 - s, t_a, t_b));
                 assert_eq!(c.force.x, 0.0, "T_a {t_a}, T_b {t_b}, s {s}");
-                assert_eq!(c.force.d, [0.0; 5], "T_a {t_a}, T_b {t_b}, s {s}");
+                assert_eq!(c.force.d, [0.0; KNOWNS], "T_a {t_a}, T_b {t_b}, s {s}");
             }
         }
     }
@@ -441,6 +466,8 @@ mod tests {
         let heavy = [0.25, 1.0, 1.0, 1.0]; // m v^2 from 6 to 36 N at these speeds
         let cases = [
             (params(), 0.0),
+            (Parameters { traction_static: 1.3, ..params() }, 0.0),
+            (Parameters { nip_mu: 0.5, traction_static: 1.2, ..params() }, 150.0),
             (Parameters { nip_mu: 0.5, ..params() }, 150.0),
             (Parameters { nip_mu: 0.5, nip_side: NipSide::Exit.value(), ..params() }, 150.0),
             (Parameters { air_roughness: 2e-6, ..params() }, 0.0),
@@ -448,10 +475,10 @@ mod tests {
             (Parameters { air_roughness: 2e-6, nip_mu: 0.4, nip_side: NipSide::Exit.value(), mass_a: heavy, ..params() }, 90.0),
             (Parameters { nip_mu: 0.5, mass_a: heavy, ..params() }, 150.0),
         ];
-        let points = [(5.0004, 5.0, 60.0, 75.0), (4.9993, 5.0, 90.0, 70.0), (12.0, 11.998, 40.0, 41.0), (-6.0, -6.0005, 70.0, 55.0)];
-        let directions: [Gradient; 2] = [[1.3e-4, -0.7e-4, 0.9, -1.7, 1e-3], [-2e-4, 1e-4, -2.0, 0.5, -2e-3]];
+        let points = [(5.0004, 5.0, 60.0, 75.0, 0.4), (4.9993, 5.0, 90.0, 70.0, -0.8), (12.0, 11.998, 40.0, 41.0, 0.9), (-6.0, -6.0005, 70.0, 55.0, 0.1)];
+        let directions: [Gradient; 2] = [[1.3e-4, -0.7e-4, 0.9, -1.7, 1e-3, 0.2], [-2e-4, 1e-4, -2.0, 0.5, -2e-3, -0.3]];
         for (p, n) in &cases {
-            for &(vw, vs, ta, tb) in &points {
+            for &(vw, vs, ta, tb, grip) in &points {
                 for d in &directions {
                     let at = |e: f64| State {
                         v_web: vw + e * d[V_WEB],
@@ -460,6 +487,7 @@ mod tests {
                         t_b: tb + e * d[T_B],
                         nip_load: *n,
                         radius: 0.05 + e * d[RADIUS],
+                        grip: grip + e * d[GRIP],
                     };
                     let e = 1e-5; // the displacements are small beside the speeds themselves
                     let c = contact(p, &at(0.0));
@@ -469,6 +497,7 @@ mod tests {
                         assert!((x.along(d) - fd).abs() <= 1e-6 * (fd.abs() + floor), "{what}: {} vs {fd}", x.along(d));
                     };
                     close("force", c.force, hi.force.x, lo.force.x, 1.0);
+                    close("grip rate", c.grip_rate, hi.grip_rate.x, lo.grip_rate.x, 1.0);
                     close("mu_eff", c.mu_eff, hi.mu_eff.x, lo.mu_eff.x, 1e-3);
                     close("h_air", c.h_air, hi.h_air.x, lo.h_air.x, 1e-9);
                     let used = |s: &State, m: Dual| traction_used(p, s, m).x;

@@ -35,6 +35,7 @@ pub struct Linearization<'a> {
     pub(crate) inputs: &'a Inputs,
     pub(crate) point: Point,
     pub(crate) states: States,
+    pub(crate) modes: Modes,
 }
 
 impl Linearization<'_> {
@@ -43,7 +44,7 @@ impl Linearization<'_> {
     pub fn along(&self, d: &Direction) -> Tangents {
         let x = self.states.along(&d.state);
         let u = self.inputs.along(&d.u);
-        rhs::outputs::<Tangent>(self.params, &self.point, &x, &u, &Modes::default()).tangents()
+        rhs::outputs::<Tangent>(self.params, &self.point, &x, &u, &self.modes).tangents()
     }
 
     /// d(everything)/d(direction) along each of `ds`, in order, to `each` (false stops: the
@@ -64,7 +65,7 @@ impl Linearization<'_> {
         let d: [Direction; L] = std::array::from_fn(|l| ds.get(l).copied().unwrap_or_default());
         let x = self.states.lanes(&d.map(|d| d.state));
         let u = self.inputs.lanes(&d.map(|d| d.u));
-        let t = rhs::outputs::<Lanes<L>>(self.params, &self.point, &x, &u, &Modes::default());
+        let t = rhs::outputs::<Lanes<L>>(self.params, &self.point, &x, &u, &self.modes);
         (0..ds.len()).all(|l| each(&t.map(|t| t.d[l])))
     }
 }

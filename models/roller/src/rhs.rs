@@ -53,8 +53,8 @@ impl Slip {
     }
 }
 
-/// The modes a step holds: how the web meets the roller. A mode a later effect adds (a loop's
-/// held output, a contact that sticks) goes here, and `rates` reads it.
+/// The modes a step holds: how the web meets the roller (its bristle, or held where a line solves
+/// its steady state). A mode a later effect adds (a loop's held output) goes here, and `rates` reads it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Modes {
     pub friction: Friction,
@@ -73,8 +73,8 @@ pub struct Rates<N> {
 struct Torques<N> {
     inertia: N,
     surface_speed: N,
-    /// The friction where the web may slip [R6]-[R7], and the web's acceleration it gives.
-    friction: Option<(N, N)>,
+    /// The friction where the web may slip [R6]-[R7], the web's acceleration it gives, the grip's rate.
+    friction: Option<(N, N, N)>,
     web: N,
     bearing: N,
     loop_law: control::Law<N>,
@@ -89,13 +89,15 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, 
         None => physics::surface_speed(r, omega),
     };
     let friction = at.slip.map(|s| {
-        let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r];
-        match modes.friction {
-            Friction::Regularized => (s.contact.force.lift(&knowns), s.acceleration.lift(&knowns)),
-        }
+        let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r, x.grip];
+        let grip_rate = match modes.friction {
+            Friction::Bristle => s.contact.grip_rate.lift(&knowns),
+            Friction::Held => (x.web_speed - v) / p.traction_creep,
+        };
+        (s.contact.force.lift(&knowns), s.acceleration.lift(&knowns), grip_rate)
     });
     let web = match friction {
-        Some((f, _)) => -(r * f),
+        Some((f, _, _)) => -(r * f),
         None => physics::web_torque(p, r, u),
     };
     Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia) }
@@ -133,8 +135,13 @@ fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs
 /// The torque a drive that follows no speed gives: its table and tau_m, its loop, a brake.
 #[inline(always)]
 fn commanded<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, loop_torque: N, v: N) -> N {
-    let brake = at.brake.map_or_else(N::default, |b| brake::torque(b, v, p.brake_v_slip));
-    drive::torque(p, at.drive, u.torque, x.radius) + loop_torque + brake
+    drive::torque(p, at.drive, u.torque, x.radius) + loop_torque + brake_at(p, at, x, v).0
+}
+
+/// A brake's torque and its grip's rate [R12] (0 and 0 without a brake table).
+#[inline(always)]
+fn brake_at<N: Number>(p: &Parameters, at: &Point, x: &States<N>, v: N) -> (N, N) {
+    at.brake.map_or_else(Default::default, |b| brake::torque(p, b, v, x.brake_grip))
 }
 
 /// The drive's torque at the roller's point (`Rates::torque` alone): without a prescribed
@@ -169,10 +176,13 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         carriage_y: y_rate,
         carriage_speed: y_speed_rate,
         // Without traction the web's speed is the surface's, and so is its rate.
-        web_speed: t.friction.map_or(surface_rate, |(_, a)| a),
+        web_speed: t.friction.map_or(surface_rate, |(_, a, _)| a),
         loop_integrator: t.loop_law.integrator_rate,
         motor_torque: t.loop_law.motor_rate,
         dancer_integrator: t.loop_law.dancer_rate,
+        grip: t.friction.map_or_else(N::default, |(_, _, rate)| rate),
+        // A speed drive has no brake (refused): its surface speed is the table's.
+        brake_grip: if at.prescribed.is_some() { N::default() } else { brake_at(p, at, x, v).1 },
     };
     Rates { derivatives, torque, surface_speed: v }
 }
@@ -194,6 +204,8 @@ pub struct Outputs<N = f64> {
     pub loop_integrator: N,
     pub motor_state: N,
     pub dancer_integrator: N,
+    pub grip: N,
+    pub brake_grip: N,
     pub rates: States<N>,
     pub omega: N,
     pub radius: N,
@@ -259,7 +271,7 @@ pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<
     let rates = rates(p, at, x, u, modes);
     let v = rates.surface_speed;
     let web_speed = if at.slip.is_some() { x.web_speed } else { v };
-    let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], x.radius];
+    let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], x.radius, x.grip];
     let lift = |d: Dual| d.lift(&knowns);
     let (traction_used, mu_eff, h_air) = at.slip.map_or_else(Default::default, |s| (lift(s.used(p)), lift(s.contact.mu_eff), lift(s.contact.h_air)));
     let merged = match (at.strain, p.layered) {
@@ -278,6 +290,8 @@ pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<
         loop_integrator: x.loop_integrator,
         motor_state: x.motor_torque,
         dancer_integrator: x.dancer_integrator,
+        grip: x.grip,
+        brake_grip: x.brake_grip,
         rates: rates.derivatives,
         omega: x.omega,
         radius: x.radius,
@@ -305,6 +319,8 @@ impl<N: Number> Outputs<N> {
             loop_integrator: f(self.loop_integrator),
             motor_state: f(self.motor_state),
             dancer_integrator: f(self.dancer_integrator),
+            grip: f(self.grip),
+            brake_grip: f(self.brake_grip),
             rates: States::from_array(&self.rates.to_array().map(&f)),
             omega: f(self.omega),
             radius: f(self.radius),

@@ -104,6 +104,13 @@ fmi_core::bind_variables! {
         dancer_ki: param(params.dancer_ki),
         dancer_I: computed(dancer_integrator()),
         der_dancer_I: computed(rates().dancer_integrator),
+        traction_static: param(params.traction_static),
+        traction_creep: param(params.traction_creep),
+        grip: computed(grip()),
+        der_grip: computed(rates().grip),
+        brake_creep: param(params.brake_creep),
+        brake_grip: computed(brake_grip()),
+        der_brake_grip: computed(rates().brake_grip),
     }
     integer {
         roll: param(params.roll),
