@@ -510,7 +510,7 @@ impl Model for Line {
 
     fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
         let net = self.joined()?;
-        let mut buffer = [0.0; 8];
+        let mut buffer = [0.0; crate::network::MAX_PART_STATES];
         for (k, s) in net.states.iter().enumerate() {
             let part = &self.ode.parts[s.part];
             let n = part.state_count();

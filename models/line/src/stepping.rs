@@ -142,8 +142,10 @@ pub fn initialize(
     ode.scratch = scratch(ode, ode.x.len());
     apply_events(ode)?;
     if start_equilibrium {
-        if let Err(why) = equilibrium::solve(ode, spec) {
-            warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values"));
+        match equilibrium::solve(ode, spec) {
+            Ok(()) => {}
+            Err(equilibrium::NoStart::Search(why)) => warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values")),
+            Err(equilibrium::NoStart::Slides(why)) => return Err(FmiError::error(why)),
         }
     }
     ode.settle()?;

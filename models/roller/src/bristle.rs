@@ -24,6 +24,21 @@ pub struct Grip<N> {
     pub rate: N,
 }
 
+/// The grip's limit psi(s) at slip s (Stribeck's curve from k_s at rest to 1 sliding).
+#[inline]
+pub fn limit(s: f64, k_s: f64, v_slip: f64) -> f64 {
+    1.0 + (k_s - 1.0) * (-(s / v_slip).powi(2)).exp()
+}
+
+/// A grip that slides steadily at slip s: psi(s) sign(s) (0 at s = 0).
+pub fn sliding(s: f64, k_s: f64, v_slip: f64) -> f64 {
+    if s == 0.0 {
+        0.0
+    } else {
+        limit(s, k_s, v_slip).copysign(s)
+    }
+}
+
 /// The bristle at slip `s` and grip `u`.
 #[inline]
 pub fn grip<N: Number>(s: N, u: N, k_s: f64, v_slip: f64, delta: f64) -> Grip<N> {
@@ -31,12 +46,20 @@ pub fn grip<N: Number>(s: N, u: N, k_s: f64, v_slip: f64, delta: f64) -> Grip<N>
     let psi = if k_s == 1.0 {
         N::constant(1.0)
     } else {
-        let peak = (k_s - 1.0) * (-(x / v_slip).powi(2)).exp();
+        let peak = limit(x, k_s, v_slip) - 1.0;
         s.map(1.0 + peak, -2.0 * peak * x / (v_slip * v_slip))
     };
     let sign = if x > 0.0 { 1.0 } else if x < 0.0 { -1.0 } else { 0.0 };
     let deflection = s - s.map(x.abs(), sign) * u / psi;
     Grip { share: u + deflection / v_slip, rate: deflection / delta }
+}
+
+/// The bristle held at zero slip while a line solves its steady state: the same share and rate at
+/// s = 0, without the kink of |s| (so that Newton's method sees one smooth system whatever the
+/// grip needs): g = u + s/v_slip, du/dt = s/delta.
+#[inline]
+pub fn held<N: Number>(s: N, u: N, v_slip: f64, delta: f64) -> Grip<N> {
+    Grip { share: u + s / v_slip, rate: s / delta }
 }
 
 #[cfg(test)]

@@ -26,9 +26,9 @@ use crate::number::{Lanes, Number};
 use crate::parameters::Parameters;
 
 /// How the web meets the roller: by [R7]'s bristle, which covers sticking and sliding alike; or,
-/// where a line solves the steady state it starts in, held (`Held`): the grip's rate is then the
-/// slip itself, s/delta, so that the steady state is the sticking one (s = 0, the grip solved
-/// from the force balance) whatever the grip needs, and a grip beyond its limit is found and refused.
+/// where a line solves the steady state it starts in, held (`bristle::held`): the grip's rate is
+/// then the slip itself, s/delta, so that the steady state is the sticking one (s = 0, the grip
+/// solved from the force balance) whatever the grip needs, and a grip beyond its limit is found and refused.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Friction {
     #[default]
@@ -232,11 +232,14 @@ fn relieved(p: &Parameters, s: &State) -> (Dual, Dual) {
     (Dual::known(s.t_a, T_A).minus(relief), Dual::known(s.t_b, T_B).minus(relief))
 }
 
-/// [R7] and [R8] at the contact's state.
-pub fn contact(p: &Parameters, s: &State) -> Contact {
+/// [R7] and [R8] at the contact's state, its bristle as `friction` has it.
+pub fn contact(p: &Parameters, s: &State, friction: Friction) -> Contact {
     let slip = Dual::known(s.v_web, V_WEB).minus(Dual::known(s.v_surface, V_SURFACE));
     let grip = Dual::known(s.grip, GRIP);
-    let bristle = bristle::grip(slip.lanes(), grip.lanes(), p.traction_static, p.traction_v_slip, p.traction_creep);
+    let bristle = match friction {
+        Friction::Bristle => bristle::grip(slip.lanes(), grip.lanes(), p.traction_static, p.traction_v_slip, p.traction_creep),
+        Friction::Held => bristle::held(slip.lanes(), grip.lanes(), p.traction_v_slip, p.traction_creep),
+    };
     let (g, grip_rate) = (Dual::of(bristle.share), Dual::of(bristle.rate));
     let (h_air, mu_eff) = air(p, s);
     let f_nip = g.scaled(-p.nip_mu * s.nip_load);
@@ -253,6 +256,31 @@ pub fn contact(p: &Parameters, s: &State) -> Contact {
     let sinh = kg.map(kg.x.sinh(), kg.x.cosh());
     let f_wrap = root.times(sinh).scaled(-2.0);
     Contact { force: f_nip.plus(f_wrap), grip_rate, mu_eff, h_air }
+}
+
+/// Where the grip has reached its static limit (|u| >= psi(0) (1 - 1e-6), the contact's "slides"),
+/// what the tensions need of the contact against what it can give, in words: a wrap's capstan limit
+/// on the side the higher tension needs, a nip's mu N; None while it sticks.
+pub fn demand(p: &Parameters, s: &State) -> Option<String> {
+    if s.grip.abs() < p.traction_static * (1.0 - 1e-6) {
+        return None;
+    }
+    let tenth = |x: f64| (10.0 * x).round() / 10.0;
+    let (t_a, t_b) = relieved(p, s);
+    let relief = s.t_a - t_a.x;
+    let (_, mu_eff) = air(p, s);
+    let wrap = p.traction_static * mu_eff.x * p.traction_wrap;
+    let nip = p.traction_static * p.nip_mu * s.nip_load;
+    let (side, need, other) = if s.t_b >= s.t_a { ("downstream", s.t_b, t_a.x) } else { ("upstream", s.t_a, t_b.x) };
+    let mu = if p.traction_static == 1.0 { format!("mu {}", mu_eff.x) } else { format!("mu {}, static x{}", mu_eff.x, p.traction_static) };
+    Some(if nip == 0.0 {
+        let limit = relief + other.max(0.0) * wrap.exp();
+        format!("needs {} N {side}, its capstan limit is {} N ({mu}, {} deg)", tenth(need), tenth(limit), tenth(p.traction_wrap.to_degrees()))
+    } else if wrap == 0.0 {
+        format!("needs {} N across its nip, its limit is {} N (nip.mu {} x {} N)", tenth((s.t_b - s.t_a).abs()), tenth(nip), p.nip_mu * p.traction_static, s.nip_load)
+    } else {
+        format!("needs {} % of the traction its nip and its wrap give together ({mu}, {} deg; nip.mu {} x {} N)", tenth(100.0 * s.grip.abs() / p.traction_static), tenth(p.traction_wrap.to_degrees()), p.nip_mu, s.nip_load)
+    })
 }
 
 /// The share of the available traction the tensions use: the direction g in [R7]'s law at rest,
@@ -353,7 +381,7 @@ mod tests {
         let p = massless();
         let (t_a, mu_theta) = (50.0, 0.3 * std::f64::consts::FRAC_PI_2);
         for (s, t_b) in [(0.1, t_a * mu_theta.exp()), (-0.1, t_a * (-mu_theta).exp())] {
-            let c = contact(&p, &state(5.0 + s, 5.0, t_a, t_b));
+            let c = contact(&p, &state(5.0 + s, 5.0, t_a, t_b), Friction::Bristle);
             let rest = t_b - t_a + c.force.x;
             assert!(rest.abs() < 1e-12 * t_a, "s = {s}: {rest}");
             let used = traction_used(&p, &state(5.0 + s, 5.0, t_a, t_b), c.mu_eff);
@@ -366,12 +394,12 @@ mod tests {
     fn a_sliding_nip_passes_mu_n_and_the_wrap_multiplies_after_it() {
         let p = Parameters { traction_wrap: 0.0, nip_mu: 0.5, ..params() };
         let s = State { nip_load: 200.0, ..state(5.1, 5.0, 80.0, 180.0) };
-        let c = contact(&p, &s);
+        let c = contact(&p, &s, Friction::Bristle);
         assert!((180.0 - 80.0 + c.force.x).abs() < 1e-12);
         let both = Parameters { nip_mu: 0.5, ..massless() };
         let t_b = (80.0 + 100.0) * (0.3 * std::f64::consts::FRAC_PI_2).exp();
         let s = State { nip_load: 200.0, ..state(5.1, 5.0, 80.0, t_b) };
-        let c = contact(&both, &s);
+        let c = contact(&both, &s, Friction::Bristle);
         assert!((t_b - 80.0 + c.force.x).abs() < 1e-12 * t_b, "{}", t_b - 80.0 + c.force.x);
         assert!((traction_used(&both, &s, c.mu_eff).x - 1.0).abs() < 1e-12);
     }
@@ -379,8 +407,8 @@ mod tests {
     #[test]
     fn a_slack_side_transmits_no_friction() {
         let p = params();
-        assert_eq!(contact(&p, &state(5.1, 5.0, 0.0, 80.0)).force.x, 0.0);
-        assert_eq!(contact(&p, &state(4.9, 5.0, 80.0, -3.0)).force.x, 0.0);
+        assert_eq!(contact(&p, &state(5.1, 5.0, 0.0, 80.0), Friction::Bristle).force.x, 0.0);
+        assert_eq!(contact(&p, &state(4.9, 5.0, 80.0, -3.0), Friction::Bristle).force.x, 0.0);
     }
 
     /// A web of mass m per length runs round the wrap at v_w: its centripetal force m v_w^2 per
@@ -392,7 +420,7 @@ mod tests {
         let (v, t_a, e) = (15.0, 80.0, (0.3 * std::f64::consts::FRAC_PI_2).exp());
         let relief = 0.2 * v * v;
         for (s, t_b) in [(0.1, relief + (t_a - relief) * e), (-0.1, relief + (t_a - relief) / e)] {
-            let c = contact(&p, &state(v, v - s, t_a, t_b));
+            let c = contact(&p, &state(v, v - s, t_a, t_b), Friction::Bristle);
             assert!((t_b - t_a + c.force.x).abs() < 1e-12 * t_a, "s = {s}: {}", t_b - t_a + c.force.x);
             let used = traction_used(&p, &state(v, v - s, t_a, t_b), c.mu_eff).x;
             assert!((used - 1.0).abs() < 1e-12, "{used}");
@@ -406,7 +434,7 @@ mod tests {
         // m v^2 = 0.2 * 20^2 = 80 N: one side at 70 N, then both below 80 N.
         for (t_a, t_b) in [(70.0, 120.0), (120.0, 70.0), (79.0, 75.0), (80.0, 90.0)] {
             for s in [0.5, -0.5, 1e-4] {
-                let c = contact(&p, &state(20.0, 20.0 - s, t_a, t_b));
+                let c = contact(&p, &state(20.0, 20.0 - s, t_a, t_b), Friction::Bristle);
                 assert_eq!(c.force.x, 0.0, "T_a {t_a}, T_b {t_b}, s {s}");
                 assert_eq!(c.force.d, [0.0; KNOWNS], "T_a {t_a}, T_b {t_b}, s {s}");
             }
@@ -440,7 +468,7 @@ mod tests {
             // Sliding forward T_b is high, backward T_a.
             let (t_a, t_b) = if s > 0.0 { (t_low, t_high) } else { (t_high, t_low) };
             let at = State { nip_load: n, ..state(5.0 + s, 5.0, t_a, t_b) };
-            let c = contact(&p, &at);
+            let c = contact(&p, &at, Friction::Bristle);
             let rest = t_b - t_a + c.force.x;
             assert!(rest.abs() < 1e-12 * t_high, "{side:?}, s {s}: {rest}");
             let used = traction_used(&p, &at, c.mu_eff).x;
@@ -490,8 +518,8 @@ mod tests {
                         grip: grip + e * d[GRIP],
                     };
                     let e = 1e-5; // the displacements are small beside the speeds themselves
-                    let c = contact(p, &at(0.0));
-                    let (hi, lo) = (contact(p, &at(e)), contact(p, &at(-e)));
+                    let c = contact(p, &at(0.0), Friction::Bristle);
+                    let (hi, lo) = (contact(p, &at(e), Friction::Bristle), contact(p, &at(-e), Friction::Bristle));
                     let close = |what: &str, x: Dual, hi: f64, lo: f64, floor: f64| {
                         let fd = (hi - lo) / (2.0 * e);
                         assert!((x.along(d) - fd).abs() <= 1e-6 * (fd.abs() + floor), "{what}: {} vs {fd}", x.along(d));

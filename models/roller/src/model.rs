@@ -6,7 +6,7 @@ use crate::description::Real;
 use crate::drive::{self, Drive, Key, Loaded};
 use crate::jacobian::{Direction, Linearization, Tangents};
 use crate::parameters::{Inputs, Parameters, STATES};
-use crate::rhs::{self, Modes, Point, Slip};
+use crate::rhs::{self, Point, Slip};
 use crate::roll::Roll;
 use crate::state::{State, States};
 use crate::{carriage, contact, control, physics};
@@ -40,7 +40,7 @@ pub struct Roller {
     pub(crate) grip: f64,
     pub(crate) brake_grip: f64,
     /// How the equations take the contact: its bristle, or held while a line solves its steady state.
-    pub(crate) modes: Modes,
+    pub(crate) friction: contact::Friction,
     pub(crate) profile: Option<Loaded>,
 }
 
@@ -180,7 +180,7 @@ impl Roller {
     fn reading(&self, t: f64, contact_at: Option<&States>) -> Point {
         let p = &self.params;
         let prescribed = self.prescribed(t);
-        let slip = contact_at.filter(|_| p.traction).map(|x| Slip::at(p, self.contact_state_at(t, prescribed, x.omega, x.web_speed, x.grip)));
+        let slip = contact_at.filter(|_| p.traction).map(|x| Slip::at(p, self.contact_state_at(t, prescribed, x.omega, x.web_speed, x.grip), self.friction));
         if self.profile.is_none() {
             // No tables to read (an idler, most rollers of a line): what the parameters give.
             let control = control::Reads { set: p.loop_set, reference: None };
@@ -272,7 +272,7 @@ impl Roller {
 
     /// The contact now [R6]-[R8] (None without traction).
     fn slip_now(&self) -> Option<Slip> {
-        self.params.traction.then(|| Slip::at(&self.params, self.contact_state_at(self.time, self.prescribed(self.time), self.omega(), self.v_web, self.grip)))
+        self.params.traction.then(|| Slip::at(&self.params, self.contact_state_at(self.time, self.prescribed(self.time), self.omega(), self.v_web, self.grip), self.friction))
     }
 
     /// The coefficient of friction after the air film [R8] (0 without traction).
@@ -331,7 +331,7 @@ impl Roller {
     #[inline(always)]
     fn evaluate(&self) -> rhs::Rates<f64> {
         let x = self.held();
-        rhs::rates(&self.params, &self.point_at(self.time, &x), &x, &self.inputs, &self.modes)
+        rhs::rates(&self.params, &self.point_at(self.time, &x), &x, &self.inputs)
     }
 
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
@@ -339,13 +339,13 @@ impl Roller {
         let x = self.held();
         // The contact only where [R1] gives a speed drive's torque: a commanded one does not read it.
         let point = self.reading(self.time, self.speed_prescribed().then_some(&x));
-        rhs::torque(&self.params, &point, &x, &self.inputs, &self.modes)
+        rhs::torque(&self.params, &point, &x, &self.inputs)
     }
 
     /// Whether the tangents along omega, the carriage and the inputs stay as they are until an event or
     /// a parameter changes them (`jacobian::tangents_fixed`; a brake [R12] is nonlinear in omega).
     pub fn tangents_fixed(&self) -> bool {
-        crate::jacobian::tangents_fixed(&self.params) && self.table(Key::Brake).is_none()
+        crate::jacobian::tangents_fixed(&self.params) && !self.braked()
     }
 
     /// The contact's grip [R7] (0 without traction).
@@ -361,12 +361,29 @@ impl Roller {
     /// The states that move on this roller (`Parameters::active_states`, a brake's grip where its
     /// profile has a brake table).
     pub fn active_states(&self) -> Vec<State> {
-        self.params.active_states(self.table(Key::Brake).is_some())
+        self.params.active_states(self.braked())
+    }
+
+    /// The states a line integrates whatever the values of the parameters it offers
+    /// (`Parameters::possible_states`).
+    pub fn possible_states(&self, speed_driven: bool) -> Vec<State> {
+        self.params.possible_states(speed_driven, self.braked())
+    }
+
+    /// Whether the profile has a brake table [R12].
+    fn braked(&self) -> bool {
+        self.table(Key::Brake).is_some()
+    }
+
+    /// Where the contact's grip has reached its limit, what it needs against what it can give
+    /// (`contact::demand`); None while it sticks, or without traction.
+    pub fn beyond_grip(&self) -> Option<String> {
+        self.slip_now().and_then(|s| contact::demand(&self.params, &s.state))
     }
 
     /// The contact held while a line solves the steady state it starts in (`Friction::Held`), or its bristle.
     pub fn hold_contact(&mut self, held: bool) {
-        self.modes.friction = if held { contact::Friction::Held } else { contact::Friction::Bristle };
+        self.friction = if held { contact::Friction::Held } else { contact::Friction::Bristle };
     }
 
     /// The loop's integrator [R10] (0 without a loop).
@@ -419,7 +436,7 @@ impl Roller {
             *d.get_mut(j) = 1.0;
             d
         });
-        let rates = rhs::rates(&self.params, point, &x.lanes(&units), &self.inputs.lanes(&[Inputs::default(); N]), &self.modes).derivatives;
+        let rates = rhs::rates(&self.params, point, &x.lanes(&units), &self.inputs.lanes(&[Inputs::default(); N])).derivatives;
         std::array::from_fn(|i| rates.get(states[i]).d)
     }
 
@@ -448,7 +465,7 @@ impl Roller {
         if let Some(s) = point.slip.as_mut() {
             s.used = Some(contact::traction_used(&self.params, &s.state, s.contact.mu_eff));
         }
-        Linearization { params: &self.params, inputs: &self.inputs, point, states: x, modes: self.modes }
+        Linearization { params: &self.params, inputs: &self.inputs, point, states: x }
     }
 }
 

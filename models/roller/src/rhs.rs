@@ -42,22 +42,15 @@ pub struct Slip {
 }
 
 impl Slip {
-    /// The contact at `state` [R6]-[R8].
-    pub fn at(p: &Parameters, state: contact::State) -> Slip {
-        let contact = contact::contact(p, &state);
+    /// The contact at `state` [R6]-[R8], its bristle as `friction` has it.
+    pub fn at(p: &Parameters, state: contact::State, friction: Friction) -> Slip {
+        let contact = contact::contact(p, &state, friction);
         Slip { state, contact, acceleration: contact::web_acceleration(p, &state, contact.force), used: None }
     }
 
     fn used(&self, p: &Parameters) -> Dual {
         self.used.unwrap_or_else(|| contact::traction_used(p, &self.state, self.contact.mu_eff))
     }
-}
-
-/// The modes a step holds: how the web meets the roller (its bristle, or held where a line solves
-/// its steady state). A mode a later effect adds (a loop's held output) goes here, and `rates` reads it.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Modes {
-    pub friction: Friction,
 }
 
 /// The rates of the states and what they are made of.
@@ -81,7 +74,7 @@ struct Torques<N> {
 }
 
 #[inline(always)]
-fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Torques<N> {
+fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) -> Torques<N> {
     let (omega, r) = (x.omega, x.radius);
     let inertia = at.roll.inertia(p, r);
     let v = match at.prescribed {
@@ -90,11 +83,7 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, 
     };
     let friction = at.slip.map(|s| {
         let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r, x.grip];
-        let grip_rate = match modes.friction {
-            Friction::Bristle => s.contact.grip_rate.lift(&knowns),
-            Friction::Held => (x.web_speed - v) / p.traction_creep,
-        };
-        (s.contact.force.lift(&knowns), s.acceleration.lift(&knowns), grip_rate)
+        (s.contact.force.lift(&knowns), s.acceleration.lift(&knowns), s.contact.grip_rate.lift(&knowns))
     });
     let web = match friction {
         Some((f, _, _)) => -(r * f),
@@ -147,9 +136,9 @@ fn brake_at<N: Number>(p: &Parameters, at: &Point, x: &States<N>, v: N) -> (N, N
 /// The drive's torque at the roller's point (`Rates::torque` alone): without a prescribed
 /// speed, what the drive commands alone (no web, bearing or friction to form).
 #[inline]
-pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> N {
+pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) -> N {
     if at.prescribed.is_some() {
-        return drive_torque(p, at, x, u, &torques(p, at, x, u, modes));
+        return drive_torque(p, at, x, u, &torques(p, at, x, u));
     }
     let loop_torque = loop_law(p, at, x, u, at.roll.inertia(p, x.radius)).torque;
     commanded(p, at, x, u, loop_torque, physics::surface_speed(x.radius, x.omega))
@@ -157,9 +146,9 @@ pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N
 
 /// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
 #[inline(always)]
-pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Rates<N> {
+pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) -> Rates<N> {
     let (omega, r) = (x.omega, x.radius);
-    let t = torques(p, at, x, u, modes);
+    let t = torques(p, at, x, u);
     let (v, torque) = (t.surface_speed, drive_torque(p, at, x, u, &t));
     let radius_rate = radius_rate(p, at, u, r, v);
     let (omega_rate, surface_rate) = match at.prescribed {
@@ -267,8 +256,8 @@ pub fn load_cell_force<N: Number>(p: &Parameters, u: &Inputs<N>) -> N {
 }
 
 /// Every output and rate.
-pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Outputs<N> {
-    let rates = rates(p, at, x, u, modes);
+pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) -> Outputs<N> {
+    let rates = rates(p, at, x, u);
     let v = rates.surface_speed;
     let web_speed = if at.slip.is_some() { x.web_speed } else { v };
     let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], x.radius, x.grip];

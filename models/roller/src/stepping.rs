@@ -9,7 +9,7 @@ use crate::model::Roller;
 use crate::rhs::{self, Point};
 use crate::roll::{self, Roll};
 use crate::state::{State, States};
-use crate::{carriage, physics};
+use crate::{bristle, carriage, physics};
 use fmi_core::{FmiError, FmiResult};
 use profiles::Value;
 use solver::CompensatedSum;
@@ -199,7 +199,10 @@ impl Roller {
         self.events_at = time;
         self.next_event = 0;
         (self.integrator, self.motor, self.dancer) = (0.0, 0.0, 0.0);
-        (self.grip, self.brake_grip) = (0.0, 0.0);
+        // A web that starts slipping starts sliding: its bristles at their sliding deflection (at
+        // u = 0 their damping would carry |s|/v_slip times the limit).
+        self.grip = if p.traction { bristle::sliding(p.traction_slip_start, p.traction_static, p.traction_v_slip) } else { 0.0 };
+        self.brake_grip = 0.0;
     }
 }
 
@@ -226,7 +229,7 @@ impl Slipping<'_> {
 impl solver::Ode<3> for Slipping<'_> {
     fn rhs(&self, s: f64, y: &[f64; 3]) -> [f64; 3] {
         let (point, x) = self.trial(s, y);
-        let d = rhs::rates(&self.roller.params, &point, &x, &self.roller.inputs, &self.roller.modes).derivatives;
+        let d = rhs::rates(&self.roller.params, &point, &x, &self.roller.inputs).derivatives;
         SLIPPING.map(|i| d.get(i))
     }
 
