@@ -1064,3 +1064,30 @@ fn an_ideal_speed_drive_follows_its_input_in_both_interfaces() {
     assert!(me.event_update().states_changed, "the event update moves omega");
     assert!((get(&me, "pull.omega") - 105.0).abs() < 1e-12, "omega {}", get(&me, "pull.omega"));
 }
+
+/// A powder-braked unwinder (5 N.m on R = 0.1 m: 50 N while it turns) feeding a pull roll that stops
+/// from 1 m/s over [0.5, 1] s: the unwinder stops with it and its brake holds the span's tension.
+/// From 1 s to 10 s after the stop the tension drifts by less than 1e-6 relative and stays within the
+/// brake's rating (T r <= B), at 1 and 10 ms. Its grip is the held torque over B.
+#[test]
+fn a_braked_stopped_line_holds_its_tension() {
+    let (b, r) = (5.0, 0.1);
+    let unwind = roller("unwind", "unwinder", json!({"J": 0.01, "R": r, "b": 0.0, "v_start": 1.0, "roll": 1, "web_a.eps": 0.0}), Some(json!({"brake": [[0.0, b]]})));
+    let pull = prescribed("pull", "roller", json!([[0.0, 1.0], [0.5, 1.0], [1.0, 0.0]]));
+    let spec = line_spec(vec![unwind, span("web", 1.0, 0.0, &["includeDamping"]), pull], chain(&["unwind", "web", "pull"]), "equilibrium");
+    for h in [1e-3, 1e-2] {
+        let mut line = initialized(&spec);
+        assert!((get(&line, "web.T") - b / r).abs() < 1e-9 * b / r, "running: T {}", get(&line, "web.T"));
+        while line.time() < 2.0 - 1e-9 {
+            line.do_step(h).unwrap();
+        }
+        let held = get(&line, "web.T");
+        assert!(held > 0.0 && held * r <= b, "h {h}: holds {held} N");
+        assert!((get(&line, "unwind.brake.grip") * b - held * r).abs() < 1e-6 * b, "h {h}: grip {}", get(&line, "unwind.brake.grip"));
+        while line.time() < 11.0 - 1e-9 {
+            line.do_step(h).unwrap();
+            let t = get(&line, "web.T");
+            assert!((t - held).abs() < 1e-6 * held, "h {h}, t {}: T {t} N, {held} N at 2 s", line.time());
+        }
+    }
+}

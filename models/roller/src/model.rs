@@ -364,14 +364,8 @@ impl Roller {
         self.params.active_states(self.braked())
     }
 
-    /// The states a line integrates whatever the values of the parameters it offers
-    /// (`Parameters::possible_states`).
-    pub fn possible_states(&self, speed_driven: bool) -> Vec<State> {
-        self.params.possible_states(speed_driven, self.braked())
-    }
-
     /// Whether the profile has a brake table [R12].
-    fn braked(&self) -> bool {
+    pub(crate) fn braked(&self) -> bool {
         self.table(Key::Brake).is_some()
     }
 
