@@ -49,7 +49,7 @@ pub fn grip<N: Number>(s: N, u: N, k_s: f64, v_slip: f64, delta: f64) -> Grip<N>
         let peak = limit(x, k_s, v_slip) - 1.0;
         s.map(1.0 + peak, -2.0 * peak * x / (v_slip * v_slip))
     };
-    let sign = if x > 0.0 { 1.0 } else if x < 0.0 { -1.0 } else { 0.0 };
+    let sign = if x == 0.0 { 0.0 } else { x.signum() };
     let deflection = s - s.map(x.abs(), sign) * u / psi;
     Grip { share: u + deflection / v_slip, rate: deflection / delta }
 }
