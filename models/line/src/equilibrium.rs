@@ -6,7 +6,9 @@
 //! what is steady: omega' = -omega*r'/r, not 0. The speed of a roller whose
 //! speed a table prescribes keeps its start value too. A laminate whose span stands still
 //! is steady at any strains of its layers that pull as one: they move together
-//! from their start.
+//! from their start. A contact that may slip starts sticking: its grip's rate is held at the
+//! slip (`Roller::hold_contact`), so the steady state has zero slip and the grip the force
+//! balance needs; a grip beyond its static limit means the web slides from the start, refused.
 
 use crate::ode::{residual_and_jacobian, Ode};
 use crate::spec::Spec;
@@ -71,9 +73,35 @@ fn steady_surfaces(rolls: &[(usize, usize)], x: &[f64], f: &mut [f64], mut jac: 
     }
 }
 
+/// Why a line has no steady state to start in.
+#[derive(Debug)]
+pub enum NoStart {
+    /// The search found none (the line then starts from its parts' start values, with this warning).
+    Search(String),
+    /// A contact cannot stick: what it needs against what it can give (refused).
+    Slides(String),
+}
+
 /// Moves the line's states to its steady state, or says why there is none
 /// (the states are then as they were).
-pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
+pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), NoStart> {
+    for part in &mut ode.parts {
+        part.hold_contact(true);
+    }
+    let solved = search(ode, spec).map_err(NoStart::Search);
+    for part in &mut ode.parts {
+        part.hold_contact(false);
+    }
+    solved?;
+    let slides: Vec<String> = ode.parts.iter().zip(&spec.parts).filter_map(|(part, ps)| Some(format!("{}: {}", ps.name, part.beyond_grip()?))).collect();
+    if slides.is_empty() {
+        return Ok(());
+    }
+    Err(NoStart::Slides(format!("{}: the web slides from the start; use a given start (\"start\": \"given\")", slides.join("; "))))
+}
+
+/// Newton's method for the steady state, the parts as `solve` set them.
+fn search(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
     let net = ode.net.as_ref().expect("initialized");
     let n = net.len();
     if n == 0 {
@@ -92,7 +120,7 @@ pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
     let (mut f, mut trial_f) = (vec![0.0; n], vec![0.0; n]);
     let mut jac = Band::zeros(n, kl, ku);
     let mut lu = BandLu::new(n, kl, ku);
-    let mut trial = vec![0.0; n];
+    let (mut trial, mut simplified) = (vec![0.0; n], vec![0.0; n]);
     let norm = |f: &[f64]| f.iter().zip(&size).map(|(r, s)| (r / s).abs()).fold(0.0, f64::max);
     // A held state's residual: its move from the start, less its first layer's where it is tied to one.
     let held = |i: usize, x: &[f64]| x[i] - x0[i] - tied[i].map_or(0.0, |f| x[f] - x0[f]);
@@ -114,8 +142,11 @@ pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
             }
             let mut step = f.clone();
             lu.solve(&mut step);
-            let r0 = norm(&f);
-            // Damped: halve the step until the residual falls.
+            // Damped: halve the step until the simplified Newton step from the trial, J^-1 f(trial) with
+            // this J, is shorter than this one (Deuflhard's natural monotonicity test): a residual's
+            // norm would weigh each rate by its own time scale, and a contact's web (its small mass)
+            // has the shortest.
+            let r0 = norm(&step);
             let mut lambda = 1.0;
             loop {
                 for i in 0..n {
@@ -130,7 +161,11 @@ pub fn solve(ode: &mut Ode, spec: &Spec) -> Result<(), String> {
                         }
                     }
                 }
-                if ok && (norm(&trial_f) < r0 || lambda < 1e-3) {
+                if ok {
+                    simplified.copy_from_slice(&trial_f);
+                    lu.solve(&mut simplified);
+                }
+                if ok && (norm(&simplified) < r0 || lambda < 1e-3) {
                     break;
                 }
                 lambda *= 0.5;

@@ -93,11 +93,11 @@ impl Line {
         for f in &feeds {
             feed::follow(&feeds, &mut parts, f.from)?;
         }
-        let active: Vec<Vec<usize>> = parts.iter().map(Part::active_states).collect();
+                let active: Vec<Vec<usize>> = parts.iter().zip(&spec.parts).map(|(part, ps)| part.described_states(ps)).collect();
         let start_equilibrium = spec.start == StartMode::Equilibrium;
         let Interface { description, bindings, laminates } = interface::build(&spec, &parts, &active, spec::guid(text), start_equilibrium);
         let profiled = spec.parts.iter().any(|p| p.profile.is_some());
-        let possible_states = parts.iter().zip(&spec.parts).map(|(part, ps)| part.possible_states(ps.speed_driven())).collect();
+        let possible_states = parts.iter().zip(&spec.parts).map(|(part, ps)| part.possible_states(ps)).collect();
         Ok(Line {
             shared: Arc::new(Shared { spec, description, bindings, laminates, described_states: active, possible_states }),
             ode: Ode::new(parts, interface::DEFAULT_TOLERANCE),
@@ -565,7 +565,7 @@ impl Model for Line {
 
     fn get_nominals(&self, nominals: &mut [f64]) -> FmiResult {
         let net = self.joined()?;
-        let mut buffer = [0.0; 8];
+        let mut buffer = [0.0; crate::network::MAX_PART_STATES];
         for (k, s) in net.states.iter().enumerate() {
             let part = &self.ode.parts[s.part];
             let n = part.state_count();

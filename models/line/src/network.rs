@@ -32,7 +32,7 @@ use fmi_core::{FmiError, FmiResult};
 use std::collections::BTreeSet;
 
 /// Most states a part has (its Model Exchange state vector).
-const MAX_PART_STATES: usize = 8;
+pub(crate) const MAX_PART_STATES: usize = roller::parameters::STATES;
 
 /// One span carrying web mass and pulling a roller: its web_b.F into the
 /// roller's `input`, its web_b.v (`speed`) fed by the roller's `roller_speed`.

@@ -77,7 +77,7 @@ impl Ode {
     #[inline(always)]
     pub fn nominal(&self, net: &Network, k: usize) -> f64 {
         let s = net.states[k];
-        let mut buffer = [0.0; 8];
+        let mut buffer = [0.0; crate::network::MAX_PART_STATES];
         let part = &self.parts[s.part];
         let m = part.state_count();
         if part.get_nominals(&mut buffer[..m]).is_ok() && buffer[s.index] != 0.0 {

@@ -297,6 +297,21 @@ impl Part {
         }
     }
 
+    /// A roller's contact held (`Roller::hold_contact`) while the line solves its steady state, or its bristle.
+    pub fn hold_contact(&mut self, held: bool) {
+        if let Part::Roller(r) = self {
+            r.hold_contact(held);
+        }
+    }
+
+    /// Where a roller's grip has reached its limit, what it needs against what it can give (`Roller::beyond_grip`).
+    pub fn beyond_grip(&self) -> Option<String> {
+        match self {
+            Part::Roller(r) => r.beyond_grip(),
+            Part::Span(_) => None,
+        }
+    }
+
     /// A roller's load cell for a wrap angle with this cosine.
     pub fn load_cell(&self, cos_wrap: f64) -> FmiResult<f64> {
         match self {
@@ -345,11 +360,20 @@ impl Part {
     }
 
     /// The part's continuous states the line integrates (indices into its Model Exchange state
-    /// vector): a span's one, the ones a Roller says move (`Parameters::active_states`).
+    /// vector): a span's one, the ones a Roller says move (`Roller::active_states`, its profile read).
     pub fn active_states(&self) -> Vec<usize> {
         match self {
             Part::Span(_) => vec![0],
-            Part::Roller(r) => r.params.active_states().into_iter().map(State::index).collect(),
+            Part::Roller(r) => r.active_states().into_iter().map(State::index).collect(),
+        }
+    }
+
+    /// `active_states` as its line.json entry `spec` fixes them before the profile is read (the
+    /// line's description): a Roller's brake grip where the entry has a brake table.
+    pub fn described_states(&self, spec: &PartSpec) -> Vec<usize> {
+        match self {
+            Part::Span(_) => self.active_states(),
+            Part::Roller(r) => r.params.active_states(spec.has_table("brake")).into_iter().map(State::index).collect(),
         }
     }
 
@@ -363,11 +387,12 @@ impl Part {
 
     /// The part's states a line integrates whatever the values of the parameters it offers
     /// (Co-Simulation's states, which keep their number): a span's one, a Roller's
-    /// `Parameters::possible_states` (a surface at a prescribed speed is `speed_driven`).
-    pub fn possible_states(&self, speed_driven: bool) -> Vec<usize> {
+    /// `Parameters::possible_states` as its line.json entry `spec` fixes them (a surface at a
+    /// prescribed speed, a brake table).
+    pub fn possible_states(&self, spec: &PartSpec) -> Vec<usize> {
         match self {
             Part::Span(_) => self.active_states(),
-            Part::Roller(r) => r.params.possible_states(speed_driven).into_iter().map(State::index).collect(),
+            Part::Roller(r) => r.params.possible_states(spec.speed_driven(), spec.has_table("brake")).into_iter().map(State::index).collect(),
         }
     }
 

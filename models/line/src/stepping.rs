@@ -144,8 +144,10 @@ pub fn initialize(
     if start_equilibrium {
         // A sampled loop is steady where its continuous one is [R14]: solved continuous, then sampled there.
         sampled_loops_restart(ode, t0);
-        if let Err(why) = equilibrium::solve(ode, spec) {
-            warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values"));
+        match equilibrium::solve(ode, spec) {
+            Ok(()) => {}
+            Err(equilibrium::NoStart::Search(why)) => warnings.push(format!("startAtEquilibrium: {why}; the line starts from its parts' start values")),
+            Err(equilibrium::NoStart::Slides(why)) => return Err(FmiError::error(why)),
         }
         if sampled_loops_restart(ode, t0) {
             apply_events(ode)?;

@@ -183,7 +183,7 @@ fn a_failed_equilibrium_search_leaves_the_parts_as_they_were() {
     let (parts, x) = (line.parts().to_vec(), line.states().to_vec());
     let spec = line.spec().clone();
     let why = line::equilibrium::solve(&mut line.ode, &spec).expect_err("this line has no steady state");
-    assert!(why.starts_with("no steady state"), "{why}");
+    assert!(matches!(&why, line::equilibrium::NoStart::Search(w) if w.starts_with("no steady state")), "{why:?}");
     assert_eq!(line.states(), &x[..]);
     assert!(line.parts() == parts, "the parts were left at the search's last trial point");
 }
@@ -404,7 +404,23 @@ fn a_dancer_loop_holds_a_springless_dancer_at_its_set_point() {
 /// entries (a roll's radius rate: 2e-6); a connection left out of the chain costs a whole entry.
 #[test]
 fn the_chained_jacobian_is_the_lines_own() {
-    for (name, spec) in [("paper line", paper_line("equilibrium")), ("winding merge", winding_merge_line()), ("load cell loop", load_cell_looped_line(json!([[0.0, 10.0]])))] {
+    let pull = |start: &str| {
+        let ([v0, v1, v2], _) = mass_balance(1.0, 100.0, 200.0);
+        let pull = slipping("pull", json!({"J": 0.05, "R": 0.1, "b": 0.0, "traction.wrap": std::f64::consts::PI}), Some(json!({"speed": [[0.0, v1]]})));
+        let mut spec = drawn(pull, v0, v2);
+        spec["start"] = json!(start);
+        spec
+    };
+    let idler = slipping("idler", json!({"J": 0.01, "R": 0.05, "b": 0.0, "v_start": 0.0, "traction.slip_start": 5.0, "traction.static": 1.2}), None);
+    // The least entries the differences find (0: two per state); a speed a table holds has none. The
+    // contacts: a pull roll sticking, an idler sliding with a static peak (its grip in the chain).
+    for (name, spec, least) in [
+        ("sticking pull", pull("given"), 11),
+        ("sliding idler", through(idler, 5.0 * 1.002 / 1.001, "given"), 14),
+        ("paper line", paper_line("equilibrium"), 0),
+        ("winding merge", winding_merge_line(), 0),
+        ("load cell loop", load_cell_looped_line(json!([[0.0, 10.0]])), 0),
+    ] {
         let mut line = initialized(&spec);
         if name == "paper line" {
             let tau = vr(&line, "idler.tau_m");
@@ -413,7 +429,8 @@ fn the_chained_jacobian_is_the_lines_own() {
         line.do_step(0.02).unwrap();
         let (chained, checked) = chained_against_differences(&mut line, name);
         let n = line.states().len();
-        assert!(checked >= 2 * n, "{name}: only {checked} entries");
+        let least = if least == 0 { 2 * n } else { least };
+        assert!(checked >= least, "{name}: only {checked} entries");
         if name == "winding merge" {
             // The winder's r' = h*omega/(2*pi*(1 + eps)) [R3] (v = r*omega) reads the arriving span d's
             // strain eps = L/x - 1: dr'/domega = h/(2*pi*(1 + eps)), dr'/dx = h*omega/(2*pi*L), so
@@ -520,11 +537,13 @@ fn through(node: Value, v_sink: f64, start: &str) -> Value {
 /// force); the strains follow from the mass balance: 1 + eps_b = (v_snk/v_src)(1 + eps_src) for the
 /// span after it, EA eps_a = m v_w^2 + (EA eps_b - m v_w^2) exp(-mu theta) before it (one web), and
 /// the web crosses the roll at v_w = v_src (1 + eps_a)/(1 + eps_src): the two solved by iteration,
-/// each step shrinking the error by 2 m v_w^2/EA. At the equilibrium start and held there, at 1 and 10 ms.
+/// each step shrinking the error by 2 m v_w^2/EA. From a given start (an equilibrium start is
+/// refused: the contact cannot stick), once the line has settled (8 s; at 3 s eps_a is still 4e-5
+/// off: the web's speed over the sliding roll follows span a's strain, a slower mode than L/v), at 1 and 10 ms.
 #[test]
 fn a_drag_roll_slides_at_the_capstan_ratio() {
     let drag = slipping("drag", json!({"J": 0.05, "R": 0.1, "b": 0.0}), Some(json!({"speed": [[0.0, 4.5]]})));
-    let spec = through(drag, 5.005, "equilibrium");
+    let spec = through(drag, 5.005, "given");
     let ea = 4.5e9 * 50e-6;
     let eps_b = 5.005 / 5.0 * 1.001 - 1.0;
     let (mut eps_a, mut v_w) = (eps_b, 5.0);
@@ -536,7 +555,10 @@ fn a_drag_roll_slides_at_the_capstan_ratio() {
     let relief = WEB_MASS * v_w * v_w;
     for h in [1e-3, 1e-2] {
         let mut line = initialized(&spec);
-        for step in 0..=50 {
+        while line.time() < 8.0 - 1e-9 {
+            line.do_step(h).unwrap();
+        }
+        for step in 0..=20 {
             if step > 0 {
                 line.do_step(h).unwrap();
             }
@@ -547,12 +569,14 @@ fn a_drag_roll_slides_at_the_capstan_ratio() {
             assert!((get(&line, "b.eps") - eps_b).abs() < 1e-6 * eps_b);
             assert!((get(&line, "drag.v_web") - v_w).abs() < 1e-6 * 5.0, "v_web {} vs {v_w}", get(&line, "drag.v_web"));
             assert!(get(&line, "drag.slip") > 50.0 * V_SLIP && get(&line, "drag.traction") > 0.99);
+            assert!((get(&line, "drag.grip") - 1.0).abs() < 1e-9, "grip {}", get(&line, "drag.grip"));
         }
     }
 }
 
 /// An idler at rest on a running line is spun up by friction: while the web slides, its surface
-/// accelerates at R^2 (T_a - m v_w^2)(exp(mu theta) - 1)/J (b = 0); then it sticks, |s| <= 5 v_slip.
+/// accelerates at R^2 (T_a - m v_w^2)(exp(mu theta) - 1)/J (b = 0); then it sticks, at zero slip
+/// once the grip has settled.
 #[test]
 fn an_idler_at_rest_is_spun_up_by_friction_then_sticks() {
     let (j, r) = (0.01, 0.05);
@@ -569,22 +593,24 @@ fn an_idler_at_rest_is_spun_up_by_friction_then_sticks() {
             let expected = r * r * pressing * ((MU * WRAP).exp() - 1.0) / j;
             assert!((acceleration / expected - 1.0).abs() < 1e-6, "t = {}: {acceleration} vs {expected}", line.time());
             slid += 1;
-        } else if get(&line, "idler.traction") <= 0.9 {
-            assert!(slip.abs() <= 5.0 * V_SLIP, "t = {}: sticking at {slip} m/s", line.time());
+        } else if get(&line, "idler.grip").abs() <= 0.9 {
             stuck += 1;
         }
     }
     assert!(slid > 50 && stuck > 100, "slid {slid} steps, stuck {stuck}");
+    assert!(get(&line, "idler.slip").abs() <= 1e-9, "still slipping at {} m/s", get(&line, "idler.slip"));
 }
 
-/// A nip alone (no wrap) on a roll driven slower than the web: T_b - T_a = mu_nip N while it slides.
+/// A nip alone (no wrap) on a roll driven slower than the web: T_b - T_a = mu_nip N while it slides
+/// (from a given start, once the transport has settled).
 #[test]
 fn a_sliding_nip_passes_mu_n() {
     let mut nip = slipping("nip", json!({"J": 0.05, "R": 0.1, "b": 0.0, "traction.wrap": 0.0, "nip.mu": 0.5}), None);
     nip["profile"] = json!({"speed": [[0.0, 4.5]], "nip": [[0.0, 200.0]]});
-    let (mut line, r) = instantiate(&through(nip, 5.005, "equilibrium")).unwrap();
-    let warnings = line.initialize(&Experiment::default(), &r).unwrap();
-    assert!(warnings.is_empty(), "{warnings:?}");
+    let mut line = initialized(&through(nip, 5.005, "given"));
+    while line.time() < 3.0 - 1e-9 {
+        line.do_step(1e-2).unwrap();
+    }
     for _ in 0..20 {
         line.do_step(1e-2).unwrap();
         let (t_a, t_b) = (get(&line, "a.T"), get(&line, "b.T"));
@@ -593,19 +619,97 @@ fn a_sliding_nip_passes_mu_n() {
     }
 }
 
-/// A pull roll a little faster than the web sticks: at most 90 % of its traction in use, |s| <= 5 v_slip,
-/// and the line starts flat (the equilibrium start is steady).
+/// src (v0, strain 1e-3) - a - node - b - snk, the spans damped, 1 m each; the node a speed drive
+/// at v1 and the sink at v2.
+fn drawn(node: Value, v0: f64, v2: f64) -> Value {
+    let mut src = prescribed("src", "source", json!([[0.0, v0]]));
+    src["start"]["web_a.eps"] = json!(1e-3);
+    let name = node["name"].as_str().unwrap().to_string();
+    let parts = vec![src, span("a", 1.0, 1e-3, &["includeDamping"]), node, span("b", 1.0, 1e-3, &["includeDamping"]), prescribed("snk", "sink", json!([[0.0, v2]]))];
+    line_spec(parts, chain(&["src", "a", &name, "b", "snk"]), "equilibrium")
+}
+
+/// The speeds of src, node and snk that draw the web from the source's strain 1e-3 to T_a and T_b
+/// where it sticks, and the tensions the mass balance gives back for them: each span carries
+/// v/(1 + eps) unchanged and sticks to its rollers' surfaces, 1 + eps_a = (v1/v0)(1 + eps_src),
+/// 1 + eps_b = (v2/v1)(1 + eps_a), T = EA eps.
+fn mass_balance(v0: f64, t_a: f64, t_b: f64) -> ([f64; 3], [f64; 2]) {
+    let ea = 4.5e9 * 50e-6;
+    let (v1, v2) = (v0 * (1.0 + t_a / ea) / 1.001, v0 * (1.0 + t_b / ea) / 1.001);
+    let eps_a = v1 / v0 * 1.001 - 1.0;
+    let eps_b = v2 / v1 * (1.0 + eps_a) - 1.0;
+    ([v0, v1, v2], [ea * eps_a, ea * eps_b])
+}
+
+/// Sticking draws: a pull roll (mu 0.3 over 180 deg) holding 100 N against 200 N, and a nip (500 N,
+/// mu 0.5, no wrap) holding 100 N against 300 N, each a speed drive between two more, at 0.1, 1 and
+/// 10 m/s: the tensions are the mass balance's to 1e-6 (the contact holds at zero slip), at the
+/// equilibrium start and over a second of Co-Simulation steps of 1 and 10 ms; the grip is the share
+/// the force balance needs, 2 sqrt(T'_a T'_b) sinh(mu theta g/2) = T_b - T_a on the wrap
+/// (T' = T - m v^2), (T_b - T_a)/(mu N) = 0.8 at the nip. Model Exchange starts steady: its
+/// derivatives vanish there.
 #[test]
-fn a_roll_that_sticks_slips_by_the_order_of_v_slip() {
-    let pull = slipping("pull", json!({"J": 0.05, "R": 0.1, "b": 0.0}), Some(json!({"speed": [[0.0, 5.001]]})));
-    let mut line = initialized(&through(pull, 5.0015, "equilibrium"));
-    let x0 = line.states().to_vec();
-    line.do_step(0.1).unwrap();
-    let used = get(&line, "pull.traction");
-    assert!(used > 0.05 && used <= 0.9, "traction {used}");
-    assert!(get(&line, "pull.slip").abs() <= 5.0 * V_SLIP);
-    for (a, b) in x0.iter().zip(line.states()) {
-        assert!((a - b).abs() <= 1e-9 * a.abs().max(1.0), "the start is not steady: {a} -> {b}");
+fn sticking_draws_give_the_mass_balances_tensions() {
+    let pi = std::f64::consts::PI;
+    for (what, (t_a, t_b)) in [("pull", (100.0, 200.0)), ("nip", (100.0, 300.0))] {
+        for v0 in [0.1, 1.0, 10.0] {
+            let ([_, v1, v2], [ta, tb]) = mass_balance(v0, t_a, t_b);
+            let mut node = slipping(what, json!({"J": 0.05, "R": 0.1, "b": 0.0, "traction.wrap": pi}), Some(json!({"speed": [[0.0, v1]]})));
+            let share = if what == "nip" {
+                node["start"]["traction.wrap"] = json!(0.0);
+                node["start"]["nip.mu"] = json!(0.5);
+                node["profile"]["nip"] = json!([[0.0, 500.0]]);
+                (tb - ta) / 250.0
+            } else {
+                let relief = WEB_MASS * v1 * v1;
+                let k = 2.0 * ((ta - relief) * (tb - relief)).sqrt();
+                2.0 * ((tb - ta) / k).asinh() / (MU * pi)
+            };
+            let spec = drawn(node, v0, v2);
+            for h in [1e-3, 1e-2] {
+                let mut line = initialized(&spec);
+                for step in 0..=(1.0f64 / h).round() as usize {
+                    if step > 0 {
+                        line.do_step(h).unwrap();
+                    }
+                    let (a, b) = (get(&line, "a.T"), get(&line, "b.T"));
+                    assert!((a - ta).abs() < 1e-6 * ta && (b - tb).abs() < 1e-6 * tb, "{what} at {v0} m/s, h = {h}, step {step}: T_a {a} vs {ta}, T_b {b} vs {tb}");
+                }
+                let grip = get(&line, &format!("{what}.grip"));
+                assert!((grip - share).abs() < 1e-6, "{what} at {v0} m/s: grip {grip} vs {share}");
+                assert!(get(&line, &format!("{what}.slip")).abs() < 1e-12 * v0, "{what} at {v0} m/s: slip {}", get(&line, &format!("{what}.slip")));
+            }
+            let (mut me, r) = instantiate(&spec).unwrap();
+            me.initialize(&Experiment { model_exchange: true, ..Experiment::default() }, &r).unwrap();
+            let mut dx = vec![0.0; me.states().len()];
+            me.get_derivatives(&mut dx).unwrap();
+            let (a, b) = (get(&me, "a.T"), get(&me, "b.T"));
+            assert!((a - ta).abs() < 1e-6 * ta && (b - tb).abs() < 1e-6 * tb, "ME {what} at {v0} m/s: T_a {a}, T_b {b}");
+            // The grip's rate s/delta: a slip of 1e-15 m/s moves it by 2e-8/s.
+            assert!(dx.iter().all(|d| d.abs() < 1e-6), "ME {what} at {v0} m/s: {dx:?}");
+        }
+    }
+}
+
+/// The pull roll at 0.2 m/s (PET 50 um, m v^2 = 3e-3 N): holding 100 N against 200 N it sticks
+/// at a grip of 0.7355 (2 sqrt(100*200) sinh(0.3 pi g/2) = 100); against 300 N, more than its capstan
+/// limit 100 exp(0.3 pi) = 256.6 N, an equilibrium start is refused in words.
+#[test]
+fn a_pull_roll_holds_within_its_capstan_limit_and_is_refused_beyond_it() {
+    let pi = std::f64::consts::PI;
+    for (t_b, holds) in [(200.0, true), (300.0, false)] {
+        let ([v0, v1, v2], _) = mass_balance(0.2, 100.0, t_b);
+        let pull = slipping("pull", json!({"J": 0.05, "R": 0.1, "b": 0.0, "traction.wrap": pi}), Some(json!({"speed": [[0.0, v1]]})));
+        let spec = drawn(pull, v0, v2);
+        if holds {
+            let line = initialized(&spec);
+            assert!((get(&line, "a.T") - 100.0).abs() < 1e-6 * 100.0, "T_a {}", get(&line, "a.T"));
+            assert!((get(&line, "pull.grip") - 0.7355).abs() < 5e-5, "grip {}", get(&line, "pull.grip"));
+            continue;
+        }
+        let (mut line, r) = instantiate(&spec).unwrap();
+        let why = line.initialize(&Experiment::default(), &r).expect_err("the web cannot stick").message.clone();
+        assert_eq!(why, "pull: needs 300 N downstream, its capstan limit is 256.6 N (mu 0.3, 180 deg): the web slides from the start; use a given start (\"start\": \"given\")");
     }
 }
 
@@ -1058,5 +1162,32 @@ fn a_sampled_loop_in_the_line_starts_steady_and_holds_its_set_point() {
         assert!((next.unwrap() - due).abs() < 1e-15, "next event {next:?}, expected {due}");
         me.set_time(due);
         next = me.event_update().next_event_time;
+    }
+}
+
+/// A powder-braked unwinder (5 N.m on R = 0.1 m: 50 N while it turns) feeding a pull roll that stops
+/// from 1 m/s over [0.5, 1] s: the unwinder stops with it and its brake holds the span's tension.
+/// From 1 s to 10 s after the stop the tension drifts by less than 1e-6 relative and stays within the
+/// brake's rating (T r <= B), at 1 and 10 ms. Its grip is the held torque over B.
+#[test]
+fn a_braked_stopped_line_holds_its_tension() {
+    let (b, r) = (5.0, 0.1);
+    let unwind = roller("unwind", "unwinder", json!({"J": 0.01, "R": r, "b": 0.0, "v_start": 1.0, "roll": 1, "web_a.eps": 0.0}), Some(json!({"brake": [[0.0, b]]})));
+    let pull = prescribed("pull", "roller", json!([[0.0, 1.0], [0.5, 1.0], [1.0, 0.0]]));
+    let spec = line_spec(vec![unwind, span("web", 1.0, 0.0, &["includeDamping"]), pull], chain(&["unwind", "web", "pull"]), "equilibrium");
+    for h in [1e-3, 1e-2] {
+        let mut line = initialized(&spec);
+        assert!((get(&line, "web.T") - b / r).abs() < 1e-9 * b / r, "running: T {}", get(&line, "web.T"));
+        while line.time() < 2.0 - 1e-9 {
+            line.do_step(h).unwrap();
+        }
+        let held = get(&line, "web.T");
+        assert!(held > 0.0 && held * r <= b, "h {h}: holds {held} N");
+        assert!((get(&line, "unwind.brake.grip") * b - held * r).abs() < 1e-6 * b, "h {h}: grip {}", get(&line, "unwind.brake.grip"));
+        while line.time() < 11.0 - 1e-9 {
+            line.do_step(h).unwrap();
+            let t = get(&line, "web.T");
+            assert!((t - held).abs() < 1e-6 * held, "h {h}, t {}: T {t} N, {held} N at 2 s", line.time());
+        }
     }
 }

@@ -1,13 +1,17 @@
-//! A powder brake on the roller [R12], its torque a table of time (the profile's `brake`):
+//! A powder brake on the roller [R12], its torque a table of time (the profile's `brake`), held by
+//! the bristle (`bristle`) on the surface speed v with its own grip u_b (k_s = 1):
 //!
-//! [R12] tau_brake = -B*tanh(v/v_slip)   (B >= 0 its torque)
+//! [R12] tau_brake = -B g_b,  g_b = u_b + (v - |v| u_b)/v_slip_b,  du_b/dt = (v - |v| u_b)/delta_b
+//!       (B >= 0 its rated torque)
 
+use crate::bristle::{self, Grip};
 use crate::number::Number;
+use crate::parameters::Parameters;
 
-/// A powder brake's torque at surface speed v [R12]: it opposes the motion with its full torque
-/// B once |v| is well above v_slip, and passes through 0 at rest (regularized like Coulomb
-/// friction [12] of the physics docs), so that a line can start from there.
+/// A powder brake of rated torque B at surface speed v and grip u_b [R12]: its torque, and its grip's
+/// rate. At rest it holds any torque up to B (|u_b| < 1); turning, it slides at B.
 #[inline]
-pub fn torque<N: Number>(b: f64, v: N, v_slip: f64) -> N {
-    -((v / v_slip).tanh() * b)
+pub fn torque<N: Number>(p: &Parameters, b: f64, v: N, grip: N) -> (N, N) {
+    let Grip { share, rate } = bristle::grip(v, grip, 1.0, p.brake_v_slip, p.brake_creep);
+    (-(share * b), rate)
 }

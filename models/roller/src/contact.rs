@@ -3,15 +3,17 @@
 //!
 //! [R6]  m_w dv_w/dt = T_b - T_a + f,   J domega/dt = -r f + tau - b omega     (s = v_w - r omega)
 //!       m_w = m_web * r * max(theta, THETA_MIN): the web's mass on the wrap
-//! [R7]  f = f_nip + f_wrap,  g = tanh(s/v_slip),  T' = T - m_web v_w^2 (the pressure left after the
-//!       web's centripetal force)
+//! [R7]  f = f_nip + f_wrap,  T' = T - m_web v_w^2 (the pressure left after the web's centripetal force),
+//!       g the bristles' share of the kinetic limit (`bristle`, the grip u a state):
+//!       du/dt = (s - |s| u/psi(s))/delta,  g = u + (s - |s| u/psi(s))/v_slip,
+//!       psi(s) = 1 + (k_s - 1) exp(-(s/v_slip)^2)
 //!       f_nip  = -mu_nip N g                                       (the nip line, on the wrap's entry or exit)
 //!       f_wrap = -2 sqrt(T'_in+ T'_out+) sinh(mu_eff theta g / 2)  (the wrap between the nip and the other side)
 //!       nip at the entry (`nip.side` 0): T'_in = T'_a - f_nip, T'_out = T'_b
 //!       nip at the exit  (`nip.side` 1): T'_in = T'_a,         T'_out = T'_b + f_nip
 //!       at rest (m_w dv_w/dt = 0): T'_b = (T'_a + mu_nip N g) exp(mu_eff theta g) (entry), or
-//!       T'_b = T'_a exp(mu_eff theta g) + mu_nip N g (exit): the capstan law with the regularized
-//!       direction g of the slip; a side where T' <= 0 leaves the wrap no traction
+//!       T'_b = T'_a exp(mu_eff theta g) + mu_nip N g (exit): the capstan law with the share g in use
+//!       (|g| = 1 sliding); a side where T' <= 0 leaves the wrap no traction
 //! [R8]  h = 0.643 r (12 eta V / T_w)^(2/3),  V = |v_w + r omega|/2,  T_w = T_entry / W, T_entry the
 //!       tension of the side the air is dragged in from: T_a where v_w + r omega >= 0, else T_b
 //!       mu_eff = mu * clamp((3 sigma - h)/(2 sigma), 0, 1)   (sigma > 0; without air mu_eff = mu)
@@ -19,15 +21,19 @@
 //! Each result is a value with its gradient in the contact's knowns (`Dual`): the tangents are the
 //! equations' own, differentiated once, here, and formed once per point for every direction.
 
-use crate::number::Number;
+use crate::bristle;
+use crate::number::{Lanes, Number};
 use crate::parameters::Parameters;
 
-/// How the web meets the roller: today always by [R7]'s regularized friction, which covers
-/// sticking (|s| << v_slip) and sliding alike.
+/// How the web meets the roller: by [R7]'s bristle, which covers sticking and sliding alike; or,
+/// where a line solves the steady state it starts in, held (`bristle::held`): the grip's rate is
+/// then the slip itself, s/delta, so that the steady state is the sticking one (s = 0, the grip
+/// solved from the force balance) whatever the grip needs, and a grip beyond its limit is found and refused.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Friction {
     #[default]
-    Regularized,
+    Bristle,
+    Held,
 }
 
 /// Which side of the wrap the nip presses on (`nip.side`), named for the web running from web_a
@@ -59,13 +65,15 @@ impl NipSide {
 pub const THETA_MIN: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
 /// The contact's knowns, the components of a gradient: the web's speed, the surface's, the
-/// tensions T_a and T_b, the radius.
+/// tensions T_a and T_b, the radius, the grip.
 pub const V_WEB: usize = 0;
 pub const V_SURFACE: usize = 1;
 pub const T_A: usize = 2;
 pub const T_B: usize = 3;
 pub const RADIUS: usize = 4;
-pub type Gradient = [f64; 5];
+pub const GRIP: usize = 5;
+pub const KNOWNS: usize = 6;
+pub type Gradient = [f64; KNOWNS];
 
 /// A value and its gradient in the knowns.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -76,11 +84,11 @@ pub struct Dual {
 
 impl Dual {
     pub const fn constant(x: f64) -> Dual {
-        Dual { x, d: [0.0; 5] }
+        Dual { x, d: [0.0; KNOWNS] }
     }
 
     fn known(x: f64, i: usize) -> Dual {
-        let mut d = [0.0; 5];
+        let mut d = [0.0; KNOWNS];
         d[i] = 1.0;
         Dual { x, d }
     }
@@ -91,10 +99,10 @@ impl Dual {
         self.d.iter().zip(direction).map(|(g, d)| g * d).sum()
     }
 
-    /// This result in the roller's number, the knowns (v_web, v_surface, T_a, T_b, r) in it: the
-    /// contact's own gradient, chained.
+    /// This result in the roller's number, the knowns (v_web, v_surface, T_a, T_b, r, grip) in it:
+    /// the contact's own gradient, chained.
     #[inline]
-    pub fn lift<N: Number>(&self, knowns: &[N; 5]) -> N {
+    pub fn lift<N: Number>(&self, knowns: &[N; KNOWNS]) -> N {
         N::chain(self.x, &self.d, knowns)
     }
 
@@ -118,6 +126,15 @@ impl Dual {
     fn scaled(self, a: f64) -> Dual {
         self.map(a * self.x, a)
     }
+
+    /// As a number of the roller's equations: its gradient the lanes.
+    fn lanes(self) -> Lanes<KNOWNS> {
+        Lanes { x: self.x, d: self.d }
+    }
+
+    fn of(x: Lanes<KNOWNS>) -> Dual {
+        Dual { x: x.x, d: x.d }
+    }
 }
 
 /// What the contact needs from the roller now.
@@ -130,6 +147,8 @@ pub struct State {
     /// The nip's load N (a table of time: no known of the contact).
     pub nip_load: f64,
     pub radius: f64,
+    /// The bristles' grip u [R7].
+    pub grip: f64,
 }
 
 /// The contact's results [R6]–[R8], each with its gradient.
@@ -137,6 +156,8 @@ pub struct State {
 pub struct Contact {
     /// The friction force on the web, along its motion.
     pub force: Dual,
+    /// The grip's rate du/dt [R7].
+    pub grip_rate: Dual,
     pub mu_eff: Dual,
     pub h_air: Dual,
 }
@@ -187,7 +208,7 @@ fn air(p: &Parameters, s: &State) -> (Dual, Dual) {
     }
     // h = 0.643 r (12 eta v / t_w)^(2/3): d ln h = d ln r + (2/3)(d ln v - d ln t_w).
     let h = 0.643 * s.radius * (12.0 * p.air_viscosity * v.x / tw.x).powf(2.0 / 3.0);
-    let mut d = [0.0; 5];
+    let mut d = [0.0; KNOWNS];
     for (i, di) in d.iter_mut().enumerate() {
         *di = h * ((2.0 / 3.0) * (v.d[i] / v.x - tw.d[i] / tw.x));
     }
@@ -211,13 +232,15 @@ fn relieved(p: &Parameters, s: &State) -> (Dual, Dual) {
     (Dual::known(s.t_a, T_A).minus(relief), Dual::known(s.t_b, T_B).minus(relief))
 }
 
-/// [R7] and [R8] at the contact's state.
-pub fn contact(p: &Parameters, s: &State) -> Contact {
+/// [R7] and [R8] at the contact's state, its bristle as `friction` has it.
+pub fn contact(p: &Parameters, s: &State, friction: Friction) -> Contact {
     let slip = Dual::known(s.v_web, V_WEB).minus(Dual::known(s.v_surface, V_SURFACE));
-    let g = {
-        let g = (slip.x / p.traction_v_slip).tanh();
-        slip.map(g, (1.0 - g * g) / p.traction_v_slip)
+    let grip = Dual::known(s.grip, GRIP);
+    let bristle = match friction {
+        Friction::Bristle => bristle::grip(slip.lanes(), grip.lanes(), p.traction_static, p.traction_v_slip, p.traction_creep),
+        Friction::Held => bristle::held(slip.lanes(), grip.lanes(), p.traction_v_slip, p.traction_creep),
     };
+    let (g, grip_rate) = (Dual::of(bristle.share), Dual::of(bristle.rate));
     let (h_air, mu_eff) = air(p, s);
     let f_nip = g.scaled(-p.nip_mu * s.nip_load);
     let (t_a, t_b) = relieved(p, s);
@@ -232,7 +255,32 @@ pub fn contact(p: &Parameters, s: &State) -> Contact {
     let kg = mu_eff.scaled(0.5 * p.traction_wrap).times(g);
     let sinh = kg.map(kg.x.sinh(), kg.x.cosh());
     let f_wrap = root.times(sinh).scaled(-2.0);
-    Contact { force: f_nip.plus(f_wrap), mu_eff, h_air }
+    Contact { force: f_nip.plus(f_wrap), grip_rate, mu_eff, h_air }
+}
+
+/// Where the grip has reached its static limit (|u| >= psi(0) (1 - 1e-6), the contact's "slides"),
+/// what the tensions need of the contact against what it can give, in words: a wrap's capstan limit
+/// on the side the higher tension needs, a nip's mu N; None while it sticks.
+pub fn demand(p: &Parameters, s: &State) -> Option<String> {
+    if s.grip.abs() < p.traction_static * (1.0 - 1e-6) {
+        return None;
+    }
+    let tenth = |x: f64| (10.0 * x).round() / 10.0;
+    let (t_a, t_b) = relieved(p, s);
+    let relief = s.t_a - t_a.x;
+    let (_, mu_eff) = air(p, s);
+    let wrap = p.traction_static * mu_eff.x * p.traction_wrap;
+    let nip = p.traction_static * p.nip_mu * s.nip_load;
+    let (side, need, other) = if s.t_b >= s.t_a { ("downstream", s.t_b, t_a.x) } else { ("upstream", s.t_a, t_b.x) };
+    let mu = if p.traction_static == 1.0 { format!("mu {}", mu_eff.x) } else { format!("mu {}, static x{}", mu_eff.x, p.traction_static) };
+    Some(if nip == 0.0 {
+        let limit = relief + other.max(0.0) * wrap.exp();
+        format!("needs {} N {side}, its capstan limit is {} N ({mu}, {} deg)", tenth(need), tenth(limit), tenth(p.traction_wrap.to_degrees()))
+    } else if wrap == 0.0 {
+        format!("needs {} N across its nip, its limit is {} N (nip.mu {} x {} N)", tenth((s.t_b - s.t_a).abs()), tenth(nip), p.nip_mu * p.traction_static, s.nip_load)
+    } else {
+        format!("needs {} % of the traction its nip and its wrap give together ({mu}, {} deg; nip.mu {} x {} N)", tenth(100.0 * s.grip.abs() / p.traction_static), tenth(p.traction_wrap.to_degrees()), p.nip_mu, s.nip_load)
+    })
 }
 
 /// The share of the available traction the tensions use: the direction g in [R7]'s law at rest,
@@ -306,6 +354,8 @@ mod tests {
             traction_mu: 0.3,
             traction_wrap: std::f64::consts::FRAC_PI_2,
             traction_v_slip: 1e-3,
+            traction_static: 1.0,
+            traction_creep: 5e-8,
             traction_width: 1.0,
             air_viscosity: 1.81e-5,
             mass_a: [0.0167, 1.0, 1.0, 1.0],
@@ -313,8 +363,11 @@ mod tests {
         }
     }
 
+    /// Steady sliding where the web slips (the grip at its limit, sign(s)), at rest where it does not.
     fn state(v_web: f64, v_surface: f64, t_a: f64, t_b: f64) -> State {
-        State { v_web, v_surface, t_a, t_b, nip_load: 0.0, radius: 0.05 }
+        let s = v_web - v_surface;
+        let grip = if s == 0.0 { 0.0 } else { s.signum() };
+        State { v_web, v_surface, t_a, t_b, nip_load: 0.0, radius: 0.05, grip }
     }
 
     /// A web too light for its centripetal force to count (m = 0).
@@ -328,7 +381,7 @@ mod tests {
         let p = massless();
         let (t_a, mu_theta) = (50.0, 0.3 * std::f64::consts::FRAC_PI_2);
         for (s, t_b) in [(0.1, t_a * mu_theta.exp()), (-0.1, t_a * (-mu_theta).exp())] {
-            let c = contact(&p, &state(5.0 + s, 5.0, t_a, t_b));
+            let c = contact(&p, &state(5.0 + s, 5.0, t_a, t_b), Friction::Bristle);
             let rest = t_b - t_a + c.force.x;
             assert!(rest.abs() < 1e-12 * t_a, "s = {s}: {rest}");
             let used = traction_used(&p, &state(5.0 + s, 5.0, t_a, t_b), c.mu_eff);
@@ -341,12 +394,12 @@ mod tests {
     fn a_sliding_nip_passes_mu_n_and_the_wrap_multiplies_after_it() {
         let p = Parameters { traction_wrap: 0.0, nip_mu: 0.5, ..params() };
         let s = State { nip_load: 200.0, ..state(5.1, 5.0, 80.0, 180.0) };
-        let c = contact(&p, &s);
+        let c = contact(&p, &s, Friction::Bristle);
         assert!((180.0 - 80.0 + c.force.x).abs() < 1e-12);
         let both = Parameters { nip_mu: 0.5, ..massless() };
         let t_b = (80.0 + 100.0) * (0.3 * std::f64::consts::FRAC_PI_2).exp();
         let s = State { nip_load: 200.0, ..state(5.1, 5.0, 80.0, t_b) };
-        let c = contact(&both, &s);
+        let c = contact(&both, &s, Friction::Bristle);
         assert!((t_b - 80.0 + c.force.x).abs() < 1e-12 * t_b, "{}", t_b - 80.0 + c.force.x);
         assert!((traction_used(&both, &s, c.mu_eff).x - 1.0).abs() < 1e-12);
     }
@@ -354,8 +407,8 @@ mod tests {
     #[test]
     fn a_slack_side_transmits_no_friction() {
         let p = params();
-        assert_eq!(contact(&p, &state(5.1, 5.0, 0.0, 80.0)).force.x, 0.0);
-        assert_eq!(contact(&p, &state(4.9, 5.0, 80.0, -3.0)).force.x, 0.0);
+        assert_eq!(contact(&p, &state(5.1, 5.0, 0.0, 80.0), Friction::Bristle).force.x, 0.0);
+        assert_eq!(contact(&p, &state(4.9, 5.0, 80.0, -3.0), Friction::Bristle).force.x, 0.0);
     }
 
     /// A web of mass m per length runs round the wrap at v_w: its centripetal force m v_w^2 per
@@ -367,7 +420,7 @@ mod tests {
         let (v, t_a, e) = (15.0, 80.0, (0.3 * std::f64::consts::FRAC_PI_2).exp());
         let relief = 0.2 * v * v;
         for (s, t_b) in [(0.1, relief + (t_a - relief) * e), (-0.1, relief + (t_a - relief) / e)] {
-            let c = contact(&p, &state(v, v - s, t_a, t_b));
+            let c = contact(&p, &state(v, v - s, t_a, t_b), Friction::Bristle);
             assert!((t_b - t_a + c.force.x).abs() < 1e-12 * t_a, "s = {s}: {}", t_b - t_a + c.force.x);
             let used = traction_used(&p, &state(v, v - s, t_a, t_b), c.mu_eff).x;
             assert!((used - 1.0).abs() < 1e-12, "{used}");
@@ -381,9 +434,9 @@ mod tests {
         // m v^2 = 0.2 * 20^2 = 80 N: one side at 70 N, then both below 80 N.
         for (t_a, t_b) in [(70.0, 120.0), (120.0, 70.0), (79.0, 75.0), (80.0, 90.0)] {
             for s in [0.5, -0.5, 1e-4] {
-                let c = contact(&p, &state(20.0, 20.0 - s, t_a, t_b));
+                let c = contact(&p, &state(20.0, 20.0 - s, t_a, t_b), Friction::Bristle);
                 assert_eq!(c.force.x, 0.0, "T_a {t_a}, T_b {t_b}, s {s}");
-                assert_eq!(c.force.d, [0.0; 5], "T_a {t_a}, T_b {t_b}, s {s}");
+                assert_eq!(c.force.d, [0.0; KNOWNS], "T_a {t_a}, T_b {t_b}, s {s}");
             }
         }
     }
@@ -415,7 +468,7 @@ mod tests {
             // Sliding forward T_b is high, backward T_a.
             let (t_a, t_b) = if s > 0.0 { (t_low, t_high) } else { (t_high, t_low) };
             let at = State { nip_load: n, ..state(5.0 + s, 5.0, t_a, t_b) };
-            let c = contact(&p, &at);
+            let c = contact(&p, &at, Friction::Bristle);
             let rest = t_b - t_a + c.force.x;
             assert!(rest.abs() < 1e-12 * t_high, "{side:?}, s {s}: {rest}");
             let used = traction_used(&p, &at, c.mu_eff).x;
@@ -441,6 +494,8 @@ mod tests {
         let heavy = [0.25, 1.0, 1.0, 1.0]; // m v^2 from 6 to 36 N at these speeds
         let cases = [
             (params(), 0.0),
+            (Parameters { traction_static: 1.3, ..params() }, 0.0),
+            (Parameters { nip_mu: 0.5, traction_static: 1.2, ..params() }, 150.0),
             (Parameters { nip_mu: 0.5, ..params() }, 150.0),
             (Parameters { nip_mu: 0.5, nip_side: NipSide::Exit.value(), ..params() }, 150.0),
             (Parameters { air_roughness: 2e-6, ..params() }, 0.0),
@@ -448,10 +503,10 @@ mod tests {
             (Parameters { air_roughness: 2e-6, nip_mu: 0.4, nip_side: NipSide::Exit.value(), mass_a: heavy, ..params() }, 90.0),
             (Parameters { nip_mu: 0.5, mass_a: heavy, ..params() }, 150.0),
         ];
-        let points = [(5.0004, 5.0, 60.0, 75.0), (4.9993, 5.0, 90.0, 70.0), (12.0, 11.998, 40.0, 41.0), (-6.0, -6.0005, 70.0, 55.0)];
-        let directions: [Gradient; 2] = [[1.3e-4, -0.7e-4, 0.9, -1.7, 1e-3], [-2e-4, 1e-4, -2.0, 0.5, -2e-3]];
+        let points = [(5.0004, 5.0, 60.0, 75.0, 0.4), (4.9993, 5.0, 90.0, 70.0, -0.8), (12.0, 11.998, 40.0, 41.0, 0.9), (-6.0, -6.0005, 70.0, 55.0, 0.1)];
+        let directions: [Gradient; 2] = [[1.3e-4, -0.7e-4, 0.9, -1.7, 1e-3, 0.2], [-2e-4, 1e-4, -2.0, 0.5, -2e-3, -0.3]];
         for (p, n) in &cases {
-            for &(vw, vs, ta, tb) in &points {
+            for &(vw, vs, ta, tb, grip) in &points {
                 for d in &directions {
                     let at = |e: f64| State {
                         v_web: vw + e * d[V_WEB],
@@ -460,15 +515,17 @@ mod tests {
                         t_b: tb + e * d[T_B],
                         nip_load: *n,
                         radius: 0.05 + e * d[RADIUS],
+                        grip: grip + e * d[GRIP],
                     };
                     let e = 1e-5; // the displacements are small beside the speeds themselves
-                    let c = contact(p, &at(0.0));
-                    let (hi, lo) = (contact(p, &at(e)), contact(p, &at(-e)));
+                    let c = contact(p, &at(0.0), Friction::Bristle);
+                    let (hi, lo) = (contact(p, &at(e), Friction::Bristle), contact(p, &at(-e), Friction::Bristle));
                     let close = |what: &str, x: Dual, hi: f64, lo: f64, floor: f64| {
                         let fd = (hi - lo) / (2.0 * e);
                         assert!((x.along(d) - fd).abs() <= 1e-6 * (fd.abs() + floor), "{what}: {} vs {fd}", x.along(d));
                     };
                     close("force", c.force, hi.force.x, lo.force.x, 1.0);
+                    close("grip rate", c.grip_rate, hi.grip_rate.x, lo.grip_rate.x, 1.0);
                     close("mu_eff", c.mu_eff, hi.mu_eff.x, lo.mu_eff.x, 1e-3);
                     close("h_air", c.h_air, hi.h_air.x, lo.h_air.x, 1e-9);
                     let used = |s: &State, m: Dual| traction_used(p, s, m).x;

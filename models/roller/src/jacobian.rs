@@ -5,7 +5,7 @@
 use crate::number::{Lanes, Tangent};
 use crate::parameters::{Inputs, Kind, Parameters};
 use crate::roll;
-use crate::rhs::{self, Modes, Outputs, Point};
+use crate::rhs::{self, Outputs, Point};
 use crate::state::States;
 
 /// A direction in the knowns: d(states) and d(inputs).
@@ -43,7 +43,7 @@ impl Linearization<'_> {
     pub fn along(&self, d: &Direction) -> Tangents {
         let x = self.states.along(&d.state);
         let u = self.inputs.along(&d.u);
-        rhs::outputs::<Tangent>(self.params, &self.point, &x, &u, &Modes::default()).tangents()
+        rhs::outputs::<Tangent>(self.params, &self.point, &x, &u).tangents()
     }
 
     /// d(everything)/d(direction) along each of `ds`, in order, to `each` (false stops: the
@@ -64,7 +64,7 @@ impl Linearization<'_> {
         let d: [Direction; L] = std::array::from_fn(|l| ds.get(l).copied().unwrap_or_default());
         let x = self.states.lanes(&d.map(|d| d.state));
         let u = self.inputs.lanes(&d.map(|d| d.u));
-        let t = rhs::outputs::<Lanes<L>>(self.params, &self.point, &x, &u, &Modes::default());
+        let t = rhs::outputs::<Lanes<L>>(self.params, &self.point, &x, &u);
         (0..ds.len()).all(|l| each(&t.map(|t| t.d[l])))
     }
 }

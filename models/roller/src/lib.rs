@@ -24,6 +24,7 @@
 #![deny(unsafe_code)]
 
 pub mod brake;
+pub mod bristle;
 pub mod carriage;
 pub mod contact;
 pub mod control;

@@ -6,7 +6,7 @@ use crate::description::Real;
 use crate::drive::{self, Drive, Key, Loaded};
 use crate::jacobian::{Direction, Linearization, Tangents};
 use crate::parameters::{Inputs, Parameters, STATES};
-use crate::rhs::{self, Modes, Point, Slip};
+use crate::rhs::{self, Point, Slip};
 use crate::roll::Roll;
 use crate::state::{State, States};
 use crate::{carriage, contact, control, physics};
@@ -38,6 +38,11 @@ pub struct Roller {
     pub(crate) dancer: f64,
     /// A sampled loop's hold [R14] (unused by a continuous loop).
     pub(crate) hold: control::Hold,
+    /// The contact's grip [R7] and a brake's [R12] (0 without them).
+    pub(crate) grip: f64,
+    pub(crate) brake_grip: f64,
+    /// How the equations take the contact: its bristle, or held while a line solves its steady state.
+    pub(crate) friction: contact::Friction,
     pub(crate) profile: Option<Loaded>,
 }
 
@@ -84,6 +89,7 @@ impl Roller {
             self.v_web = x.web_speed;
         }
         (self.integrator, self.motor, self.dancer) = (x.loop_integrator, x.motor_torque, x.dancer_integrator);
+        (self.grip, self.brake_grip) = (x.grip, x.brake_grip);
         Ok(())
     }
 
@@ -111,7 +117,14 @@ impl Roller {
         match s {
             State::Radius => true,
             State::Omega => self.speed_prescribed(),
-            State::CarriageY | State::CarriageSpeed | State::WebSpeed | State::LoopIntegrator | State::MotorTorque | State::DancerIntegrator => false,
+            State::CarriageY
+            | State::CarriageSpeed
+            | State::WebSpeed
+            | State::LoopIntegrator
+            | State::MotorTorque
+            | State::DancerIntegrator
+            | State::Grip
+            | State::BrakeGrip => false,
         }
     }
 
@@ -169,7 +182,7 @@ impl Roller {
     fn reading(&self, t: f64, contact_at: Option<&States>) -> Point {
         let p = &self.params;
         let prescribed = self.prescribed(t);
-        let slip = contact_at.filter(|_| p.traction).map(|x| Slip::at(p, self.contact_state_at(t, prescribed, x.omega, x.web_speed)));
+        let slip = contact_at.filter(|_| p.traction).map(|x| Slip::at(p, self.contact_state_at(t, prescribed, x.omega, x.web_speed, x.grip), self.friction));
         if self.profile.is_none() {
             // No tables to read (an idler, most rollers of a line): what the parameters give.
             let control = control::Reads { set: p.loop_set, reference: self.given_reference(), held: self.held_command() };
@@ -251,6 +264,8 @@ impl Roller {
             loop_integrator: self.integrator,
             motor_torque: self.motor,
             dancer_integrator: self.dancer,
+            grip: self.grip,
+            brake_grip: self.brake_grip,
         }
     }
 
@@ -278,9 +293,9 @@ impl Roller {
         self.web_speed() - self.surface_speed()
     }
 
-    /// The contact's state at time t (a speed drive's `prescribed` speed there) with the roller at omega
-    /// and the web at v_web (a step's trial point).
-    pub(crate) fn contact_state_at(&self, t: f64, prescribed: Option<(f64, f64)>, omega: f64, v_web: f64) -> contact::State {
+    /// The contact's state at time t (a speed drive's `prescribed` speed there) with the roller at omega,
+    /// the web at v_web and the grip at `grip` (a step's trial point).
+    pub(crate) fn contact_state_at(&self, t: f64, prescribed: Option<(f64, f64)>, omega: f64, v_web: f64, grip: f64) -> contact::State {
         let (u, r) = (&self.inputs, self.roll.radius);
         let v_surface = match prescribed {
             Some((v, _)) => v,
@@ -293,12 +308,13 @@ impl Roller {
             t_b: u.force_b[0],
             nip_load: self.value(Key::Nip, t).map_or(0.0, |(n, _)| n),
             radius: r,
+            grip,
         }
     }
 
     /// The contact now [R6]-[R8] (None without traction).
     fn slip_now(&self) -> Option<Slip> {
-        self.params.traction.then(|| Slip::at(&self.params, self.contact_state_at(self.time, self.prescribed(self.time), self.omega(), self.v_web)))
+        self.params.traction.then(|| Slip::at(&self.params, self.contact_state_at(self.time, self.prescribed(self.time), self.omega(), self.v_web, self.grip), self.friction))
     }
 
     /// The coefficient of friction after the air film [R8] (0 without traction).
@@ -357,7 +373,7 @@ impl Roller {
     #[inline(always)]
     fn evaluate(&self) -> rhs::Rates<f64> {
         let x = self.held();
-        rhs::rates(&self.params, &self.point_at(self.time, &x), &x, &self.inputs, &Modes::default())
+        rhs::rates(&self.params, &self.point_at(self.time, &x), &x, &self.inputs)
     }
 
     /// The drive's torque now; a speed drive's is what [R1] needs to follow its profile.
@@ -365,13 +381,45 @@ impl Roller {
         let x = self.held();
         // The contact only where [R1] gives a speed drive's torque: a commanded one does not read it.
         let point = self.reading(self.time, self.speed_prescribed().then_some(&x));
-        rhs::torque(&self.params, &point, &x, &self.inputs, &Modes::default())
+        rhs::torque(&self.params, &point, &x, &self.inputs)
     }
 
     /// Whether the tangents along omega, the carriage and the inputs stay as they are until an event or
     /// a parameter changes them (`jacobian::tangents_fixed`; a brake [R12] is nonlinear in omega).
     pub fn tangents_fixed(&self) -> bool {
-        crate::jacobian::tangents_fixed(&self.params) && self.table(Key::Brake).is_none()
+        crate::jacobian::tangents_fixed(&self.params) && !self.braked()
+    }
+
+    /// The contact's grip [R7] (0 without traction).
+    pub fn grip(&self) -> f64 {
+        self.grip
+    }
+
+    /// A brake's grip [R12] (0 without a brake).
+    pub fn brake_grip(&self) -> f64 {
+        self.brake_grip
+    }
+
+    /// The states that move on this roller (`Parameters::active_states`, a brake's grip where its
+    /// profile has a brake table).
+    pub fn active_states(&self) -> Vec<State> {
+        self.params.active_states(self.braked())
+    }
+
+    /// Whether the profile has a brake table [R12].
+    pub(crate) fn braked(&self) -> bool {
+        self.table(Key::Brake).is_some()
+    }
+
+    /// Where the contact's grip has reached its limit, what it needs against what it can give
+    /// (`contact::demand`); None while it sticks, or without traction.
+    pub fn beyond_grip(&self) -> Option<String> {
+        self.slip_now().and_then(|s| contact::demand(&self.params, &s.state))
+    }
+
+    /// The contact held while a line solves the steady state it starts in (`Friction::Held`), or its bristle.
+    pub fn hold_contact(&mut self, held: bool) {
+        self.friction = if held { contact::Friction::Held } else { contact::Friction::Bristle };
     }
 
     /// The loop's integrator [R10] (0 without a loop).
@@ -424,7 +472,7 @@ impl Roller {
             *d.get_mut(j) = 1.0;
             d
         });
-        let rates = rhs::rates(&self.params, point, &x.lanes(&units), &self.inputs.lanes(&[Inputs::default(); N]), &Modes::default()).derivatives;
+        let rates = rhs::rates(&self.params, point, &x.lanes(&units), &self.inputs.lanes(&[Inputs::default(); N])).derivatives;
         std::array::from_fn(|i| rates.get(states[i]).d)
     }
 

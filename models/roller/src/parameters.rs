@@ -33,6 +33,9 @@ pub struct Parameters {
     pub traction_mu: f64,
     pub traction_wrap: f64,
     pub traction_v_slip: f64,
+    /// The bristle's static over kinetic friction k_s and presliding displacement delta (m) [R7].
+    pub traction_static: f64,
+    pub traction_creep: f64,
     /// The web's speed over the roller at the start minus the surface's [R6], m/s.
     pub traction_slip_start: f64,
     /// The web's width, for the tension per width under the air film [R8], m.
@@ -72,6 +75,8 @@ pub struct Parameters {
     pub motor_lag: f64,
     /// A powder brake's speed scale [R12].
     pub brake_v_slip: f64,
+    /// A powder brake's presliding displacement delta_b (m of surface travel) [R12].
+    pub brake_creep: f64,
     /// A dancer loop's set point and gains [R13].
     pub dancer_set: f64,
     pub dancer_kp: f64,
@@ -101,8 +106,9 @@ impl Kind {
     }
 }
 
-/// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I).
-pub const STATES: usize = 8;
+/// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I,
+/// grip, brake.grip).
+pub const STATES: usize = 10;
 
 /// The most webs a roller takes in or gives out.
 pub const PORTS: usize = 4;
@@ -248,6 +254,8 @@ impl Parameters {
             | Real::traction_v_slip
             | Real::traction_width
             | Real::traction_slip_start
+            | Real::traction_static
+            | Real::traction_creep
             | Real::nip_mu
             | Real::air_roughness
             | Real::air_viscosity => self.traction,
@@ -255,7 +263,7 @@ impl Parameters {
             Real::loop_speed => (speed_loop && !s.reference_table || self.speed_input) && !s.speed_input,
             Real::loop_acceleration => self.loop_feedforward && !s.reference_table,
             Real::loop_sample | Real::loop_delay => kind != Kind::None,
-            Real::brake_v_slip => s.brake_table,
+            Real::brake_v_slip | Real::brake_creep => s.brake_table,
             Real::dancer_set | Real::dancer_kp | Real::dancer_ki => kind == Kind::Dancer,
             Real::loop_kp | Real::loop_ki | Real::motor_limit => kind != Kind::None,
             Real::loop_sign | Real::motor_lag | Real::load_cell_wrap => true,
@@ -309,6 +317,10 @@ impl Parameters {
             | Real::mu_eff
             | Real::h_air
             | Real::der_v_web
+            | Real::grip
+            | Real::der_grip
+            | Real::brake_grip
+            | Real::der_brake_grip
             | Real::loop_I
             | Real::der_loop_I
             | Real::motor_torque

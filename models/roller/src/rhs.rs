@@ -42,22 +42,15 @@ pub struct Slip {
 }
 
 impl Slip {
-    /// The contact at `state` [R6]-[R8].
-    pub fn at(p: &Parameters, state: contact::State) -> Slip {
-        let contact = contact::contact(p, &state);
+    /// The contact at `state` [R6]-[R8], its bristle as `friction` has it.
+    pub fn at(p: &Parameters, state: contact::State, friction: Friction) -> Slip {
+        let contact = contact::contact(p, &state, friction);
         Slip { state, contact, acceleration: contact::web_acceleration(p, &state, contact.force), used: None }
     }
 
     fn used(&self, p: &Parameters) -> Dual {
         self.used.unwrap_or_else(|| contact::traction_used(p, &self.state, self.contact.mu_eff))
     }
-}
-
-/// The modes a step holds: how the web meets the roller. A mode a later effect adds (a loop's
-/// held output, a contact that sticks) goes here, and `rates` reads it.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Modes {
-    pub friction: Friction,
 }
 
 /// The rates of the states and what they are made of.
@@ -73,15 +66,15 @@ pub struct Rates<N> {
 struct Torques<N> {
     inertia: N,
     surface_speed: N,
-    /// The friction where the web may slip [R6]-[R7], and the web's acceleration it gives.
-    friction: Option<(N, N)>,
+    /// The friction where the web may slip [R6]-[R7], the web's acceleration it gives, the grip's rate.
+    friction: Option<(N, N, N)>,
     web: N,
     bearing: N,
     loop_law: control::Law<N>,
 }
 
 #[inline(always)]
-fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Torques<N> {
+fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) -> Torques<N> {
     let (omega, r) = (x.omega, x.radius);
     let inertia = at.roll.inertia(p, r);
     let v = match at.prescribed {
@@ -89,13 +82,11 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, 
         None => physics::surface_speed(r, omega),
     };
     let friction = at.slip.map(|s| {
-        let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r];
-        match modes.friction {
-            Friction::Regularized => (s.contact.force.lift(&knowns), s.acceleration.lift(&knowns)),
-        }
+        let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r, x.grip];
+        (s.contact.force.lift(&knowns), s.acceleration.lift(&knowns), s.contact.grip_rate.lift(&knowns))
     });
     let web = match friction {
-        Some((f, _)) => -(r * f),
+        Some((f, _, _)) => -(r * f),
         None => physics::web_torque(p, r, u),
     };
     Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia) }
@@ -138,16 +129,21 @@ fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs
 /// The torque a drive that follows no speed gives: its table and tau_m, its loop, a brake.
 #[inline(always)]
 fn commanded<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, loop_torque: N, v: N) -> N {
-    let brake = at.brake.map_or_else(N::default, |b| brake::torque(b, v, p.brake_v_slip));
-    drive::torque(p, at.drive, u.torque, x.radius) + loop_torque + brake
+    drive::torque(p, at.drive, u.torque, x.radius) + loop_torque + brake_at(p, at, x, v).0
+}
+
+/// A brake's torque and its grip's rate [R12] (0 and 0 without a brake table).
+#[inline(always)]
+fn brake_at<N: Number>(p: &Parameters, at: &Point, x: &States<N>, v: N) -> (N, N) {
+    at.brake.map_or_else(Default::default, |b| brake::torque(p, b, v, x.brake_grip))
 }
 
 /// The drive's torque at the roller's point (`Rates::torque` alone): without a prescribed
 /// speed, what the drive commands alone (no web, bearing or friction to form).
 #[inline]
-pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> N {
+pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) -> N {
     if at.prescribed.is_some() {
-        return drive_torque(p, at, x, u, &torques(p, at, x, u, modes));
+        return drive_torque(p, at, x, u, &torques(p, at, x, u));
     }
     let loop_torque = loop_law(p, at, x, u, at.roll.inertia(p, x.radius)).torque;
     commanded(p, at, x, u, loop_torque, physics::surface_speed(x.radius, x.omega))
@@ -155,9 +151,9 @@ pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N
 
 /// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
 #[inline(always)]
-pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Rates<N> {
+pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) -> Rates<N> {
     let (omega, r) = (x.omega, x.radius);
-    let t = torques(p, at, x, u, modes);
+    let t = torques(p, at, x, u);
     let (v, torque) = (t.surface_speed, drive_torque(p, at, x, u, &t));
     let radius_rate = radius_rate(p, at, u, r, v);
     let (omega_rate, surface_rate) = match at.prescribed {
@@ -174,10 +170,13 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         carriage_y: y_rate,
         carriage_speed: y_speed_rate,
         // Without traction the web's speed is the surface's, and so is its rate.
-        web_speed: t.friction.map_or(surface_rate, |(_, a)| a),
+        web_speed: t.friction.map_or(surface_rate, |(_, a, _)| a),
         loop_integrator: t.loop_law.integrator_rate,
         motor_torque: t.loop_law.motor_rate,
         dancer_integrator: t.loop_law.dancer_rate,
+        grip: t.friction.map_or_else(N::default, |(_, _, rate)| rate),
+        // A speed drive has no brake (refused): its surface speed is the table's.
+        brake_grip: if at.prescribed.is_some() { N::default() } else { brake_at(p, at, x, v).1 },
     };
     Rates { derivatives, torque, surface_speed: v }
 }
@@ -199,6 +198,8 @@ pub struct Outputs<N = f64> {
     pub loop_integrator: N,
     pub motor_state: N,
     pub dancer_integrator: N,
+    pub grip: N,
+    pub brake_grip: N,
     pub rates: States<N>,
     pub omega: N,
     pub radius: N,
@@ -260,11 +261,11 @@ pub fn load_cell_force<N: Number>(p: &Parameters, u: &Inputs<N>) -> N {
 }
 
 /// Every output and rate.
-pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, modes: &Modes) -> Outputs<N> {
-    let rates = rates(p, at, x, u, modes);
+pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) -> Outputs<N> {
+    let rates = rates(p, at, x, u);
     let v = rates.surface_speed;
     let web_speed = if at.slip.is_some() { x.web_speed } else { v };
-    let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], x.radius];
+    let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], x.radius, x.grip];
     let lift = |d: Dual| d.lift(&knowns);
     let (traction_used, mu_eff, h_air) = at.slip.map_or_else(Default::default, |s| (lift(s.used(p)), lift(s.contact.mu_eff), lift(s.contact.h_air)));
     let merged = match (at.strain, p.layered) {
@@ -283,6 +284,8 @@ pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<
         loop_integrator: x.loop_integrator,
         motor_state: x.motor_torque,
         dancer_integrator: x.dancer_integrator,
+        grip: x.grip,
+        brake_grip: x.brake_grip,
         rates: rates.derivatives,
         omega: x.omega,
         radius: x.radius,
@@ -310,6 +313,8 @@ impl<N: Number> Outputs<N> {
             loop_integrator: f(self.loop_integrator),
             motor_state: f(self.motor_state),
             dancer_integrator: f(self.dancer_integrator),
+            grip: f(self.grip),
+            brake_grip: f(self.brake_grip),
             rates: States::from_array(&self.rates.to_array().map(&f)),
             omega: f(self.omega),
             radius: f(self.radius),

@@ -21,6 +21,9 @@ pub enum State {
     LoopIntegrator,
     MotorTorque,
     DancerIntegrator,
+    /// The contact's grip u [R7] and a brake's u_b [R12]: the bristles' share of their limit.
+    Grip,
+    BrakeGrip,
 }
 
 impl State {
@@ -34,6 +37,8 @@ impl State {
         State::LoopIntegrator,
         State::MotorTorque,
         State::DancerIntegrator,
+        State::Grip,
+        State::BrakeGrip,
     ];
 
     /// Its position in the Model Exchange state vector.
@@ -53,6 +58,8 @@ impl State {
             State::LoopIntegrator => Real::loop_I,
             State::MotorTorque => Real::motor_torque,
             State::DancerIntegrator => Real::dancer_I,
+            State::Grip => Real::grip,
+            State::BrakeGrip => Real::brake_grip,
         }
     }
 
@@ -65,9 +72,10 @@ impl State {
 impl Parameters {
     /// The states that move on a roller of these parameters (the others keep their values): omega
     /// always, its radius only on a roll being wound, its carriage only on a dancer, the web's
-    /// speed over it only where the web may slip, a loop's integrator, its motor's torque where it
-    /// lags [R10]-[R11], and a dancer loop's integrator [R13].
-    pub fn active_states(&self) -> Vec<State> {
+    /// speed over it and the contact's grip only where the web may slip, a loop's integrator, its
+    /// motor's torque where it lags [R10]-[R11], a dancer loop's integrator [R13], and a brake's
+    /// grip where its profile has a brake table (`brake`) [R12].
+    pub fn active_states(&self, brake: bool) -> Vec<State> {
         let kind = Kind::of(self);
         State::ALL
             .into_iter()
@@ -75,7 +83,8 @@ impl Parameters {
                 State::Omega => true,
                 State::Radius => self.winding(),
                 State::CarriageY | State::CarriageSpeed => self.carriage,
-                State::WebSpeed => self.traction,
+                State::WebSpeed | State::Grip => self.traction,
+                State::BrakeGrip => brake,
                 State::LoopIntegrator => kind != Kind::None,
                 State::MotorTorque => kind != Kind::None && self.motor_lag > 0.0,
                 State::DancerIntegrator => kind == Kind::Dancer,
@@ -86,8 +95,8 @@ impl Parameters {
     /// The states a line integrates whatever the values of the parameters it offers (its
     /// Co-Simulation states, which keep their number): the active ones, and a roll's radius
     /// wherever `wound.thickness` may make it one (a roll not driven at a prescribed speed).
-    pub fn possible_states(&self, speed_driven: bool) -> Vec<State> {
-        let mut states = self.active_states();
+    pub fn possible_states(&self, speed_driven: bool, brake: bool) -> Vec<State> {
+        let mut states = self.active_states(brake);
         if self.roll != 0 && !speed_driven && !states.contains(&State::Radius) {
             states.push(State::Radius);
             states.sort();
@@ -102,7 +111,8 @@ impl State {
         match self {
             State::Radius => "wound.thickness",
             State::CarriageY | State::CarriageSpeed => "carriage",
-            State::WebSpeed => "includeTraction",
+            State::WebSpeed | State::Grip => "includeTraction",
+            State::BrakeGrip => "brake",
             State::MotorTorque => "motor.lag",
             State::LoopIntegrator | State::DancerIntegrator => "loop.kind",
             // Always a state.
@@ -122,6 +132,8 @@ pub struct States<N = f64> {
     pub loop_integrator: N,
     pub motor_torque: N,
     pub dancer_integrator: N,
+    pub grip: N,
+    pub brake_grip: N,
 }
 
 impl<N: Number> States<N> {
@@ -136,6 +148,8 @@ impl<N: Number> States<N> {
             State::LoopIntegrator => self.loop_integrator,
             State::MotorTorque => self.motor_torque,
             State::DancerIntegrator => self.dancer_integrator,
+            State::Grip => self.grip,
+            State::BrakeGrip => self.brake_grip,
         }
     }
 
@@ -150,6 +164,8 @@ impl<N: Number> States<N> {
             State::LoopIntegrator => &mut self.loop_integrator,
             State::MotorTorque => &mut self.motor_torque,
             State::DancerIntegrator => &mut self.dancer_integrator,
+            State::Grip => &mut self.grip,
+            State::BrakeGrip => &mut self.brake_grip,
         }
     }
 

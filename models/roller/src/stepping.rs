@@ -6,10 +6,10 @@
 use crate::parameters::Kind;
 use crate::drive::{Drive, Key};
 use crate::model::Roller;
-use crate::rhs::{self, Modes, Point};
+use crate::rhs::{self, Point};
 use crate::roll::{self, Roll};
 use crate::state::{State, States};
-use crate::{carriage, physics};
+use crate::{bristle, carriage, physics};
 use fmi_core::{FmiError, FmiResult};
 use profiles::Value;
 use solver::CompensatedSum;
@@ -47,7 +47,7 @@ impl Roller {
         let p = &self.params;
         let r = self.roll.radius;
         let prescribed = self.prescribed(t); // at the piece's start, after its events
-        let mut v_web = self.v_web;
+        let (mut v_web, mut grip) = (self.v_web, self.grip);
         // [R1] is linear in omega without a loop, a brake or bearings whose torque is not -b*omega.
         let linear = roll::bearing_damping(p).filter(|_| Kind::of(p) == Kind::None && self.table(Key::Brake).is_none());
         let Some(damping) = linear else {
@@ -61,12 +61,12 @@ impl Roller {
                 self.carriage
             };
             if !(y.iter().all(|x| x.is_finite()) && y[1] > 0.0 && carriage.iter().all(|x| x.is_finite())) {
-                return Err(FmiError::discard(format!("the roller's loop would reach (omega, r, loop.I, motor.torque) = {y:?}: take a shorter step or check the inputs")));
+                return Err(FmiError::discard(format!("the roller's loop would reach (omega, r, loop.I, motor.torque, dancer.I, brake.grip) = {y:?}: take a shorter step or check the inputs")));
             }
             let inertia = self.roll.inertia(p, y[1]);
             self.omega = CompensatedSum::from_parts(y[0], 0.0);
             self.roll = Roll { radius: y[1], inertia, ..self.roll };
-            (self.integrator, self.motor, self.dancer, self.carriage) = (y[2], y[3], y[4], carriage);
+            (self.integrator, self.motor, self.dancer, self.brake_grip, self.carriage) = (y[2], y[3], y[4], y[5], carriage);
             return Ok(());
         };
         // The web's strain at the roll [R3]: the inputs are held, a table read at the piece's middle.
@@ -76,7 +76,7 @@ impl Roller {
                 // [R6]-[R7] are nonlinear and stiff (the friction's slope over the web's small mass):
                 // an L-stable Rosenbrock method on (omega, v_web), the inputs held. No roll winds here.
                 let y = self.slipping_step(t, h)?;
-                v_web = y[1];
+                (v_web, grip) = (y[1], y[2]);
                 (CompensatedSum::from_parts(y[0], 0.0), 0.0)
             }
             Some((v0, slope)) => {
@@ -124,23 +124,24 @@ impl Roller {
                 physics::web_torque(p, r, &self.inputs)
             )));
         }
-        (self.omega, self.roll, self.carriage, self.v_web) = (omega, roll, carriage, v_web);
+        (self.omega, self.roll, self.carriage, self.v_web, self.grip) = (omega, roll, carriage, v_web, grip);
         Ok(())
     }
 
-    /// (omega, v_web) after [t, t+h] of a piece [R6]-[R7], the inputs held.
-    fn slipping_step(&self, t: f64, h: f64) -> FmiResult<[f64; 2]> {
-        let y0 = [self.omega(), self.v_web];
+    /// (omega, v_web, grip) after [t, t+h] of a piece [R6]-[R7], the inputs held.
+    fn slipping_step(&self, t: f64, h: f64) -> FmiResult<[f64; 3]> {
+        let y0 = [self.omega(), self.v_web, self.grip];
         let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
-        let control = solver::Control { rtol: SLIP_RTOL, atol: [scale(y0[0]), scale(y0[1])], initial_step: h, max_steps: 100_000 };
+        let control = solver::Control { rtol: SLIP_RTOL, atol: y0.map(scale), initial_step: h, max_steps: 100_000 };
         solver::rosenbrock::integrate(&Slipping { roller: self, t0: t }, h, y0, &control)
             .map(|solution| solution.y)
             .map_err(|failure| FmiError::discard(format!("the web's slip on the roller could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
-    /// (omega, r, loop.I, motor.torque, dancer.I) after [t, t+h] of a piece with a loop [R10]-[R11], [R13], the inputs held.
-    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 5]> {
-        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor, self.dancer];
+    /// (omega, r, loop.I, motor.torque, dancer.I, brake.grip) after [t, t+h] of a piece with a loop
+    /// [R10]-[R11], [R13] or a brake [R12], the inputs held.
+    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 6]> {
+        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor, self.dancer, self.brake_grip];
         let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
         let control = solver::Control { rtol: SLIP_RTOL, atol: y0.map(scale), initial_step: h, max_steps: 100_000 };
         solver::rosenbrock::integrate(&Controlled { roller: self, t0: t }, h, y0, &control)
@@ -148,13 +149,13 @@ impl Roller {
             .map_err(|failure| FmiError::discard(format!("the roller's loop could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
-    /// The roller at time t with (omega, r, loop.I, motor.torque, dancer.I) at y, the rest as now (a step's trial point).
-    fn at_trial(&self, t: f64, y: &[f64; 5]) -> Roller {
+    /// The roller at time t with (omega, r, loop.I, motor.torque, dancer.I, brake.grip) at y, the rest as now (a step's trial point).
+    fn at_trial(&self, t: f64, y: &[f64; 6]) -> Roller {
         let mut trial = self.clone();
         let inertia = self.roll.inertia(&self.params, y[1]);
         trial.omega = CompensatedSum::from_parts(y[0], 0.0);
         trial.roll = Roll { radius: y[1], inertia, ..self.roll };
-        (trial.integrator, trial.motor, trial.dancer, trial.time) = (y[2], y[3], y[4], t);
+        (trial.integrator, trial.motor, trial.dancer, trial.brake_grip, trial.time) = (y[2], y[3], y[4], y[5], t);
         trial
     }
 
@@ -206,6 +207,10 @@ impl Roller {
         self.next_event = 0;
         (self.integrator, self.motor, self.dancer) = (0.0, 0.0, 0.0);
         self.restart_hold(time);
+        // A web that starts slipping, a brake that starts turning, start sliding: their bristles at
+        // their sliding deflection (at u = 0 their damping would carry |s|/v_slip times the limit).
+        self.grip = if p.traction { bristle::sliding(p.traction_slip_start, p.traction_static, p.traction_v_slip) } else { 0.0 };
+        self.brake_grip = if self.braked() { bristle::sliding(speed, 1.0, p.brake_v_slip) } else { 0.0 };
     }
 }
 
@@ -215,40 +220,40 @@ impl Roller {
 const SLIP_RTOL: f64 = 1e-10;
 const SLIP_ATOL: f64 = 1e-12;
 
-/// [R6]-[R7] over a piece, as an ODE in (omega, v_web) from the piece's start t0.
+/// [R6]-[R7] over a piece, as an ODE in (omega, v_web, grip) from the piece's start t0.
 struct Slipping<'a> {
     roller: &'a Roller,
     t0: f64,
 }
 
 impl Slipping<'_> {
-    /// The roller at time t0 + s with (omega, v_web) at y: what the equations read there, its states.
-    fn trial(&self, s: f64, y: &[f64; 2]) -> (Point, States) {
-        let x = States { omega: y[0], web_speed: y[1], ..self.roller.held() };
+    /// The roller at time t0 + s with (omega, v_web, grip) at y: what the equations read there, its states.
+    fn trial(&self, s: f64, y: &[f64; 3]) -> (Point, States) {
+        let x = States { omega: y[0], web_speed: y[1], grip: y[2], ..self.roller.held() };
         (self.roller.point_at(self.t0 + s, &x), x)
     }
 }
 
-impl solver::Ode<2> for Slipping<'_> {
-    fn rhs(&self, s: f64, y: &[f64; 2]) -> [f64; 2] {
+impl solver::Ode<3> for Slipping<'_> {
+    fn rhs(&self, s: f64, y: &[f64; 3]) -> [f64; 3] {
         let (point, x) = self.trial(s, y);
-        let d = rhs::rates(&self.roller.params, &point, &x, &self.roller.inputs, &Modes::default()).derivatives;
+        let d = rhs::rates(&self.roller.params, &point, &x, &self.roller.inputs).derivatives;
         SLIPPING.map(|i| d.get(i))
     }
 
-    fn jacobian(&self, s: f64, y: &[f64; 2]) -> [[f64; 2]; 2] {
+    fn jacobian(&self, s: f64, y: &[f64; 3]) -> [[f64; 3]; 3] {
         let (point, x) = self.trial(s, y);
         self.roller.rate_jacobian(&point, &x, SLIPPING)
     }
 
     /// Tables of time (a drive's ramp, the nip's load) move f at fixed y: a central difference.
-    fn time_derivative(&self, s: f64, y: &[f64; 2]) -> [f64; 2] {
+    fn time_derivative(&self, s: f64, y: &[f64; 3]) -> [f64; 3] {
         time_derivative(self, self.roller, self.t0, s, y)
     }
 }
 
 /// The states the slip's step integrates.
-const SLIPPING: [State; 2] = [State::Omega, State::WebSpeed];
+const SLIPPING: [State; 3] = [State::Omega, State::WebSpeed, State::Grip];
 
 /// df/dt at fixed y of a piece's ODE from t0: where a table of time has a slope, a central difference.
 fn time_derivative<const N: usize>(ode: &impl solver::Ode<N>, roller: &Roller, t0: f64, s: f64, y: &[f64; N]) -> [f64; N] {
@@ -260,7 +265,7 @@ fn time_derivative<const N: usize>(ode: &impl solver::Ode<N>, roller: &Roller, t
     std::array::from_fn(|i| (hi[i] - lo[i]) / (2.0 * e))
 }
 
-/// [R1], [R3], [R10]-[R11], [R13] over a piece, as an ODE in (omega, r, loop.I, motor.torque, dancer.I) from the
+/// [R1], [R3], [R10]-[R13] over a piece, as an ODE in (omega, r, loop.I, motor.torque, dancer.I, brake.grip) from the
 /// piece's start t0; its Jacobian from the right-hand side's tangents.
 struct Controlled<'a> {
     roller: &'a Roller,
@@ -268,21 +273,21 @@ struct Controlled<'a> {
 }
 
 /// The states the loop's step integrates.
-const CONTROLLED: [State; 5] = [State::Omega, State::Radius, State::LoopIntegrator, State::MotorTorque, State::DancerIntegrator];
+const CONTROLLED: [State; 6] = [State::Omega, State::Radius, State::LoopIntegrator, State::MotorTorque, State::DancerIntegrator, State::BrakeGrip];
 
-impl solver::Ode<5> for Controlled<'_> {
-    fn rhs(&self, s: f64, y: &[f64; 5]) -> [f64; 5] {
+impl solver::Ode<6> for Controlled<'_> {
+    fn rhs(&self, s: f64, y: &[f64; 6]) -> [f64; 6] {
         let d = self.roller.at_trial(self.t0 + s, y).rates();
         CONTROLLED.map(|i| d.get(i))
     }
 
-    fn jacobian(&self, s: f64, y: &[f64; 5]) -> [[f64; 5]; 5] {
+    fn jacobian(&self, s: f64, y: &[f64; 6]) -> [[f64; 6]; 6] {
         let trial = self.roller.at_trial(self.t0 + s, y);
         trial.rate_jacobian(&trial.point(), &trial.held(), CONTROLLED)
     }
 
     /// Tables of time (a set point's or a reference's ramp) move f at fixed y: a central difference.
-    fn time_derivative(&self, s: f64, y: &[f64; 5]) -> [f64; 5] {
+    fn time_derivative(&self, s: f64, y: &[f64; 6]) -> [f64; 6] {
         time_derivative(self, self.roller, self.t0, s, y)
     }
 }

@@ -107,6 +107,13 @@ fmi_core::bind_variables! {
         loop_acceleration: param(params.loop_acceleration),
         loop_sample: param(params.loop_sample),
         loop_delay: param(params.loop_delay),
+        traction_static: param(params.traction_static),
+        traction_creep: param(params.traction_creep),
+        grip: computed(grip()),
+        der_grip: computed(rates().grip),
+        brake_creep: param(params.brake_creep),
+        brake_grip: computed(brake_grip()),
+        der_brake_grip: computed(rates().brake_grip),
     }
     integer {
         roll: param(params.roll),

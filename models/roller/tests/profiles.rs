@@ -329,3 +329,57 @@ fn a_state_saved_after_a_parameter_changed_under_a_provisional_profile_restores(
     let e = back.model.clone().initialize(&Experiment::default(), &Resources::default()).unwrap_err().into_message();
     assert!(e.contains("a load table needs carriage = true"), "{e}");
 }
+
+/// A powder brake (B = 10 N.m, [R12]) on a roller at rest holds any torque up to its rating: its grip
+/// carries tau_m/B and the surface creeps by at most brake.creep (1e-6 m); past its rating it slides
+/// at B, the roller accelerating at (tau_m - B)/J. Loaded to u, the bristle's stiffness is
+/// B r (1 - |u|)/delta_b: at 0.99 of its rating it settles at v_slip_b (1 - |u|)/delta_b = 100/s
+/// (the overdamped mode; the damping is B r/(v_slip_b J) = 200/s), within the second.
+#[test]
+fn a_braked_roller_at_rest_holds_any_torque_up_to_its_rating() {
+    let (j, r, b) = (0.5, 0.1, 10.0);
+    for tau in [-9.9, -3.0, 0.0, 4.0, 9.9, 10.1] {
+        let mut m = roller(&[(Real::J, j), (Real::R, r), (Real::b, 0.0), (Real::v_start, 0.0)], Some(r#"{"brake": [[0, 10]]}"#), |_| {}).unwrap();
+        m.set_real(Real::tau_m.vr(), tau).unwrap();
+        let mut t = 0.0;
+        step_to(&mut m, &mut t, 0.5, 1e-3);
+        let v_half = get(&m, Real::v);
+        step_to(&mut m, &mut t, 1.0, 1e-3);
+        let v = get(&m, Real::v);
+        if tau.abs() < b {
+            assert!(v.abs() < 1e-9, "tau {tau}: v = {v} m/s");
+            // The roller's own step is tight to 1e-10 per step: a thousand steps leave 1e-8.
+            assert!((get(&m, Real::brake_grip) - tau / b).abs() < 1e-8, "tau {tau}: grip {}", get(&m, Real::brake_grip));
+        } else {
+            // Sliding at B once the bristle has let go (its breakaway within the first 0.1 s).
+            let (rate, expected) = ((v - v_half) / 0.5, r * (tau - b) / j);
+            assert!((rate - expected).abs() < 1e-3 * expected, "tau {tau}: dv/dt = {rate} m/s2, expected {expected}");
+            assert!((get(&m, Real::brake_grip) - 1.0).abs() < 1e-9);
+        }
+    }
+}
+
+/// A braked roller pulled by a web at 50 N (5 N.m against the brake's 10) slows from 1 m/s to a
+/// stop at 1 s, then holds: from 1 s to 10 s after the stop the torque it holds, B times its grip
+/// (5 N.m), drifts by less than 1e-6 relative and the surface stays at rest. At 1 and 10 ms.
+#[test]
+fn a_braked_roller_holds_after_it_stops() {
+    let (j, r) = (0.5, 0.1);
+    for h in [1e-3, 1e-2] {
+        let mut m = roller(&[(Real::J, j), (Real::R, r), (Real::b, 0.0), (Real::v_start, 1.0)], Some(r#"{"brake": [[0, 10]]}"#), |_| {}).unwrap();
+        m.set_real(Real::web_b_F.vr(), 50.0).unwrap();
+        let mut t = 0.0;
+        step_to(&mut m, &mut t, 0.5, h);
+        // Sliding: J omega' = r F - B, omega = 10 - 10 t.
+        assert!((m.omega() - 5.0).abs() < 1e-6, "h {h}: omega {} at 0.5 s", m.omega());
+        step_to(&mut m, &mut t, 2.0, h);
+        let held = 10.0 * get(&m, Real::brake_grip);
+        assert!((held - 5.0).abs() < 1e-9, "h {h}: holds {held} N.m");
+        for end in [4.0, 7.0, 11.0] {
+            step_to(&mut m, &mut t, end, h);
+            let now = 10.0 * get(&m, Real::brake_grip);
+            assert!((now - held).abs() < 1e-6 * held, "h {h}, t {end}: holds {now} N.m, {held} at 2 s");
+            assert!(get(&m, Real::v).abs() < 1e-12, "h {h}, t {end}: v {}", get(&m, Real::v));
+        }
+    }
+}

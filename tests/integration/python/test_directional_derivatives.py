@@ -313,15 +313,15 @@ def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind,
 
 
 # ---------------------------------------------------------------- the Roller
-# The same check on the Roller: states omega, r, y, y', v_web (ME), inputs web_a.F,
-# web_b.F, web_a.eps, tau_m, F_load and those of the extra inlets and outlets
+# The same check on the Roller: states omega, r, y, y', v_web, loop.I, motor.torque, dancer.I, grip,
+# brake.grip (ME), inputs web_a.F, web_b.F, web_a.eps, tau_m, F_load and those of the extra inlets and outlets
 # (a merge and a split: cases with ports; elsewhere unused, their derivatives 0).
 # The outputs are polynomials in the states and inputs (degree <= 4 in r), or
 # the merged strain, a smooth ratio, so the same steps and tolerances apply.
 
 ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load", "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps",
                  "web_a4.F", "web_a4.eps", "web_b2.F", "web_b3.F", "web_b4.F")
-ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web", "loop.I", "motor.torque", "dancer.I")
+ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web", "loop.I", "motor.torque", "dancer.I", "grip", "brake.grip")
 ROLLER_UNKNOWNS = ("web_a.v", "web_b.v", "web_b.eps", "omega", "r", "y", "y_dot", "tau", "web_a.x", "web_a.y",
                    "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)", "web_a2.v", "web_a4.v",
                    "web_b2.v", "web_b2.eps", "web_b4.eps", "v_web", "der(v_web)")
