@@ -36,7 +36,7 @@ pub enum Binding {
 /// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
 /// measures) and a span's variable length are the line's structure, which line.json fixes; a feed-forward's
 /// loop.acceleration the line sets from its reference (`feed`).
-const NOT_OFFERED: [&str; 23] = [
+const NOT_OFFERED: [&str; 24] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",

@@ -1,7 +1,7 @@
 //! A powder brake on the roller [R12], its torque a table of time (the profile's `brake`), held by
 //! the bristle (`bristle`) on the surface speed v with its own grip u_b (k_s = 1):
 //!
-//! [R12] tau_brake = -B g_b,  g_b = u_b + (v - |v| u_b)/v_slip_b,  du_b/dt = (v - |v| u_b)/delta_b
+//! [R12] tau_brake = -B g_b,  g_b = u_b + exp(-(v/v_slip_b)^2) (v - |v| u_b)/v_slip_b,  du_b/dt = (v - |v| u_b)/delta_b
 //!       (B >= 0 its rated torque)
 
 use crate::bristle::{self, Grip};

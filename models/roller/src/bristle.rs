@@ -2,11 +2,12 @@
 //! web on a roller [R7] and a powder brake [R12] share it. Its state, the grip u, is the share of
 //! the kinetic limit the bristles carry (LuGre's z over its steady sliding value):
 //!
-//!   du/dt = (s - |s| u/psi(s))/delta,   g = u + (s - |s| u/psi(s))/v_slip,
+//!   du/dt = (s - |s| u/psi(s))/delta,   g = u + exp(-(s/v_slip)^2) (s - |s| u/psi(s))/v_slip,
 //!   psi(s) = 1 + (k_s - 1) exp(-(s/v_slip)^2)
 //!
 //! s the slip, delta the presliding displacement, v_slip the damping and Stribeck speed, k_s the
-//! static over kinetic friction. Steady, either s = 0 with |u| < psi(0) (sticking, at any load up
+//! static over kinetic friction. The damping fades with the slip (LuGre's sigma_1(s)), so that a slip
+//! far from the grip's asks at most about 0.43 (1 + |u|/psi) of the limit more, never e^(|s|/v_slip). Steady, either s = 0 with |u| < psi(0) (sticking, at any load up
 //! to the static limit) or u = psi(s) sign(s) (sliding at the limit); g is the share in use.
 //!
 //! |s| keeps its kink at s = 0: the rate is Lipschitz there (slopes (1 -/+ u/psi)/delta, both > 0
@@ -51,7 +52,9 @@ pub fn grip<N: Number>(s: N, u: N, k_s: f64, v_slip: f64, delta: f64) -> Grip<N>
     };
     let sign = if x == 0.0 { 0.0 } else { x.signum() };
     let deflection = s - s.map(x.abs(), sign) * u / psi;
-    Grip { share: u + deflection / v_slip, rate: deflection / delta }
+    let fade = (-(x / v_slip).powi(2)).exp();
+    let damping = s.map(fade, -2.0 * x * fade / (v_slip * v_slip));
+    Grip { share: u + damping * deflection / v_slip, rate: deflection / delta }
 }
 
 /// The bristle held at zero slip while a line solves its steady state: the same share and rate at

@@ -5,7 +5,7 @@
 //!       m_w = m_web * r * max(theta, THETA_MIN): the web's mass on the wrap
 //! [R7]  f = f_nip + f_wrap,  T' = T - m_web v_w^2 (the pressure left after the web's centripetal force),
 //!       g the bristles' share of the kinetic limit (`bristle`, the grip u a state):
-//!       du/dt = (s - |s| u/psi(s))/delta,  g = u + (s - |s| u/psi(s))/v_slip,
+//!       du/dt = (s - |s| u/psi(s))/delta,  g = u + exp(-(s/v_slip)^2) (s - |s| u/psi(s))/v_slip,
 //!       psi(s) = 1 + (k_s - 1) exp(-(s/v_slip)^2)
 //!       f_nip  = -mu_nip N g                                       (the nip line, on the wrap's entry or exit)
 //!       f_wrap = -2 sqrt(T'_in+ T'_out+) sinh(mu_eff theta g / 2)  (the wrap between the nip and the other side)

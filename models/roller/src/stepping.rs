@@ -206,11 +206,11 @@ impl Roller {
         self.events_at = time;
         self.next_event = 0;
         (self.integrator, self.motor, self.dancer) = (0.0, 0.0, 0.0);
-        self.restart_hold(time);
         // A web that starts slipping, a brake that starts turning, start sliding: their bristles at
         // their sliding deflection (at u = 0 their damping would carry |s|/v_slip times the limit).
         self.grip = if p.traction { bristle::sliding(p.traction_slip_start, p.traction_static, p.traction_v_slip) } else { 0.0 };
         self.brake_grip = if self.braked() { bristle::sliding(speed, 1.0, p.brake_v_slip) } else { 0.0 };
+        self.restart_hold(time);
     }
 }
 

@@ -763,10 +763,11 @@ THETA_MIN = np.radians(5.0)
 def grip(u, s, v_slip, creep, static):
     """(du/dt, g) of a contact's grip u at slip s (docs/physics.md, "Contacts that stick"): the bristles'
     deflection rate du/dt = (s - |s| u/psi(s))/creep, psi(s) = 1 + (static - 1) exp(-(s/v_slip)^2) the
-    Stribeck limit, and g = u + (s - |s| u/psi(s))/v_slip the share of the kinetic limit the contact
-    carries (bristle and damping). Steady, s = 0 where |u| < psi(0) (it sticks) or u = psi(s) sign(s)."""
+    Stribeck limit, and g = u + exp(-(s/v_slip)^2) (s - |s| u/psi(s))/v_slip the share of the kinetic
+    limit the contact carries (bristle and its damping, which fades with the slip as LuGre's sigma_1(s)).
+    Steady, s = 0 where |u| < psi(0) (it sticks) or u = psi(s) sign(s)."""
     rate = s - abs(s) * u / stribeck(s, v_slip, static)
-    return rate / creep, u + rate / v_slip
+    return rate / creep, u + np.exp(-np.square(s / v_slip)) * rate / v_slip
 
 
 def stribeck(s, v_slip, static):
@@ -776,9 +777,8 @@ def stribeck(s, v_slip, static):
 
 def start_grip(tr):
     """A given start's grip: 0 where the web starts at the surface's speed; where it starts sliding
-    (slip_start s0 != 0), the grip of a steady slide, psi(s0) sign(s0). From 0 there, g's damping term
-    s0/v_slip (5000 at 5 m/s) would ask e^1000 times the kinetic limit of the wrap for the nanoseconds
-    the bristles take to deflect (docs/physics.md, "Contacts that stick")."""
+    (slip_start s0 != 0), the grip of a steady slide, psi(s0) sign(s0): from 0 the contact would carry
+    no friction for the nanoseconds the bristles take to deflect, an event as stiff as any in the line."""
     s0 = tr.slip_start
     if s0 == 0.0:
         return 0.0
