@@ -349,19 +349,25 @@ def test_webline_run_says_an_idler_rides_on_air_not_a_share_over_its_limit(tmp_p
     assert 5.5 < table["idlerv_web_ms"][first] < 7.0, "near where the film reaches 3 roughnesses"
 
 
-def test_a_huge_mu_prints_no_runtime_warning(tmp_path, capsys):
-    """mu = 1e6 on the pull roll: the wrap's sinh(mu theta g/2) would overflow a float in a trial
-    state; the run ends cleanly, with no NumPy RuntimeWarning, at the sticking line's 100 N."""
+def test_a_huge_mu_is_refused_by_name_and_the_largest_runs_without_runtime_warnings(tmp_path, capsys):
+    """mu = 1e6 on the pull roll is refused by name with the range the Roller takes (0 to 10), before any
+    engine runs; mu = 10, the largest, where a trial state's sinh(mu theta g/2) grows fastest,
+    runs cleanly with no NumPy RuntimeWarning at the sticking line's 100 N."""
     import warnings
 
     scene = json.loads((CASES / "pull_roll_sticks_slow.json").read_text())
-    scene["line"][2]["traction"]["mu"] = 1e6
     scene["stop_time"] = "0.2 s"
     path = tmp_path / "mu.json"
-    path.write_text(json.dumps(scene))
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", RuntimeWarning)
-        code, out, err = run_reference(path, tmp_path, capsys)
-    assert code == 0 and "RuntimeWarning" not in err, err
+    for mu in (1e6, 10.0):
+        scene["line"][2]["traction"]["mu"] = mu
+        path.write_text(json.dumps(scene))
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            code, out, err = run_reference(path, tmp_path, capsys)
+        assert "RuntimeWarning" not in err, err
+        if mu > 10.0:
+            assert code != 0 and "traction: mu = 1e+06: a friction coefficient is 0 to 10" in err, err
+        else:
+            assert code == 0, err
     table = np.genfromtxt(tmp_path / "pull_roll_sticks_slow.csv", delimiter=",", names=True)
     assert np.max(np.abs(table["upT_N"] / 100.0 - 1.0)) < 1e-5

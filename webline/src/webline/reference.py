@@ -486,7 +486,7 @@ class LineODE:
             self.stuck = False
         for c in self.slippers:
             z[self.i_vw[c.name]] = self.speed(c, t, z)
-            z[self.i_grip[c.name]] = self.hold(c, t, z)
+            z[self.i_grip[c.name]] = self.held_grip(c, t, z)
             scale[self.i_vw[c.name]], scale[self.i_grip[c.name]] = c.traction.v_slip, 1.0
         for b in self.brakes:
             self.check_brake(b, t, z, b in resting)
@@ -513,7 +513,7 @@ class LineODE:
                     f"difference), or {GIVEN}")
         return z
 
-    def hold(self, c, t, z):
+    def held_grip(self, c, t, z):
         """The grip u of contact `c` at zero slip (g = u) that balances its web, T_b - T_a + f(u) = 0, within
         its static limit |u| <= k_s; where none does, the demand exceeds the limit: refused in plain words."""
         _, q, v = self.evaluate(t, z)

@@ -41,6 +41,7 @@ MIDDLE = ("roller", "dancer")
 LAST = ("sink", "winder")
 
 MIN_SAMPLE = 1e-5  # s: the Roller's shortest sample period [R14]
+MU_MAX = 10.0  # the Roller's traction.mu and nip.mu at most
 
 
 class _Reader:
@@ -537,6 +538,8 @@ def _traction(r, o, what, wrap) -> Traction:
         if wrap is None or wrap == 0.0:
             raise r.err(r.key_pos(o["traction"]), f"{what}: traction acts on the web's wrap: give the roller a \"wrap\" angle")
         t.mu = r.quantity(tr["mu"], units.DIMENSIONLESS, f"{what}: traction: mu", nonnegative=True)
+        if t.mu > MU_MAX:  # the Roller's traction.mu range: no pair of surfaces grips harder
+            raise r.err(tr["mu"], f"{what}: traction: mu = {t.mu:g}: a friction coefficient is 0 to {MU_MAX:g}")
         if "v_slip" in tr:
             t.v_slip = r.quantity(tr["v_slip"], units.SPEED, f"{what}: traction: v_slip", positive=True)
         if "static" in tr:
@@ -557,6 +560,8 @@ def _traction(r, o, what, wrap) -> Traction:
     if "nip" in o:
         nip = r.keys(o["nip"], f"{what}: nip", required=("load", "mu"), optional=("side",))
         t.nip_mu = r.quantity(nip["mu"], units.DIMENSIONLESS, f"{what}: nip: mu", nonnegative=True)
+        if t.nip_mu > MU_MAX:
+            raise r.err(nip["mu"], f"{what}: nip: mu = {t.nip_mu:g}: a friction coefficient is 0 to {MU_MAX:g}")
         if "side" in nip:
             if nip["side"].value not in NIP_SIDES:
                 raise r.err(nip["side"], f"{what}: nip: side {nip['side'].value!r} is not one of {', '.join(map(repr, NIP_SIDES))} "
