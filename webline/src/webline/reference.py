@@ -790,8 +790,8 @@ def friction(tr, R, wrap_deg, web, v_w, v_s, T_a, T_b, load, u) -> dict:
     its motion, from the capstan law on the wrap and a nip on its entry or exit side, both carrying the
     share g of their kinetic limit that the contact's grip u gives (`grip`), the wrap's law on
     T - rho_l v_w^2 (the pressure its centripetal force leaves), under Knox and Sweeney's air film at
-    the entry tension; with the grip's rate and what a roller with traction reports (|g|, the friction
-    in use over the kinetic limit)."""
+    the entry tension; with the grip's rate and what a roller with traction reports (the share of its
+    traction the tensions use, `traction_used`: |g| once steady)."""
     theta = math.radians(wrap_deg)
     s = v_w - v_s
     du, g = grip(u, s, tr.v_slip, tr.creep, tr.static)
@@ -811,8 +811,33 @@ def friction(tr, R, wrap_deg, web, v_w, v_s, T_a, T_b, load, u) -> dict:
     A, B = T_a - relief, T_b - relief
     T_in, T_out = (A - f_nip, B) if tr.nip_side == "entry" else (A, B + f_nip)
     f_wrap = -2.0 * math.sqrt(max(T_in, 0.0) * max(T_out, 0.0)) * bounded_sinh(mu * theta * g / 2.0)
+    # What the Roller's output `traction` reports: the share the tensions use at rest (|g| once steady).
+    used = traction_used(A, B, n, mu * theta) if tr.nip_side == "entry" else traction_used(B, A, n, mu * theta)
     return {"f": f_nip + f_wrap, "du": du, "m_w": web.rho_l * R * max(theta, THETA_MIN), "v_web": v_w, "slip": s,
-            "traction": abs(g), "mu_eff": mu, "h_air": h}
+            "traction": used, "mu_eff": mu, "h_air": h}
+
+
+def traction_used(T_a, T_b, n, w):
+    """The share of the traction in use: g solving T_b = (T_a + n g) exp(w g), |g|, the tensions less
+    rho_l v^2 and the nip on T_a's side (docs/physics.md); a slack side leaves the nip alone."""
+    if T_a <= 0.0 or T_b <= 0.0:
+        if n > 0.0:
+            return abs(T_b - T_a) / n
+        return 0.0 if T_a == T_b else 1.0
+    if n == 0.0 and w == 0.0:
+        return 0.0 if T_a == T_b else 1.0
+    if n == 0.0:
+        return abs(np.log(T_b / T_a)) / w
+    if w == 0.0:
+        return abs(T_b - T_a) / n
+    from scipy.optimize import brentq
+
+    lo = -T_a / n * (1.0 - 1e-15)  # T_a + n g > 0 there
+    phi = lambda g: np.log(T_a + n * g) + w * g - np.log(T_b)
+    hi = 1.0
+    while phi(hi) < 0.0:
+        hi *= 2.0
+    return abs(brentq(phi, lo, hi, xtol=1e-15))
 
 
 # sinh's argument beyond which the wrap's law goes on linearly (sinh(300) = 1e130; a float overflows past
