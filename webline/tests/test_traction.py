@@ -371,3 +371,25 @@ def test_a_huge_mu_is_refused_by_name_and_the_largest_runs_without_runtime_warni
             assert code == 0, err
     table = np.genfromtxt(tmp_path / "pull_roll_sticks_slow.csv", delimiter=",", names=True)
     assert np.max(np.abs(table["upT_N"] / 100.0 - 1.0)) < 1e-5
+
+
+def test_idlers_that_stick_side_by_side_on_damped_spans_start_steady_in_the_reference():
+    """Two idlers with traction next to each other, their spans damped (a damped span's tension reads the
+    web's speed at both ends): the reference's equilibrium start sets every web to its roller's surface
+    before it solves any grip, so the line starts steady (each grip solved against the final tensions;
+    solved one by one with the next web still at its start speed, idler0 was left 6.7e-9 of its scale
+    off steady and the start refused). Over 0.2 s the tensions stay at the start's to 1e-9 relative."""
+    web = {"paper": {"E": "5 GPa", "thickness": "100 um", "width": "1.2 m", "density": "800 kg/m3", "d_r": "0.5 ms"}}
+    idler = {"type": "roller", "J": "0.05 kg.m2", "R": "0.08 m", "b": "0.002 N.m.s", "v_start": "10 m/s",
+             "wrap": "90 deg", "traction": {"mu": 0.3}}
+    line = [{"type": "unwinder", "name": "unwind", "J": "8 kg.m2", "R": "0.5 m", "b": "0.1 N.m.s",
+             "drive": {"tension": "400 N"}, "strain": 0.0, "v_start": "10 m/s"}]
+    for i in range(3):
+        line.append({"type": "span", "name": f"s{i}", "L": f"{1.0 + 0.25 * i} m", "web": "paper", "effects": ["includeDamping"]})
+        line.append({**idler, "name": f"idler{i}"} if i < 2 else {"type": "sink", "name": "pull", "speed": "10 m/s"})
+    s = parse_scene(json.dumps({"name": "idlers", "stop_time": "0.2 s", "step": "1 ms", "start": "equilibrium", "webs": web,
+                                "line": line, "record": ["s0.T", "s1.T", "s2.T"]}), "idlers.json")
+    r = reference(s)
+    for name in ("s0.T [N]", "s1.T [N]", "s2.T [N]"):
+        T = r.column(name)
+        assert np.max(np.abs(T / T[0] - 1.0)) < 1e-9, name

@@ -484,8 +484,9 @@ class LineODE:
             z, scale = self._solve(t, z0, z, held + contact, skipped + contact, tied)
         finally:
             self.stuck = False
-        for c in self.slippers:
+        for c in self.slippers:  # every web at its roller's surface first: a damped span's tension reads both ends' speeds
             z[self.i_vw[c.name]] = self.speed(c, t, z)
+        for c in self.slippers:
             z[self.i_grip[c.name]] = self.held_grip(c, t, z)
             scale[self.i_vw[c.name]], scale[self.i_grip[c.name]] = c.traction.v_slip, 1.0
         for b in self.brakes:
