@@ -29,7 +29,9 @@ fn roller(reals: &[(Real, f64)], profile: Option<&str>, setup: impl FnOnce(&mut 
     }
     setup(&mut m);
     if let Some(text) = profile {
-        let path = profile_file(&format!("{:x}.json", text.len() * 7919 + text.bytes().map(|b| b as usize).sum::<usize>()), text);
+        // One file per call: tests run in parallel, and a file another test rewrites reads empty meanwhile.
+        static WRITTEN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let path = profile_file(&format!("{}.json", WRITTEN.fetch_add(1, std::sync::atomic::Ordering::Relaxed)), text);
         m.set_string(Text::profile.vr(), path.to_str().unwrap()).unwrap();
     }
     m.initialize(&Experiment::default(), &Resources::default()).map_err(|e| e.into_message())?;
