@@ -442,7 +442,7 @@ def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
     me = kind == "ModelExchange"
     values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "inlets": inlets, "outlets": outlets}
     # Away from the start values: the carriage moving, the roll grown.
-    states = (33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0, 0.0)
+    states = (33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0, 0.0, 0.0, 0.0)
     # Without traction the fifth state is the surface's speed r*omega, not a known of its own: v_web
     # reads r*omega back (its derivatives by r and omega are omega and r, by itself 0).
     unknowns, knowns = every_pair(roller, me)
@@ -473,18 +473,19 @@ def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind,
     values = {**params, **ROLLER_POINT, "includeTraction": True, "traction.mu": 0.3, "traction.v_slip": 1e-3,
               "traction.width": 0.5, "traction.slip_start": 2e-3, **TRACTION_CASES[label]}
     unknowns, knowns = every_pair(roller, me)
-    # tanh(slip/v_slip) curves over 1 mm/s: a step of 1e-6 of a speed of 5 m/s would leave a
+    # The grip curves over v_slip = 1 mm/s: a step of 1e-6 of a speed of 5 m/s would leave a
     # truncation error of (5e-6/1e-3)^2 ~ 2.5e-5; 1e-8 leaves 2.5e-9, rounding stays in the noise term.
     (a, f, n), (slip, mu_eff, h_air) = roller_case(
-        roller, tmp_path, kind, profile, values, (33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0, 0.0),
+        roller, tmp_path, kind, profile, values, (33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0, 0.0, 0.9, 0.0),
         knowns, unknowns, step=1e-8, read=("slip", "mu_eff", "h_air"))
     what = f"Roller {kind} traction {label}"
     worst = compare(what, a, f, n)
     print(f"{what}: slip {slip:.2e} m/s, mu_eff {mu_eff:.4f}, h_air {h_air:.2e} m, max relative error {worst:.1e}")
     if "air.roughness" in TRACTION_CASES[label]:
         assert 0 < mu_eff < 0.3, "the air film must be on its sloping part"
-    if me:
-        assert a["der(v_web)", "v_web"] < 0, "friction must pull the web's speed toward the surface's"
+    if me:  # sliding forward with its grip near the kinetic limit: more grip pulls the web back, and the grip grows to it
+        assert a["der(v_web)", "grip"] < 0, "the grip's friction must pull the web's speed toward the surface's"
+        assert a["der(grip)", "grip"] < 0 < a["der(grip)", "v_web"], "the grip must relax to its sliding value"
 
 
 # A drive's loop [R10]-[R11]: its integrator and its lagging motor are states, what it measures an
@@ -511,7 +512,7 @@ def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, l
     values = {**params, **ROLLER_POINT, "roll": 1, "loop.kp": 0.2, "loop.ki": 2.0, **LOOP_CASES[label]}
     unknowns, knowns = every_pair(roller, me)
     (a, f, n), _ = roller_case(roller, tmp_path, kind, {"reference": [[0, 5.0], [10, 6.0]]}, values,
-                               (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0, 0.02), knowns, unknowns)
+                               (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0, 0.02, 0.0, 0.0), knowns, unknowns)
     what = f"Roller {kind} loop {label}"
     worst = compare(what, a, f, n)
     print(f"{what}: max relative error {worst:.1e}")
@@ -522,11 +523,12 @@ def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, l
 
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
 def test_roller_with_a_brake_matches_finite_differences(roller, tmp_path, kind):
-    """A powder brake [R12] near rest (v = 4 mm/s, where tanh(v/v_slip) bends) on a roll being wound."""
+    """A powder brake [R12] near rest (v = 4 mm/s, where the grip's damping fades over v_slip) on a roll
+    being wound, its grip at half its rating."""
     me = kind == "ModelExchange"
     params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
     values = {**params, **ROLLER_POINT, "web_b.F": 180.0, "roll": 1, "v_start": 0.004}
     (a, f, n), _ = roller_case(roller, tmp_path, kind, {"brake": [[0, 2.0], [10, 3.0]]}, values,
-                               (0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0), *every_pair(roller, me)[::-1], cs_time=0.01)
+                               (0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0, 0.0, 0.5), *every_pair(roller, me)[::-1], cs_time=0.01)
     what = f"Roller {kind} brake"
     print(f"{what}: max relative error {compare(what, a, f, n):.1e}")
