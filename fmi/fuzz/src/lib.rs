@@ -864,7 +864,9 @@ fn op_set_real(r: &mut Run, src: &mut Source) -> Result<(), Violation> {
                     }
                     None => false,
                 });
-            vec![if ok { OK } else { ERROR }]
+            // A model may refuse an in-range value by a rule of its own (fmi_core's value check: the
+            // Roller's loop.set <= 0 without loop.compression): fmi2Error with its log line.
+            if ok { vec![OK, ERROR] } else { vec![ERROR] }
         },
         |c| unsafe { api.set_real(c, vr_ptr, n, value_ptr, nv) },
     )?;

@@ -60,6 +60,9 @@ impl NipSide {
     }
 }
 
+/// sinh's argument past which the wrap's law goes on linearly (sinh(300) = 1e130, a float's limit near 710).
+pub const SINH_MAX: f64 = 300.0;
+
 /// The least wrap whose web mass [R6] counts: a roller the web only touches at a nip still
 /// carries the web over a short arc there, and [R6] needs a mass to stay an ODE.
 pub const THETA_MIN: f64 = 5.0 * std::f64::consts::PI / 180.0;
@@ -253,7 +256,12 @@ pub fn contact(p: &Parameters, s: &State, friction: Friction) -> Contact {
     let root = if product.x > 0.0 { product.map(product.x.sqrt(), 0.5 / product.x.sqrt()) } else { Dual::default() };
     // sinh(k g), k = mu_eff theta / 2.
     let kg = mu_eff.scaled(0.5 * p.traction_wrap).times(g);
-    let sinh = kg.map(kg.x.sinh(), kg.x.cosh());
+    // Past |k g| = SINH_MAX it goes on linearly (as the reference's does): a trial state's huge grip stays finite.
+    let sinh = if kg.x.abs() <= SINH_MAX {
+        kg.map(kg.x.sinh(), kg.x.cosh())
+    } else {
+        kg.map(SINH_MAX.sinh().copysign(kg.x) * (1.0 + kg.x.abs() - SINH_MAX), SINH_MAX.sinh())
+    };
     let f_wrap = root.times(sinh).scaled(-2.0);
     Contact { force: f_nip.plus(f_wrap), grip_rate, mu_eff, h_air }
 }
