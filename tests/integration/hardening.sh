@@ -150,7 +150,7 @@ cargo test --profile cross-test --quiet -p roller --features test-hooks --target
 fi
 
 for model in "${MODELS[@]}"; do
-    step "3. fuzz harness, strict (a non-finite output after accepted values fails too), ${NAME[$model]}: $SEQ sequences"
+    step "3. fuzz harness, strict (a non-finite output after accepted values fails too), ${NAME[$model]}: $(( SEQ * ${SEQ_SCALE[$model]} )) sequences"
     build_fuzz "$model"
     fuzz=$(fuzz_of "$model")
     # shellcheck disable=SC2086
