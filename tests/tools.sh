@@ -6,6 +6,8 @@
 #                           the Windows and ARM64 binaries; aarch64 gcc, which
 #                           compiles the C importer for ARM64 and whose sysroot
 #                           QEMU loads; valgrind; libclang-dev (fmi-sim's build)
+#   apt (browser)           Chromium and its WebDriver (chromium, chromium-driver), which
+#                           tests/integration/python/test_browser.py drives headless
 #   wine-prefix/            the tests' Wine prefix, with a test-only
 #                           bcryptprimitives.dll (tests/integration/cross/bcryptprimitives.c):
 #                           Wine 8 lacks ProcessPrng, which Rust's std imports.
@@ -25,6 +27,15 @@ test_packages_setup() {
     echo "tools.sh: installing Wine, QEMU, aarch64 gcc, valgrind and libclang for the tests (apt, once)"
     apt_install "${TEST_PACKAGES[@]}" || setup_failed tools.sh "apt-get install ${TEST_PACKAGES[*]}" \
         "apt could not install the tests' packages (its message is above)" "Check that Debian's mirrors are reachable, then run again."
+}
+
+# Its own step: the browser test is the one test that needs it, and its message names only these.
+BROWSER_PACKAGES=(chromium chromium-driver)
+browser_setup() {
+    installed "${BROWSER_PACKAGES[@]}" && return 0
+    echo "tools.sh: installing Chromium and its WebDriver for the browser test (apt, once)"
+    apt_install "${BROWSER_PACKAGES[@]}" || setup_failed tools.sh "apt-get install ${BROWSER_PACKAGES[*]}" \
+        "apt could not install Chromium (its message is above)" "Check that Debian's mirrors are reachable, then run again."
 }
 
 wine_prefix_setup() {
@@ -65,5 +76,6 @@ export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER=qemu-aarch64-static
 
 python_packages tests "$ROOT/tests/requirements.txt"
 test_packages_setup
+browser_setup
 wine_prefix_setup
 fmi_sim_setup

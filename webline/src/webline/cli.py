@@ -1,6 +1,6 @@
 """The `webline` command.
 
-    webline run SCENE.json|LINE.ssp [--engine line|reference|parts|libcosim|fmpy] [--step 1ms] [--force]
+    webline run SCENE.json|LINE.ssp [--engine line|reference|parts|libcosim|fmpy] [--step 1ms] [--force] [--report]
                                     [--algorithm gauss-seidel|jacobi] [--coupling extrapolate|hold]
     webline export SCENE.json -o LINE.ssp
     webline export SCENE.json --fmu [-o Line.fmu] [--fmi3]
@@ -36,11 +36,11 @@ from .names import ARCHIVE_ENGINES, ENGINES, engine_name
 from .fmus import DEFAULT_FMU_DIR, FmuError
 from .linear import StabilityError
 from .master import ALGORITHMS, COUPLINGS, CoSimulationError, scene_grid
-from .result import Result
-from .scene import Dancer, SceneError, Span, load_scene
+from .scene import SceneError, load_scene
 from .ssp import SspError
 from .linefmu import LineFmuError
 from .journal import StudyError
+from .summary import summary, system_summary, traction_columns
 from .usermetric import FUNCTIONS
 
 OUT = Path("out")  # of the current folder, wherever webline runs from
@@ -90,135 +90,6 @@ def master_options(args, engine: str, progress=False) -> dict:
                 rollback=not getattr(args, "no_rollback", False), progress=progress)
 
 
-def summary(scene, result: Result) -> str:
-    info = result.info
-    if "instances" in info:
-        cost = f"{info['steps']} steps, {info['rollbacks']} rollbacks, {info['instances']} FMU instances"
-    elif "rhs_evaluations" in info:  # the monolithic reference
-        cost = f"{len(result.time)} points, {info['rhs_evaluations']} right-hand sides"
-    else:
-        cost = f"{info['steps']} steps"
-    lines = [f"{scene.name}: engine {info['engine']}: {info['method']}, step {info['step'] * 1e3:g} ms, {cost}, "
-             f"{info['wall_time']:.2f} s wall time"]
-    lines += [f"  warning: {w}" for w in info.get("warnings", [])]
-    keys = result.keys()
-    spans = [c for c in scene.parts if isinstance(c, Span) and f"{c.name}.T" in keys]
-    if spans:
-        lines.append(f"  {'span':<14}{'T start':>10}{'T min':>10}{'T max':>10}{'T end':>10}  [N]  slack")
-        for sp in spans:
-            T = result.column(f"{sp.name}.T")
-            slack = ""
-            if "preventNegativeTension" in sp.effects:
-                dt = np.diff(result.time)
-                slack_time = float(np.sum(dt[(T[1:] <= 0.0)]))
-                slack = f"{slack_time:.3f} s"
-            lines.append(f"  {sp.name:<14}{T[0]:>10.1f}{T.min():>10.1f}{T.max():>10.1f}{T[-1]:>10.1f}       {slack}")
-    nodes = [c for c in scene.parts if not isinstance(c, Span) and f"{c.name}.v" in keys]
-    if nodes:
-        lines.append(f"  {'roller':<14}{'v start':>10}{'v min':>10}{'v max':>10}{'v end':>10}  [m/s]")
-        for n in nodes:
-            v = result.column(f"{n.name}.v")
-            lines.append(f"  {n.name:<14}{v[0]:>10.4f}{v.min():>10.4f}{v.max():>10.4f}{v[-1]:>10.4f}")
-    for d in [c for c in scene.parts if isinstance(c, Dancer) and f"{c.name}.y" in keys]:
-        y = result.column(f"{d.name}.y")
-        lines.append(f"  dancer {d.name}: position {y[0]:.4f} m at start, {y.min():.4f} .. {y.max():.4f} m, {y[-1]:.4f} m at the end")
-    for c in [c for c in scene.parts if getattr(c, "traction", None) is not None and f"{c.name}.traction" in keys]:
-        column = lambda q: result.column(f"{c.name}.{q}") if f"{c.name}.{q}" in keys else None  # noqa: E731
-        lines.append(f"  {traction_report(c, result.time, column('traction'), column('slip'), column('mu_eff'), column('v_web'))}")
-        floating = floating_report(scene, c, result)
-        if floating is not None:
-            lines.append(f"  {floating}")
-    for t, name, what in info.get("events", []):
-        lines.append(f"  event at t = {t:g} s: {name} changed {what}")
-    return "\n".join(lines)
-
-
-# A contact slides where its grip sits on its limit, |g| >= psi(s) (1 - ON_LIMIT), or it slips faster
-# than its v_slip (docs/physics.md, "Contacts that stick"): a slide at a slip far below v_slip still
-# counts (a grip that holds sits below psi(0) at zero slip).
-ON_LIMIT = 1e-6
-
-
-def traction_report(c, time, used, slip, mu_eff=None, v_web=None) -> str:
-    """Will it slip? The most traction a roller used while it held (|g|, the friction it needs over
-    the kinetic limit) and when; where it slid, when, how fast at most and how much web slid over it
-    (the integral of |slip|); where an air film leaves its wrap no friction (mu_eff = 0) and no nip
-    presses, that it rides on air from which web speed, instead of a share of nothing."""
-    from .reference import stribeck
-
-    tr = c.traction
-    psi = stribeck(slip, tr.v_slip, tr.static)
-    floating = np.zeros(len(time), dtype=bool)
-    if mu_eff is not None and tr.nip_load is None:
-        floating = mu_eff == 0.0
-    sliding = ((used >= psi * (1.0 - ON_LIMIT)) | (np.abs(slip) > tr.v_slip)) & ~floating
-    held = ~sliding & ~floating
-    parts = []
-    if held.any():
-        k = int(np.argmax(np.where(held, used, -np.inf)))
-        parts.append(f"{100 * used[k]:.0f} % of its traction at most while it held (t = {time[k]:.3g} s)")
-    dt = np.diff(time, prepend=time[0])
-    if floating.any():
-        first = int(np.argmax(floating))
-        speed = f"{v_web[first]:.4g} m/s" if v_web is not None else f"t = {time[first]:.3g} s"
-        parts.append(f"it rides on air from {speed} (t = {time[first]:.3g} s to {time[floating][-1]:.3g} s, "
-                     f"{float(np.sum(dt[floating])):.3g} s in all): its air film leaves the wrap no friction")
-    if sliding.any():
-        fastest = float(np.max(np.abs(slip[sliding])))
-        slid = float(np.trapezoid(np.where(sliding, np.abs(slip), 0.0), time))
-        parts.append(f"it slid from t = {time[sliding][0]:.3g} s to {time[sliding][-1]:.3g} s "
-                     f"({float(np.sum(dt[sliding])):.3g} s in all), at up to {fastest:.3g} m/s, "
-                     f"{slid:.3g} m of web slid over it")
-    elif not floating.any():
-        parts.append("it never slid")
-    return f"{c.name}: " + "; ".join(parts)
-
-
-def traction_columns(scene, c) -> list:
-    """What a roller the web may slip on records for the summary: its traction in use, its slip and
-    mu_eff for `traction_report`, and for `floating_report` the web's speed over it and the tensions
-    of the spans on either side."""
-    return [(c.name, "traction"), (c.name, "slip"), (c.name, "mu_eff"), (c.name, "v_web"), (scene.span_before(c).name, "T"),
-            (scene.span_after(c).name, "T")]
-
-
-def floating_report(scene, c, result) -> str | None:
-    """Where the web's centripetal force takes all its pressure off the wrap (T - rho_l v_w^2 <= 0 < T on
-    a side, docs/physics.md "Rollers that slip"), the wrap has no traction: when, and at which speed."""
-    if not (c.traction.mu > 0.0 and c.wrap):
-        return None
-    keys = result.keys()
-    before, after = scene.span_before(c), scene.span_after(c)
-    names = [f"{c.name}.v_web", f"{before.name}.T", f"{after.name}.T"]
-    if not all(n in keys for n in names):
-        return None
-    v, t_a, t_b = (result.column(n) for n in names)
-    relief = before.wp2.rho_l * v * v
-    tension = np.minimum(t_a, t_b)
-    floating = (tension - relief <= 0.0) & (tension > 0.0)
-    if not floating.any():
-        return None
-    k = int(np.argmax(np.where(floating, relief - tension, -np.inf)))
-    time = result.time
-    dt = np.diff(time, prepend=time[0])
-    return (f"{c.name}: no traction on its wrap from t = {time[floating][0]:.3g} s to {time[floating][-1]:.3g} s "
-            f"({float(np.sum(dt[floating])):.3g} s in all): at v_web = {v[k]:.4g} m/s the web's centripetal "
-            f"force rho_l v^2 = {relief[k]:.4g} N takes all of its tension {tension[k]:.4g} N off the wrap")
-
-
-def system_summary(result: Result) -> str:
-    """What a run of an SSP shows: each recorded column's start, range and end."""
-    info = result.info
-    lines = [f"{result.scene}: engine {info['engine']}: {info['method']}, step {info['step'] * 1e3:g} ms, "
-             f"{info['steps']} steps, {info['wall_time']:.2f} s wall time"]
-    lines += [f"  warning: {w}" for w in info.get("warnings", [])]
-    lines.append(f"  {'variable':<28}{'start':>12}{'min':>12}{'max':>12}{'end':>12}")
-    for c in result.columns:
-        x = result.column(c)
-        lines.append(f"  {c:<28}{x[0]:>12.6g}{x.min():>12.6g}{x.max():>12.6g}{x[-1]:>12.6g}")
-    return "\n".join(lines)
-
-
 def cmd_export(args):
     from .ssp import write_ssp
     from .stability import export_step
@@ -257,11 +128,13 @@ def cmd_run(args):
         engine = args.engine or "parts"
         if args.reference:
             raise SspError(f"{args.scene}: --reference needs a scene (the monolithic reference is computed from it)")
+        if args.report:
+            raise SspError(f"{args.scene}: --report needs a scene (.json): its page shows the scene and its parts' tables")
         if engine not in ARCHIVE_ENGINES:
             raise SspError(f"{args.scene}: the {engine} engine runs a scene (.json); an SSP archive runs as "
                            f"{', '.join(ARCHIVE_ENGINES)} (parts by default)")
         result = run_archive(Path(args.scene), engine, args.step, force=args.force, **master_options(args, engine, progress))
-        return report_run(args, None, result.scene, result, system_summary(result))
+        return report_run(args, None, result.scene, result)
     from .engines import run_scene
 
     scene = load_scene(args.scene, fmu_dir=args.fmu_dir)
@@ -276,11 +149,12 @@ def cmd_run(args):
         raise SceneError("--force runs the parts' co-simulation above its predicted stable step; it goes with --engine parts")
     from .growth import check
 
-    for warning in check(scene, args.fmu_dir):  # before the run: a loop that grows is never silent
+    growing = check(scene, args.fmu_dir)
+    for warning in growing:  # before the run: a loop that grows is never silent
         print(f"webline run: warning: {warning}", flush=True)
     result = run_scene(scene, engine, args.fmu_dir, args.step, force=args.force,
                        **master_options(args, engine or "line", progress))
-    return report_run(args, scene, scene.name, result, None)
+    return report_run(args, scene, scene.name, result, growing)
 
 
 def first_sentence(text: str) -> str:
@@ -289,8 +163,9 @@ def first_sentence(text: str) -> str:
     return re.split(r"[.](?:\s|$)", text, maxsplit=1)[0]
 
 
-def report_run(args, scene, name, result, text):
-    """CSV, the summary (with the reference's errors when asked) and the PNG of a run."""
+def report_run(args, scene, name, result, growing=()):
+    """CSV, the summary (with the reference's errors when asked), the PNG and, with --report, the page of a
+    run; `growing`: the warnings of the loops that grow, said before the run."""
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / f"{name}.csv"
@@ -302,20 +177,27 @@ def report_run(args, scene, name, result, text):
 
         ref = reference(scene, times=result.time)
         errs = errors(result, ref)
-    print(text or summary(scene, result))
+    said = summary(scene, result) if scene is not None else None
+    print(said.text() if said is not None else system_summary(result))
     if ref is not None:
         worst = max(errs.items(), key=lambda kv: kv[1])
-        print(f"  against the monolithic reference ({ref.info['method']}, {ref.info['wall_time']:.1f} s): "
-              f"largest error {worst[1]:.2e} of the column's range ({worst[0]}); "
-              + ", ".join(f"{k} {e:.1e}" for k, e in errs.items()))
+        against = (f"against the monolithic reference ({ref.info['method']}, {ref.info['wall_time']:.1f} s): "
+                   f"largest error {worst[1]:.2e} of the column's range ({worst[0]}); "
+                   + ", ".join(f"{k} {e:.1e}" for k, e in errs.items()))
+        print(f"  {against}")
+        said.findings.append(against)
     written = [str(csv_path)]
+    title = f"{name}: {first_sentence(scene.description)}" if scene is not None and scene.description else None
     if not args.no_plot:
         from .plot import plot
 
         png = out / f"{name}.png"
-        described = scene is not None and scene.description
-        plot(result, png, title=f"{name}: {first_sentence(scene.description)}" if described else None, reference=ref)
+        plot(result, png, title=title, reference=ref)
         written.append(str(png))
+    if args.report:
+        from .report import write_report
+
+        written.append(str(write_report(out / f"{name}.html", Path(args.scene), said, list(growing), result, ref, title)))
     print("wrote " + ", ".join(written))
     return 0
 
@@ -539,6 +421,9 @@ def main(argv=None):
                    help="parts: run above the predicted stable step anyway (the summary warns)")
     p.add_argument("--out", default=str(OUT), help="output folder (default: ./out)")
     p.add_argument("--no-plot", action="store_true")
+    p.add_argument("--report", action="store_true",
+                   help="also OUT/SCENE.html: one self-contained page (viewable offline) with the summary, the warnings, "
+                        "a plot per quantity, the scene and the versions of webline and the FMUs")
     p.add_argument("--reference", action="store_true", help="also compute the monolithic reference and print the error")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--progress", dest="progress", action="store_true", default=None, help="show a progress bar")

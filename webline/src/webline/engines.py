@@ -24,6 +24,7 @@ import numpy as np
 
 from . import names
 from .bound import check_result
+from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, identity
 from .names import ARCHIVE_ENGINES, DEFAULT, engine_name
 from .result import Result
 from .scene import SceneError
@@ -83,6 +84,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
     see. `options`: the parts' master options (algorithm, coupling, rollback, progress)."""
     engine = engine_name(engine or DEFAULT)
     warnings = []
+    used = []  # the FMUs that ran, by identity (fmus.identity)
     if engine == "line":
         from . import linefmu
         from .compiler import TooManyWebs
@@ -92,6 +94,7 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
             with tempfile.TemporaryDirectory(prefix="webline-line-") as tmp:
                 path = linefmu.export(scene, Path(tmp) / f"{scene.name}.fmu", fmu_dir)
                 result = linefmu.simulate(scene, path, step)
+                used = [identity(path)]
         except (LineFmuError, TooManyWebs) as e:
             if isinstance(e, LineFmuError) and not e.cannot_export:
                 raise
@@ -125,8 +128,11 @@ def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None
             system.step = export_step(system)
             result = run_archive(write_ssp(system, Path(tmp) / f"{scene.name}.ssp"), engine, step, Path(tmp))
         result.scene = scene.name
+    if engine in ("parts", "libcosim", "fmpy"):
+        used = [identity(Path(fmu_dir or DEFAULT_FMU_DIR) / name) for name in (SPAN_FMU, ROLLER_FMU)]
     result.info["engine"] = engine
     result.info["warnings"] = warnings + result.info.get("warnings", [])
+    result.info["fmus"] = used
     check_result(scene, result)  # the engines webline does not step: their recorded tensions
     return result
 

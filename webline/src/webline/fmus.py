@@ -114,6 +114,18 @@ def _effects(path: str, mtime: float) -> tuple:
     return names
 
 
+# What an FMU carries to say which it is, as its modelDescription.xml names them (FMI 2.0's guid is
+# FMI 3.0's instantiationToken).
+IDENTITY = ("modelName", "fmiVersion", "version", "guid", "instantiationToken", "generationTool", "generationDateAndTime")
+
+
+def identity(path) -> dict:
+    """An FMU's identity (a .fmu file): its file name and the attributes of IDENTITY that it gives."""
+    with zipfile.ZipFile(path) as z:
+        root = etree.fromstring(z.read("modelDescription.xml"), etree.XMLParser(resolve_entities=False, no_network=True))
+    return {"file": Path(path).name, **{k: root.get(k) for k in IDENTITY if root.get(k) is not None}}
+
+
 class FmuFile:
     """An extracted FMU and its variables."""
 

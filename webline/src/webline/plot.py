@@ -24,32 +24,46 @@ def _panel(key: str, unit: str) -> tuple:
     return (unit, DIMENSIONLESS.get(key.rsplit(".", 1)[-1], "strain")) if unit == "1" else (unit, QUANTITY_OF_UNIT.get(unit))
 
 
+def panels(result: Result) -> list:
+    """The run's quantities, one per unit (and, for a number, per quantity), in the order they are shown:
+    tensions (N) first, speeds (m/s) next, then the rest as recorded; each as ((unit, what it
+    measures), [column keys in line order])."""
+    found = {}  # (unit, what it measures) -> [column key]
+    for c in result.columns:
+        key, unit = c.split(" [")[0], c.split(" [")[1].rstrip("]")
+        found.setdefault(_panel(key, unit), []).append(key)
+    first = [p for u in FIRST for p in found if p[0] == u]
+    return [(p, found[p]) for p in first + [p for p in found if p not in first]]
+
+
+def draw_panel(ax, result: Result, unit: str, what: str | None, keys: list, reference: Result | None = None):
+    """One quantity's curves on `ax`, its unit on the y axis (a reference's as dashed lines)."""
+    for key in keys:
+        (line,) = ax.plot(result.time, result.column(key), lw=1.3, label=key)
+        if reference is not None and key in reference.keys():
+            ax.plot(reference.time, reference.column(key), lw=0.8, ls="--", color=line.get_color())
+    ax.set_ylabel(f"{what} [{unit}]" if what else f"[{unit}]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8, ncol=2)
+
+
+def subtitle(result: Result, reference: Result | None = None) -> str:
+    info = result.info
+    sub = f"{info.get('method', '')}, step {info.get('step', 0) * 1e3:g} ms" if info else ""
+    return sub + ("; dashed: monolithic reference" if reference is not None else "")
+
+
 def plot(result: Result, path, title=None, reference: Result | None = None):
     """One panel per unit, so that each quantity is read on an axis of its own
     unit (strains of 1e-3 and angular speeds of 40 rad/s never share one):
     tensions (N) on top, speeds (m/s) below, then strain, angular speed,
     position, torque as recorded; each curve in line order."""
-    panels = {}  # (unit, what it measures) -> [column key]
-    for c in result.columns:
-        key, unit = c.split(" [")[0], c.split(" [")[1].rstrip("]")
-        panels.setdefault(_panel(key, unit), []).append(key)
-    first = [p for u in FIRST for p in panels if p[0] == u]
-    units = first + [p for p in panels if p not in first]
-    fig, axes = plt.subplots(len(units), 1, figsize=(9, 2.6 * len(units) + 0.6), sharex=True, squeeze=False)
-    for ax, (unit, what) in zip(axes[:, 0], units):
-        for key in panels[(unit, what)]:
-            (line,) = ax.plot(result.time, result.column(key), lw=1.3, label=key)
-            if reference is not None and key in reference.keys():
-                ax.plot(reference.time, reference.column(key), lw=0.8, ls="--", color=line.get_color())
-        ax.set_ylabel(f"{what} [{unit}]" if what else f"[{unit}]")
-        ax.grid(True, alpha=0.3)
-        ax.legend(loc="best", fontsize=8, ncol=2)
+    shown = panels(result)
+    fig, axes = plt.subplots(len(shown), 1, figsize=(9, 2.6 * len(shown) + 0.6), sharex=True, squeeze=False)
+    for ax, ((unit, what), keys) in zip(axes[:, 0], shown):
+        draw_panel(ax, result, unit, what, keys, reference)
     axes[-1, 0].set_xlabel("time [s]")
-    info = result.info
-    sub = f"{info.get('method', '')}, step {info.get('step', 0) * 1e3:g} ms" if info else ""
-    if reference is not None:
-        sub += "; dashed: monolithic reference"
-    fig.suptitle(f"{textwrap.fill(title or result.scene, 100)}\n{sub}", fontsize=10)
+    fig.suptitle(f"{textwrap.fill(title or result.scene, 100)}\n{subtitle(result, reference)}", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
