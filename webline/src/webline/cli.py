@@ -197,7 +197,7 @@ def report_run(args, scene, name, result, growing=()):
     if args.report:
         from .report import write_report
 
-        written.append(str(write_report(out / f"{name}.html", Path(args.scene), said, list(growing), result, ref, title)))
+        written.append(str(write_report(out / f"{name}.html", scene, Path(args.scene), said, list(growing), result, ref, title)))
     print("wrote " + ", ".join(written))
     return 0
 

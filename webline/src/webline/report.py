@@ -62,13 +62,14 @@ def quantity_plots(result: Result, reference: Result | None = None) -> list:
     return images
 
 
-def sections(scene_file: Path, said: Summary, growing: list, result: Result, reference: Result | None) -> list:
-    """The page's sections, in the order shown."""
+def sections(scene, scene_file: Path, said: Summary, growing: list, result: Result, reference: Result | None) -> list:
+    """The page's sections, in the order shown (`scene`: the scene as run, read from `scene_file`)."""
     return [
         Section("summary", "Summary", "summary", said),
         Section("warnings", "Warnings", "warnings", growing + said.warnings),
         Section("plots", "Plots", "figures", quantity_plots(result, reference)),
-        Section("scene", "Scene", "scene", {"file": str(scene_file), "text": scene_file.read_text(encoding="utf-8")}),
+        Section("scene", "Scene", "scene", {"name": scene.name, "parts": len(scene.parts), "file": str(scene_file),
+                                            "text": scene_file.read_text(encoding="utf-8")}),
         Section("versions", "Versions", "versions", {"webline": version(), "fmus": result.info.get("fmus", []),
                                                      "engine": result.info["engine"]}),
     ]
@@ -78,11 +79,11 @@ ENVIRONMENT = Environment(loader=PackageLoader("webline", "templates"), autoesca
                           undefined=StrictUndefined, trim_blocks=True, lstrip_blocks=True)
 
 
-def write_report(path: Path, scene_file: Path, said: Summary, growing: list, result: Result,
+def write_report(path: Path, scene, scene_file: Path, said: Summary, growing: list, result: Result,
                  reference: Result | None = None, title: str | None = None) -> Path:
     """The run's page at `path`: `said` is the summary the terminal showed, `growing` the warnings said
     before the run (growth.check)."""
     page = ENVIRONMENT.get_template("report.html.j2").render(
-        title=title or result.scene, sections=sections(scene_file, said, growing, result, reference))
+        title=title or result.scene, sections=sections(scene, scene_file, said, growing, result, reference))
     path.write_text(page, encoding="utf-8")
     return path
