@@ -1,6 +1,6 @@
 """The pages a user opens, in a real browser (headless Chromium, browser.py): the model documentation
-each FMU ships (documentation/index.html of ConvertingSpan.fmu, Roller.fmu and an exported Line FMU,
-opened from the unpacked FMU) and the report of a shipped scene (`webline run --report`, default engine).
+each FMU ships (documentation/index.html of ConvertingSpan.fmu, Roller.fmu, their FMI 3.0 twins and an
+exported Line FMU, opened from the unpacked FMU) and the report of a shipped scene (`webline run --report`, default engine).
 
 Each page: no console error, every image loaded, every link resolved, every heading and table shown;
 its screenshot goes to target/browser/. Skipped, with the set-up's reason, only where Chromium cannot
@@ -43,6 +43,14 @@ def roller_page(fmus, tmp):
     return unpacked(fmus / "Roller.fmu", tmp)
 
 
+def span_fmi3_page(fmus, tmp):
+    return unpacked(packaged(fmus / "fmi3" / "ConvertingSpan.fmu"), tmp)
+
+
+def roller_fmi3_page(fmus, tmp):
+    return unpacked(packaged(fmus / "fmi3" / "Roller.fmu"), tmp)
+
+
 def line_page(fmus, tmp):
     from webline import linefmu
     from webline.scene import load_scene
@@ -59,6 +67,7 @@ def report_page(fmus, tmp):
 
 # (name, how the page is made, whether it may link out: the report must stand alone offline)
 PAGES = [("ConvertingSpan", span_page, True), ("Roller", roller_page, True), ("Line", line_page, True),
+         ("ConvertingSpan-fmi3", span_fmi3_page, True), ("Roller-fmi3", roller_fmi3_page, True),
          ("report-lamination", report_page, False)]
 
 

@@ -96,8 +96,9 @@ def test_a_scene_runs_exports_and_linearizes_outside_the_repository(venv, tmp_pa
     venv.webline("scenes")
     venv.webline("check", f"scenes/{SCENE}.json")
     venv.webline("export", f"scenes/{SCENE}.json", "-o", "lamination.ssp")
-    venv.webline("run", f"scenes/{SCENE}.json")
+    venv.webline("run", f"scenes/{SCENE}.json", "--report")  # the report's template is the wheel's package data
     assert (venv.folder / "out" / f"{SCENE}.png").stat().st_size > 0
+    assert "<h2>Versions</h2>" in (venv.folder / "out" / f"{SCENE}.html").read_text(encoding="utf-8")
     with open(venv.folder / "out" / f"{SCENE}.csv", newline="") as f:
         rows = list(csv.reader(f))
     film_T = float(rows[-1][rows[0].index("film.T [N]")])
