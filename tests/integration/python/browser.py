@@ -36,8 +36,8 @@ def install() -> str | None:
                                          "&& browser_setup"], cwd=ROOT, capture_output=True, text=True)
     if step.returncode == 0 and shutil.which(CHROMIUM) and shutil.which(DRIVER):
         return None
-    said = (step.stderr.strip().splitlines() or ["browser_setup installed them, yet they are not on PATH"])[-1]
-    return f"Chromium cannot be installed here: {said}"
+    said = step.stderr.strip().splitlines() or ["browser_setup installed them, yet they are not on PATH"]
+    return "Chromium cannot be installed here: " + " / ".join(said)
 
 
 @contextmanager
