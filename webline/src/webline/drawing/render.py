@@ -14,7 +14,7 @@ from matplotlib.patches import Arc, Circle
 from matplotlib.transforms import offset_copy
 
 from ..scene import Dancer
-from .geometry import CCW, dot, heading_of, norm, sub
+from .geometry import CCW, angle_apart, heading_of, sub
 from .layout import Layout, lay_out
 
 PATH_COLOURS = {"line": "tab:blue", "merge": "tab:orange", "split": "tab:green"}
@@ -28,7 +28,7 @@ MARKS = {
     "brake": ("brake", "X", "black"),
     "nip": ("nip pressing on the wrap", "v", "tab:brown"),
     "traction": ("traction: the web may slip", "*", "tab:olive"),
-    "load cell": ("load cell (the scene's wrap)", "^", "tab:cyan"),
+    "load cell": ("load cell (on the wrap the scene states)", "^", "tab:cyan"),
     "dancer": ("dancer: carriage under load", r"$\updownarrow$", "black"),
     "merge": ("merge: webs laminated", "<", "tab:orange"),
     "split": ("split: slitter", ">", "tab:green"),
@@ -68,7 +68,7 @@ def figure(scene, layout: Layout | None = None) -> tuple[Figure, Layout]:
     layout = layout or lay_out(scene)
     xs = [v for r in layout.rollers for v in (r.centre[0] - r.radius, r.centre[0] + r.radius)]
     ys = [v for r in layout.rollers for v in (r.centre[1] - r.radius, r.centre[1] + r.radius)]
-    pad = 0.12 * max(max(xs) - min(xs), max(ys) - min(ys), 0.5)
+    pad = 0.12 * max(max(xs) - min(xs), max(ys) - min(ys), 0.5) + 0.25  # room for the names beside the parts
     x0, x1, y0, y1 = min(xs) - pad, max(xs) + pad, min(ys) - pad, max(ys) + pad
     width = 9.0
     fig = Figure(figsize=(width + 3.2, max(2.5, min(9.0, width * (y1 - y0) / (x1 - x0)))), layout="constrained")
@@ -95,28 +95,32 @@ def _spans(ax, layout):
     for s in layout.spans:
         ax.plot([s.a[0], s.b[0]], [s.a[1], s.b[1]], color=_colour(s.path), lw=2, solid_capstyle="butt", zorder=3)
         mid = ((s.a[0] + s.b[0]) / 2, (s.a[1] + s.b[1]) / 2)
-        angle = heading_of(sub(s.b, s.a))
-        upright = angle - 180.0 if angle > 90.0 else angle + 180.0 if angle <= -90.0 else angle
         ax.annotate(f"{s.name}: {s.length:g} m, {s.web}", mid, xytext=(0, 3), textcoords="offset points", fontsize=6,
-                    ha="center", va="bottom", rotation=upright, rotation_mode="anchor", zorder=6)
+                    ha="center", va="bottom", rotation=_upright(heading_of(sub(s.b, s.a))), rotation_mode="anchor",
+                    zorder=6)
 
 
 def outward(layout, r) -> tuple:
-    """The unit vector from a roller away from the webs it turns: where its name and marks go."""
-    ends = [s.b if s.start == r.name else s.a for s in layout.spans if r.name in (s.start, s.end)]
-    pull = (0.0, 0.0)
-    for e in ends:
-        v = sub(e, r.centre)
-        if norm(v) > 0:
-            pull = (pull[0] + v[0] / norm(v), pull[1] + v[1] / norm(v))
-    if norm(pull) < 0.2:  # the web runs straight through: beside it, away from the nearest other part
-        v = sub(ends[0], r.centre) if ends and norm(sub(ends[0], r.centre)) > 0 else (1.0, 0.0)
-        u = (-v[1] / norm(v), v[0] / norm(v))
-        near = min((q for q in layout.rollers if q is not r), key=lambda q: norm(sub(q.centre, r.centre)), default=None)
-        if near is not None and dot(u, sub(near.centre, r.centre)) > 0:
-            u = (-u[0], -u[1])
-        return u
-    return (-pull[0] / norm(pull), -pull[1] / norm(pull))
+    """The unit vector from a roller to where its name and marks go: the middle of the widest gap between
+    the webs that leave it and their labels (each label lies along its span, on its upright text's top
+    side), sideways where gaps tie."""
+    taken = []
+    for s in layout.spans:
+        if r.name not in (s.start, s.end):
+            continue
+        other = s.b if s.start == r.name else s.a
+        away = heading_of(sub(other, r.centre))
+        upright = _upright(heading_of(sub(s.b, s.a)))
+        taken += [away, away + math.copysign(15.0, math.sin(math.radians(upright + 90.0 - away)))]
+    if not taken:
+        return (0.0, -1.0)
+    best = max(range(0, 360, 15), key=lambda a: (round(min(angle_apart(a, t) for t in taken)), abs(math.cos(math.radians(a)))))
+    return (math.cos(math.radians(best)), math.sin(math.radians(best)))
+
+
+def _upright(angle: float) -> float:
+    """A text's angle along a heading, turned so that it reads left to right."""
+    return angle - 180.0 if angle > 90.0 else angle + 180.0 if angle <= -90.0 else angle
 
 
 def _place(u) -> dict:
@@ -135,7 +139,9 @@ def _rollers(ax, scene, layout):
             ax.plot(*r.centre, marker="o", mfc="white", mec="black", ms=6, zorder=4)
             size = "a point"
         u = outward(layout, r)
-        ax.annotate(f"{r.name} ({r.type}, {size})", (r.centre[0] + u[0] * r.radius, r.centre[1] + u[1] * r.radius),
+        stated = [w.stated for w in layout.wraps if w.roller == r.name and w.stated is not None]
+        size += "".join(f", wrap {w:g}°" for w in stated)
+        ax.annotate(f"{r.name}\n{r.type}, {size}", (r.centre[0] + u[0] * r.radius, r.centre[1] + u[1] * r.radius),
                     xytext=(18 * u[0], 18 * u[1]), textcoords="offset points", fontsize=6.5, zorder=6, **_place(u))
 
 
@@ -152,11 +158,6 @@ def _wraps(ax, layout):
             last = first + 360.0
         ax.add_patch(Arc(r.centre, 2 * r.radius, 2 * r.radius, theta1=first, theta2=last, color=_colour(spans[w.span_out].path),
                          lw=2.5, zorder=3))
-        if w.stated is not None:
-            middle = math.radians(first + w.angle / 2)
-            at = (r.centre[0] + r.radius * math.cos(middle), r.centre[1] + r.radius * math.sin(middle))
-            ax.annotate(f"wrap {w.stated:g}°", at, xytext=(9 * math.cos(middle), 9 * math.sin(middle)),
-                        textcoords="offset points", fontsize=6.5, ha="center", va="center", color="tab:cyan", zorder=6)
 
 
 def _marks(fig, ax, scene, layout) -> set:
@@ -198,7 +199,5 @@ def _legend(layout, used) -> list:
     if any(r.radius == 0 for r in layout.rollers):
         handles.append(Line2D([], [], marker="o", mfc="white", mec="black", ls="none",
                               label="part without a radius in the scene"))
-    if any(w.stated is not None for w in layout.wraps):
-        handles.append(Line2D([], [], color="tab:cyan", ls="none", marker="$°$", label="the scene's wrap angle"))
     handles += [Line2D([], [], marker=MARKS[k][1], color=MARKS[k][2], ls="none", label=MARKS[k][0]) for k in MARKS if k in used]
     return handles
