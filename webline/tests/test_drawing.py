@@ -6,6 +6,7 @@ honoured, and refused where they contradict its wrap."""
 import copy
 import json
 import math
+import re
 
 import pytest
 from matplotlib.figure import Figure
@@ -13,7 +14,7 @@ from webline.cli import main
 from webline.drawing import DrawError, check_layout, figure, lay_out, layout_dict
 from webline.scene import SceneError, load_scene, parse_scene
 
-from .conftest import SCENES
+from .conftest import ROOT, SCENES
 
 SHIPPED = sorted(SCENES.glob("*.json"))
 
@@ -223,3 +224,13 @@ def test_the_checker_finds_overlaps():
 
     problems = spoiled(through)
     assert "span 'film' runs through roller 'unwind_foil'" in "\n".join(problems)
+
+
+@pytest.mark.parametrize("mark", ["scene example", "merge split example"])
+def test_the_docs_examples_draw(mark):
+    """docs/scenes.md's examples: a converting span, and a merge and a split at rollers with a radius."""
+    doc = (ROOT / "docs" / "scenes.md").read_text()
+    scene = parse_scene(re.search(r"<!-- %s -->\s*```json\n(.*?)```" % mark, doc, re.S).group(1), mark)
+    layout = layout_dict(lay_out(scene))
+    assert check_layout(layout, scene) == []
+

@@ -23,8 +23,9 @@ from .geometry import (
     turn, wrap_angle,
 )
 
-ZIGZAG = (20.0, 30.0, 10.0)  # degrees: a free span's heading below or above the horizontal, tried in order
+ZIGZAG = (20.0, 30.0, 10.0, 45.0)  # degrees: a free span's heading below or above the horizontal, tried in order
 FANS = (60.0, 90.0, 40.0, 120.0)  # degrees: a side path's span off the main line's at its nip or slitter
+FLIP_ALL = 5  # up to this many parts whose side is a choice, every combination of them is tried
 ROOM = 0.1  # m: the gap an automatic layout leaves between parts where it can
 LENGTH_TOLERANCE = 0.01  # a span drawn at its positions this much longer or shorter than its L is warned of
 
@@ -204,27 +205,36 @@ def _choices(scene):
     # the roll the web runs on).
     free = [n.name for n in scene.nodes if getattr(n, "wrap", None) is not None or not scene.spans_in(n)
             or not scene.spans_out(n)]
-    flips = [frozenset()] + [frozenset([n]) for n in free] + [frozenset(free)]
-    for zigzag, fan, down, fan_flipped, flipped in itertools.product(ZIGZAG, FANS, (True, False), (False, True), flips):
+    if len(free) <= FLIP_ALL:  # every set of them, the smaller first
+        flips = [frozenset(c) for k in range(len(free) + 1) for c in itertools.combinations(free, k)]
+    else:
+        flips = [frozenset()] + [frozenset([n]) for n in free] + [frozenset(free)]
+    for flipped, zigzag, fan, down, fan_flipped in itertools.product(flips, ZIGZAG, FANS, (True, False), (False, True)):
         yield _Choice(zigzag, fan, down, fan_flipped, flipped)
 
 
 def _automatic(scene) -> Layout:
     """The first try that leaves ROOM between parts and crosses no webs; else the first that just
-    leaves CLEARANCE (webs crossing, warned of); else refused with what overlaps."""
-    tries = [_Chained(scene, choice).layout("automatic") for choice in _choices(scene)]
-    dicts = [layout_dict(t) for t in tries]
-    for layout, d in zip(tries, dicts):
-        if not overlaps(d, ROOM) and not crossings(d):
+    leaves CLEARANCE and crosses none; else the first that leaves CLEARANCE (its crossing webs warned
+    of); else refused with what overlaps."""
+    fits, first = [None, None], None
+    for choice in _choices(scene):
+        layout = _Chained(scene, choice).layout("automatic")
+        d = layout_dict(layout)
+        first = first or overlaps(d)
+        if overlaps(d):
+            continue
+        crossed = crossings(d)
+        if not crossed and not overlaps(d, ROOM):
             return layout
-    for layout, d in zip(tries, dicts):
-        if not overlaps(d) and not crossings(d):
-            return layout
-    for layout, d in zip(tries, dicts):
-        if not overlaps(d):
-            layout.warnings.append(f"webs cross: {crossings(d)[0]}")
-            return layout
-    raise DrawError(f"{scene.path}: no layout draws the line without overlap ({overlaps(dicts[0])[0]}): give the parts "
+        tier = 1 if crossed else 0
+        if fits[tier] is None:
+            fits[tier] = layout
+            if crossed:
+                layout.warnings.append(f"webs cross: {crossed[0]}")
+    if fits[0] or fits[1]:
+        return fits[0] or fits[1]
+    raise DrawError(f"{scene.path}: no layout draws the line without overlap ({first[0]}): give the parts "
                     "positions (\"at\")")
 
 
