@@ -41,6 +41,12 @@ def test_the_default_output_is_out_name_svg(tmp_path, monkeypatch):
                                                                      "lamination.svg"]
 
 
+def test_the_drawing_is_an_svg(tmp_path, capsys):
+    assert main(["draw", str(SCENES / "lamination.json"), "-o", str(tmp_path / "line.png")]) == 2
+    assert "the drawing is an SVG; give FILE.svg" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_figure_for_the_report():
     fig, layout = figure(load_scene(SCENES / "laminator.json"))
     assert isinstance(fig, Figure) and layout.placement == "automatic"

@@ -525,6 +525,8 @@ def cmd_draw(args):
 
     scene = load_scene(args.scene)
     svg = args.output or Path(args.out) / f"{scene.name}.svg"
+    if svg.suffix.lower() != ".svg":
+        raise SceneError(f"-o {svg}: the drawing is an SVG; give FILE.svg (FILE.png and FILE.layout.json go beside it)")
     svg.parent.mkdir(parents=True, exist_ok=True)
     fig, layout = figure(scene)
     for warning in layout.warnings:
