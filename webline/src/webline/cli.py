@@ -12,6 +12,7 @@
     webline sweep SCENE.json --grid KEY=V1,V2 ... [--sample KEY=uniform(A, B) --n N] [--scheduler tcp://host:8786]
                              [--metric NAME=max(SIGNAL)] [--resume] [--max-failed N]
     webline scenes [--to scenes]
+    webline draw SCENE.json [-o FILE.svg]
     webline --version
 
 Outputs go to ./out of the current folder unless --out says otherwise; which FMUs webline
@@ -396,8 +397,34 @@ def cmd_scenes(args):
     return 0
 
 
+def cmd_draw(args):
+    """The line as an SVG, a PNG beside it and NAME.layout.json: the geometry drawn (docs/scenes.md)."""
+    import json
+
+    from matplotlib import rc_context
+
+    from .drawing import figure, layout_dict
+
+    scene = load_scene(args.scene)
+    svg = args.output or Path(args.out) / f"{scene.name}.svg"
+    if svg.suffix.lower() != ".svg":
+        raise SceneError(f"-o {svg}: the drawing is an SVG; give FILE.svg (FILE.png and FILE.layout.json go beside it)")
+    svg.parent.mkdir(parents=True, exist_ok=True)
+    fig, layout = figure(scene)
+    for warning in layout.warnings:
+        print(f"webline draw: warning: {warning}", file=sys.stderr)
+    png, geometry = svg.with_suffix(".png"), svg.with_name(f"{svg.stem}.layout.json")
+    with rc_context({"svg.hashsalt": scene.name}):  # the same scene, the same file
+        fig.savefig(svg, metadata={"Date": None})
+    fig.savefig(png, dpi=150)
+    geometry.write_text(json.dumps(layout_dict(layout), indent=1) + "\n", encoding="utf-8")
+    print(f"{scene.name}: {len(layout.rollers)} parts, {len(layout.spans)} spans ({layout.placement} placement); "
+          f"wrote {svg}, {png}, {geometry}")
+    return 0
+
+
 # The commands that need no FMU library of this platform.
-WITHOUT_LIBRARIES = ("scenes", "reference")
+WITHOUT_LIBRARIES = ("scenes", "reference", "draw")
 
 
 def main(argv=None):
@@ -520,6 +547,19 @@ def main(argv=None):
     p = sub.add_parser("scenes", help="copy the shipped scenes (lamination, laminator, slitter, ...) into a folder")
     p.add_argument("--to", default="scenes", help="the folder (default: ./scenes); a scene already there is kept")
     p.set_defaults(func=cmd_scenes)
+
+    p = sub.add_parser("draw", help="draw the line to scale: an SVG, a PNG beside it and NAME.layout.json (the "
+                                    "geometry drawn, in metres)",
+                       description="Draws the scene's line to scale: rollers as circles of their radius, spans as the "
+                                   "web's tangents labelled with name, length and web, drives, loops, brakes, nips, "
+                                   "traction, load cells and dancers marked. Parts go where the scene's \"at\" puts "
+                                   "them, else a left-to-right layout keeps every wrap the scene states; positions that "
+                                   "contradict a wrap are refused (exit 2). docs/scenes.md, \"Drawing a line\".")
+    p.add_argument("scene")
+    p.add_argument("-o", "--output", type=Path, metavar="FILE.svg",
+                   help="the drawing (default: OUT/SCENE.svg); FILE.png and FILE.layout.json go beside it")
+    p.add_argument("--out", default=str(OUT), help="output folder (default: ./out)")
+    p.set_defaults(func=cmd_draw)
 
     args = parser.parse_args(argv)
     try:

@@ -1,6 +1,7 @@
 """The rules a scene keeps beyond each part's own keys, checked once the line is read: the webs at a
 slitter and a nip, a web's layers from span to span, the spans around a roller the web may slip on and
-around a dancer, and what a drive's loop measures. Each refusal names the part and its position."""
+around a dancer, what a drive's loop measures, and the parts' positions. Each refusal names the part and
+its position."""
 
 from __future__ import annotations
 
@@ -178,3 +179,15 @@ def check_dancer_spans(r, scene: Scene, raw):
                 raise r.err(node, f"span {c.name!r} needs the key 'L'")
         if c.solver == "exact" and next_to_dancer:
             raise r.err(node, f"span {c.name!r}: solver exact holds the length; a span on a dancer needs auto or rosenbrock")
+
+
+def check_positions(r, scene: Scene, raw):
+    """A scene places every part ("at") or none: between placed parts the lengths L and the wraps would
+    over-determine where an unplaced one goes, so `webline draw` lays out all of them or none."""
+    nodes = scene.nodes
+    placed = [c for c in nodes if c.at is not None]
+    if placed and len(placed) < len(nodes):
+        missing = next(c for c in nodes if c.at is None)
+        raise r.err(raw[missing.name], f"{missing.type} {missing.name!r} has no \"at\" while {placed[0].type} "
+                    f"{placed[0].name!r} has one: give every part but the spans a position, or none (webline draw "
+                    "then lays the line out)")

@@ -13,7 +13,7 @@ from ..fmus import DEFAULT_FMU_DIR, SPAN_FMU, enumeration, span_description, spa
 from ..jsontree import Node, Obj
 from ..profiles import Profile
 from ..units import UnitError
-from .checks import WIDTH_TOLERANCE, check_dancer_spans, check_layers, check_loops, check_merge, check_split, check_traction
+from .checks import WIDTH_TOLERANCE, check_dancer_spans, check_positions, check_layers, check_loops, check_merge, check_split, check_traction
 from .types import (
     NIP_SIDES,
     STRAIN_RANGE,
@@ -443,7 +443,7 @@ def _span(r, o_node, name, webs) -> Span:
 
 def _roller(r, o_node, name, kind) -> Roller:
     what = f"{kind} {name!r}"
-    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip", "wound"]
+    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip", "wound", "at"]
     if kind == "roller":
         optional += ["merge", "split", "trim"]  # side paths: read by _branch
     required = ["type", "name"]
@@ -478,6 +478,7 @@ def _roller(r, o_node, name, kind) -> Roller:
     if kind == "unwinder":
         c.strain = _strain_profile(r, o["strain"], what)
     c.wrap = _wrap(r, o, what)
+    c.at = _at(r, o, what)
     if "merge" in o and "split" in o:
         raise r.err(r.key_pos(o["split"]), f"{what} carries both merge and split: laminate at one roller, slit at another")
     if "trim" in o:
@@ -594,10 +595,20 @@ def _wrap(r, o, what):
     return w
 
 
+def _at(r, o, what):
+    """A part's centre where the scene places it, `"at": [x, y]` (two lengths, y up), for `webline draw`."""
+    if "at" not in o:
+        return None
+    node = o["at"]
+    if not isinstance(node.value, list) or len(node.value) != 2:
+        raise r.err(node, f"{what}: at must be a list of two lengths [x, y], the centre's position (e.g. [\"1.2 m\", \"0.4 m\"])")
+    return tuple(r.quantity(v, units.LENGTH, f"{what}: at[{i}]") for i, v in enumerate(node.value))
+
+
 def _prescribed(r, o_node, name, kind) -> Prescribed:
     what = f"{kind} {name!r}"
     required = ["type", "name", "speed"] + (["strain"] if kind == "source" else [])
-    o = r.keys(o_node, what, required=required, optional=("description", "wrap"))
+    o = r.keys(o_node, what, required=required, optional=("description", "wrap", "at"))
     c = Prescribed(name=name, type=kind, where=f"{r.source}:{o_node.line}:{o_node.col}")
     c.speed = r.profile(o["speed"], units.SPEED, f"{what}: speed")
     backwards = next(((t, v) for t, v in c.speed.knots if v < 0), None)
@@ -607,6 +618,7 @@ def _prescribed(r, o_node, name, kind) -> Prescribed:
     if kind == "source":
         c.strain = _strain_profile(r, o["strain"], what)
     c.wrap = _wrap(r, o, what)
+    c.at = _at(r, o, what)
     return c
 
 
@@ -616,7 +628,7 @@ def _dancer(r, o_node, name) -> Dancer:
         o_node,
         what,
         required=("type", "name", "J", "R", "mass", "load", "damping", "y_start"),
-        optional=("b", "stiffness", "v_start", "description", "wrap", "traction", "nip"),
+        optional=("b", "stiffness", "v_start", "description", "wrap", "traction", "nip", "at"),
     )
     U = units
     wrap = _wrap(r, o, what)
@@ -635,6 +647,7 @@ def _dancer(r, o_node, name) -> Dancer:
         v_start=r.quantity(o["v_start"], U.SPEED, f"{what}: v_start") if "v_start" in o else None,
         wrap=wrap,
         traction=_traction(r, o, what, wrap) if "traction" in o or "nip" in o else None,
+        at=_at(r, o, what),
     )
 
 
@@ -753,6 +766,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
     _fill_wound(scene)
 
     check_dancer_spans(r, scene, raw)
+    check_positions(r, scene, raw)
 
     parts = scene.parts
     events = []

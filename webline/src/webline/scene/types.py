@@ -247,6 +247,14 @@ class Component:
 
 
 @dataclass
+class Node(Component):
+    """A part the web runs over (every component but a span): `at` is its centre where the scene places
+    it ("at", metres; None: `webline draw` lays it out)."""
+
+    at: tuple | None = None
+
+
+@dataclass
 class Span(Component):
     length: float | None = None  # None: from the dancer next to it
     wp1: Web | None = None
@@ -269,7 +277,7 @@ class Span(Component):
 
 
 @dataclass
-class Prescribed(Component):
+class Prescribed(Node):
     """A source or sink: speed (and, for a source, strain) from profiles."""
 
     speed: Profile | None = None
@@ -278,7 +286,7 @@ class Prescribed(Component):
 
 
 @dataclass
-class Roller(Component):
+class Roller(Node):
     """A roller, unwinder or winder (Roller FMU unless speed-driven)."""
 
     J: float | None = None
@@ -298,7 +306,7 @@ class Roller(Component):
 
 
 @dataclass
-class Dancer(Component):
+class Dancer(Node):
     """A dancer: a roller (Roller FMU) on a carriage loaded with a force.
     The two spans next to it hang from it: their length is the carriage
     position y; m*y'' = load - F_a - F_b - damping*y' - stiffness*(y - y_start), F_a and F_b the
