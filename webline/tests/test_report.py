@@ -57,6 +57,9 @@ def test_the_page_holds_the_terminal_summary_the_plots_the_scene_and_the_line_fm
         assert matplotlib.image.imread(io.BytesIO(base64.b64decode(uri.split(",", 1)[1])), format="png").shape[0] > 100
 
     assert section(page, "scene").find("pre").text_content() == scene.read_text(encoding="utf-8")
+    drawn = section(page, "drawing").findall(".//img")  # the line as `webline draw` draws it, first
+    assert len(drawn) == 1 and drawn[0].get("src").startswith("data:image/png;base64,")
+    assert [s.get("id") for s in page.iter("section")][0] == "drawing"
 
     exported = read_model_description(str(linefmu.export(load_scene(scene), tmp_path / "again.fmu", fmus)))
     versions = section(page, "versions")

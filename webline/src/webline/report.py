@@ -18,6 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape  # noqa: E402
 
+from .drawing import DrawError, figure  # noqa: E402
 from .installation import version  # noqa: E402
 from .plot import draw_panel, panels, subtitle  # noqa: E402
 from .result import Result  # noqa: E402
@@ -62,9 +63,20 @@ def quantity_plots(result: Result, reference: Result | None = None) -> list:
     return images
 
 
+def drawing(scene) -> dict:
+    """The line as `webline draw` draws it, and what its layout says; a scene the layout cannot draw
+    gets the reason instead (the run itself does not need a drawing)."""
+    try:
+        fig, layout = figure(scene)
+    except DrawError as refused:
+        return {"images": [], "notes": [f"not drawn: {refused}"]}
+    return {"images": [figure_image(fig, f"{scene.name} as drawn, to scale (webline draw)")], "notes": list(layout.warnings)}
+
+
 def sections(scene, scene_file: Path, said: Summary, growing: list, result: Result, reference: Result | None) -> list:
     """The page's sections, in the order shown (`scene`: the scene as run, read from `scene_file`)."""
     return [
+        Section("drawing", "The line", "drawing", drawing(scene)),
         Section("summary", "Summary", "summary", said),
         Section("warnings", "Warnings", "warnings", growing + said.warnings),
         Section("plots", "Plots", "figures", quantity_plots(result, reference)),
