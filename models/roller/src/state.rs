@@ -77,8 +77,8 @@ impl Parameters {
     /// The states that move on a roller of these parameters (the others keep their values): omega
     /// always, its radius only on a roll being wound, its carriage only on a dancer, the web's
     /// speed over it and the contact's grip only where the web may slip, a loop's integrator, its
-    /// motor's torque where it lags [R10]-[R11], a dancer loop's integrator [R13], and a brake's
-    /// grip where its profile has a brake table (`brake`) [R12].
+    /// motor's torque where it lags [R10]-[R11], a dancer loop's integrator [R13], a brake's
+    /// grip where its profile has a brake table (`brake`) [R12], and a roll's angle with runout [R15].
     pub fn active_states(&self, brake: bool) -> Vec<State> {
         let kind = Kind::of(self);
         State::ALL

@@ -805,7 +805,7 @@ def runout_geometry(node, L0, angle, omega, R) -> dict:
     beta = -math.asin(R / d)
     u = (C - B) / d
     direction = np.array([u[0] * math.cos(beta) - u[1] * math.sin(beta), u[0] * math.sin(beta) + u[1] * math.cos(beta)])
-    p = abs(float(np.cross(direction, -B)))
+    p = abs(float(direction[1] * B[0] - direction[0] * B[1]))  # |direction x (O - B)|
     dL = float(np.dot(C - B, C_rate)) / L
     return {"L": L, "dL": dL, "p": p, "v": omega * p + s * dL}
 
