@@ -32,11 +32,11 @@ pub enum Binding {
 }
 
 /// Part parameters the line does not offer: the line solves and starts the
-/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side) and
+/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side), runout (and its span's length) and
 /// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
 /// measures) and a span's variable length are the line's structure, which line.json fixes; a feed-forward's
 /// loop.acceleration the line sets from its reference (`feed`).
-const NOT_OFFERED: [&str; 24] = [
+const NOT_OFFERED: [&str; 26] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",
@@ -61,6 +61,8 @@ const NOT_OFFERED: [&str; 24] = [
     "speed.input",
     "load_cell.wrap",
     "nip.side",
+    "runout",
+    "runout.L",
 ];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.

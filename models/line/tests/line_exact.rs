@@ -1191,3 +1191,65 @@ fn a_braked_stopped_line_holds_its_tension() {
         }
     }
 }
+
+/// A speed-driven unwinder of radius r whose roll runs out by e [R15], a span of length L (its
+/// length the moving tangent point's: `variableLength`, its frame_a from the unwinder's web_b.y),
+/// a sink at the roll's surface speed, the web leaving the roll at the span's strain eps0 (no draw).
+fn runout_line(e: f64, r: f64, length: f64, v: f64, eps0: f64) -> Value {
+    let mut unwind = prescribed("unwind", "unwinder", json!([[0.0, v]]));
+    for (k, x) in [("R", json!(r)), ("roll", json!(1)), ("runout", json!(true)), ("runout.e", json!(e)), ("runout.phase", json!(0.3)), ("runout.L", json!(length)), ("web_a.eps", json!(eps0))] {
+        unwind["start"][k] = x;
+    }
+    let mut film = span("film", length, eps0, &["variableLength"]);
+    for (k, x) in [("wp1.d_r", 0.0), ("wp2.d_r", 0.0), ("frame_a.x", 0.0), ("frame_a.y", 0.0), ("frame_b.x", 0.0), ("frame_b.y", length)] {
+        film["start"][k] = json!(x);
+    }
+    let mut c = chain(&["unwind", "film", "snk"]);
+    c.push(connect("unwind", "web_b.y", "film", "frame_a.y"));
+    line_spec(vec![unwind, film, prescribed("snk", "sink", json!([[0.0, v]]))], c, "given")
+}
+
+/// The tension ripple of a roll with runout [R15] at the roll's rotation frequency, and its
+/// amplitude as the span's first-order lag gives it (docs/physics.md, "A roll with runout"): the
+/// payout omega*p = omega*(r + e*cos(psi)) forces L eps' + v eps = -(1 + eps0)^2 omega e cos(psi)/(1 + eps_a)
+/// to first order, so T ripples by EA (e/L)(1 + eps0)/sqrt(1 + (r/L)^2) with eps_a = eps0, v = omega r.
+/// At e/L = 1e-5 the neglected terms are of order e/L: the amplitude to 1e-4, fitted over ten
+/// whole turns after thirty time constants L/v; the frequency from the zero crossings to 1e-4.
+#[test]
+fn a_roll_with_runout_ripples_its_span_at_its_turn_by_the_first_order_lag() {
+    let (e, r, length, v, eps0) = (1e-5, 0.5, 1.0, 10.0, 1e-3);
+    let ea = 4.5e9 * 50e-6;
+    let mut line = initialized(&runout_line(e, r, length, v, eps0));
+    let omega = v / r;
+    let turn = 2.0 * std::f64::consts::PI / omega;
+    let per_turn = 200;
+    let h = turn / per_turn as f64;
+    let settle = (3.0 / turn).ceil() as usize * per_turn;
+    for _ in 0..settle {
+        line.do_step(h).unwrap();
+    }
+    let start = line.time();
+    let samples: Vec<(f64, f64)> = (0..10 * per_turn)
+        .map(|_| {
+            line.do_step(h).unwrap();
+            (line.time() - start, get(&line, "film.T"))
+        })
+        .collect();
+    // Least squares on (1, cos, sin) over whole turns: the columns are orthogonal there.
+    let n = samples.len() as f64;
+    let mean = samples.iter().map(|s| s.1).sum::<f64>() / n;
+    let a = 2.0 / n * samples.iter().map(|&(t, y)| (y - mean) * (omega * t).cos()).sum::<f64>();
+    let b = 2.0 / n * samples.iter().map(|&(t, y)| (y - mean) * (omega * t).sin()).sum::<f64>();
+    let amplitude = a.hypot(b);
+    let expected = ea * (e / length) * (1.0 + eps0) / (1.0 + (r / length).powi(2)).sqrt();
+    assert!((amplitude / expected - 1.0).abs() < 1e-4, "ripple {amplitude} N against {expected} N");
+    assert!((mean / (ea * eps0) - 1.0).abs() < 1e-4, "mean tension {mean} N against {} N", ea * eps0);
+    // Upward zero crossings of T - mean, linearly interpolated: their spacing is the ripple's period.
+    let crossings: Vec<f64> = samples
+        .windows(2)
+        .filter(|w| w[0].1 < mean && w[1].1 >= mean)
+        .map(|w| w[0].0 + (mean - w[0].1) / (w[1].1 - w[0].1) * (w[1].0 - w[0].0))
+        .collect();
+    let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+    assert!(crossings.len() >= 9 && (period / turn - 1.0).abs() < 1e-4, "period {period} s against the turn {turn} s ({} crossings)", crossings.len());
+}

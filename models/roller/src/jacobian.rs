@@ -24,9 +24,10 @@ pub type Tangents = Outputs<f64>;
 /// no roll (J and r fixed) and merges no webs ([R5] with one inlet passes the strain on, and so do
 /// layers [R9], each its own). Not where the web may slip: [R7] is nonlinear; nor where a drive has a
 /// loop: its limit [R11] is nonlinear, and its gains and limit are tunable; nor with a load cell, a
-/// root of the forces; nor where the bearings' torque is not linear in omega.
+/// root of the forces; nor where the bearings' torque is not linear in omega; nor with runout [R15], whose
+/// arm moves with the roll's angle.
 pub fn tangents_fixed(p: &Parameters) -> bool {
-    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && Kind::of(p) == Kind::None && p.load_cell_wrap == 0.0 && roll::bearing_damping(p).is_some()
+    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && Kind::of(p) == Kind::None && p.load_cell_wrap == 0.0 && roll::bearing_damping(p).is_some() && !p.runout
 }
 
 /// The roller at one point, for the tangents along any direction there (`Roller::linearize`).

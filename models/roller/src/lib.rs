@@ -38,6 +38,7 @@ pub mod parameters;
 pub mod physics;
 pub mod rhs;
 pub mod roll;
+pub mod runout;
 pub mod state;
 mod stepping;
 mod variables;

@@ -41,6 +41,8 @@ pub struct Roller {
     /// The contact's grip [R7] and a brake's [R12] (0 without them).
     pub(crate) grip: f64,
     pub(crate) brake_grip: f64,
+    /// The roll's angle [R15] (turns only with runout).
+    pub(crate) angle: f64,
     /// How the equations take the contact: its bristle, or held while a line solves its steady state.
     pub(crate) friction: contact::Friction,
     pub(crate) profile: Option<Loaded>,
@@ -89,7 +91,7 @@ impl Roller {
             self.v_web = x.web_speed;
         }
         (self.integrator, self.motor, self.dancer) = (x.loop_integrator, x.motor_torque, x.dancer_integrator);
-        (self.grip, self.brake_grip) = (x.grip, x.brake_grip);
+        (self.grip, self.brake_grip, self.angle) = (x.grip, x.brake_grip, x.angle);
         Ok(())
     }
 
@@ -115,7 +117,8 @@ impl Roller {
     /// web winds), a speed a table prescribes.
     pub fn held_at_steady_state(&self, s: State) -> bool {
         match s {
-            State::Radius => true,
+            // Never steady while the roll turns: its runout's phase at the start.
+            State::Radius | State::Angle => true,
             State::Omega => self.speed_prescribed(),
             State::CarriageY
             | State::CarriageSpeed
@@ -266,6 +269,7 @@ impl Roller {
             dancer_integrator: self.dancer,
             grip: self.grip,
             brake_grip: self.brake_grip,
+            angle: self.angle,
         }
     }
 
@@ -447,9 +451,37 @@ impl Roller {
     }
 
     /// Heights from the dancer's start position, up positive: 0 at the start,
-    /// so a master that starts its inputs at 0 (FMPy) still sees a valid span.
-    pub(crate) fn contact_y(&self) -> f64 {
-        carriage::contact_height(&self.params, self.carriage[0])
+    /// so a master that starts its inputs at 0 (FMPy) still sees a valid span. A roll with runout
+    /// gives its end of its span there [R15].
+    pub(crate) fn contact_a_y(&self) -> f64 {
+        self.runout_outputs().map_or_else(|| carriage::contact_height(&self.params, self.carriage[0]), |o| o.contact_a_y)
+    }
+
+    pub(crate) fn contact_b_y(&self) -> f64 {
+        self.runout_outputs().map_or_else(|| carriage::contact_height(&self.params, self.carriage[0]), |o| o.contact_b_y)
+    }
+
+    /// The web's speed where it arrives and where it leaves: the web's over the roller, or the
+    /// moving tangent point's on a roll with runout [R15].
+    pub fn arriving_speed(&self) -> f64 {
+        self.runout_outputs().map_or_else(|| self.web_speed(), |o| o.arriving_speed)
+    }
+
+    pub fn leaving_speed(&self) -> f64 {
+        self.runout_outputs().map_or_else(|| self.web_speed(), |o| o.leaving_speed)
+    }
+
+    /// The roll's angle [R15].
+    pub fn angle(&self) -> f64 {
+        self.angle
+    }
+
+    /// Everything the roller computes now, where its roll has runout (its ends move with the angle).
+    fn runout_outputs(&self) -> Option<rhs::Outputs> {
+        self.params.runout.then(|| {
+            let x = self.held();
+            rhs::outputs(&self.params, &self.point_at(self.time, &x), &x, &self.inputs)
+        })
     }
 
     /// d/dt of the states now, by name.

@@ -31,6 +31,16 @@ pub trait Number:
         self.map(s, 0.5 / s)
     }
     #[inline]
+    fn sin(self) -> Self {
+        let x = self.value();
+        self.map(x.sin(), x.cos())
+    }
+    #[inline]
+    fn cos(self) -> Self {
+        let x = self.value();
+        self.map(x.cos(), -x.sin())
+    }
+    #[inline]
     fn tanh(self) -> Self {
         let t = self.value().tanh();
         self.map(t, 1.0 - t * t)

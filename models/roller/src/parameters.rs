@@ -81,6 +81,12 @@ pub struct Parameters {
     pub dancer_set: f64,
     pub dancer_kp: f64,
     pub dancer_ki: f64,
+    /// The roll's runout [R15]: on, its eccentricity (m), its phase (rad), the free length to the
+    /// span's fixed end (m).
+    pub runout: bool,
+    pub runout_e: f64,
+    pub runout_phase: f64,
+    pub runout_length: f64,
 }
 
 /// What the drive's loop holds (`loop.kind`).
@@ -107,8 +113,8 @@ impl Kind {
 }
 
 /// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I,
-/// grip, brake.grip).
-pub const STATES: usize = 10;
+/// grip, brake.grip, angle).
+pub const STATES: usize = 11;
 
 /// The most webs a roller takes in or gives out.
 pub const PORTS: usize = 4;
@@ -267,6 +273,7 @@ impl Parameters {
             Real::dancer_set | Real::dancer_kp | Real::dancer_ki => kind == Kind::Dancer,
             Real::loop_kp | Real::loop_ki | Real::motor_limit => kind != Kind::None,
             Real::loop_sign | Real::motor_lag | Real::load_cell_wrap => true,
+            Real::runout_e | Real::runout_phase | Real::runout_L => self.runout,
             // Inputs.
             Real::web_a_F
             | Real::web_b_F
@@ -327,7 +334,9 @@ impl Parameters {
             | Real::der_motor_torque
             | Real::load_cell_F
             | Real::dancer_I
-            | Real::der_dancer_I => true,
+            | Real::der_dancer_I
+            | Real::angle
+            | Real::der_angle => true,
         }
     }
 

@@ -9,6 +9,7 @@ use crate::number::{Number, Tangent};
 use crate::parameters::{Inputs, Parameters, PORTS, UNWINDER};
 use crate::physics;
 use crate::roll::{self, Roll};
+use crate::runout::{self, Runout};
 use crate::state::States;
 use crate::{brake, carriage, control, drive};
 
@@ -60,6 +61,7 @@ pub struct Rates<N> {
     /// The drive's torque: its table, loop and brake; a speed drive's, what [R1] needs.
     pub torque: N,
     pub surface_speed: N,
+    pub runout: Option<Runout<N>>,
 }
 
 /// What [R1] sums and what it is made of, at the roller's point.
@@ -71,6 +73,8 @@ struct Torques<N> {
     web: N,
     bearing: N,
     loop_law: control::Law<N>,
+    /// The roll's runout [R15] where it has one: its arm, its span's length and the web's speed.
+    runout: Option<Runout<N>>,
 }
 
 #[inline(always)]
@@ -85,11 +89,13 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) 
         let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r, x.grip];
         (s.contact.force.lift(&knowns), s.acceleration.lift(&knowns), s.contact.grip_rate.lift(&knowns))
     });
-    let web = match friction {
-        Some((f, _, _)) => -(r * f),
-        None => physics::web_torque(p, r, u),
+    let runout = p.runout.then(|| runout::at(p, x.angle, omega, r));
+    let web = match (friction, runout) {
+        (Some((f, _, _)), _) => -(r * f),
+        (None, Some(g)) => runout::web_torque(p, r, g.arm, u),
+        (None, None) => physics::web_torque(p, r, u),
     };
-    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia) }
+    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia), runout }
 }
 
 /// The loop's law [R10]-[R11], [R13] at the roller's point.
@@ -177,8 +183,9 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         grip: t.friction.map_or_else(N::default, |(_, _, rate)| rate),
         // A speed drive has no brake (refused): its surface speed is the table's.
         brake_grip: if at.prescribed.is_some() { N::default() } else { brake_at(p, at, x, v).1 },
+        angle: if p.runout { omega } else { N::default() },
     };
-    Rates { derivatives, torque, surface_speed: v }
+    Rates { derivatives, torque, surface_speed: v, runout: t.runout }
 }
 
 /// Everything the roller computes, each named as the roller's own (`t.x` for `Roller::x()`): the
@@ -207,7 +214,13 @@ pub struct Outputs<N = f64> {
     pub carriage: [N; 2],
     pub contact_a_x: N,
     pub contact_b_x: N,
-    pub contact_y: N,
+    /// Where the webs touch, along the span: a dancer's height [R4], a roll's end of its span [R15].
+    pub contact_a_y: N,
+    pub contact_b_y: N,
+    /// The web's speed at each side: the surface's, or the moving tangent point's on a roll with runout [R15].
+    pub arriving_speed: N,
+    pub leaving_speed: N,
+    pub angle: N,
     pub load_cell_force: N,
 }
 
@@ -268,6 +281,13 @@ pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<
     let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], x.radius, x.grip];
     let lift = |d: Dual| d.lift(&knowns);
     let (traction_used, mu_eff, h_air) = at.slip.map_or_else(Default::default, |s| (lift(s.used(p)), lift(s.contact.mu_eff), lift(s.contact.h_air)));
+    let height = carriage::contact_height(p, x.carriage_y);
+    // The roll's end of its span moves with runout [R15]: an unwinder's leaving side, a winder's arriving one.
+    let (ends, speeds) = match rates.runout {
+        Some(g) if p.roll == UNWINDER => ((height, runout::frame(p, &g)), (web_speed, g.speed)),
+        Some(g) => ((runout::frame(p, &g), height), (g.speed, web_speed)),
+        None => ((height, height), (web_speed, web_speed)),
+    };
     let merged = match (at.strain, p.layered) {
         (None, false) => Some(physics::merged_strain(p, &u.strain_a)),
         _ => None,
@@ -292,7 +312,11 @@ pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<
         carriage: [x.carriage_y, x.carriage_speed],
         contact_a_x: N::default(),
         contact_b_x: carriage::contact_b_x(x.radius),
-        contact_y: carriage::contact_height(p, x.carriage_y),
+        contact_a_y: ends.0,
+        contact_b_y: ends.1,
+        arriving_speed: speeds.0,
+        leaving_speed: speeds.1,
+        angle: x.angle,
         load_cell_force: load_cell_force(p, u),
     }
 }
@@ -321,7 +345,11 @@ impl<N: Number> Outputs<N> {
             carriage: self.carriage.map(&f),
             contact_a_x: f(self.contact_a_x),
             contact_b_x: f(self.contact_b_x),
-            contact_y: f(self.contact_y),
+            contact_a_y: f(self.contact_a_y),
+            contact_b_y: f(self.contact_b_y),
+            arriving_speed: f(self.arriving_speed),
+            leaving_speed: f(self.leaving_speed),
+            angle: f(self.angle),
             load_cell_force: f(self.load_cell_force),
         }
     }

@@ -24,6 +24,8 @@ pub enum State {
     /// The contact's grip u [R7] and a brake's u_b [R12]: the bristles' share of their limit.
     Grip,
     BrakeGrip,
+    /// The roll's angle [R15] (moves only with runout).
+    Angle,
 }
 
 impl State {
@@ -39,6 +41,7 @@ impl State {
         State::DancerIntegrator,
         State::Grip,
         State::BrakeGrip,
+        State::Angle,
     ];
 
     /// Its position in the Model Exchange state vector.
@@ -60,6 +63,7 @@ impl State {
             State::DancerIntegrator => Real::dancer_I,
             State::Grip => Real::grip,
             State::BrakeGrip => Real::brake_grip,
+            State::Angle => Real::angle,
         }
     }
 
@@ -73,8 +77,8 @@ impl Parameters {
     /// The states that move on a roller of these parameters (the others keep their values): omega
     /// always, its radius only on a roll being wound, its carriage only on a dancer, the web's
     /// speed over it and the contact's grip only where the web may slip, a loop's integrator, its
-    /// motor's torque where it lags [R10]-[R11], a dancer loop's integrator [R13], and a brake's
-    /// grip where its profile has a brake table (`brake`) [R12].
+    /// motor's torque where it lags [R10]-[R11], a dancer loop's integrator [R13], a brake's
+    /// grip where its profile has a brake table (`brake`) [R12], and a roll's angle with runout [R15].
     pub fn active_states(&self, brake: bool) -> Vec<State> {
         let kind = Kind::of(self);
         State::ALL
@@ -88,6 +92,7 @@ impl Parameters {
                 State::LoopIntegrator => kind != Kind::None,
                 State::MotorTorque => kind != Kind::None && self.motor_lag > 0.0,
                 State::DancerIntegrator => kind == Kind::Dancer,
+                State::Angle => self.runout,
             })
             .collect()
     }
@@ -113,6 +118,7 @@ impl State {
             State::CarriageY | State::CarriageSpeed => "carriage",
             State::WebSpeed | State::Grip => "includeTraction",
             State::BrakeGrip => "brake",
+            State::Angle => "runout",
             State::MotorTorque => "motor.lag",
             State::LoopIntegrator | State::DancerIntegrator => "loop.kind",
             // Always a state.
@@ -134,6 +140,7 @@ pub struct States<N = f64> {
     pub dancer_integrator: N,
     pub grip: N,
     pub brake_grip: N,
+    pub angle: N,
 }
 
 impl<N: Number> States<N> {
@@ -150,6 +157,7 @@ impl<N: Number> States<N> {
             State::DancerIntegrator => self.dancer_integrator,
             State::Grip => self.grip,
             State::BrakeGrip => self.brake_grip,
+            State::Angle => self.angle,
         }
     }
 
@@ -166,6 +174,7 @@ impl<N: Number> States<N> {
             State::DancerIntegrator => &mut self.dancer_integrator,
             State::Grip => &mut self.grip,
             State::BrakeGrip => &mut self.brake_grip,
+            State::Angle => &mut self.angle,
         }
     }
 

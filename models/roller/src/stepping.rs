@@ -49,10 +49,12 @@ impl Roller {
         let prescribed = self.prescribed(t); // at the piece's start, after its events
         let (mut v_web, mut grip) = (self.v_web, self.grip);
         // [R1] is linear in omega without a loop, a brake or bearings whose torque is not -b*omega.
-        let linear = roll::bearing_damping(p).filter(|_| Kind::of(p) == Kind::None && self.table(Key::Brake).is_none());
+        // Nor with runout [R15]: the web's arm moves with the roll's angle.
+        let linear = roll::bearing_damping(p).filter(|_| Kind::of(p) == Kind::None && self.table(Key::Brake).is_none() && !p.runout);
         let Some(damping) = linear else {
-            // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused): the loop's integrator,
-            // its motor and the roll's own (omega, r), with J moving with r, by the same L-stable method.
+            // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused), or runout [R15]: the
+            // loop's integrator, its motor and the roll's own (omega, r, angle), with J moving with r, by
+            // the same L-stable method.
             let y = self.controlled_step(t, h)?;
             let carriage = if p.carriage {
                 let (g0, g1) = self.carriage_force(t);
@@ -61,12 +63,12 @@ impl Roller {
                 self.carriage
             };
             if !(y.iter().all(|x| x.is_finite()) && y[1] > 0.0 && carriage.iter().all(|x| x.is_finite())) {
-                return Err(FmiError::discard(format!("the roller's loop would reach (omega, r, loop.I, motor.torque, dancer.I, brake.grip) = {y:?}: take a shorter step or check the inputs")));
+                return Err(FmiError::discard(format!("the roller's loop would reach (omega, r, loop.I, motor.torque, dancer.I, brake.grip, angle) = {y:?}: take a shorter step or check the inputs")));
             }
             let inertia = self.roll.inertia(p, y[1]);
             self.omega = CompensatedSum::from_parts(y[0], 0.0);
             self.roll = Roll { radius: y[1], inertia, ..self.roll };
-            (self.integrator, self.motor, self.dancer, self.brake_grip, self.carriage) = (y[2], y[3], y[4], y[5], carriage);
+            (self.integrator, self.motor, self.dancer, self.brake_grip, self.angle, self.carriage) = (y[2], y[3], y[4], y[5], y[6], carriage);
             return Ok(());
         };
         // The web's strain at the roll [R3]: the inputs are held, a table read at the piece's middle.
@@ -138,10 +140,10 @@ impl Roller {
             .map_err(|failure| FmiError::discard(format!("the web's slip on the roller could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
-    /// (omega, r, loop.I, motor.torque, dancer.I, brake.grip) after [t, t+h] of a piece with a loop
-    /// [R10]-[R11], [R13] or a brake [R12], the inputs held.
-    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 6]> {
-        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor, self.dancer, self.brake_grip];
+    /// (omega, r, loop.I, motor.torque, dancer.I, brake.grip, angle) after [t, t+h] of a piece with a loop
+    /// [R10]-[R11], [R13], a brake [R12] or runout [R15], the inputs held.
+    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 7]> {
+        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor, self.dancer, self.brake_grip, self.angle];
         let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
         let control = solver::Control { rtol: SLIP_RTOL, atol: y0.map(scale), initial_step: h, max_steps: 100_000 };
         solver::rosenbrock::integrate(&Controlled { roller: self, t0: t }, h, y0, &control)
@@ -149,13 +151,13 @@ impl Roller {
             .map_err(|failure| FmiError::discard(format!("the roller's loop could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
-    /// The roller at time t with (omega, r, loop.I, motor.torque, dancer.I, brake.grip) at y, the rest as now (a step's trial point).
-    fn at_trial(&self, t: f64, y: &[f64; 6]) -> Roller {
+    /// The roller at time t with (omega, r, loop.I, motor.torque, dancer.I, brake.grip, angle) at y, the rest as now (a step's trial point).
+    fn at_trial(&self, t: f64, y: &[f64; 7]) -> Roller {
         let mut trial = self.clone();
         let inertia = self.roll.inertia(&self.params, y[1]);
         trial.omega = CompensatedSum::from_parts(y[0], 0.0);
         trial.roll = Roll { radius: y[1], inertia, ..self.roll };
-        (trial.integrator, trial.motor, trial.dancer, trial.brake_grip, trial.time) = (y[2], y[3], y[4], y[5], t);
+        (trial.integrator, trial.motor, trial.dancer, trial.brake_grip, trial.angle, trial.time) = (y[2], y[3], y[4], y[5], y[6], t);
         trial
     }
 
@@ -210,6 +212,7 @@ impl Roller {
         // their sliding deflection (at u = 0 their damping would carry |s|/v_slip times the limit).
         self.grip = if p.traction { bristle::sliding(p.traction_slip_start, p.traction_static, p.traction_v_slip) } else { 0.0 };
         self.brake_grip = if self.braked() { bristle::sliding(speed, 1.0, p.brake_v_slip) } else { 0.0 };
+        self.angle = 0.0;
         self.restart_hold(time);
     }
 }
@@ -265,29 +268,29 @@ fn time_derivative<const N: usize>(ode: &impl solver::Ode<N>, roller: &Roller, t
     std::array::from_fn(|i| (hi[i] - lo[i]) / (2.0 * e))
 }
 
-/// [R1], [R3], [R10]-[R13] over a piece, as an ODE in (omega, r, loop.I, motor.torque, dancer.I, brake.grip) from the
-/// piece's start t0; its Jacobian from the right-hand side's tangents.
+/// [R1], [R3], [R10]-[R13], [R15] over a piece, as an ODE in (omega, r, loop.I, motor.torque, dancer.I, brake.grip,
+/// angle) from the piece's start t0; its Jacobian from the right-hand side's tangents.
 struct Controlled<'a> {
     roller: &'a Roller,
     t0: f64,
 }
 
 /// The states the loop's step integrates.
-const CONTROLLED: [State; 6] = [State::Omega, State::Radius, State::LoopIntegrator, State::MotorTorque, State::DancerIntegrator, State::BrakeGrip];
+const CONTROLLED: [State; 7] = [State::Omega, State::Radius, State::LoopIntegrator, State::MotorTorque, State::DancerIntegrator, State::BrakeGrip, State::Angle];
 
-impl solver::Ode<6> for Controlled<'_> {
-    fn rhs(&self, s: f64, y: &[f64; 6]) -> [f64; 6] {
+impl solver::Ode<7> for Controlled<'_> {
+    fn rhs(&self, s: f64, y: &[f64; 7]) -> [f64; 7] {
         let d = self.roller.at_trial(self.t0 + s, y).rates();
         CONTROLLED.map(|i| d.get(i))
     }
 
-    fn jacobian(&self, s: f64, y: &[f64; 6]) -> [[f64; 6]; 6] {
+    fn jacobian(&self, s: f64, y: &[f64; 7]) -> [[f64; 7]; 7] {
         let trial = self.roller.at_trial(self.t0 + s, y);
         trial.rate_jacobian(&trial.point(), &trial.held(), CONTROLLED)
     }
 
     /// Tables of time (a set point's or a reference's ramp) move f at fixed y: a central difference.
-    fn time_derivative(&self, s: f64, y: &[f64; 6]) -> [f64; 6] {
+    fn time_derivative(&self, s: f64, y: &[f64; 7]) -> [f64; 7] {
         time_derivative(self, self.roller, self.t0, s, y)
     }
 }

@@ -30,8 +30,8 @@ fmi_core::bind_variables! {
         web_a_eps: input(strain_a[0]),
         tau_m: input(torque),
         F_load: input(load),
-        web_a_v: computed(web_speed()),
-        web_b_v: computed(web_speed()),
+        web_a_v: computed(arriving_speed()),
+        web_b_v: computed(leaving_speed()),
         web_b_eps: computed(strain_leaving(0)),
         omega: computed(omega()),
         r: computed(radius()),
@@ -39,9 +39,9 @@ fmi_core::bind_variables! {
         y_dot: computed(carriage[1]),
         tau: computed(drive_torque()),
         web_a_x: computed(contact_a_x()),
-        web_a_y: computed(contact_y()),
+        web_a_y: computed(contact_a_y()),
         web_b_x: computed(contact_b_x()),
-        web_b_y: computed(contact_y()),
+        web_b_y: computed(contact_b_y()),
         der_omega: computed(rates().omega),
         der_r: computed(rates().radius),
         der_y: computed(rates().carriage_y),
@@ -114,6 +114,11 @@ fmi_core::bind_variables! {
         brake_creep: param(params.brake_creep),
         brake_grip: computed(brake_grip()),
         der_brake_grip: computed(rates().brake_grip),
+        runout_e: param(params.runout_e),
+        runout_phase: param(params.runout_phase),
+        runout_L: param(params.runout_length),
+        angle: computed(angle()),
+        der_angle: computed(rates().angle),
     }
     integer {
         roll: param(params.roll),
@@ -129,6 +134,7 @@ fmi_core::bind_variables! {
         loop_feedforward: param(params.loop_feedforward),
         loop_compression: param(params.loop_compression),
         speed_input: param(params.speed_input),
+        runout: param(params.runout),
     }
     string {
         profile: param(params.profile),

@@ -9,7 +9,8 @@ use fmi_testkit::conformance::{Hints, Point};
 /// and at a nip, under an air film [R6]-[R8], with the web pulling on both sides, running forward with
 /// the nip at the entry and back with it at the exit; a drive's loop; a brake;
 /// an ideal speed drive on its input; a dancer loop [R13], without a lag (its position reaches tau) and with one;
-/// a speed-driven winder of four webs, whose r' reads their merged strain [R3] (it reaches tau).
+/// a speed-driven winder of four webs, whose r' reads their merged strain [R3] (it reaches tau); a
+/// winder and an unwinder with runout [R15].
 fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
     let nip = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/traction_nip.json");
@@ -64,11 +65,14 @@ fn hints() -> Hints {
             Point { values: slipping.clone(), texts: vec![("profile", nip.into())] },
             // The same web running back, the nip at the exit: the air film forms at web_b [R8].
             Point { values: [slipping, vec![("v_start", -12.0), ("nip.side", 1.0)]].concat(), texts: vec![("profile", nip.into())] },
+            // Rolls with runout [R15] that wind: the web's speed at the roll moves with the angle.
+            Point { values: vec![("roll", 2.0), ("runout", 1.0), ("runout.e", 0.03), ("runout.L", 0.1), ("runout.phase", 0.5), ("wound.thickness", 1e-2), ("wound.density", 1000.0), ("inlets", 4.0), ("web_a.F", 100.0)], texts: vec![] },
+            Point { values: vec![("roll", 1.0), ("runout", 1.0), ("runout.e", 0.03), ("runout.L", 0.1), ("runout.phase", -0.5), ("wound.thickness", 1e-2), ("wound.density", 1000.0), ("inlets", 4.0), ("web_b.F", 100.0)], texts: vec![] },
             // An ideal speed drive on its input loop.speed (speed.input), the web pulling on both sides.
             Point { values: vec![("speed.input", 1.0), ("loop.speed", 6.0), ("web_a.F", 100.0), ("web_b.F", 120.0)], texts: vec![] },
         ],
         texts: vec![("profile", speed_drive.into())],
-        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop", "a sampled loop's period is 0 (continuous) or at least", "a sampled loop's delay is at most its period"],
+        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop", "a sampled loop's period is 0 (continuous) or at least", "a sampled loop's delay is at most its period", "runout [R15] is a roll's", "the span's fixed end must lie beyond the roll"],
     }
 }
 

@@ -314,14 +314,14 @@ def test_bad_value_references_are_refused_with_a_message(unzipdir, md, vr, kind,
 
 # ---------------------------------------------------------------- the Roller
 # The same check on the Roller: states omega, r, y, y', v_web, loop.I, motor.torque, dancer.I, grip,
-# brake.grip (ME), inputs web_a.F, web_b.F, web_a.eps, tau_m, F_load and those of the extra inlets and outlets
+# brake.grip, angle (ME), inputs web_a.F, web_b.F, web_a.eps, tau_m, F_load and those of the extra inlets and outlets
 # (a merge and a split: cases with ports; elsewhere unused, their derivatives 0).
 # The outputs are polynomials in the states and inputs (degree <= 4 in r), or
 # the merged strain, a smooth ratio, so the same steps and tolerances apply.
 
 ROLLER_INPUTS = ("web_a.F", "web_b.F", "web_a.eps", "tau_m", "F_load", "web_a2.F", "web_a2.eps", "web_a3.F", "web_a3.eps",
                  "web_a4.F", "web_a4.eps", "web_b2.F", "web_b3.F", "web_b4.F")
-ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web", "loop.I", "motor.torque", "dancer.I", "grip", "brake.grip")
+ROLLER_STATES = ("omega", "r", "y", "y_dot", "v_web", "loop.I", "motor.torque", "dancer.I", "grip", "brake.grip", "angle")
 ROLLER_UNKNOWNS = ("web_a.v", "web_b.v", "web_b.eps", "omega", "r", "y", "y_dot", "tau", "web_a.x", "web_a.y",
                    "web_b.x", "web_b.y", "der(omega)", "der(r)", "der(y)", "der(y_dot)", "web_a2.v", "web_a4.v",
                    "web_b2.v", "web_b2.eps", "web_b4.eps", "v_web", "der(v_web)")
@@ -357,6 +357,23 @@ def roller_label(case):
     drive, roll, carriage, (inlets, outlets) = case
     ports = f"-{inlets}in{outlets}out" if (inlets, outlets) != (1, 1) else ""
     return f"{drive}-{['roller', 'unwinder', 'winder'][roll]}{'-dancer' if carriage else ''}{ports}"
+
+
+@pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
+@pytest.mark.parametrize("roll", [1, 2])
+def test_roller_with_runout_matches_finite_differences(roller, tmp_path, kind, roll):
+    """A roll with runout [R15], winding, its angle 1.3 rad (ME): the arm p, the span's end and the
+    web's speed at the moving tangent point move with the angle, omega and r."""
+    me = kind == "ModelExchange"
+    params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
+    values = {**params, **ROLLER_POINT, "roll": roll, "runout": True, "runout.e": 0.01, "runout.phase": 0.4, "runout.L": 0.6}
+    (a, f, n), _ = roller_case(roller, tmp_path, kind, {"torque": [[0, 1.0], [10, 3.0]]}, values,
+                               (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, 0.0, 0.0, 0.0, 0.0, 0.0, 1.3), *every_pair(roller, me)[::-1])
+    if me:
+        assert a["web_b.y" if roll == 1 else "web_a.y", "angle"] != 0.0, "the span's end must move with the angle"
+        assert a["der(omega)", "angle"] != 0.0, "the web's arm must move with the angle"
+    what = f"Roller {kind} runout roll {roll}"
+    print(f"{what}: max relative error {compare(what, a, f, n):.1e}")
 
 
 @pytest.fixture(scope="module")
@@ -442,7 +459,7 @@ def test_roller_matches_finite_differences(roller, tmp_path, kind, case):
     me = kind == "ModelExchange"
     values = {**ROLLER_PARAMS, **ROLLER_POINT, "roll": roll, "carriage": carriage, "inlets": inlets, "outlets": outlets}
     # Away from the start values: the carriage moving, the roll grown.
-    states = (33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0, 0.0, 0.0, 0.0)
+    states = (33.0, 0.16, 0.52, -0.03, 33.0 * 0.16 + 2e-3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     # Without traction the fifth state is the surface's speed r*omega, not a known of its own: v_web
     # reads r*omega back (its derivatives by r and omega are omega and r, by itself 0).
     unknowns, knowns = every_pair(roller, me)
@@ -476,7 +493,7 @@ def test_roller_with_traction_matches_finite_differences(roller, tmp_path, kind,
     # The grip curves over v_slip = 1 mm/s: a step of 1e-6 of a speed of 5 m/s would leave a
     # truncation error of (5e-6/1e-3)^2 ~ 2.5e-5; 1e-8 leaves 2.5e-9, rounding stays in the noise term.
     (a, f, n), (slip, mu_eff, h_air) = roller_case(
-        roller, tmp_path, kind, profile, values, (33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0, 0.0, 0.9, 0.0),
+        roller, tmp_path, kind, profile, values, (33.0, 0.15, 0.0, 0.0, 33.0 * 0.15 + 2e-3, 0.0, 0.0, 0.0, 0.9, 0.0, 0.0),
         knowns, unknowns, step=1e-8, read=("slip", "mu_eff", "h_air"))
     what = f"Roller {kind} traction {label}"
     worst = compare(what, a, f, n)
@@ -512,7 +529,7 @@ def test_roller_with_a_loop_matches_finite_differences(roller, tmp_path, kind, l
     values = {**params, **ROLLER_POINT, "roll": 1, "loop.kp": 0.2, "loop.ki": 2.0, **LOOP_CASES[label]}
     unknowns, knowns = every_pair(roller, me)
     (a, f, n), _ = roller_case(roller, tmp_path, kind, {"reference": [[0, 5.0], [10, 6.0]]}, values,
-                               (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0, 0.02, 0.0, 0.0), knowns, unknowns)
+                               (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, -3.5, -4.0, 0.02, 0.0, 0.0, 0.0), knowns, unknowns)
     what = f"Roller {kind} loop {label}"
     worst = compare(what, a, f, n)
     print(f"{what}: max relative error {worst:.1e}")
@@ -529,6 +546,6 @@ def test_roller_with_a_brake_matches_finite_differences(roller, tmp_path, kind):
     params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
     values = {**params, **ROLLER_POINT, "web_b.F": 180.0, "roll": 1, "v_start": 0.004}
     (a, f, n), _ = roller_case(roller, tmp_path, kind, {"brake": [[0, 2.0], [10, 3.0]]}, values,
-                               (0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0, 0.0, 0.5), *every_pair(roller, me)[::-1], cs_time=0.01)
+                               (0.025, 0.16, 0.0, 0.0, 0.004, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0), *every_pair(roller, me)[::-1], cs_time=0.01)
     what = f"Roller {kind} brake"
     print(f"{what}: max relative error {compare(what, a, f, n):.1e}")

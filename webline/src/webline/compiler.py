@@ -73,8 +73,9 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     speed = scene.speed_profile(node)
     traction = getattr(node, "traction", None)
     if speed is not None:
-        # With traction the radius counts (the web's mass on the wrap, the air film): the scene's.
-        start.update(J=PRESCRIBED_J, R=float(node.R) if traction is not None else PRESCRIBED_R, b=0.0)
+        # With traction or runout the radius counts (the web's mass on the wrap, the air film; where the web touches): the scene's.
+        given_radius = traction is not None or getattr(node, "runout", None) is not None
+        start.update(J=PRESCRIBED_J, R=float(node.R) if given_radius else PRESCRIBED_R, b=0.0)
         if getattr(getattr(node, "drive", None), "input", False):  # held at loop.speed: the Line FMU's input v_ref
             start.update({"speed.input": True, "loop.speed": float(speed.value(0.0))})
         else:
@@ -90,6 +91,7 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if wound is not None:
         start.update({"wound.thickness": float(wound.thickness), "wound.density": float(wound.density),
                       "wound.width": float(wound.width)})
+    start.update(runout_values(scene, node))
     drive = getattr(node, "drive", None)
     if drive is not None and drive.kind in ("torque", "tension", "brake"):
         profile[drive.kind] = table(drive.profile)
@@ -182,6 +184,31 @@ def traction_values(scene: Scene, node) -> dict:
     }
 
 
+def runout_span(scene: Scene, node) -> Span:
+    """The span whose length a roll's runout moves [R15]: an unwinder's leaving, a winder's arriving."""
+    (span,) = scene.spans_out(node) if node.type == "unwinder" else scene.spans_in(node)
+    return span
+
+
+def runout_values(scene: Scene, node) -> dict:
+    """A roll's runout [R15] as the Roller takes it: on, its eccentricity, phase, and its span's length."""
+    runout = getattr(node, "runout", None)
+    if runout is None:
+        return {}
+    return {"runout": True, "runout.e": float(runout.eccentricity), "runout.phase": float(runout.phase),
+            "runout.L": float(runout_span(scene, node).length)}
+
+
+def _runout_roll(scene: Scene, span: Span):
+    """The roll with runout at an end of `span` whose tangent point moves its length [R15], or None."""
+    up, down = scene.upstream(span), scene.downstream(span)
+    if getattr(up, "runout", None) is not None and up.type == "unwinder":
+        return up
+    if getattr(down, "runout", None) is not None and down.type == "winder":
+        return down
+    return None
+
+
 def _dancer_of(scene: Scene, span: Span):
     up, down = scene.upstream(span), scene.downstream(span)
     return up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
@@ -225,6 +252,10 @@ def _span(scene: Scene, span: Span, eps: float, fmu: Path, solvers: dict, effect
         else:
             start.update({"frame_b.x": 2.0 * float(dancer.R), "frame_b.y": float(y0),
                           "frame_a.x": 2.0 * float(dancer.R)})
+    if _runout_roll(scene, span) is not None:
+        # Its length the tangent point's on the roll [R15]: along a line from frame_a (0, 0) to frame_b
+        # (0, L), the roll's end connected (an unwinder's web_b.y = L - L(angle), a winder's web_a.y = L(angle)).
+        start.update({"variableLength": True, "frame_a.x": 0.0, "frame_a.y": 0.0, "frame_b.x": 0.0, "frame_b.y": float(span.length)})
     sets = []
     webs = {"wp1": wp1, "wp2": wp2}
     for e in scene.events:
@@ -428,6 +459,11 @@ def compile_scene(scene: Scene, fmu_dir=None, settle=True, carriages_at_equilibr
                 connect(down.name, "web_a.y", name, "frame_b.y")
             if isinstance(up, Dancer):
                 connect(up.name, "web_b.y", name, "frame_a.y")
+            roll = _runout_roll(scene, sp)
+            if roll is up:
+                connect(up.name, "web_b.y", name, "frame_a.y")
+            elif roll is down:
+                connect(down.name, "web_a.y", name, "frame_b.y")
             connect(name, "web_a.F", up.name, f"{a}.F")
             connect(name, "web_b.F", down.name, f"{b}.F")
 

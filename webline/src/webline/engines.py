@@ -69,9 +69,21 @@ def refuse_slack_laminates(scene):
                          "as one Line FMU (webline run's default engine) or with --engine reference")
 
 
+def refuse_runout(scene):
+    """A roll with runout [R15] moves its span's length with its angle; the parts' co-simulation and its
+    SSP export are not checked against the reference for it (nor is its stable step predicted)."""
+    rolls = [c for c in scene.nodes if getattr(c, "runout", None) is not None]
+    if rolls:
+        c = rolls[0]
+        raise SceneError(f"{c.where}: {c.type} {c.name!r} has runout: the parts' co-simulation and its SSP export do not "
+                         "run a roll with runout; run the scene as one Line FMU (webline run's default engine) or with "
+                         "--engine reference")
+
+
 def refuse_for_parts(scene):
     """What a line of part FMUs cannot run (the parts' co-simulation and its SSP export): a web that may
-    slip, a drive's loop, a laminate that may go slack."""
+    slip, a drive's loop, a laminate that may go slack, a roll with runout."""
+    refuse_runout(scene)
     refuse_traction(scene)
     refuse_loops(scene)
     refuse_slack_laminates(scene)

@@ -27,6 +27,9 @@ scene. States:
 * each dancer's position y and speed y': m*y'' = load - F_b,up - F_a,down - c*y' - k*(y - y0);
 * each drive's loop (docs/physics.md [R10]-[R11]): its integrator I, and its motor's torque tau_m where
   it lags (`loop_torque`);
+* each roll with runout (docs/physics.md, "A roll with runout"), its angle, d(angle)/dt = omega: the web
+  touches the offset circle on the line from its span's far end, pulls with the arm p and crosses the
+  span's moving end at omega*p +- dL/dt (`runout_geometry`);
 * where the web may slip on a roller or dancer (docs/physics.md, "Rollers that slip"), the web's
   speed over it v_w: m_w dv_w/dt = T_b - T_a + f, the spans on both sides see v_w, and the roller
   turns by -R*f instead of R*(T_b - T_a) (`friction`); and the contact's grip u, the bristles' share
@@ -135,7 +138,10 @@ class LineODE:
         self.i_trim = {c.name: first + i for i, c in enumerate(trims)}
         # The dancers whose position a dancer loop holds: steady at its set point, spring or not.
         self.held_by_loop = {c.drive.loop.dancer.dancer for c in trims}
-        self.n = first + len(trims)
+        # A roll with runout: its angle [R15].
+        self.runouts = [c for c in scene.nodes if getattr(c, "runout", None) is not None]
+        self.i_angle = {c.name: first + len(trims) + i for i, c in enumerate(self.runouts)}
+        self.n = first + len(trims) + len(self.runouts)
         # A sampled loop's hold [R14]: the command it applies (None before its first sample: continuous),
         # a sample waiting out the delay (when it applies, its command), the last continuous command.
         self.sampled = {c.name: c.drive.loop for c in self.loops if c.drive.loop.sample > 0.0}
@@ -291,6 +297,7 @@ class LineODE:
         v = {node.name: self.speed(node, t, z) for node in s.nodes}
         # The spans see the web's speed where it may slip, the surface's elsewhere.
         w = v if self.stuck else {**v, **{c.name: z[i] for c, i in zip(self.slippers, self.i_vw.values())}}
+        runout = self.runout_state(t, z, dz)
         for sp in self.spans:
             up, down = self.up[sp.name], self.down[sp.name]
             dancer = up if isinstance(up, Dancer) else down if isinstance(down, Dancer) else None
@@ -300,6 +307,10 @@ class LineODE:
             else:
                 L, dL = sp.length, 0.0
             va, vb = w[up.name], w[down.name]
+            if up.name in runout and up.type == "unwinder":  # the roll's tangent point is the span's entry
+                L, dL, va = runout[up.name]["L"], runout[up.name]["dL"], runout[up.name]["v"]
+            if down.name in runout and down.type == "winder":
+                L, dL, vb = runout[down.name]["L"], runout[down.name]["dL"], runout[down.name]["v"]
             first = self.i_eps[sp.name]
             entries = self.entries(sp, t, z) if va >= 0 else None
             layers = []
@@ -342,6 +353,9 @@ class LineODE:
             if node.name in self.i_loop:
                 q[node.name] = {"tau": tau + self.loop_torque(node, t, z, q, dz)}
                 tau = q[node.name]["tau"]
+            if node.name in runout:  # the web at the roll pulls with the arm p [R15]
+                p = runout[node.name]["p"]
+                F_down, F_up = (F_down * p / R, F_up) if node.type == "unwinder" else (F_down, F_up * p / R)
             num = R * (F_down - F_up) + tau - b * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
@@ -369,6 +383,18 @@ class LineODE:
             dz[i] = ydot
             dz[i + 1] = (F - d.damping * ydot - d.stiffness * (y - d.y_start)) / d.mass
         return dz, q, v
+
+    def runout_state(self, t, z, dz):
+        """Each roll with runout at (t, z): its geometry (`runout_geometry`) by name, its angle's rate into dz."""
+        out = {}
+        for node in self.runouts:
+            mover = node.name in self.i_omega
+            R = self.radius(node, z) if mover else node.R
+            omega = z[self.i_omega[node.name]] if mover else self.speed(node, t, z) / R
+            span = self.s.spans_out(node)[0] if node.type == "unwinder" else self.s.spans_in(node)[0]
+            out[node.name] = runout_geometry(node, span.length, z[self.i_angle[node.name]], omega, R)
+            dz[self.i_angle[node.name]] = omega
+        return out
 
     @staticmethod
     def layer(sp, w1, w2, eps, deps, L, qa, va, vb, clamp=True):
@@ -465,7 +491,7 @@ class LineODE:
         held = [self.i_y[d.name] for d in springless]  # their positions: held
         balance = [i + 1 for i in held]  # their accelerations: checked afterwards
         # A roll's radius is never steady while web winds: held at its start, its rate not solved for.
-        rolls = list(self.i_r.values())
+        rolls = list(self.i_r.values()) + list(self.i_angle.values())  # and a roll's angle, which turns
         held, balance = held + rolls, balance + rolls
         # A laminate at rest is steady at any strains of its layers that pull as one: its layers move
         # together from their start (each layer's rate is zero whatever its strain; [M6]).
@@ -644,6 +670,8 @@ class LineODE:
                 names[m] = f"{k!r}'s motor torque"
         for k, i in self.i_trim.items():
             names[i] = f"{k!r}'s dancer loop integrator"
+        for k, i in self.i_angle.items():
+            names[i] = f"roll {k!r}'s angle"
         return names
 
     def given_state(self, t=0.0):
@@ -754,7 +782,32 @@ def atol_of(ode: LineODE, z0):
             a[m] = 1e-10
     for name, i in ode.i_trim.items():  # speeds
         a[i] = 1e-12
+    for name, i in ode.i_angle.items():  # radians
+        a[i] = 1e-12
     return a
+
+
+def runout_geometry(node, L0, angle, omega, R) -> dict:
+    """A roll with runout [R15] (docs/physics.md, "A roll with runout"): its surface a circle of radius R
+    about the centre C, e off the axis O; the web runs from the fixed point B = (L0, R) (its span's far
+    end; a winder seen in a mirror) along the line that touches the circle on the web's side. Returns
+    the span's length L = |T - B| and its rate dL/dt, the arm p (the axis's distance from the line),
+    and the web's speed across the span's moving end, omega*p + dL/dt (a winder's omega*p - dL/dt)."""
+    s = 1.0 if node.type == "unwinder" else -1.0
+    e = node.runout.eccentricity
+    psi = s * (angle + node.runout.phase)
+    C = e * np.array([np.sin(psi), np.cos(psi)])
+    C_rate = e * s * omega * np.array([np.cos(psi), -np.sin(psi)])
+    B = np.array([L0, R])
+    d = float(np.hypot(*(C - B)))
+    L = math.sqrt(d * d - R * R)
+    # The line from B turns off BC by asin(R/d), towards the web's side (clockwise seen from B).
+    beta = -math.asin(R / d)
+    u = (C - B) / d
+    direction = np.array([u[0] * math.cos(beta) - u[1] * math.sin(beta), u[0] * math.sin(beta) + u[1] * math.cos(beta)])
+    p = abs(float(direction[1] * B[0] - direction[0] * B[1]))  # |direction x (O - B)|
+    dL = float(np.dot(C - B, C_rate)) / L
+    return {"L": L, "dL": dL, "p": p, "v": omega * p + s * dL}
 
 
 # The least wrap whose web mass counts (a roller the web touches only at a nip), as the Roller's.

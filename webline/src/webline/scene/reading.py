@@ -5,6 +5,7 @@ with `file:line:column` of the offending key or value."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -26,6 +27,7 @@ from .types import (
     Loop,
     Prescribed,
     Roller,
+    Runout,
     Scene,
     SceneError,
     Span,
@@ -443,7 +445,7 @@ def _span(r, o_node, name, webs) -> Span:
 
 def _roller(r, o_node, name, kind) -> Roller:
     what = f"{kind} {name!r}"
-    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip", "wound", "at"]
+    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip", "wound", "runout", "at"]
     if kind == "roller":
         optional += ["merge", "split", "trim"]  # side paths: read by _branch
     required = ["type", "name"]
@@ -457,13 +459,16 @@ def _roller(r, o_node, name, kind) -> Roller:
         c.drive = _drive(r, o["drive"], f"{what}: drive", drives[kind])
     slips = "traction" in o or "nip" in o
     if c.drive.kind == "speed":
-        # With traction the roll's radius sets the web's mass on it and the air film: R is needed then.
-        for k in ("J", "b", "v_start") if slips else ("J", "R", "b", "v_start"):
+        # With traction the roll's radius sets the web's mass on it and the air film, with runout where
+        # the web touches [R15]: R is needed then.
+        radius = slips or "runout" in o
+        for k in ("J", "b", "v_start") if radius else ("J", "R", "b", "v_start"):
             if k in o:
                 raise r.err(r.key_pos(o[k]), f"{what}: {k} is not used: a speed-driven roller follows its speed profile exactly")
-        if slips:
+        if radius:
             if "R" not in o:
-                raise r.err(o_node, f"{what} needs the key 'R' with traction (the web's mass on the wrap and the air film depend on it)")
+                why = "the web's mass on the wrap and the air film depend on it" if slips else "the roll's surface, where the web touches"
+                raise r.err(o_node, f"{what} needs the key 'R' with {'traction' if slips else 'runout'} ({why})")
             c.R = r.quantity(o["R"], units.LENGTH, f"{what}: R", positive=True)
     else:
         for k in ("J", "R"):
@@ -510,7 +515,39 @@ def _roller(r, o_node, name, kind) -> Roller:
             c.wound.density = r.quantity(w["density"], units.DENSITY, f"{what}: wound: density", positive=True)
         if "width" in w:
             c.wound.width = r.quantity(w["width"], units.LENGTH, f"{what}: wound: width", positive=True)
+    if "runout" in o:
+        c.runout = _runout(r, o["runout"], what, kind)
     return c
+
+
+def _runout(r, node, what, kind) -> Runout:
+    """`"runout": {"eccentricity": length, "phase": angle}` on an unwinder or a winder [R15]."""
+    if kind == "roller":
+        raise r.err(r.key_pos(node), f"{what}: runout is a roll's: put it on an unwinder or a winder")
+    o = r.keys(node, f"{what}: runout", required=("eccentricity",), optional=("phase",))
+    e = r.quantity(o["eccentricity"], units.LENGTH, f"{what}: runout: eccentricity", nonnegative=True)
+    phase = math.radians(r.quantity(o["phase"], units.ANGLE, f"{what}: runout: phase")) if "phase" in o else 0.0
+    return Runout(eccentricity=e, phase=phase)
+
+
+def check_runout(r, scene, raw):
+    """A roll with runout moves the length of its own span [R15]: a plain span of given length (not a
+    dancer's, not a laminate's)."""
+    for c in scene.nodes:
+        if getattr(c, "runout", None) is None:
+            continue
+        (sp,) = scene.spans_out(c) if c.type == "unwinder" else scene.spans_in(c)
+        if sp.length is None or sp.layered:
+            raise SceneError(f"{c.where}: {c.type} {c.name!r}: runout moves the length of span {sp.name!r}, which "
+                             f"{'hangs from a dancer' if sp.length is None else 'carries a laminate'}: put a span of its own "
+                             f"length between the roll and it")
+        if scene.start == "equilibrium":
+            raise SceneError(f"{c.where}: {c.type} {c.name!r} has runout and the scene starts at \"equilibrium\": a roll that "
+                             "turns off its centre holds no steady state (its tangent point moves once a turn); start it "
+                             "\"given\" (the steady state of its round roll) and let the ripple settle")
+        if not sp.length > c.runout.eccentricity + c.R:
+            raise SceneError(f"{sp.where}: span {sp.name!r} of {sp.length:g} m is too short for {c.type} {c.name!r}'s runout: "
+                             f"its length must exceed the roll's radius plus its eccentricity ({c.R + c.runout.eccentricity:g} m)")
 
 
 def _fill_wound(scene):
@@ -763,6 +800,7 @@ def parse_scene(text: str, source: str = "<scene>", fmu_dir=None, base_dir=None)
 
     check_traction(r, scene, raw)
     check_loops(r, scene, raw)
+    check_runout(r, scene, raw)
     _fill_wound(scene)
 
     check_dancer_spans(r, scene, raw)

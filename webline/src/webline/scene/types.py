@@ -239,6 +239,16 @@ class Wound:
 
 
 @dataclass
+class Runout:
+    """An unwinder's or winder's roll whose surface, a circle of its radius, turns about an axis
+    `eccentricity` (m) off its centre [R15]; `phase` (rad) is the centre's angle from the web's side
+    at the start, in the roll's sense of turning (docs/physics.md, "A roll with runout")."""
+
+    eccentricity: float
+    phase: float = 0.0
+
+
+@dataclass
 class Component:
     name: str
     type: str
@@ -299,6 +309,7 @@ class Roller(Node):
     trim: float = 0.0  # a slitter: the width cut off as trim (m), which leaves without tension
     traction: Traction | None = None  # the web may slip on it
     wound: Wound | None = None  # an unwinder's or winder's roll that changes as web winds off or on
+    runout: Runout | None = None  # an unwinder's or winder's roll off its axis [R15]
 
     @property
     def has_fmu(self):
