@@ -114,6 +114,8 @@ fmi_core::bind_variables! {
         brake_creep: param(params.brake_creep),
         brake_grip: computed(brake_grip()),
         der_brake_grip: computed(rates().brake_grip),
+        drive_taper: param(params.drive_taper),
+        wound_merge: param(params.wound_merge),
     }
     integer {
         roll: param(params.roll),
