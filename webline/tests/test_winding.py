@@ -45,7 +45,8 @@ TAPERED = {"tension": {"table": [["0 s", "300 N"], ["1 s", "300 N"], ["3 s", "36
 
 @pytest.mark.parametrize("engine", ["line", "reference", "parts"])
 def test_a_tapered_winders_torque_over_its_radius_is_the_hyperbolic_law(fmus, engine):
-    r = engines.run_scene(scene(TAPERED), engine, fmu_dir=fmus)
+    # The parts' explicit coupling is stable up to 4.7 ms here (webline check): they step at 2 ms.
+    r = engines.run_scene(scene(TAPERED), engine, fmu_dir=fmus, step=2e-3 if engine == "parts" else None)
     t, radius = r.time, r.column("rewind.r")
     expected = tension_given(t) * (1.0 - K * (1.0 - R0 / radius))
     err = np.max(np.abs(r.column("rewind.tau") / radius - expected) / expected)
@@ -57,7 +58,7 @@ def test_a_tapered_winders_torque_over_its_radius_is_the_hyperbolic_law(fmus, en
     late = t > 4.0
     T = r.column("exit.T")[late]
     assert np.max(np.abs(T - expected[late]) / expected[late]) < 0.02
-    assert T[-1] < 0.95 * 360.0, "the taper must lower the tension"
+    assert T[-1] < 0.97 * 360.0, "the taper must lower the tension (360 N and more without it)"
 
 
 def test_a_taper_is_a_winders_and_between_0_and_1():
