@@ -1,4 +1,4 @@
-"""A winder's tapered tension and stepwise radius ([R15], [R16] of docs/physics.md).
+"""A winder's tapered tension and stepwise radius ([R16], [R17] of docs/physics.md).
 
 - `"drive": {"tension": T0, "taper": k}` holds T(r) = T0 (1 - k (1 - R/r)) as the roll grows, in every
   engine. The law is algebraic in the roll's radius and the profile's tension, so the drive's recorded
@@ -75,7 +75,7 @@ H, M = 2e-3, 30.0 / 360.0
 
 
 def stepwise(r):
-    """The stepwise law [R16], written out for this winder."""
+    """The stepwise law [R17], written out for this winder."""
     u = (r - R0) / H
     n = np.floor(u)
     return R0 + H * (n + np.maximum(0.0, (u - n - (1.0 - M)) / M))

@@ -281,7 +281,7 @@ impl Part {
     pub fn wound_roll_radius(&self, index: usize) -> Option<usize> {
         match self {
             // A stepwise radius on its plateau (at the start, unless it merges over the whole layer) holds the surface
-            // speed at a steady omega [R16]: no correction.
+            // speed at a steady omega [R17]: no correction.
             Part::Roller(r) if r.params.winding() && !r.speed_prescribed() && index == State::Omega.index() && r.contact_moves_with_radius() => {
                 Some(State::Radius.index())
             }

@@ -1,6 +1,6 @@
-//! A winder in the Line: its tapered tension drive [R15], whose torque over its radius is
+//! A winder in the Line: its tapered tension drive [R16], whose torque over its radius is
 //! T(r) = T0*(1 - k*(1 - R/r)) while the roll grows, T0 the profile's tension table; and its stepwise
-//! radius [R16], which the web meets and which steps by a layer once per layer.
+//! radius [R17], which the web meets and which steps by a layer once per layer.
 
 use fmi_core::{Experiment, Model, Resources, Variables};
 use line::Line;
@@ -115,7 +115,7 @@ fn a_taper_on_an_unwinder_is_refused_and_off_a_tension_drive_is_not_offered() {
     assert!(line.description().variable_by_name("wind.drive.taper").is_some());
 }
 
-/// The stepwise radius [R16] of the test, written out: h = 2 mm, R = 0.2 m, a merge of 30 degrees.
+/// The stepwise radius [R17] of the test, written out: h = 2 mm, R = 0.2 m, a merge of 30 degrees.
 fn stepwise(r: f64) -> f64 {
     let (h, r0, m) = (2e-3, 0.2, 30.0 / 360.0);
     let u = (r - r0) / h;

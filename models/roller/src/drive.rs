@@ -62,7 +62,7 @@ pub fn torque<N: Number>(p: &Parameters, read: Read, tau_m: N, radius: N) -> N {
     }
 }
 
-/// r*T(r)/T0 of a tension drive with the hyperbolic taper [R15], T(r) = T0*(1 - k*(1 - R/r)):
+/// r*T(r)/T0 of a tension drive with the hyperbolic taper [R16], T(r) = T0*(1 - k*(1 - R/r)):
 /// (1 - k)*r + k*R, R the roll's start radius (a `set` event's new roll: its R); r without taper.
 #[inline]
 pub fn tapered_lever<N: Number>(p: &Parameters, radius: N) -> N {

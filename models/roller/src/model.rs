@@ -129,7 +129,7 @@ impl Roller {
     }
 
     /// Whether the radius the web meets moves with r now (at r's rate): where it moves smoothly, or a
-    /// stepwise radius [R16] within a merge that spans the whole layer; not on a stepwise plateau.
+    /// stepwise radius [R17] within a merge that spans the whole layer; not on a stepwise plateau.
     pub fn contact_moves_with_radius(&self) -> bool {
         !roll::stepped(&self.params) || roll::stepwise(&self.params, self.roll.radius).1 == 1.0
     }

@@ -83,7 +83,7 @@ pub struct Parameters {
     pub dancer_ki: f64,
     /// A winder's taper k: its tension drive holds T0*(1 - k*(1 - R/r)) (`drive::torque`).
     pub drive_taper: f64,
-    /// The angle over which a stepwise radius moves by a layer (0: smooth) [R16], rad.
+    /// The angle over which a stepwise radius moves by a layer (0: smooth) [R17], rad.
     pub wound_merge: f64,
 }
 

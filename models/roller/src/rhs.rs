@@ -132,7 +132,7 @@ fn commanded<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
     drive::torque(p, at.drive, u.torque, lever(p, at, x.radius)) + loop_torque + brake_at(p, at, x, v).0
 }
 
-/// The radius the web meets, [R1]'s lever and v = r_w*omega [R16]: r, or a roll's stepwise radius where
+/// The radius the web meets, [R1]'s lever and v = r_w*omega [R17]: r, or a roll's stepwise radius where
 /// the surface follows no speed (a speed drive's surface follows its table at r).
 #[inline(always)]
 fn lever<N: Number>(p: &Parameters, at: &Point, radius: N) -> N {
@@ -171,7 +171,7 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         Some((_, slope)) => (physics::omega_rate_at_speed(slope, v, r, radius_rate), N::constant(slope)),
         None => {
             let rate = physics::net_torque(t.web, torque, t.bearing) / t.inertia;
-            // v = r_w*omega: r_w moves with r at its slope (1 where it moves smoothly) [R16].
+            // v = r_w*omega: r_w moves with r at its slope (1 where it moves smoothly) [R17].
             let slope = if roll::stepped(p) { roll::stepwise(p, r.value()).1 } else { 1.0 };
             (rate, lever(p, at, r) * rate + omega * radius_rate * slope)
         }

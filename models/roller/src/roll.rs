@@ -56,7 +56,7 @@ pub fn radius_rate<N: Number>(p: &Parameters, radius: N, speed: N, strain: N) ->
     speed * (p.roll_sign() * p.wound_thickness) / (radius * (strain + 1.0) * (2.0 * PI))
 }
 
-/// The radius at which the web meets the roll [R16]: r, or with `wound.merge` > 0 the stepwise radius
+/// The radius at which the web meets the roll [R17]: r, or with `wound.merge` > 0 the stepwise radius
 /// (`stepwise`), which the lever of [R1] and the surface speed v = r_w*omega read; r itself (the roll's
 /// mass and inertia, [R3]) moves smoothly.
 #[inline]
@@ -68,13 +68,13 @@ pub fn contact_radius<N: Number>(p: &Parameters, radius: N) -> N {
     radius.map(value, slope)
 }
 
-/// Whether the radius the web meets steps [R16].
+/// Whether the radius the web meets steps [R17].
 #[inline]
 pub fn stepped(p: &Parameters) -> bool {
     p.winding() && p.wound_merge > 0.0
 }
 
-/// The stepwise radius at the smooth radius r, and its slope d(r_w)/dr [R16]: with u = s*(r - R)/h the
+/// The stepwise radius at the smooth radius r, and its slope d(r_w)/dr [R17]: with u = s*(r - R)/h the
 /// layers wound on (s = 1) or off (s = -1) since the start radius R, n = floor(u) and m = merge/(2 pi),
 /// r_w = R + s*h*(n + max(0, (u - n - (1 - m))/m)): held for 1 - m of each layer, moved by h over its
 /// last m, so that r_w = r where each merge ends (u an integer).

@@ -172,7 +172,7 @@ impl Roller {
         }
         if roll::stepped(&self.params) {
             return Err(FmiError::error(format!(
-                "wound.merge = {} rad: a stepwise radius [R16] runs in Model Exchange and in the Line FMU; this Co-Simulation \
+                "wound.merge = {} rad: a stepwise radius [R17] runs in Model Exchange and in the Line FMU; this Co-Simulation \
                  step holds the radius over a piece (give wound.merge = 0, or run the line as one Line FMU)",
                 self.params.wound_merge
             )));

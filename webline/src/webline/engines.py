@@ -70,7 +70,7 @@ def refuse_slack_laminates(scene):
 
 
 def refuse_stepwise(scene):
-    """A stepwise radius [R16] moves the radius the web meets by a layer within a few degrees of a turn; the
+    """A stepwise radius [R17] moves the radius the web meets by a layer within a few degrees of a turn; the
     Roller FMU's co-simulation step holds the radius over a piece, so it refuses it (docs/physics.md)."""
     stepped = [c for c in scene.nodes if getattr(getattr(c, "wound", None), "merge", 0.0)]
     if stepped:

@@ -60,7 +60,7 @@ RTOL = 1e-10
 
 
 def stepwise_radius(r, r0, h, merge, sign):
-    """The stepwise radius at the smooth radius r, and its slope [R16]: u = sign (r - r0)/h layers wound on
+    """The stepwise radius at the smooth radius r, and its slope [R17]: u = sign (r - r0)/h layers wound on
     (sign 1) or off (-1) since r0, n = floor(u), m = merge/(2 pi): r0 + sign h (n + max(0, (u - n - (1 - m))/m)),
     which is r where each merge ends."""
     m = min(merge / (2.0 * np.pi), 1.0)
@@ -182,14 +182,14 @@ class LineODE:
 
     def lever(self, node, z):
         """The radius the web meets, [R1]'s lever and v = r_w omega: the roll's radius, or with a stepwise
-        `wound.merge` its stepwise radius [R16] (`stepwise_radius`); the radius itself moves smoothly."""
+        `wound.merge` its stepwise radius [R17] (`stepwise_radius`); the radius itself moves smoothly."""
         r = self.radius(node, z)
         w = getattr(node, "wound", None)
         return r if w is None or not w.merge else stepwise_radius(r, self.inertia[node.name][1], w.thickness, w.merge,
                                                                   -1.0 if node.type == "unwinder" else 1.0)[0]
 
     def lever_slope(self, node, z):
-        """d(lever)/dr: 1 where the radius the web meets moves smoothly, a stepwise radius's slope [R16]."""
+        """d(lever)/dr: 1 where the radius the web meets moves smoothly, a stepwise radius's slope [R17]."""
         w = getattr(node, "wound", None)
         if w is None or not w.merge:
             return 1.0
@@ -224,7 +224,7 @@ class LineODE:
         return 0.0
 
     def tapered_lever(self, node, r):
-        """r T(r)/T0 of a winder's tension drive with the hyperbolic taper k [R15], T(r) = T0 (1 - k (1 - R/r)):
+        """r T(r)/T0 of a winder's tension drive with the hyperbolic taper k [R16], T(r) = T0 (1 - k (1 - R/r)):
         (1 - k) r + k R, R the roll's start radius (a new roll's after an event)."""
         k = node.drive.taper
         return r if k == 0.0 else (1.0 - k) * r + k * self.inertia[node.name][1]
@@ -365,7 +365,7 @@ class LineODE:
             if node.name in self.i_r:  # [R3]: d(r^2)/dt = s h v/(pi (1 + eps)), J(r); [R1] balances J domega/dt
                 r = z[self.i_r[node.name]]
                 J = self.roll_inertia(node, r)
-                R = self.lever(node, z)  # the radius the web meets [R16]: r, or stepwise
+                R = self.lever(node, z)  # the radius the web meets [R17]: r, or stepwise
                 slope = self.lever_slope(node, z)
                 dz[self.i_r[node.name]] = self.radius_rate(node, t, z, r, R * omega)
             # Every web leaving pulls forward, every web arriving pulls back (a nip, a slitter: several).

@@ -319,7 +319,7 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
 
 
 def _tapered(r: _Reader, node: Node, what: str) -> Drive:
-    """A tension drive with a taper, {"tension": profile, "taper": k}: T(r) = T0 (1 - k (1 - R/r)) [R15],
+    """A tension drive with a taper, {"tension": profile, "taper": k}: T(r) = T0 (1 - k (1 - R/r)) [R16],
     0 <= k <= 1 (k = 1: a constant torque T0 R). Only a winder's (checked in _roller)."""
     o = r.keys(node, what, required=("tension", "taper"))
     drive = Drive("tension", r.profile(o["tension"], units.FORCE, f"{what}.tension"))
@@ -552,7 +552,7 @@ def _roller(r, o_node, name, kind) -> Roller:
 
 def _stepwise(r: _Reader, node: Node, what: str) -> float:
     """A stepwise radius, {"merge": angle}: the angle over which the radius the web meets steps by a layer
-    [R16], in (0, 360] degrees; returned in radians."""
+    [R17], in (0, 360] degrees; returned in radians."""
     o = r.keys(node, what, required=("merge",))
     merge = r.quantity(o["merge"], units.ANGLE, f"{what}.merge", positive=True)
     if merge > 360.0:
