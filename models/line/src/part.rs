@@ -280,7 +280,11 @@ impl Part {
     /// steady state holds that roll's surface speed, so omega moves with the radius ([R1], [R3]).
     pub fn wound_roll_radius(&self, index: usize) -> Option<usize> {
         match self {
-            Part::Roller(r) if r.params.winding() && !r.speed_prescribed() && index == State::Omega.index() => Some(State::Radius.index()),
+            // A stepwise radius on its plateau (at the start, unless it merges over the whole layer) holds the surface
+            // speed at a steady omega [R17]: no correction.
+            Part::Roller(r) if r.params.winding() && !r.speed_prescribed() && index == State::Omega.index() && r.contact_moves_with_radius() => {
+                Some(State::Radius.index())
+            }
             _ => None,
         }
     }
@@ -446,6 +450,7 @@ fn structure(spec: &PartSpec) -> Structure {
         setpoint_table: spec.has_table("setpoint"),
         reference_table: spec.has_table("reference"),
         brake_table: spec.has_table("brake"),
+        tension_table: spec.has_table("tension"),
         set_input: spec.set_input,
         speed_input: spec.speed_input,
     }

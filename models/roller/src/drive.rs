@@ -58,8 +58,18 @@ pub fn torque<N: Number>(p: &Parameters, read: Read, tau_m: N, radius: N) -> N {
     match read {
         Read::None => tau_m,
         Read::Torque(x) => tau_m + x,
-        Read::Tension(x) => tau_m + radius * p.roll_sign() * x,
+        Read::Tension(x) => tau_m + tapered_lever(p, radius) * (p.roll_sign() * x),
     }
+}
+
+/// r*T(r)/T0 of a tension drive with the hyperbolic taper [R16], T(r) = T0*(1 - k*(1 - R/r)):
+/// (1 - k)*r + k*R, R the roll's start radius (a `set` event's new roll: its R); r without taper.
+#[inline]
+pub fn tapered_lever<N: Number>(p: &Parameters, radius: N) -> N {
+    if p.drive_taper == 0.0 {
+        return radius;
+    }
+    radius * (1.0 - p.drive_taper) + p.drive_taper * p.radius
 }
 
 /// A checked profile and its text (kept for FMU states, which restore
@@ -87,6 +97,19 @@ pub fn load(p: &Parameters, resources: &Resources) -> FmiResult<Result<Loaded, O
     let Some(path) = located.path else { return Ok(Err(located.unmatched)) };
     let text = Profile::read_text(&path).map_err(FmiError::error)?;
     parse(p, &text).map(Ok).map_err(|e| FmiError::error(format!("profile {}: {e}", path.display())))
+}
+
+/// Why drive.taper is refused (None: it acts, or is 0, or has nothing to act on, as `Parameters::acts`
+/// says): on an unwinder's tension drive it would mean tapering an unwind, which is not a taper (the
+/// roll's wound-in stresses are set; its tension is what the process needs).
+pub fn taper_refusal(p: &Parameters, drive: Drive) -> Option<String> {
+    (p.drive_taper != 0.0 && drive == Drive::Tension && p.roll == crate::parameters::UNWINDER).then(|| {
+        format!(
+            "drive.taper = {}: a taper acts on a winder's tension drive (roll = 2), this is an unwinder's (roll = 1): an unwinder's \
+             tension is not tapered (its roll's wound-in stresses are set); give drive.taper = 0",
+            p.drive_taper
+        )
+    })
 }
 
 /// Parses and checks a profile against the roller's parameters.

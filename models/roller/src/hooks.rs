@@ -109,6 +109,9 @@ impl Model for Roller {
             Ok(loaded) => (Some(loaded), None),
             Err(unmatched) => (None, unmatched),
         };
+        if let Some(why) = drive::taper_refusal(&self.params, profile.as_ref().map_or(drive::Drive::Torque, |l| l.drive)) {
+            return Err(FmiError::error(why));
+        }
         // A start value is only warned about: loop.kind = 1 alone leaves loop.set at its start, 0.
         let set_point = profile.as_ref().is_none_or(|loaded| loaded.table(drive::Key::Set).is_none()).then(|| control::set_point_refusal(p, p.loop_set)).flatten();
         self.profile = profile;

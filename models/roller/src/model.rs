@@ -7,7 +7,7 @@ use crate::drive::{self, Drive, Key, Loaded};
 use crate::jacobian::{Direction, Linearization, Tangents};
 use crate::parameters::{Inputs, Parameters, STATES};
 use crate::rhs::{self, Point, Slip};
-use crate::roll::Roll;
+use crate::roll::{self, Roll};
 use crate::state::{State, States};
 use crate::{carriage, contact, control, physics};
 use fmi_core::FmiResult;
@@ -129,6 +129,12 @@ impl Roller {
             | State::Grip
             | State::BrakeGrip => false,
         }
+    }
+
+    /// Whether the radius the web meets moves with r now (at r's rate): where it moves smoothly, or a
+    /// stepwise radius [R17] within a merge that spans the whole layer; not on a stepwise plateau.
+    pub fn contact_moves_with_radius(&self) -> bool {
+        !roll::stepped(&self.params) || roll::stepwise(&self.params, self.roll.radius).1 == 1.0
     }
 
     /// The surface speed follows a speed table (a source, a sink, a speed
@@ -278,7 +284,7 @@ impl Roller {
     pub fn surface_speed(&self) -> f64 {
         match self.prescribed(self.time) {
             Some((v, _)) => v,
-            None => physics::surface_speed(self.roll.radius, self.omega.value()),
+            None => physics::surface_speed(roll::contact_radius(&self.params, self.roll.radius), self.omega.value()),
         }
     }
 
@@ -337,9 +343,9 @@ impl Roller {
     }
 
     /// Whether the equations depend on time at fixed states and inputs on the
-    /// piece of the profile they read at t: one of its tables has a slope there.
+    /// piece of the profile they read at t: one of its tables has a slope there, or a curvature.
     pub fn varies_with_time(&self, t: f64) -> bool {
-        self.profile.as_ref().is_some_and(|l| l.tables.iter().flatten().any(|table| self.read(table, t).1 != 0.0))
+        self.profile.as_ref().is_some_and(|l| l.tables.iter().flatten().any(|table| self.read(table, t).1 != 0.0 || table.curvature(t) != 0.0))
     }
 
     /// The strain of the web leaving at outlet `outlet` (0-based) (`rhs::strain_leaving`).

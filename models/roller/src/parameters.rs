@@ -87,6 +87,10 @@ pub struct Parameters {
     pub runout_e: f64,
     pub runout_phase: f64,
     pub runout_length: f64,
+    /// A winder's taper k: its tension drive holds T0*(1 - k*(1 - R/r)) (`drive::torque`).
+    pub drive_taper: f64,
+    /// The angle over which a stepwise radius moves by a layer (0: smooth) [R17], rad.
+    pub wound_merge: f64,
 }
 
 /// What the drive's loop holds (`loop.kind`).
@@ -233,6 +237,8 @@ pub struct Structure {
     pub setpoint_table: bool,
     pub reference_table: bool,
     pub brake_table: bool,
+    /// A tension drive: the profile's tension table.
+    pub tension_table: bool,
     /// The line gives a force loop's set point (`set_input`), a loop's or an ideal speed drive's speed (`speed_input`).
     pub set_input: bool,
     pub speed_input: bool,
@@ -250,7 +256,7 @@ impl Parameters {
         let speed_loop = matches!(kind, Kind::Speed | Kind::Dancer);
         match var {
             Real::J | Real::R | Real::b | Real::v_start => !s.speed_driven,
-            Real::wound_thickness | Real::wound_density | Real::wound_width => self.roll != 0 && !s.speed_driven,
+            Real::wound_thickness | Real::wound_density | Real::wound_width | Real::wound_merge => self.roll != 0 && !s.speed_driven,
             Real::carriage_m | Real::carriage_d | Real::carriage_k | Real::carriage_y_start => self.carriage,
             Real::web_a_m | Real::web_a2_m => self.inlets >= 2,
             Real::web_a3_m => self.inlets >= 3,
@@ -270,6 +276,7 @@ impl Parameters {
             Real::loop_acceleration => self.loop_feedforward && !s.reference_table,
             Real::loop_sample | Real::loop_delay => kind != Kind::None,
             Real::brake_v_slip | Real::brake_creep => s.brake_table,
+            Real::drive_taper => self.roll == WINDER && s.tension_table,
             Real::dancer_set | Real::dancer_kp | Real::dancer_ki => kind == Kind::Dancer,
             Real::loop_kp | Real::loop_ki | Real::motor_limit => kind != Kind::None,
             Real::loop_sign | Real::motor_lag | Real::load_cell_wrap => true,

@@ -83,7 +83,7 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) 
     let inertia = at.roll.inertia(p, r);
     let v = match at.prescribed {
         Some((v, _)) => N::constant(v),
-        None => physics::surface_speed(r, omega),
+        None => physics::surface_speed(lever(p, at, r), omega),
     };
     let friction = at.slip.map(|s| {
         let knowns = [x.web_speed, v, u.force_a[0], u.force_b[0], r, x.grip];
@@ -93,7 +93,7 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) 
     let web = match (friction, runout) {
         (Some((f, _, _)), _) => -(r * f),
         (None, Some(g)) => runout::web_torque(p, r, g.arm, u),
-        (None, None) => physics::web_torque(p, r, u),
+        (None, None) => physics::web_torque(p, lever(p, at, r), u),
     };
     Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia), runout }
 }
@@ -103,7 +103,7 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) 
 fn loop_law<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, inertia: N) -> control::Law<N> {
     control::law(p, &at.control, &control::Seen {
         omega: x.omega,
-        radius: x.radius,
+        radius: lever(p, at, x.radius),
         inertia,
         strain: roll_strain(p, at.strain, &u.strain_a),
         measured: u.measured,
@@ -135,7 +135,18 @@ fn drive_torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs
 /// The torque a drive that follows no speed gives: its table and tau_m, its loop, a brake.
 #[inline(always)]
 fn commanded<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>, loop_torque: N, v: N) -> N {
-    drive::torque(p, at.drive, u.torque, x.radius) + loop_torque + brake_at(p, at, x, v).0
+    drive::torque(p, at.drive, u.torque, lever(p, at, x.radius)) + loop_torque + brake_at(p, at, x, v).0
+}
+
+/// The radius the web meets, [R1]'s lever and v = r_w*omega [R17]: r, or a roll's stepwise radius where
+/// the surface follows no speed (a speed drive's surface follows its table at r).
+#[inline(always)]
+fn lever<N: Number>(p: &Parameters, at: &Point, radius: N) -> N {
+    if at.prescribed.is_some() {
+        radius
+    } else {
+        roll::contact_radius(p, radius)
+    }
 }
 
 /// A brake's torque and its grip's rate [R12] (0 and 0 without a brake table).
@@ -152,7 +163,7 @@ pub fn torque<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N
         return drive_torque(p, at, x, u, &torques(p, at, x, u));
     }
     let loop_torque = loop_law(p, at, x, u, at.roll.inertia(p, x.radius)).torque;
-    commanded(p, at, x, u, loop_torque, physics::surface_speed(x.radius, x.omega))
+    commanded(p, at, x, u, loop_torque, physics::surface_speed(lever(p, at, x.radius), x.omega))
 }
 
 /// d(states)/dt [R1]-[R4], [R6], [R10]-[R13].
@@ -166,7 +177,9 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         Some((_, slope)) => (physics::omega_rate_at_speed(slope, v, r, radius_rate), N::constant(slope)),
         None => {
             let rate = physics::net_torque(t.web, torque, t.bearing) / t.inertia;
-            (rate, r * rate + omega * radius_rate)
+            // v = r_w*omega: r_w moves with r at its slope (1 where it moves smoothly) [R17].
+            let slope = if roll::stepped(p) { roll::stepwise(p, r.value()).1 } else { 1.0 };
+            (rate, lever(p, at, r) * rate + omega * radius_rate * slope)
         }
     };
     let (y_rate, y_speed_rate) = carriage::rates(p, x.carriage_y, x.carriage_speed, || carriage::force(u.load, at.load, u.pull_back(p), u.pull_forward(p)));

@@ -56,6 +56,41 @@ pub fn radius_rate<N: Number>(p: &Parameters, radius: N, speed: N, strain: N) ->
     speed * (p.roll_sign() * p.wound_thickness) / (radius * (strain + 1.0) * (2.0 * PI))
 }
 
+/// The radius at which the web meets the roll [R17]: r, or with `wound.merge` > 0 the stepwise radius
+/// (`stepwise`), which the lever of [R1] and the surface speed v = r_w*omega read; r itself (the roll's
+/// mass and inertia, [R3]) moves smoothly.
+#[inline]
+pub fn contact_radius<N: Number>(p: &Parameters, radius: N) -> N {
+    if !stepped(p) {
+        return radius;
+    }
+    let (value, slope) = stepwise(p, radius.value());
+    radius.map(value, slope)
+}
+
+/// Whether the radius the web meets steps [R17].
+#[inline]
+pub fn stepped(p: &Parameters) -> bool {
+    p.winding() && p.wound_merge > 0.0
+}
+
+/// The stepwise radius at the smooth radius r, and its slope d(r_w)/dr [R17]: with u = s*(r - R)/h the
+/// layers wound on (s = 1) or off (s = -1) since the start radius R, n = floor(u) and m = merge/(2 pi),
+/// r_w = R + s*h*(n + max(0, (u - n - (1 - m))/m)): held for 1 - m of each layer, moved by h over its
+/// last m, so that r_w = r where each merge ends (u an integer).
+pub fn stepwise(p: &Parameters, radius: f64) -> (f64, f64) {
+    let (s, h) = (p.roll_sign(), p.wound_thickness);
+    let m = (p.wound_merge / (2.0 * PI)).min(1.0);
+    let layers = s * (radius - p.radius) / h;
+    let n = layers.floor();
+    let into_merge = layers - n - (1.0 - m);
+    if into_merge <= 0.0 {
+        (p.radius + s * h * n, 0.0)
+    } else {
+        (p.radius + s * h * (n + into_merge / m), 1.0 / m)
+    }
+}
+
 /// The warning for a roll that winds with no density: its radius moves while J stays J_start, so the
 /// angular momentum and mass the web carries are not the roll's ([R1], [R3]); legal (a massless wound
 /// web), but rarely meant.
@@ -95,6 +130,29 @@ pub fn wound_radius(p: &Parameters, radius: f64, travel: f64, strain: f64) -> Op
 mod tests {
     use super::*;
     use crate::parameters::{UNWINDER, WINDER};
+
+    /// Where each merge ends (r = R + s*n*h) the stepwise radius is the smooth one, to 1e-9 of h (rounding
+    /// leaves 1e-16 of r); before the merge it holds the last layer's radius, within it it moves by h/m per h.
+    #[test]
+    fn the_stepwise_radius_is_the_smooth_one_where_each_merge_ends() {
+        for (roll, s) in [(WINDER, 1.0), (UNWINDER, -1.0)] {
+            let (h, r0) = (50e-6, 0.3);
+            let p = Parameters { roll, wound_thickness: h, radius: r0, wound_merge: 30f64.to_radians(), ..Parameters::default() };
+            for n in 1..2000 {
+                let end = r0 + s * h * n as f64;
+                assert!((stepwise(&p, end).0 - end).abs() < 1e-9 * h, "n = {n}: {} against {end}", stepwise(&p, end).0);
+                // Halfway through the layer: held at the last merge's radius, slope 0.
+                let held = stepwise(&p, end + 0.5 * s * h);
+                assert!((held.0 - end).abs() < 1e-9 * h && held.1 == 0.0, "n = {n}: {held:?}");
+                // A quarter into the merge (the last 1/12 of the layer): a quarter of h on.
+                let inside = stepwise(&p, end + s * h * (1.0 - 0.75 / 12.0));
+                assert!((inside.0 - (end + 0.25 * s * h)).abs() < 1e-9 * h && (inside.1 - 12.0).abs() < 1e-9, "n = {n}: {inside:?}");
+            }
+            // Merging over the whole layer is the smooth law.
+            let whole = Parameters { wound_merge: 2.0 * PI, ..p };
+            assert!((stepwise(&whole, r0 + s * 3.3 * h).0 - (r0 + s * 3.3 * h)).abs() < 1e-15);
+        }
+    }
 
     #[test]
     fn a_winder_grows_by_thickness_times_unstretched_travel_over_pi() {

@@ -93,6 +93,13 @@ pub fn refusal(p: &Parameters) -> Option<String> {
             p.roll, p.carriage, p.traction
         ));
     }
+    if p.wound_merge > 0.0 {
+        return Some(format!(
+            "runout = true with wound.merge = {} rad: runout with a stepwise radius [R17] is not modelled (the arm is the \
+             smooth radius's); set wound.merge = 0",
+            p.wound_merge
+        ));
+    }
     if !(p.runout_length > p.runout_e + p.radius) {
         return Some(format!(
             "runout.L = {} m with runout.e = {} m and R = {} m: the span's fixed end must lie beyond the roll (runout.L > runout.e + R)",

@@ -4,7 +4,7 @@
 //! (the web's slip [R6]-[R7], a loop [R10]-[R11], a brake [R12]).
 
 use crate::parameters::Kind;
-use crate::drive::{Drive, Key};
+use crate::drive::{self, Drive, Key};
 use crate::model::Roller;
 use crate::rhs::{self, Point};
 use crate::roll::{self, Roll};
@@ -165,6 +165,20 @@ impl Roller {
     /// and where a `set` event falls; one at the end (within the profiles'
     /// tolerance) applies at the start of the next step.
     pub(crate) fn advance(&mut self, h: f64) -> FmiResult {
+        let curved = |l: &drive::Loaded| l.tables.iter().zip(drive::TABLES).find_map(|(t, key)| t.as_ref().filter(|t| t.is_curved()).map(|_| key));
+        if let Some(key) = self.profile.as_ref().and_then(curved) {
+            return Err(FmiError::error(format!(
+                "the profile's {key} table has a quadratic piece (an S-curve): this Co-Simulation step takes a table as linear \
+                 over a piece; run the line as one Line FMU, or in Model Exchange"
+            )));
+        }
+        if roll::stepped(&self.params) {
+            return Err(FmiError::error(format!(
+                "wound.merge = {} rad: a stepwise radius [R17] runs in Model Exchange and in the Line FMU; this Co-Simulation \
+                 step holds the radius over a piece (give wound.merge = 0, or run the line as one Line FMU)",
+                self.params.wound_merge
+            )));
+        }
         let end = self.time + h;
         let last = end - profiles::tolerance(end);
         let mut t = self.time;

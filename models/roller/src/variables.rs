@@ -119,6 +119,8 @@ fmi_core::bind_variables! {
         runout_L: param(params.runout_length),
         angle: computed(angle()),
         der_angle: computed(rates().angle),
+        drive_taper: param(params.drive_taper),
+        wound_merge: param(params.wound_merge),
     }
     integer {
         roll: param(params.roll),

@@ -72,7 +72,7 @@ fn hints() -> Hints {
             Point { values: vec![("speed.input", 1.0), ("loop.speed", 6.0), ("web_a.F", 100.0), ("web_b.F", 120.0)], texts: vec![] },
         ],
         texts: vec![("profile", speed_drive.into())],
-        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop", "a sampled loop's period is 0 (continuous) or at least", "a sampled loop's delay is at most its period", "runout [R15] is a roll's", "the span's fixed end must lie beyond the roll"],
+        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop", "a sampled loop's period is 0 (continuous) or at least", "a sampled loop's delay is at most its period", "runout [R15] is a roll's", "a stepwise radius [R17] runs in Model Exchange", "runout with a stepwise radius [R17] is not modelled", "the span's fixed end must lie beyond the roll"],
     }
 }
 

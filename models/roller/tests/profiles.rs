@@ -385,3 +385,22 @@ fn a_braked_roller_holds_after_it_stops() {
         }
     }
 }
+
+/// The Co-Simulation step takes a table as linear over a piece [R1]'s exact step: a quadratic piece
+/// (an S-curve) and a stepwise radius [R17] are refused by name at the step (Model Exchange and the
+/// Line run both); a winder's taper [R16] on an unwinder is refused when initialization ends.
+#[test]
+fn what_the_co_simulation_step_cannot_follow_is_refused_by_name() {
+    let curved = r#"{"speed": [[0, 1], [1, 1.5, 1], [2, 2.5, -1]]}"#;
+    let mut m = roller(&[(Real::R, 0.1), (Real::J, 0.2)], Some(curved), |_| {}).unwrap();
+    m.set_time(0.0);
+    let e = m.do_step(0.1).unwrap_err().into_message();
+    assert!(e.contains("speed table has a quadratic piece"), "{e}");
+    let stepped = [(Real::R, 0.2), (Real::J, 1.0), (Real::wound_thickness, 1e-3), (Real::wound_density, 900.0), (Real::wound_merge, 0.5)];
+    let mut m = roller(&stepped, Some(r#"{"tension": [[0, 100]]}"#), |m| m.set_integer(Integer::roll.vr(), 2).unwrap()).unwrap();
+    m.set_time(0.0);
+    let e = m.do_step(0.1).unwrap_err().into_message();
+    assert!(e.contains("wound.merge = 0.5 rad: a stepwise radius [R17] runs in Model Exchange"), "{e}");
+    let e = roller(&[(Real::drive_taper, 0.3)], Some(r#"{"tension": [[0, 100]]}"#), |m| m.set_integer(Integer::roll.vr(), 1).unwrap()).unwrap_err();
+    assert!(e.contains("drive.taper = 0.3") && e.contains("an unwinder's tension is not tapered"), "{e}");
+}

@@ -11,6 +11,8 @@
 //! A table is `[[time, value], ...]`: times do not decrease, at most two
 //! entries share a time (a jump: the value before, then after), linear in
 //! between, constant before the first and after the last entry. SI units.
+//! An entry `[time, value, curvature]` makes the piece that ends there the
+//! quadratic through both entries with that second derivative (S-curves).
 
 mod table;
 
@@ -117,6 +119,24 @@ pub enum Value {
     Text(String),
 }
 
+/// A table's entry: [time, value], or [time, value, curvature], the second derivative of the piece
+/// that ends there (an S-curve's jerk phase: webline writes them).
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Entry {
+    Linear([f64; 2]),
+    Curved([f64; 3]),
+}
+
+impl Entry {
+    fn split(self) -> ([f64; 2], f64) {
+        match self {
+            Entry::Linear(p) => (p, 0.0),
+            Entry::Curved([t, x, q]) => ([t, x], q),
+        }
+    }
+}
+
 /// Parameter changes at one time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SetEvent {
@@ -164,8 +184,10 @@ impl Profile {
                     profile.events.push(event(i, e)?);
                 }
             } else if tables.contains(&key.as_str()) {
-                let points: Vec<[f64; 2]> = serde_json::from_value(value).map_err(|e| format!("{key}: {e} (a table is [[time, value], ...])"))?;
-                let table = Table::new(points).map_err(|e| format!("{key}: {e}"))?;
+                let entries: Vec<Entry> = serde_json::from_value(value)
+                    .map_err(|e| format!("{key}: {e} (a table is [[time, value], ...], or [time, value, curvature] for a quadratic piece)"))?;
+                let (points, curvature) = entries.into_iter().map(Entry::split).unzip();
+                let table = Table::curved(points, curvature).map_err(|e| format!("{key}: {e}"))?;
                 profile.tables.insert(key, table);
             } else {
                 let mut allowed: Vec<&str> = tables.to_vec();
@@ -268,11 +290,19 @@ mod tests {
     }
 
     #[test]
+    fn reads_a_curved_piece() {
+        let p = Profile::parse(r#"{"speed": [[0, 0], [1, 0.5, 1], [2, 1.5]]}"#, &["speed"]).unwrap();
+        let t = p.table("speed").unwrap();
+        assert_eq!((t.value(0.5), t.slope(0.5), t.value(1.5)), (0.125, 0.5, 1.0));
+    }
+
+    #[test]
     fn refuses_what_it_cannot_use_and_says_what() {
         let e = |text: &str| Profile::parse(text, &["speed"]).unwrap_err();
         assert!(e(r#"{"torque": [[0, 1]]}"#).contains("unknown key \"torque\" (allowed: speed, set)"));
         assert!(e(r#"{"speed": [[1, 1], [0, 1]]}"#).contains("speed: entry 1"));
-        assert!(e(r#"{"speed": [[0, 1, 2]]}"#).contains("speed:"));
+        assert!(e(r#"{"speed": [[0, 1, 2]]}"#).contains("speed: entry 0"));
+        assert!(e(r#"{"speed": [[0, 1, 2, 3]]}"#).contains("speed:"));
         assert!(e(r#"{"set": [{"time": 1}]}"#).contains("changes nothing"));
         assert!(e(r#"{"set": [{"time": 1, "b": [1]}]}"#).contains("must be a number or a text"));
         assert!(e(r#"{"set": [{"b": 1}]}"#).contains("set:"));

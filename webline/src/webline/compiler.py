@@ -48,8 +48,10 @@ MAX_PORTS = 4  # the Roller's inlets web_a..web_a4 and outlets web_b..web_b4
 WEB_FIELDS = ("E", "thickness", "width", "density", "d_r")
 
 def table(profile: Profile):
-    """A scene profile as a profile-JSON table [[t, value], ...]."""
-    return [[float(t), float(v)] for t, v in profile.knots]
+    """A scene profile as a profile-JSON table [[t, value], ...], [t, value, curvature] where the piece
+    ending at a knot is quadratic (an S-curve's jerk phase)."""
+    q = profile.curvature or (0.0,) * len(profile.knots)
+    return [[float(t), float(v)] + ([float(c)] if c else []) for (t, v), c in zip(profile.knots, q)]
 
 
 def web_values(side: str, web, web_library=None, clear_record=False) -> dict:
@@ -91,12 +93,16 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
     if wound is not None:
         start.update({"wound.thickness": float(wound.thickness), "wound.density": float(wound.density),
                       "wound.width": float(wound.width)})
+        if wound.merge:
+            start["wound.merge"] = float(wound.merge)
     start.update(runout_values(scene, node))
     drive = getattr(node, "drive", None)
     if drive is not None and drive.kind in ("torque", "tension", "brake"):
         profile[drive.kind] = table(drive.profile)
     if drive is not None and drive.kind == "brake":
         start.update({"brake.v_slip": BRAKE_V_SLIP, "brake.creep": float(drive.creep)})
+    if drive is not None and drive.taper:
+        start["drive.taper"] = float(drive.taper)
     if drive is not None and drive.loop is not None:
         start.update(loop_values(drive.loop))
         if drive.loop.speed and drive.loop.set_input:  # the Line FMU's input v_ref, starting there

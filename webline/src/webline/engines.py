@@ -28,6 +28,7 @@ from .fmus import DEFAULT_FMU_DIR, ROLLER_FMU, SPAN_FMU, identity
 from .names import ARCHIVE_ENGINES, DEFAULT, engine_name
 from .result import Result
 from .scene import SceneError
+from .scene.types import profiles_of
 from .ssp import SSD, SspError, _variables
 from .system import System
 
@@ -80,13 +81,37 @@ def refuse_runout(scene):
                          "--engine reference")
 
 
+def refuse_stepwise(scene):
+    """A stepwise radius [R17] moves the radius the web meets by a layer within a few degrees of a turn; the
+    Roller FMU's co-simulation step holds the radius over a piece, so it refuses it (docs/physics.md)."""
+    stepped = [c for c in scene.nodes if getattr(getattr(c, "wound", None), "merge", 0.0)]
+    if stepped:
+        c = stepped[0]
+        raise SceneError(f"{c.where}: {c.type} {c.name!r} has a stepwise radius (wound.stepwise): the Roller FMU's "
+                         "co-simulation step holds its radius over a piece, so the parts' co-simulation and its SSP export "
+                         "refuse it; run the scene as one Line FMU (webline run's default engine) or with --engine reference")
+
+
+def refuse_scurves(scene):
+    """An S-curve's jerk phases are quadratic pieces; the Roller FMU's co-simulation step takes a table as
+    linear over a piece, and the master passes a profile's value and slope at a step's start."""
+    for c in scene.parts:
+        for p in profiles_of(c):
+            if p.is_curved():
+                raise SceneError(f"{c.where}: {c.type} {c.name!r} has an S-curve profile (\"scurve\"): the parts' co-simulation "
+                                 "and its SSP export take profiles as linear within a step; run the scene as one Line FMU "
+                                 "(webline run's default engine) or with --engine reference")
+
+
 def refuse_for_parts(scene):
     """What a line of part FMUs cannot run (the parts' co-simulation and its SSP export): a web that may
-    slip, a drive's loop, a laminate that may go slack, a roll with runout."""
+    slip, a drive's loop, a laminate that may go slack, a roll with runout, a stepwise radius, an S-curve."""
     refuse_runout(scene)
     refuse_traction(scene)
     refuse_loops(scene)
     refuse_slack_laminates(scene)
+    refuse_stepwise(scene)
+    refuse_scurves(scene)
 
 
 def run_scene(scene, engine: str | None = None, fmu_dir=None, step: float | None = None, force: bool = False,

@@ -61,6 +61,17 @@ from .scene import BRAKE_V_SLIP, STRAIN_RANGE, Dancer, Prescribed, Roller, Scene
 RTOL = 1e-10
 
 
+
+def stepwise_radius(r, r0, h, merge, sign):
+    """The stepwise radius at the smooth radius r, and its slope [R17]: u = sign (r - r0)/h layers wound on
+    (sign 1) or off (-1) since r0, n = floor(u), m = merge/(2 pi): r0 + sign h (n + max(0, (u - n - (1 - m))/m)),
+    which is r where each merge ends."""
+    m = min(merge / (2.0 * np.pi), 1.0)
+    u = sign * (r - r0) / h
+    n = np.floor(u)
+    into = u - n - (1.0 - m)
+    return (r0 + sign * h * n, 0.0) if into <= 0.0 else (r0 + sign * h * (n + into / m), 1.0 / m)
+
 class EquilibriumError(SceneError):
     """The line has no steady state for its drives at the start; the message says why and the way out."""
 
@@ -164,13 +175,32 @@ class LineODE:
         a, b = self.segment
         return profile.value_left(t) if t >= b and b > a else profile.value(t)
 
-    def pslope(self, profile):
-        return profile.slope(self.segment[0])
+    def pslope(self, profile, t):
+        """A profile's slope at t inside the current segment [a, b]: the left slope at b (one piece of every
+        profile: an S-curve's slope moves within it)."""
+        a, b = self.segment
+        return profile.slope_left(t) if t >= b and b > a else profile.slope(t)
 
     def radius(self, node, z):
         """The roller's radius: a roll's state where its web winds [R3], else its R."""
         i = self.i_r.get(node.name)
         return z[i] if i is not None else self.inertia[node.name][1]
+
+    def lever(self, node, z):
+        """The radius the web meets, [R1]'s lever and v = r_w omega: the roll's radius, or with a stepwise
+        `wound.merge` its stepwise radius [R17] (`stepwise_radius`); the radius itself moves smoothly."""
+        r = self.radius(node, z)
+        w = getattr(node, "wound", None)
+        return r if w is None or not w.merge else stepwise_radius(r, self.inertia[node.name][1], w.thickness, w.merge,
+                                                                  -1.0 if node.type == "unwinder" else 1.0)[0]
+
+    def lever_slope(self, node, z):
+        """d(lever)/dr: 1 where the radius the web meets moves smoothly, a stepwise radius's slope [R17]."""
+        w = getattr(node, "wound", None)
+        if w is None or not w.merge:
+            return 1.0
+        return stepwise_radius(self.radius(node, z), self.inertia[node.name][1], w.thickness, w.merge,
+                               -1.0 if node.type == "unwinder" else 1.0)[1]
 
     def roll_inertia(self, node, r):
         """J(r) = J_0 + (pi/2) rho w (r^4 - r_0^4) [R3], J_0 and r_0 the roll's at the start."""
@@ -193,11 +223,17 @@ class LineODE:
         if d.kind == "torque":
             return self.pv(d.profile, t)
         if d.kind == "tension":
-            R = self.radius(node, z)
-            return (-R if node.type == "unwinder" else R) * self.pv(d.profile, t)
+            R = self.lever(node, z)
+            return (-R if node.type == "unwinder" else self.tapered_lever(node, R)) * self.pv(d.profile, t)
         if d.kind == "brake":  # a powder brake: its grip on the surface's speed carries up to its rating [R12]
             return -self.pv(d.profile, t) * self.brake_grip(node, t, z)[1]
         return 0.0
+
+    def tapered_lever(self, node, r):
+        """r T(r)/T0 of a winder's tension drive with the hyperbolic taper k [R16], T(r) = T0 (1 - k (1 - R/r)):
+        (1 - k) r + k R, R the roll's start radius (a new roll's after an event)."""
+        k = node.drive.taper
+        return r if k == 0.0 else (1.0 - k) * r + k * self.inertia[node.name][1]
 
     def brake_grip(self, node, t, z):
         """(du_b/dt, g_b) of a brake's grip on its roll's surface speed (k_s = 1, `grip`)."""
@@ -211,8 +247,8 @@ class LineODE:
         the speed reference (its own for a speed loop, else the line's): J*a_ref/R, and on a roll being
         wound - J*R_rate*v_ref/R^2 with R_rate of [R3] at v_ref (and the strain the roll sees)."""
         lp = node.drive.loop
-        R = self.radius(node, z)
-        J = self.roll_inertia(node, R) if node.name in self.i_r else self.inertia[node.name][0]
+        R = self.lever(node, z)
+        J = self.roll_inertia(node, self.radius(node, z)) if node.name in self.i_r else self.inertia[node.name][0]
         if lp.speed:  # a speed loop on its own surface speed
             e = self.pv(lp.set, t) - R * z[self.i_omega[node.name]]
             if lp.dancer is not None:  # its reference trimmed by a PI on the dancer's position [R13]
@@ -227,7 +263,7 @@ class LineODE:
         ff = 0.0
         if lp.feedforward:
             reference = lp.set if lp.speed else self.s.speed_reference()
-            v_ref, a_ref = self.pv(reference, t), self.pslope(reference)
+            v_ref, a_ref = self.pv(reference, t), self.pslope(reference, t)
             ff = J * a_ref / R
             if node.name in self.i_r:
                 ff -= J * self.radius_rate(node, t, z, R, v_ref) * v_ref / R**2
@@ -277,7 +313,7 @@ class LineODE:
             return self.pv(node.speed, t)
         if isinstance(node, Roller) and node.drive.kind == "speed":
             return self.pv(node.drive.profile, t)
-        return self.radius(node, z) * z[self.i_omega[node.name]]
+        return self.lever(node, z) * z[self.i_omega[node.name]]
 
     def contact(self, node, t, z, v, q):
         """Where the web may slip on `node`: its friction on the web and what it reports, at (t, z)."""
@@ -336,10 +372,13 @@ class LineODE:
         for node in self.movers:
             J, R, b = self.inertia[node.name]
             omega = z[self.i_omega[node.name]]
+            slope = 1.0  # d(lever)/dr
             if node.name in self.i_r:  # [R3]: d(r^2)/dt = s h v/(pi (1 + eps)), J(r); [R1] balances J domega/dt
-                R = z[self.i_r[node.name]]
-                J = self.roll_inertia(node, R)
-                dz[self.i_r[node.name]] = self.radius_rate(node, t, z, R, R * omega)
+                r = z[self.i_r[node.name]]
+                J = self.roll_inertia(node, r)
+                R = self.lever(node, z)  # the radius the web meets [R17]: r, or stepwise
+                slope = self.lever_slope(node, z)
+                dz[self.i_r[node.name]] = self.radius_rate(node, t, z, r, R * omega)
             # Every web leaving pulls forward, every web arriving pulls back (a nip, a slitter: several).
             F_down = sum(q[sp.name]["T"] for sp in self.outs[node.name])
             F_up = sum(q[sp.name]["T"] + q[sp.name]["p"] for sp in self.ins[node.name])
@@ -359,14 +398,14 @@ class LineODE:
             num = R * (F_down - F_up) + tau - b * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
-            accel[node.name] = R * domega + omega * dz[self.i_r[node.name]] if node.name in self.i_r else R * domega
+            accel[node.name] = R * domega + omega * slope * dz[self.i_r[node.name]] if node.name in self.i_r else R * domega
         for sp in self.spans:
             down = self.down[sp.name]
             if down.name in accel:
                 dvb = accel[down.name]
             else:
                 prof = s.speed_profile(down)
-                dvb = self.pslope(prof) if prof is not None else 0.0
+                dvb = self.pslope(prof, t) if prof is not None else 0.0
             qs = q[sp.name]
             qs["F_b"] = qs["T"] + qs["p"] + qs["m"] * dvb
         for c in self.slippers:
@@ -426,7 +465,8 @@ class LineODE:
         dz = self.rhs(t, z)
         for name, i in self.i_r.items():
             k = self.i_omega[name]
-            dz[k] += z[k] * dz[i] / z[i]
+            node = self.s.component(name)
+            dz[k] += z[k] * self.lever_slope(node, z) * dz[i] / self.lever(node, z)
         return dz
 
     def entries(self, sp, t, z):

@@ -12,7 +12,7 @@ from pathlib import Path
 from .. import jsontree, records, units
 from ..fmus import DEFAULT_FMU_DIR, SPAN_FMU, enumeration, span_description, span_effects
 from ..jsontree import Node, Obj
-from ..profiles import Profile
+from ..profiles import Profile, ScurveError
 from ..units import UnitError
 from .checks import WIDTH_TOLERANCE, check_dancer_spans, check_positions, check_layers, check_loops, check_merge, check_split, check_traction
 from .types import (
@@ -111,7 +111,7 @@ class _Reader:
         v = node.value
         if not isinstance(v, Obj):
             return Profile.constant(self.quantity(node, dimension, what))
-        kinds = ("constant", "step", "ramp", "table")
+        kinds = ("constant", "step", "ramp", "scurve", "table")
         if len(v.items) != 1 or next(iter(v.keys())) not in kinds:
             raise self.err(node, f"{what}: a profile is a value or an object with one key of {', '.join(kinds)}")
         kind, body = next(iter(v.items.items()))
@@ -131,6 +131,8 @@ class _Reader:
             a = self.quantity(o["from"], dimension, f"{what}.ramp.from")
             b = self.quantity(o["to"], dimension, f"{what}.ramp.to")
             return Profile(((t0, a), (t0 + dt, b)))
+        if kind == "scurve":
+            return self._scurve(body, dimension, f"{what}.scurve")
         # table: [[time, value], ...]
         if not isinstance(body.value, list) or not body.value:
             raise self.err(body, f"{what}.table must be a non-empty list of [time, value] pairs")
@@ -146,6 +148,23 @@ class _Reader:
                 raise self.err(pair, f"{what}.table[{i}]: at most two entries at one time (a jump)")
             knots.append((t, x))
         return Profile(tuple(knots))
+
+    def _scurve(self, node: Node, dimension, what: str) -> Profile:
+        """A jerk-limited ramp, {"start", "from", "to"} and "jerk" (per s^2 of the profile's unit), "duration",
+        or both (`Profile.scurve`: which fixes what, and the duration the jerk needs)."""
+        o = self.keys(node, what, required=("start", "from", "to"), optional=("duration", "jerk"))
+        if "duration" not in o and "jerk" not in o:
+            raise self.err(node, f"{what} needs a jerk, a duration or both (the jerk fixes the shortest ramp, a duration the least jerk)")
+        t0 = self.quantity(o["start"], units.TIME, f"{what}.start", nonnegative=True)
+        a = self.quantity(o["from"], dimension, f"{what}.from")
+        b = self.quantity(o["to"], dimension, f"{what}.to")
+        duration = self.quantity(o["duration"], units.TIME, f"{what}.duration", positive=True) if "duration" in o else None
+        jerk = self.quantity(o["jerk"], units.DIMENSIONLESS, f"{what}.jerk (per s^2, in the profile's SI unit)", positive=True) \
+            if "jerk" in o else None
+        try:
+            return Profile.scurve(t0, a, b, jerk, duration)
+        except ScurveError as e:
+            raise self.err(node, f"{what}: {e}") from None
 
 
 def _web(r: _Reader, name: str, node: Node, web_library, webs) -> Web:
@@ -287,6 +306,8 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
                 kp=r.quantity(d["kp"], units.DIMENSIONLESS, f"{what}.dancer.kp (m/s per m)", nonnegative=True),
                 ki=r.quantity(d["ki"], units.DIMENSIONLESS, f"{what}.dancer.ki (m/s per m.s)", nonnegative=True))
         return Drive("speed loop", None, loop)
+    if "tension" in kinds and "tension" in o and "taper" in o:
+        return _tapered(r, node, what)
     if len(o.items) != 1 or next(iter(o.keys())) not in kinds:
         raise r.err(node, f"{what} must be an object with one key of {', '.join(kinds)}")
     kind, body = next(iter(o.items.items()))
@@ -296,6 +317,17 @@ def _drive(r: _Reader, node: Node, what: str, kinds) -> Drive:
         return _brake(r, body, f"{what}.brake")
     dim = {"torque": units.TORQUE, "tension": units.FORCE, "speed": units.SPEED}[kind]
     return Drive(kind, r.profile(body, dim, f"{what}.{kind}"))
+
+
+def _tapered(r: _Reader, node: Node, what: str) -> Drive:
+    """A tension drive with a taper, {"tension": profile, "taper": k}: T(r) = T0 (1 - k (1 - R/r)) [R16],
+    0 <= k <= 1 (k = 1: a constant torque T0 R). Only a winder's (checked in _roller)."""
+    o = r.keys(node, what, required=("tension", "taper"))
+    drive = Drive("tension", r.profile(o["tension"], units.FORCE, f"{what}.tension"))
+    drive.taper = r.quantity(o["taper"], units.DIMENSIONLESS, f"{what}.taper", nonnegative=True)
+    if drive.taper > 1.0:
+        raise r.err(o["taper"], f"{what}.taper = {drive.taper:g}: a taper is 0 to 1 (1 - k (1 - R/r) stays > 0 as the roll grows)")
+    return drive
 
 
 def _brake(r: _Reader, node: Node, what: str) -> Drive:
@@ -457,6 +489,9 @@ def _roller(r, o_node, name, kind) -> Roller:
               "winder": ("torque", "tension", "speed", "pi", "brake")}
     if "drive" in o:
         c.drive = _drive(r, o["drive"], f"{what}: drive", drives[kind])
+        if c.drive.taper and kind != "winder":
+            raise r.err(r.key_pos(o["drive"]), f"{what}: drive.taper = {c.drive.taper:g}: a taper is a winder's (the tension "
+                                               "falls as the roll it winds grows); an unwinder's roll has its wound-in stresses already")
     slips = "traction" in o or "nip" in o
     if c.drive.kind == "speed":
         # With traction the roll's radius sets the web's mass on it and the air film, with runout where
@@ -509,12 +544,14 @@ def _roller(r, o_node, name, kind) -> Roller:
         if c.drive.kind == "speed":
             raise r.err(r.key_pos(o["wound"]), f"{what}: wound moves a roll's radius and inertia, which a speed-driven "
                                                "roll does not use (its surface follows its speed profile): drive it by torque or tension")
-        w = r.keys(o["wound"], f"{what}: wound", required=("thickness",), optional=("density", "width"))
+        w = r.keys(o["wound"], f"{what}: wound", required=("thickness",), optional=("density", "width", "stepwise"))
         c.wound = Wound(thickness=r.quantity(w["thickness"], units.LENGTH, f"{what}: wound: thickness", positive=True))
         if "density" in w:
             c.wound.density = r.quantity(w["density"], units.DENSITY, f"{what}: wound: density", positive=True)
         if "width" in w:
             c.wound.width = r.quantity(w["width"], units.LENGTH, f"{what}: wound: width", positive=True)
+        if "stepwise" in w:
+            c.wound.merge = _stepwise(r, w["stepwise"], f"{what}: wound: stepwise")
     if "runout" in o:
         c.runout = _runout(r, o["runout"], what, kind)
     return c
@@ -541,6 +578,9 @@ def check_runout(r, scene, raw):
             raise SceneError(f"{c.where}: {c.type} {c.name!r}: runout moves the length of span {sp.name!r}, which "
                              f"{'hangs from a dancer' if sp.length is None else 'carries a laminate'}: put a span of its own "
                              f"length between the roll and it")
+        if getattr(c.wound, "merge", 0.0):
+            raise SceneError(f"{c.where}: {c.type} {c.name!r} has runout and a stepwise radius (wound.stepwise): the two "
+                             "together are not modelled (runout's arm is the smooth radius's); drop one")
         if scene.start == "equilibrium":
             raise SceneError(f"{c.where}: {c.type} {c.name!r} has runout and the scene starts at \"equilibrium\": a roll that "
                              "turns off its centre holds no steady state (its tangent point moves once a turn); start it "
@@ -548,6 +588,16 @@ def check_runout(r, scene, raw):
         if not sp.length > c.runout.eccentricity + c.R:
             raise SceneError(f"{sp.where}: span {sp.name!r} of {sp.length:g} m is too short for {c.type} {c.name!r}'s runout: "
                              f"its length must exceed the roll's radius plus its eccentricity ({c.R + c.runout.eccentricity:g} m)")
+
+
+def _stepwise(r: _Reader, node: Node, what: str) -> float:
+    """A stepwise radius, {"merge": angle}: the angle over which the radius the web meets steps by a layer
+    [R17], in (0, 360] degrees; returned in radians."""
+    o = r.keys(node, what, required=("merge",))
+    merge = r.quantity(o["merge"], units.ANGLE, f"{what}.merge", positive=True)
+    if merge > 360.0:
+        raise r.err(o["merge"], f"{what}.merge = {merge:g} degrees: a merge is at most a turn (360 degrees: the smooth radius)")
+    return math.radians(merge)
 
 
 def _fill_wound(scene):

@@ -199,6 +199,7 @@ class Drive:
     loop: Loop | None = None
     input: bool = False  # an ideal speed drive on the Line FMU's input <name>.v_ref, `profile` its start value
     creep: float = BRAKE_CREEP  # a brake's presliding surface travel, m
+    taper: float = 0.0  # a winder's tension taper k [R16]: T(r) = T0 (1 - k (1 - R/r)), T0 the profile
 
 
 # The sides of the wrap a nip may press on, in the direction of travel (web_a to web_b), each at the
@@ -236,6 +237,7 @@ class Wound:
     thickness: float
     density: float | None = None
     width: float | None = None
+    merge: float = 0.0  # a stepwise radius [R17]: the angle (rad) over which it steps by a layer; 0: smooth
 
 
 @dataclass
