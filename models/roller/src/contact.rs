@@ -299,6 +299,17 @@ pub fn demand(p: &Parameters, s: &State) -> Option<String> {
 /// also where a side's T' <= 0 leaves the wrap no traction. With no traction available at all, 1
 /// where the tensions differ, else 0.
 pub fn traction_used(p: &Parameters, s: &State, mu_eff: Dual) -> Dual {
+    // A share past f64's range (a traction limit of 1e-300 N against a tension difference) reads as the
+    // largest finite number, not inf: the web slides there either way.
+    let used = share_used(p, s, mu_eff);
+    if used.x.is_finite() {
+        used
+    } else {
+        Dual::constant(f64::MAX)
+    }
+}
+
+fn share_used(p: &Parameters, s: &State, mu_eff: Dual) -> Dual {
     let (t_a, t_b) = match (NipSide::of(p), relieved(p, s)) {
         (NipSide::Entry, (a, b)) => (a, b),
         (NipSide::Exit, (a, b)) => (b, a),

@@ -14,6 +14,9 @@ use fmi_core::{FmiError, FmiResult};
 use profiles::Value;
 use solver::CompensatedSum;
 
+/// The most samples of a sampled loop [R14] one communication step may cross.
+const MAX_SAMPLES_PER_STEP: f64 = 1e5;
+
 impl Roller {
     /// Applies the `set` events due at t; whether one changed the roll.
     pub(crate) fn apply_due(&mut self, t: f64) -> bool {
@@ -177,6 +180,15 @@ impl Roller {
                 "wound.merge = {} rad: a stepwise radius [R17] runs in Model Exchange and in the Line FMU; this Co-Simulation \
                  step holds the radius over a piece (give wound.merge = 0, or run the line as one Line FMU)",
                 self.params.wound_merge
+            )));
+        }
+        // A sampled loop's holds are time events: bound the pieces one step may take (the fuzzer found a
+        // step of many seconds over a microsecond sample that ran for hours).
+        if self.params.sampled() && h / self.params.loop_sample > MAX_SAMPLES_PER_STEP {
+            return Err(FmiError::discard(format!(
+                "a step of {h} s holds {:.0} samples of loop.sample = {} s, more than {MAX_SAMPLES_PER_STEP} in one step: take a shorter step",
+                h / self.params.loop_sample,
+                self.params.loop_sample
             )));
         }
         let end = self.time + h;
