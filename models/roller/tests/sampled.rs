@@ -110,3 +110,16 @@ fn a_delay_longer_than_the_period_is_refused() {
     let err = speed_loop(1e-6, 0.0).unwrap_err();
     assert!(err.contains("loop.sample = 0.000001 s") && err.contains("at least 0.00001 s"), "{err}");
 }
+
+#[test]
+fn a_step_over_more_than_1e5_samples_is_refused_and_a_shorter_one_runs() {
+    // 10 s over a 10 us sample would be a million solves in one call (the fuzzer's hour-long step).
+    let mut m = speed_loop(1e-5, 0.0).unwrap();
+    m.set_time(0.0);
+    let err = m.do_step(10.0).unwrap_err().into_message();
+    assert!(err.contains("holds 1000000 samples of loop.sample = 0.00001 s") && err.contains("take a shorter step"), "{err}");
+    let v = get(&m, Real::v);
+    m.set_time(0.0);
+    m.do_step(1e-3).unwrap();
+    assert!(get(&m, Real::v) != v, "a step of 100 samples runs");
+}
