@@ -30,6 +30,7 @@ pub mod contact;
 pub mod control;
 pub mod description;
 pub mod drive;
+pub mod layon;
 mod hooks;
 pub mod jacobian;
 mod model;
