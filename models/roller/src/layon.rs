@@ -263,6 +263,19 @@ mod tests {
         }
     }
 
+    /// Apart over the last 0.4 s of each second, sampled every 10 ms for 2.8 s: three separations,
+    /// the first at 0.6 s, 0.4 s each but the last, still open at the end (0.2 s).
+    #[test]
+    fn the_separations_are_counted_and_timed() {
+        let mut record = Separations::default();
+        for k in 0..=280 {
+            record.observe(k as f64 * 0.01, if k % 100 >= 60 { 0.0 } else { 50.0 });
+        }
+        record.finish(2.8);
+        assert_eq!((record.count, record.first), (3, Some(0.6)));
+        assert!((record.longest - 0.4).abs() < 1e-12 && (record.total - 1.0).abs() < 1e-12, "{record:?}");
+    }
+
     /// A 1 mm runout under 100 N on a 20 kg carriage: a rigid nip lets go above
     /// omega_c = sqrt(F/(m e)) = 70.7 rad/s. The stiff nip (F/k = 1e-3 e) keeps contact at 0.99 of
     /// its own threshold and loses it at 1.01 (the surface's second harmonic, e/(r + r_l) = 0.25 % of
