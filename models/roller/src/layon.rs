@@ -276,6 +276,39 @@ mod tests {
         assert!((record.longest - 0.4).abs() < 1e-12 && (record.total - 1.0).abs() < 1e-12, "{record:?}");
     }
 
+    /// Written once, generic over the number: the nip in `Tangent` along (X, X', omega_l, psi, r)
+    /// is its central difference (h = 1e-7 of each, the nip pressed), to 1e-6 (its truncation, h^2, is 1e-14).
+    #[test]
+    fn the_nip_differentiates_as_it_computes() {
+        use crate::number::Tangent;
+        let run = Run { l: roller(1e6, 2000.0), e: 2e-3, omega: 40.0, radius_rate: 1e-4, load: 300.0 };
+        let y = [0.4 + 1e-3 - 3e-4, 0.02, 110.0, 0.7, 0.3];
+        let rates = |y: &[f64; 5]| {
+            let n = run.at(y);
+            [n.force, n.acceleration, n.spin_rate, n.winder_torque]
+        };
+        for i in 0..5 {
+            let at = |v: f64| {
+                let mut z = y;
+                z[i] += v;
+                z
+            };
+            let h = 1e-7 * y[i].abs().max(1e-3);
+            let t = |k: usize| Tangent::new(y[k], if k == i { 1.0 } else { 0.0 });
+            let w = Winder { radius: t(4), radius_rate: Tangent::constant(run.radius_rate), eccentricity: run.e, psi: t(3), psi_rate: Tangent::constant(run.omega), omega: Tangent::constant(run.omega) };
+            let n = nip(&run.l, &w, t(0), t(1), t(2), Tangent::constant(run.load));
+            let tangent = [n.force.d, n.acceleration.d, n.spin_rate.d, n.winder_torque.d];
+            let (up, down) = (rates(&at(h)), rates(&at(-h)));
+            let scale = rates(&y).map(f64::abs);
+            for k in 0..4 {
+                let difference = (up[k] - down[k]) / (2.0 * h);
+                // Rounding in the difference: 1e-16 of the rate over h, far below 1e-6 of it.
+                let floor = 1e-16 * scale[k] / h;
+                assert!((tangent[k] - difference).abs() <= 1e-6 * tangent[k].abs() + 1e3 * floor, "state {i}, rate {k}: {} {difference}", tangent[k]);
+            }
+        }
+    }
+
     /// A 1 mm runout under 100 N on a 20 kg carriage: a rigid nip lets go above
     /// omega_c = sqrt(F/(m e)) = 70.7 rad/s. The stiff nip (F/k = 1e-3 e) keeps contact at 0.99 of
     /// its own threshold and loses it at 1.01 (the surface's second harmonic, e/(r + r_l) = 0.25 % of
