@@ -8,7 +8,7 @@
 //! [R18] d = |D - C| = sqrt(X^2 - 2 X e cos phi + e^2),   delta = r + r_l - d   (the nip's compression)
 //!       N = max(0, k delta + c delta')                  (the nip pushes, never pulls)
 //!       m X'' = N (X - e cos phi)/d - F(t)              (the carriage: the nip's share along u, the load)
-//!       f = mu N tanh((omega a - omega_l r_l)/v_s),  a = r + (X e cos phi - e^2)/d
+//!       f = mu N tanh((omega a - omega_l r_l)/v_s),  a = r + (X e cos phi - e^2)/d   (Coulomb, regularized)
 //!       J_l omega_l' = r_l f - b_l omega_l,           the winder takes -a f
 //!
 //! Not yet in the Roller FMU, the Line or webline: docs/physics.md, "A lay-on roller".
@@ -114,7 +114,7 @@ pub fn bounce_omega(l: &LayOn, load: f64, eccentricity: f64) -> Option<f64> {
     if swing(resonance) < load {
         return None;
     }
-    // The swing grows with omega up to the resonance (for the damping of a nip, zeta < 0.7): bisect.
+    // Below the resonance the swing grows with omega at any damping (d ln(swing^2)/d(omega^2) >= 1/omega^2): bisect.
     let (mut lo, mut hi) = (0.0, resonance);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
