@@ -14,6 +14,7 @@
 //!   * `control` — the drive's loop and its motor [R10]–[R11], [R13];
 //!   * `brake` — a powder brake [R12];
 //!   * `drive` — the profile: the drive and the tables of time it follows;
+//! * `layon` — a lay-on roller against a winder [R18]: its physics and tests, not yet in `rhs` (the FMU);
 //! * `jacobian` — the partial derivatives: `rhs` along a direction;
 //! * `model` — the roller's data and the effects' glue;
 //! * `stepping` — one communication step;
@@ -30,6 +31,7 @@ pub mod contact;
 pub mod control;
 pub mod description;
 pub mod drive;
+pub mod layon;
 mod hooks;
 pub mod jacobian;
 mod model;
