@@ -81,6 +81,17 @@ def refuse_runout(scene):
                          "--engine reference")
 
 
+def refuse_layon(scene):
+    """A lay-on roller [R18] presses on its winder through a stiff nip that lets go; the parts' co-simulation and
+    its SSP export do not run it (the Roller's co-simulation step is not checked against the reference for it)."""
+    pressed = [c for c in scene.nodes if getattr(c, "layon", None) is not None]
+    if pressed:
+        c = pressed[0]
+        raise SceneError(f"{c.where}: {c.type} {c.name!r} has a lay-on roller (layon): the parts' co-simulation and its SSP "
+                         "export do not run it; run the scene as one Line FMU (webline run's default engine) or with "
+                         "--engine reference")
+
+
 def refuse_stepwise(scene):
     """A stepwise radius [R17] moves the radius the web meets by a layer within a few degrees of a turn; the
     Roller FMU's co-simulation step holds the radius over a piece, so it refuses it (docs/physics.md)."""
@@ -105,7 +116,9 @@ def refuse_scurves(scene):
 
 def refuse_for_parts(scene):
     """What a line of part FMUs cannot run (the parts' co-simulation and its SSP export): a web that may
-    slip, a drive's loop, a laminate that may go slack, a roll with runout, a stepwise radius, an S-curve."""
+    slip, a drive's loop, a laminate that may go slack, a roll with runout, a lay-on roller, a stepwise radius,
+    an S-curve."""
+    refuse_layon(scene)
     refuse_runout(scene)
     refuse_traction(scene)
     refuse_loops(scene)

@@ -1,0 +1,122 @@
+"""A winder's lay-on roller ([R18], docs/physics.md "A lay-on roller"): a roller on a carriage of mass m
+pressed against the roll by a load F through a nip (a spring k and damper c that only push), turned by
+the nip's traction.
+
+- The steady nip: on a round roll, after the load steps from 100 N to 200 N, the carriage settles where
+  the nip carries the load, N = F to 1e-6 N (its balance m X'' = N - F with X'' = 0), compressed by F/k.
+- The bounce: webline/scenes/rewind_layon.json ramps the line through the speed at which the load can no
+  longer hold the carriage on a roll running out by e, omega_c of `bounce_omega` (the rigid nip's
+  sqrt(F/(m e)) less the nip's own compression F/k); the nip lets go first at a speed within 5 % of it.
+  Before it the nip never let go; the summary counts the separations and warns.
+- The separations are counted from the output samples against a known signal.
+- The scene's keys: a lay-on anywhere but on a winder, on a stepwise radius, with a negative load and in
+  the parts' engine are refused by name.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from webline import engines
+from webline.reference import bounce_omega, reference
+from webline.scene import LayOn, SceneError, load_scene, parse_scene
+from webline.profiles import Profile
+from webline.summary import separations, summary
+
+from .conftest import SCENES
+
+WEB = {"PET": {"E": "4.5 GPa", "thickness": "50 um", "width": "1 m", "density": "1390 kg/m3", "d_r": "1 ms"}}
+LOAD = {"step": {"time": "0.05 s", "from": "100 N", "to": "200 N"}}
+
+
+def scene(layon=None, winder=None, start="given", stop="0.5 s"):
+    """A source, a 2 m span and a winder pressed by a lay-on; `layon` changes its keys (None drops one)."""
+    keys = {"mass": "20 kg", "stiffness": "1e7 N/m", "damping": "5000 N.s/m", "radius": "0.1 m", "load": LOAD, **(layon or {})}
+    wind = {"type": "winder", "name": "wind", "J": "1 kg.m2", "R": "0.2 m", "drive": {"tension": "112.5 N"},
+            "layon": {k: v for k, v in keys.items() if v is not None}, **(winder or {})}
+    return parse_scene(json.dumps({
+        "name": "layon", "stop_time": stop, "step": "1 ms", "start": start, "webs": WEB,
+        "line": [{"type": "source", "name": "in", "speed": "5 m/s", "strain": 0.0005},
+                 {"type": "span", "name": "film", "L": "2 m", "web": "PET", "effects": ["includeDamping"]}, wind],
+        "record": ["wind.layon.N", "wind.layon.delta"]}), "layon.json")
+
+
+@pytest.mark.parametrize("engine", ["reference"])
+def test_the_steady_nip_carries_the_load(engine, fmus):
+    result = engines.run_scene(scene(), engine, fmu_dir=fmus)
+    N, delta = result.column("wind.layon.N"), result.column("wind.layon.delta")
+    print(f"{engine}: N - F = {N[-1] - 200.0:.3g} N")
+    assert abs(N[-1] - 200.0) < 1e-6, N[-1]
+    assert abs(delta[-1] - 200.0 / 1e7) < 1e-12, delta[-1]  # the nip's static compression F/k
+    assert N.max() > 200.0 and N.min() > 0.0  # it overshot the new load and never let go
+
+
+@pytest.fixture(scope="module")
+def bounce():
+    shipped = load_scene(SCENES / "rewind_layon.json")
+    result = reference(shipped)
+    result.info.update(engine="reference", step=shipped.step)  # as run_scene says it
+    return shipped, result
+
+
+def test_the_shipped_scene_lets_go_at_the_derived_speed(bounce):
+    shipped, result = bounce
+    winder = shipped.component("rewind")
+    layon, e = winder.layon, winder.runout.eccentricity
+    load = layon.load.value(0.0)
+    omega_c = bounce_omega(layon, load, e)
+    N, omega, r = (result.column(f"rewind.{q}") for q in ("layon.N", "omega", "r"))
+    first = int(np.argmax(N <= 0.0))
+    assert N[first] <= 0.0 and np.all(N[:first] > 0.0)
+    v, v_c = r[first] * omega[first], r[first] * omega_c
+    print(f"first separation at t = {result.time[first]:.4g} s, v = {v:.4g} m/s; derived v_c = {v_c:.4g} m/s "
+          f"({v / v_c - 1:+.2%}); rigid {r[first] * math.sqrt(load / (layon.mass * e)):.4g} m/s")
+    assert abs(v / v_c - 1.0) < 0.05, (v, v_c)
+    said = summary(shipped, result)
+    warning = next(w for w in said.warnings if w.startswith("lay-on at rewind lost contact"))
+    assert f"first at t = {result.time[first]:.4g} s" in warning, warning
+
+
+def test_the_bounce_speed_is_the_undamped_closed_form_without_damping():
+    layon = LayOn(mass=25.0, stiffness=1e7, damping=0.0, radius=0.1, load=Profile.constant(50.0))
+    e, F = 5e-4, 50.0
+    assert abs(bounce_omega(layon, F, e) / math.sqrt(F / (layon.mass * (e + F / layon.stiffness))) - 1.0) < 1e-12
+    # Damped (zeta 0.16), the swing at the nip's resonance is 1.7e4 N: no speed below it lets go of 1e5 N.
+    damped = LayOn(mass=25.0, stiffness=1e7, damping=5000.0, radius=0.1, load=Profile.constant(1e5))
+    assert bounce_omega(damped, 1e5, e) is None
+
+
+def test_separations_are_counted_and_timed():
+    # Apart over the last 0.4 s of each second, sampled every 10 ms for 2.8 s: three separations, the first at
+    # 0.6 s, 0.4 s each but the last, still open at the end (0.2 s).
+    t = np.arange(281) * 0.01
+    apart = separations(t, np.where(np.arange(281) % 100 >= 60, 0.0, 50.0))
+    assert (apart.count, apart.first) == (3, 0.6)
+    assert abs(apart.longest - 0.4) < 1e-12 and abs(apart.total - 1.0) < 1e-12, apart
+    assert separations(t, np.full(281, 1.0)).count == 0
+
+
+@pytest.mark.parametrize("layon, winder, words", [
+    ({}, {"wound": {"thickness": "50 um", "stepwise": {"merge": "30 deg"}}}, "stepwise"),
+    ({"load": "-5 N"}, {}, "load >= 0"),
+    ({"mu": 20}, {}, "friction coefficient"),
+    ({"mass": None}, {}, "mass"),
+])
+def test_a_layon_that_cannot_be_is_refused_by_name(layon, winder, words):
+    with pytest.raises(SceneError, match=words):
+        scene(layon=layon, winder=winder)
+
+
+def test_a_layon_is_a_winders_and_the_parts_refuse_it(fmus):
+    text = json.dumps({
+        "name": "x", "stop_time": "0.1 s", "step": "1 ms", "webs": WEB,
+        "line": [{"type": "unwinder", "name": "unwind", "J": "1 kg.m2", "R": "0.2 m", "strain": 0.001,
+                  "layon": {"mass": "20 kg", "stiffness": "1e7 N/m", "damping": "5000 N.s/m", "radius": "0.1 m", "load": "100 N"}},
+                 {"type": "span", "name": "a", "L": "1 m", "web": "PET"},
+                 {"type": "sink", "name": "out", "speed": "5 m/s"}]})
+    with pytest.raises(SceneError, match="put it on a winder"):
+        parse_scene(text, "x.json")
+    with pytest.raises(SceneError, match="has a lay-on roller"):
+        engines.run_scene(scene(stop="0.01 s"), "parts", fmu_dir=fmus)
