@@ -43,11 +43,13 @@ def scene(layon=None, winder=None, start="given", stop="0.5 s"):
         "record": ["wind.layon.N", "wind.layon.delta"]}), "layon.json")
 
 
+@pytest.mark.parametrize("start", ["given", "equilibrium"])
 @pytest.mark.parametrize("engine", ["reference"])
-def test_the_steady_nip_carries_the_load(engine, fmus):
-    result = engines.run_scene(scene(), engine, fmu_dir=fmus)
+def test_the_steady_nip_carries_the_load(engine, start, fmus):
+    result = engines.run_scene(scene(start=start), engine, fmu_dir=fmus)
     N, delta = result.column("wind.layon.N"), result.column("wind.layon.delta")
-    print(f"{engine}: N - F = {N[-1] - 200.0:.3g} N")
+    print(f"{engine}, {start}: N - F = {N[0] - 100.0:.3g} N at the start, {N[-1] - 200.0:.3g} N at the end")
+    assert abs(N[0] - 100.0) < 1e-6, N[0]  # it starts pressed by F/k at rest
     assert abs(N[-1] - 200.0) < 1e-6, N[-1]
     assert abs(delta[-1] - 200.0 / 1e7) < 1e-12, delta[-1]  # the nip's static compression F/k
     assert N.max() > 200.0 and N.min() > 0.0  # it overshot the new load and never let go
