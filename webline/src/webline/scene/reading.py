@@ -581,16 +581,12 @@ def _layon(r, node, what, kind) -> LayOn:
                   stiffness=r.quantity(o["stiffness"], units.STIFFNESS, f"{w}: stiffness", positive=True),
                   damping=r.quantity(o["damping"], units.LIN_DAMPING, f"{w}: damping", nonnegative=True),
                   radius=r.quantity(o["radius"], units.LENGTH, f"{w}: radius", positive=True), load=load)
-    if "inertia" in o:
-        layon.inertia = r.quantity(o["inertia"], units.INERTIA, f"{w}: inertia", positive=True)
-    if "bearing" in o:
-        layon.bearing = r.quantity(o["bearing"], units.ROT_DAMPING, f"{w}: bearing", nonnegative=True)
-    if "mu" in o:
-        layon.mu = r.quantity(o["mu"], units.DIMENSIONLESS, f"{w}: mu", nonnegative=True)
-        if layon.mu > MU_MAX:
-            raise r.err(o["mu"], f"{w}: mu = {layon.mu:g}: a friction coefficient is 0 to {MU_MAX:g}")
-    if "v_slip" in o:
-        layon.v_slip = r.quantity(o["v_slip"], units.SPEED, f"{w}: v_slip", positive=True)
+    for key, kind, sign in (("inertia", units.INERTIA, "positive"), ("bearing", units.ROT_DAMPING, "nonnegative"),
+                            ("mu", units.DIMENSIONLESS, "nonnegative"), ("v_slip", units.SPEED, "positive")):
+        if key in o:
+            setattr(layon, key, r.quantity(o[key], kind, f"{w}: {key}", **{sign: True}))
+    if layon.mu > MU_MAX:
+        raise r.err(o["mu"], f"{w}: mu = {layon.mu:g}: a friction coefficient is 0 to {MU_MAX:g}")
     if "angle" in o:
         layon.angle = math.radians(r.quantity(o["angle"], units.ANGLE, f"{w}: angle"))
     return layon
