@@ -122,3 +122,16 @@ def test_a_layon_is_a_winders_and_the_parts_refuse_it(fmus):
         parse_scene(text, "x.json")
     with pytest.raises(SceneError, match="has a lay-on roller"):
         engines.run_scene(scene(stop="0.01 s"), "parts", fmu_dir=fmus)
+
+
+def test_the_compiler_gives_the_roller_its_layon_parameters(fmus):
+    """The Roller's parameters by the names of the spec (a constant load as layon.F, a profile as the table "layon")."""
+    from webline.compiler import compile_scene
+
+    wind = compile_scene(scene(layon={"angle": "30 deg", "mu": 0.4}), fmus, settle=False).component("wind")
+    assert {k: v for k, v in wind.start.items() if k.startswith("layon")} == {
+        "layon": True, "layon.m": 20.0, "layon.k": 1e7, "layon.c": 5000.0, "layon.r": 0.1, "layon.J": 0.05, "layon.b": 1e-3,
+        "layon.mu": 0.4, "layon.v_slip": 1e-3, "layon.angle": pytest.approx(math.radians(30.0), abs=1e-15)}
+    assert wind.profile["layon"] == [[0.05, 100.0], [0.05, 200.0]]
+    steady = compile_scene(scene(layon={"load": "150 N"}), fmus, settle=False).component("wind")
+    assert steady.start["layon.F"] == 150.0 and "layon" not in steady.profile
