@@ -11,9 +11,10 @@
 //!       f = mu N tanh((omega a - omega_l r_l)/v_s),  a = r + (X e cos phi - e^2)/d   (Coulomb, regularized)
 //!       J_l omega_l' = r_l f - b_l omega_l,           the winder takes -a f
 //!
-//! Not yet in the Roller FMU, the Line or webline: docs/physics.md, "A lay-on roller".
+//! In the Roller (its parameters layon.*, states layon.x, layon.v, layon.omega) and so in the Line.
 
 use crate::number::Number;
+use crate::parameters::{Parameters, WINDER};
 
 /// The lay-on roller and its carriage, SI.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,6 +33,52 @@ pub struct LayOn {
     pub v_slip: f64,
     /// The carriage's line from the winder's axis, from runout's n axis (rad).
     pub angle: f64,
+}
+
+/// The lay-on roller of these parameters, its line in runout's frame of a winder [R15] (mirrored:
+/// layon.angle is measured as runout.phase is, in the roll's sense of turning).
+pub fn of(p: &Parameters) -> LayOn {
+    LayOn {
+        mass: p.layon_m,
+        stiffness: p.layon_k,
+        damping: p.layon_c,
+        radius: p.layon_r,
+        inertia: p.layon_j,
+        bearing: p.layon_b,
+        mu: p.layon_mu,
+        v_slip: p.layon_v_slip,
+        angle: -p.layon_angle,
+    }
+}
+
+/// Why a lay-on roller cannot be on this roller (None: it can): it presses on a winder whose axis
+/// does not move, where the web does not slip, with a smooth radius.
+pub fn refusal(p: &Parameters) -> Option<String> {
+    if !p.layon {
+        return None;
+    }
+    if p.roll != WINDER || p.carriage || p.traction {
+        return Some(format!(
+            "layon = true with roll = {}, carriage = {}, includeTraction = {}: a lay-on roller [R18] presses on a winder (roll = 2) \
+             whose axis does not move, without slip",
+            p.roll, p.carriage, p.traction
+        ));
+    }
+    if p.wound_merge > 0.0 {
+        return Some(format!("layon = true with wound.merge = {} rad: a lay-on roller on a stepwise radius [R17] is not modelled; set wound.merge = 0", p.wound_merge));
+    }
+    None
+}
+
+/// Where the carriage starts [R18]: pressed by the load F0 on the roll's surface at the roll's radius r
+/// and angle 0 (runout's), at rest along its line, its roller turning with the surface at omega:
+/// (X, X', omega_l), X = e cos phi + sqrt((r + r_l - F0/k)^2 - e^2 sin^2 phi).
+pub fn start(p: &Parameters, radius: f64, omega: f64, load: f64) -> [f64; 3] {
+    let l = of(p);
+    let (e, phi) = if p.runout { (p.runout_e, -p.runout_phase - l.angle) } else { (0.0, 0.0) };
+    let reach = radius + l.radius - load / l.stiffness;
+    let x = e * phi.cos() + (reach * reach - (e * phi.sin()).powi(2)).max(0.0).sqrt();
+    [x, 0.0, omega * radius / l.radius]
 }
 
 /// The winder as the nip sees it: its radius and the rate it grows at, its runout and its turning.
