@@ -386,10 +386,11 @@ def test_roller_with_a_layon_roller_matches_finite_differences(roller, tmp_path,
     params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
     values = {**params, **ROLLER_POINT, "roll": 2, "runout": True, "runout.e": 1e-4, "runout.phase": 0.4, "runout.L": 0.6,
               "layon": True, "layon.F": 300.0, "layon.angle": 0.7}
-    # Pressed by 3e-4 m (3000 N at k = 1e7), moving out at 2 mm/s, slipping by 1 mm/s (on tanh's slope).
+    # Pressed by 3e-4 m (3000 N at k = 1e7), moving out at 2 mm/s, slipping by 1 mm/s (on tanh's slope). The
+    # traction curves over v_slip = 1 mm/s: along the states a step of 1e-8 keeps the difference's truncation at 1e-9, as the web's.
     states = (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, 0.0, 0.0, 0.0, 0.0, 0.0, 1.3, 0.26 - 3e-4, 2e-3, (33.0 * 0.16 - 1e-3) / 0.1)
     (a, f, n), (force,) = roller_case(roller, tmp_path, kind, {"torque": [[0, 1.0], [10, 3.0]]}, values, states,
-                                      *every_pair(roller, me)[::-1], read=("layon.N",))
+                                      *every_pair(roller, me)[::-1], step=1e-8 if me else STEP, read=("layon.N",))
     assert force > 0.0, "the nip must be pressed"
     if me:
         assert a["der(layon.v)", "layon.x"] < 0.0, "pressed further, the nip must push the carriage back harder"
