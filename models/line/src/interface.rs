@@ -32,11 +32,11 @@ pub enum Binding {
 }
 
 /// Part parameters the line does not offer: the line solves and starts the
-/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side), runout (and its span's length) and
+/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side), runout (and its span's length), a lay-on roller and
 /// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
 /// measures) and a span's variable length are the line's structure, which line.json fixes; a feed-forward's
 /// loop.acceleration the line sets from its reference (`feed`).
-const NOT_OFFERED: [&str; 26] = [
+const NOT_OFFERED: [&str; 27] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",
@@ -63,6 +63,7 @@ const NOT_OFFERED: [&str; 26] = [
     "nip.side",
     "runout",
     "runout.L",
+    "layon",
 ];
 
 /// The integrator's relative tolerance unless the user sets `tolerance`.
@@ -240,6 +241,9 @@ pub fn build(spec: &Spec, parts: &[Part], active: &[Vec<usize>], guid: String, s
                 }
                 if matches!(role, Role::Unwinder | Role::Winder) {
                     names.push(("r", "r"));
+                }
+                if parts[p].layon() {
+                    names.extend([("layon.N", "layon.N"), ("layon.delta", "layon.delta")]);
                 }
                 if role == Role::Dancer {
                     names.extend([("y", "y"), ("y_dot", "y_dot")]);

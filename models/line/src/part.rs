@@ -382,6 +382,11 @@ impl Part {
     }
 
     /// Where the web may slip on a roller [R6]: whether, and whether under an air film [R8].
+    /// Whether a lay-on roller presses on this part [R18].
+    pub fn layon(&self) -> bool {
+        matches!(self, Part::Roller(r) if r.params.layon)
+    }
+
     pub fn traction(&self) -> Option<bool> {
         match self {
             Part::Roller(r) if r.params.traction => Some(r.params.air_roughness > 0.0),
@@ -451,6 +456,7 @@ fn structure(spec: &PartSpec) -> Structure {
         reference_table: spec.has_table("reference"),
         brake_table: spec.has_table("brake"),
         tension_table: spec.has_table("tension"),
+        layon_table: spec.has_table("layon"),
         set_input: spec.set_input,
         speed_input: spec.speed_input,
     }

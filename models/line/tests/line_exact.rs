@@ -1253,3 +1253,93 @@ fn a_roll_with_runout_ripples_its_span_at_its_turn_by_the_first_order_lag() {
     let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
     assert!(crossings.len() >= 9 && (period / turn - 1.0).abs() < 1e-4, "period {period} s against the turn {turn} s ({} crossings)", crossings.len());
 }
+
+/// A source and a speed-driven winder of radius r at v, with a lay-on roller [R18] pressed on the winder
+/// by F on a 20 kg carriage (nip k = 1e7 N/m, damping ratio 0.6), and the winder's runout e [R15] (none at
+/// e = 0), its span's length the moving tangent point's (`variableLength`, frame_b from the winder's web_a.y).
+fn layon_line(e: f64, r: f64, v: f64, load: f64) -> Value {
+    let length = 1.0;
+    let mut wind = prescribed("wind", "winder", json!([[0.0, v]]));
+    let mut start = vec![("R", json!(r)), ("roll", json!(2)), ("layon", json!(true)), ("layon.F", json!(load)), ("layon.angle", json!(0.4))];
+    start.extend([("layon.m", json!(LAYON_MASS)), ("layon.k", json!(LAYON_K)), ("layon.c", json!(LAYON_C)), ("layon.r", json!(0.1))]);
+    if e > 0.0 {
+        start.extend([("runout", json!(true)), ("runout.e", json!(e)), ("runout.phase", json!(0.3)), ("runout.L", json!(length))]);
+    }
+    for (k, x) in start {
+        wind["start"][k] = x;
+    }
+    let mut film = span("film", length, 1e-3, if e > 0.0 { &["variableLength"] } else { &[] });
+    for (k, x) in [("frame_a.x", 0.0), ("frame_a.y", 0.0), ("frame_b.x", 0.0), ("frame_b.y", length)] {
+        film["start"][k] = json!(x);
+    }
+    let mut c = chain(&["src", "film", "wind"]);
+    if e > 0.0 {
+        c.push(connect("wind", "web_a.y", "film", "frame_b.y"));
+    }
+    line_spec(vec![prescribed("src", "source", json!([[0.0, v]])), film, wind], c, "given")
+}
+
+const LAYON_MASS: f64 = 20.0;
+const LAYON_K: f64 = 1e7;
+/// A damping ratio of 0.6: c = 1.2 sqrt(k m).
+const LAYON_C: f64 = 1.2 * 14142.135623730951;
+
+/// On a round roll turning steadily the lay-on roller's nip carries its load [R18]: the carriage's
+/// balance m X'' = N - F with X'' = 0 once it has settled (its own mode decays as exp(-0.6*707 t): 0.2 s
+/// is 85 time constants), to 1e-6 N; its roller turns with the surface but for the slip that carries its
+/// bearing (b_l omega_l = mu N tanh(slip/v_s) r_l: 7e-6 m/s here).
+#[test]
+fn a_layon_nip_carries_its_load_on_a_round_roll() {
+    let (r, v, load) = (0.3, 10.0, 300.0);
+    let mut line = initialized(&layon_line(0.0, r, v, load));
+    for _ in 0..200 {
+        line.do_step(1e-3).unwrap();
+        assert!(get(&line, "wind.layon.N") > 0.0, "the nip let go at {} s", line.time());
+    }
+    let force = get(&line, "wind.layon.N");
+    assert!((force - load).abs() < 1e-6, "N = {force} N against the load {load} N");
+    let slip = v - get(&line, "wind.layon.omega") * 0.1;
+    let bearing = 1e-3 * get(&line, "wind.layon.omega");
+    let expected = 1e-3 * (bearing / (0.1 * 0.5 * load)).atanh();
+    assert!((slip - expected).abs() < 1e-9, "slip {slip} m/s against {expected} m/s");
+    assert!((get(&line, "wind.layon.delta") - load / LAYON_K).abs() < 1e-12);
+}
+
+/// With 1 mm of runout under 100 N the carriage keeps contact below the derived bounce speed and loses
+/// it above [R18]: `layon::bounce_omega` for the nip's k and c (the rigid sqrt(F/(m e)) with F/k added
+/// to e: 1 % here), at 0.97 and 1.03 of it, over a second sampled 200 times a turn after 0.3 s of settling.
+#[test]
+fn a_layon_roller_bounces_above_the_derived_speed() {
+    let (e, r, load) = (1e-3, 0.3, 100.0);
+    let l = roller::layon::LayOn { mass: LAYON_MASS, stiffness: LAYON_K, damping: LAYON_C, radius: 0.1, inertia: 0.05, bearing: 1e-3, mu: 0.5, v_slip: 1e-3, angle: 0.0 };
+    let critical = roller::layon::bounce_omega(&l, load, e).unwrap();
+    eprintln!("bounce: omega_c = {critical} rad/s, rigid {}", roller::layon::rigid_bounce_omega(&l, load, e));
+    for (factor, bounces) in [(0.97, false), (1.03, true)] {
+        let omega = factor * critical;
+        let mut line = initialized(&layon_line(e, r, omega * r, load));
+        let h = 2.0 * std::f64::consts::PI / omega / 200.0;
+        let (mut least, mut apart) = (f64::INFINITY, 0);
+        while line.time() < 1.3 {
+            line.do_step(h).unwrap();
+            if line.time() > 0.3 {
+                let force = get(&line, "wind.layon.N");
+                least = least.min(force);
+                apart += (force <= 0.0) as usize;
+            }
+        }
+        assert_eq!(apart > 0, bounces, "at {factor} omega_c: {apart} samples apart, least N {least} N");
+    }
+}
+
+/// The line's steady start solves the lay-on roller's states too [R18]: its carriage at rest where the
+/// nip carries the load (to 1e-6 N) and its roller turning with the surface but for its bearing's slip.
+#[test]
+fn a_steady_start_presses_the_layon_roller_with_its_load() {
+    let (r, v, load) = (0.3, 10.0, 300.0);
+    let mut spec = layon_line(0.0, r, v, load);
+    spec["start"] = json!("equilibrium");
+    let line = initialized(&spec);
+    let force = get(&line, "wind.layon.N");
+    assert!((force - load).abs() < 1e-6 && get(&line, "wind.layon.v").abs() < 1e-12, "N = {force} N against {load} N");
+    assert!((get(&line, "wind.layon.omega") * 0.1 / v - 1.0).abs() < 1e-5);
+}

@@ -9,7 +9,7 @@ use profiles::{Profile, Table, Value};
 use std::sync::Arc;
 
 /// The table keys a roller's profile may have.
-pub const TABLES: [&str; 9] = ["speed", "torque", "tension", "strain", "load", "nip", "setpoint", "reference", "brake"];
+pub const TABLES: [&str; 10] = ["speed", "torque", "tension", "strain", "load", "nip", "setpoint", "reference", "brake", "layon"];
 
 /// A table of `TABLES` by position: looked up on every evaluation, so by index, not by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,6 +27,8 @@ pub enum Key {
     Reference,
     /// A powder brake's torque, N m >= 0 [R12].
     Brake,
+    /// A lay-on roller's load F, N >= 0 [R18].
+    Layon,
 }
 
 /// How the roller is driven: at most one of the profile's drive tables.
@@ -80,7 +82,7 @@ pub struct Loaded {
     pub text: Arc<str>,
     pub drive: Drive,
     /// The profile's tables in the order of `TABLES`, found once.
-    pub tables: Arc<[Option<Table>; 9]>,
+    pub tables: Arc<[Option<Table>; 10]>,
 }
 
 impl Loaded {
@@ -124,6 +126,9 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
     if loaded.table(Key::Brake).is_some() && p.traction {
         return Err("a brake table with includeTraction = true: a brake on a roller where the web may slip is not modelled".into());
     }
+    if loaded.table(Key::Layon).is_some() && !p.layon {
+        return Err("a layon table needs layon = true (it is the lay-on roller's load [R18])".into());
+    }
     if loaded.table(Key::Nip).is_some() && !p.traction {
         return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
     }
@@ -164,9 +169,9 @@ pub fn read(text: &str) -> Result<Loaded, String> {
             return Err(format!("brake: the torque at {t} s is {b} N.m; a brake's torque is >= 0 (it opposes the motion)"));
         }
     }
-    if let Some(nip) = profile.table("nip") {
-        if let Some(&[t, n]) = nip.points().iter().find(|&&[_, n]| !(n >= 0.0 && n.is_finite())) {
-            return Err(format!("nip: the load at {t} s is {n} N; a nip presses with a load >= 0"));
+    for key in ["nip", "layon"] {
+        if let Some(&[t, n]) = profile.table(key).and_then(|table| table.points().iter().find(|&&[_, n]| !(n >= 0.0 && n.is_finite()))) {
+            return Err(format!("{key}: the load at {t} s is {n} N; a nip presses with a load >= 0"));
         }
     }
     for e in &profile.events {

@@ -27,7 +27,7 @@ pub type Tangents = Outputs<f64>;
 /// root of the forces; nor where the bearings' torque is not linear in omega; nor with runout [R15], whose
 /// arm moves with the roll's angle.
 pub fn tangents_fixed(p: &Parameters) -> bool {
-    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && Kind::of(p) == Kind::None && p.load_cell_wrap == 0.0 && roll::bearing_damping(p).is_some() && !p.runout
+    !p.winding() && (p.inlets <= 1 || p.layered) && !p.traction && Kind::of(p) == Kind::None && p.load_cell_wrap == 0.0 && roll::bearing_damping(p).is_some() && !p.runout && !p.layon
 }
 
 /// The roller at one point, for the tangents along any direction there (`Roller::linearize`).

@@ -14,7 +14,8 @@
 //!   * `control` — the drive's loop and its motor [R10]–[R11], [R13];
 //!   * `brake` — a powder brake [R12];
 //!   * `drive` — the profile: the drive and the tables of time it follows;
-//! * `layon` — a lay-on roller against a winder [R18]: its physics and tests, not yet in `rhs` (the FMU);
+//!   * `runout` — a roll with runout [R15], the web tangent to its offset surface;
+//!   * `layon` — a lay-on roller against a winder [R18]: its carriage, nip and traction;
 //! * `jacobian` — the partial derivatives: `rhs` along a direction;
 //! * `model` — the roller's data and the effects' glue;
 //! * `stepping` — one communication step;

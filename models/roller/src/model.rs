@@ -43,6 +43,8 @@ pub struct Roller {
     pub(crate) brake_grip: f64,
     /// The roll's angle [R15] (turns only with runout).
     pub(crate) angle: f64,
+    /// A lay-on roller's carriage (X, X') and spin [R18] (unused without one).
+    pub(crate) layon: [f64; 3],
     /// How the equations take the contact: its bristle, or held while a line solves its steady state.
     pub(crate) friction: contact::Friction,
     pub(crate) profile: Option<Loaded>,
@@ -92,6 +94,7 @@ impl Roller {
         }
         (self.integrator, self.motor, self.dancer) = (x.loop_integrator, x.motor_torque, x.dancer_integrator);
         (self.grip, self.brake_grip, self.angle) = (x.grip, x.brake_grip, x.angle);
+        self.layon = [x.layon_x, x.layon_speed, x.layon_spin];
         Ok(())
     }
 
@@ -127,7 +130,10 @@ impl Roller {
             | State::MotorTorque
             | State::DancerIntegrator
             | State::Grip
-            | State::BrakeGrip => false,
+            | State::BrakeGrip
+            | State::LayonX
+            | State::LayonSpeed
+            | State::LayonSpin => false,
         }
     }
 
@@ -195,7 +201,7 @@ impl Roller {
         if self.profile.is_none() {
             // No tables to read (an idler, most rollers of a line): what the parameters give.
             let control = control::Reads { set: p.loop_set, reference: self.given_reference(), held: self.held_command() };
-            return Point { roll: self.roll, prescribed, control, slip, ..Point::default() };
+            return Point { roll: self.roll, prescribed, control, slip, layon_load: p.layon_f, ..Point::default() };
         }
         Point {
             roll: self.roll,
@@ -210,6 +216,7 @@ impl Roller {
             load: self.value(Key::Load, t).map_or(0.0, |(x, _)| x),
             strain: self.value(Key::Strain, t).map(|(x, _)| x),
             slip,
+            layon_load: self.value(Key::Layon, t).map_or(p.layon_f, |(x, _)| x),
         }
     }
 
@@ -276,6 +283,9 @@ impl Roller {
             grip: self.grip,
             brake_grip: self.brake_grip,
             angle: self.angle,
+            layon_x: self.layon[0],
+            layon_speed: self.layon[1],
+            layon_spin: self.layon[2],
         }
     }
 
@@ -480,6 +490,23 @@ impl Roller {
     /// The roll's angle [R15].
     pub fn angle(&self) -> f64 {
         self.angle
+    }
+
+    /// A lay-on roller's nip force [R18] (0 without one).
+    pub fn layon_force(&self) -> f64 {
+        self.layon_outputs().map_or(0.0, |o| o.layon_force)
+    }
+
+    /// A lay-on roller's nip compression [R18] (0 without one).
+    pub fn layon_compression(&self) -> f64 {
+        self.layon_outputs().map_or(0.0, |o| o.layon_compression)
+    }
+
+    fn layon_outputs(&self) -> Option<rhs::Outputs> {
+        self.params.layon.then(|| {
+            let x = self.held();
+            rhs::outputs(&self.params, &self.point_at(self.time, &x), &x, &self.inputs)
+        })
     }
 
     /// Everything the roller computes now, where its roll has runout (its ends move with the angle).

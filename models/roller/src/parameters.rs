@@ -91,6 +91,19 @@ pub struct Parameters {
     pub drive_taper: f64,
     /// The angle over which a stepwise radius moves by a layer (0: smooth) [R17], rad.
     pub wound_merge: f64,
+    /// A lay-on roller on this winder [R18]: on, its carriage's mass, the nip's k and c, the roller's
+    /// radius, inertia and bearing, the nip's mu and slip speed, its line's angle, its load.
+    pub layon: bool,
+    pub layon_m: f64,
+    pub layon_k: f64,
+    pub layon_c: f64,
+    pub layon_r: f64,
+    pub layon_j: f64,
+    pub layon_b: f64,
+    pub layon_mu: f64,
+    pub layon_v_slip: f64,
+    pub layon_angle: f64,
+    pub layon_f: f64,
 }
 
 /// What the drive's loop holds (`loop.kind`).
@@ -117,8 +130,8 @@ impl Kind {
 }
 
 /// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I,
-/// grip, brake.grip, angle).
-pub const STATES: usize = 11;
+/// grip, brake.grip, angle, layon.x, layon.v, layon.omega).
+pub const STATES: usize = 14;
 
 /// The most webs a roller takes in or gives out.
 pub const PORTS: usize = 4;
@@ -239,6 +252,8 @@ pub struct Structure {
     pub brake_table: bool,
     /// A tension drive: the profile's tension table.
     pub tension_table: bool,
+    /// A lay-on roller's load table [R18].
+    pub layon_table: bool,
     /// The line gives a force loop's set point (`set_input`), a loop's or an ideal speed drive's speed (`speed_input`).
     pub set_input: bool,
     pub speed_input: bool,
@@ -281,6 +296,16 @@ impl Parameters {
             Real::loop_kp | Real::loop_ki | Real::motor_limit => kind != Kind::None,
             Real::loop_sign | Real::motor_lag | Real::load_cell_wrap => true,
             Real::runout_e | Real::runout_phase | Real::runout_L => self.runout,
+            Real::layon_m
+            | Real::layon_k
+            | Real::layon_c
+            | Real::layon_r
+            | Real::layon_J
+            | Real::layon_b
+            | Real::layon_mu
+            | Real::layon_v_slip
+            | Real::layon_angle => self.layon,
+            Real::layon_F => self.layon && !s.layon_table,
             // Inputs.
             Real::web_a_F
             | Real::web_b_F
@@ -343,7 +368,15 @@ impl Parameters {
             | Real::dancer_I
             | Real::der_dancer_I
             | Real::angle
-            | Real::der_angle => true,
+            | Real::der_angle
+            | Real::layon_x
+            | Real::der_layon_x
+            | Real::layon_v
+            | Real::der_layon_v
+            | Real::layon_omega
+            | Real::der_layon_omega
+            | Real::layon_N
+            | Real::layon_delta => true,
         }
     }
 

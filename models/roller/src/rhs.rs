@@ -6,6 +6,7 @@
 
 use crate::contact::{self, Contact, Dual, Friction};
 use crate::number::{Number, Tangent};
+use crate::layon::{self, Nip};
 use crate::parameters::{Inputs, Parameters, PORTS, UNWINDER};
 use crate::physics;
 use crate::roll::{self, Roll};
@@ -30,6 +31,8 @@ pub struct Point {
     /// The leaving strain's table, where there is one (an unwinder's web leaves its roll at it).
     pub strain: Option<f64>,
     pub slip: Option<Slip>,
+    /// A lay-on roller's load F [R18]: its table's, else layon.F (0 without a lay-on roller).
+    pub layon_load: f64,
 }
 
 /// Where the web may slip: the contact [R6]-[R8] at the point and what it moves, with gradients.
@@ -62,6 +65,8 @@ pub struct Rates<N> {
     pub torque: N,
     pub surface_speed: N,
     pub runout: Option<Runout<N>>,
+    /// A lay-on roller's nip [R18] where the roll has one.
+    pub layon: Option<Nip<N>>,
 }
 
 /// What [R1] sums and what it is made of, at the roller's point.
@@ -75,6 +80,8 @@ struct Torques<N> {
     loop_law: control::Law<N>,
     /// The roll's runout [R15] where it has one: its arm, its span's length and the web's speed.
     runout: Option<Runout<N>>,
+    /// A lay-on roller's nip [R18]: its traction's torque is in `web`.
+    layon: Option<Nip<N>>,
 }
 
 #[inline(always)]
@@ -95,7 +102,19 @@ fn torques<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>) 
         (None, Some(g)) => runout::web_torque(p, r, g.arm, u),
         (None, None) => physics::web_torque(p, lever(p, at, r), u),
     };
-    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia), runout }
+    let layon = p.layon.then(|| layon_nip(p, at, x, radius_rate(p, at, u, r, v)));
+    let web = layon.map_or(web, |n| web + n.winder_torque);
+    Torques { inertia, surface_speed: v, friction, web, bearing: roll::bearing_torque(p, omega), loop_law: loop_law(p, at, x, u, inertia), runout, layon }
+}
+
+/// A lay-on roller's nip on the roll [R18] at the roll's radius r growing at `radius_rate`: the
+/// roll's surface is runout's circle [R15] (round without runout), the carriage's line at layon.angle
+/// measured as runout.phase is (so in runout's mirrored frame of a winder at -layon.angle).
+#[inline(always)]
+fn layon_nip<N: Number>(p: &Parameters, at: &Point, x: &States<N>, radius_rate: N) -> Nip<N> {
+    let (e, psi) = if p.runout { (p.runout_e, -(x.angle + p.runout_phase)) } else { (0.0, N::default()) };
+    let winder = layon::Winder { radius: x.radius, radius_rate, eccentricity: e, psi, psi_rate: -x.omega, omega: x.omega };
+    layon::nip(&layon::of(p), &winder, x.layon_x, x.layon_speed, x.layon_spin, N::constant(at.layon_load))
 }
 
 /// The loop's law [R10]-[R11], [R13] at the roller's point.
@@ -197,8 +216,11 @@ pub fn rates<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<N>
         // A speed drive has no brake (refused): its surface speed is the table's.
         brake_grip: if at.prescribed.is_some() { N::default() } else { brake_at(p, at, x, v).1 },
         angle: if p.runout { omega } else { N::default() },
+        layon_x: if p.layon { x.layon_speed } else { N::default() },
+        layon_speed: t.layon.map_or_else(N::default, |n| n.acceleration),
+        layon_spin: t.layon.map_or_else(N::default, |n| n.spin_rate),
     };
-    Rates { derivatives, torque, surface_speed: v, runout: t.runout }
+    Rates { derivatives, torque, surface_speed: v, runout: t.runout, layon: t.layon }
 }
 
 /// Everything the roller computes, each named as the roller's own (`t.x` for `Roller::x()`): the
@@ -235,6 +257,10 @@ pub struct Outputs<N = f64> {
     pub leaving_speed: N,
     pub angle: N,
     pub load_cell_force: N,
+    /// A lay-on roller's (X, X', omega_l) [R18], its nip force and compression (0 without one).
+    pub layon: [N; 3],
+    pub layon_force: N,
+    pub layon_compression: N,
 }
 
 impl<N: Copy> Outputs<N> {
@@ -331,6 +357,9 @@ pub fn outputs<N: Number>(p: &Parameters, at: &Point, x: &States<N>, u: &Inputs<
         leaving_speed: speeds.1,
         angle: x.angle,
         load_cell_force: load_cell_force(p, u),
+        layon: [x.layon_x, x.layon_speed, x.layon_spin],
+        layon_force: rates.layon.map_or_else(N::default, |n| n.force),
+        layon_compression: rates.layon.map_or_else(N::default, |n| n.compression),
     }
 }
 
@@ -364,6 +393,9 @@ impl<N: Number> Outputs<N> {
             leaving_speed: f(self.leaving_speed),
             angle: f(self.angle),
             load_cell_force: f(self.load_cell_force),
+            layon: self.layon.map(&f),
+            layon_force: f(self.layon_force),
+            layon_compression: f(self.layon_compression),
         }
     }
 }

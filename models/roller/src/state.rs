@@ -26,6 +26,10 @@ pub enum State {
     BrakeGrip,
     /// The roll's angle [R15] (moves only with runout).
     Angle,
+    /// A lay-on roller's carriage X and speed X', and its spin [R18].
+    LayonX,
+    LayonSpeed,
+    LayonSpin,
 }
 
 impl State {
@@ -42,6 +46,9 @@ impl State {
         State::Grip,
         State::BrakeGrip,
         State::Angle,
+        State::LayonX,
+        State::LayonSpeed,
+        State::LayonSpin,
     ];
 
     /// Its position in the Model Exchange state vector.
@@ -64,6 +71,9 @@ impl State {
             State::Grip => Real::grip,
             State::BrakeGrip => Real::brake_grip,
             State::Angle => Real::angle,
+            State::LayonX => Real::layon_x,
+            State::LayonSpeed => Real::layon_v,
+            State::LayonSpin => Real::layon_omega,
         }
     }
 
@@ -78,7 +88,8 @@ impl Parameters {
     /// always, its radius only on a roll being wound, its carriage only on a dancer, the web's
     /// speed over it and the contact's grip only where the web may slip, a loop's integrator, its
     /// motor's torque where it lags [R10]-[R11], a dancer loop's integrator [R13], a brake's
-    /// grip where its profile has a brake table (`brake`) [R12], and a roll's angle with runout [R15].
+    /// grip where its profile has a brake table (`brake`) [R12], a roll's angle with runout [R15], and a
+    /// lay-on roller's carriage and spin [R18].
     pub fn active_states(&self, brake: bool) -> Vec<State> {
         let kind = Kind::of(self);
         State::ALL
@@ -93,6 +104,7 @@ impl Parameters {
                 State::MotorTorque => kind != Kind::None && self.motor_lag > 0.0,
                 State::DancerIntegrator => kind == Kind::Dancer,
                 State::Angle => self.runout,
+                State::LayonX | State::LayonSpeed | State::LayonSpin => self.layon,
             })
             .collect()
     }
@@ -119,6 +131,7 @@ impl State {
             State::WebSpeed | State::Grip => "includeTraction",
             State::BrakeGrip => "brake",
             State::Angle => "runout",
+            State::LayonX | State::LayonSpeed | State::LayonSpin => "layon",
             State::MotorTorque => "motor.lag",
             State::LoopIntegrator | State::DancerIntegrator => "loop.kind",
             // Always a state.
@@ -141,6 +154,9 @@ pub struct States<N = f64> {
     pub grip: N,
     pub brake_grip: N,
     pub angle: N,
+    pub layon_x: N,
+    pub layon_speed: N,
+    pub layon_spin: N,
 }
 
 impl<N: Number> States<N> {
@@ -158,6 +174,9 @@ impl<N: Number> States<N> {
             State::Grip => self.grip,
             State::BrakeGrip => self.brake_grip,
             State::Angle => self.angle,
+            State::LayonX => self.layon_x,
+            State::LayonSpeed => self.layon_speed,
+            State::LayonSpin => self.layon_spin,
         }
     }
 
@@ -175,6 +194,9 @@ impl<N: Number> States<N> {
             State::Grip => &mut self.grip,
             State::BrakeGrip => &mut self.brake_grip,
             State::Angle => &mut self.angle,
+            State::LayonX => &mut self.layon_x,
+            State::LayonSpeed => &mut self.layon_speed,
+            State::LayonSpin => &mut self.layon_spin,
         }
     }
 

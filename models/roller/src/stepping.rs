@@ -53,26 +53,13 @@ impl Roller {
         let (mut v_web, mut grip) = (self.v_web, self.grip);
         // [R1] is linear in omega without a loop, a brake or bearings whose torque is not -b*omega.
         // Nor with runout [R15]: the web's arm moves with the roll's angle.
-        let linear = roll::bearing_damping(p).filter(|_| Kind::of(p) == Kind::None && self.table(Key::Brake).is_none() && !p.runout);
+        // Nor with a lay-on roller [R18]: its nip.
+        let linear = roll::bearing_damping(p).filter(|_| Kind::of(p) == Kind::None && self.table(Key::Brake).is_none() && !p.runout && !p.layon);
         let Some(damping) = linear else {
-            // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused), or runout [R15]: the
-            // loop's integrator, its motor and the roll's own (omega, r, angle), with J moving with r, by
-            // the same L-stable method.
-            let y = self.controlled_step(t, h)?;
-            let carriage = if p.carriage {
-                let (g0, g1) = self.carriage_force(t);
-                carriage::step(p, self.carriage, g0, g1, h)
-            } else {
-                self.carriage
-            };
-            if !(y.iter().all(|x| x.is_finite()) && y[1] > 0.0 && carriage.iter().all(|x| x.is_finite())) {
-                return Err(FmiError::discard(format!("the roller's loop would reach (omega, r, loop.I, motor.torque, dancer.I, brake.grip, angle) = {y:?}: take a shorter step or check the inputs")));
-            }
-            let inertia = self.roll.inertia(p, y[1]);
-            self.omega = CompensatedSum::from_parts(y[0], 0.0);
-            self.roll = Roll { radius: y[1], inertia, ..self.roll };
-            (self.integrator, self.motor, self.dancer, self.brake_grip, self.angle, self.carriage) = (y[2], y[3], y[4], y[5], y[6], carriage);
-            return Ok(());
+            // A loop [R10]-[R11] or a brake [R12] (no speed table, no slip: refused), runout [R15] or a lay-on
+            // roller [R18]: the loop's integrator, its motor and the roll's own (omega, r, angle), with J moving
+            // with r, and the lay-on roller's states where it has one, by the same L-stable method.
+            return if p.layon { self.controlled_piece(t, h, &CONTROLLED_LAYON) } else { self.controlled_piece(t, h, &CONTROLLED) };
         };
         // The web's strain at the roll [R3]: the inputs are held, a table read at the piece's middle.
         let strain = rhs::roll_strain(p, self.value(Key::Strain, t + 0.5 * h).map(|(x, _)| x), &self.inputs.strain_a);
@@ -143,24 +130,61 @@ impl Roller {
             .map_err(|failure| FmiError::discard(format!("the web's slip on the roller could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
-    /// (omega, r, loop.I, motor.torque, dancer.I, brake.grip, angle) after [t, t+h] of a piece with a loop
-    /// [R10]-[R11], [R13], a brake [R12] or runout [R15], the inputs held.
-    fn controlled_step(&self, t: f64, h: f64) -> FmiResult<[f64; 7]> {
-        let y0 = [self.omega(), self.roll.radius, self.integrator, self.motor, self.dancer, self.brake_grip, self.angle];
+    /// A piece with a loop [R10]-[R11], [R13], a brake [R12], runout [R15] or a lay-on roller [R18]: `states`
+    /// after [t, t+h] by the L-stable method, the inputs held; the carriage of a dancer by its own exact step.
+    fn controlled_piece<const N: usize>(&mut self, t: f64, h: f64, states: &[State; N]) -> FmiResult {
+        let p = &self.params;
+        let y = self.controlled_step(t, h, states)?;
+        let carriage = if p.carriage {
+            let (g0, g1) = self.carriage_force(t);
+            carriage::step(p, self.carriage, g0, g1, h)
+        } else {
+            self.carriage
+        };
+        if !(y.iter().all(|x| x.is_finite()) && y[1] > 0.0 && carriage.iter().all(|x| x.is_finite())) {
+            return Err(FmiError::discard(format!("the roller's loop would reach {states:?} = {y:?}: take a shorter step or check the inputs")));
+        }
+        self.take(states, &y);
+        self.carriage = carriage;
+        Ok(())
+    }
+
+    /// `states` after [t, t+h] of a piece with a loop [R10]-[R11], [R13], a brake [R12], runout [R15] or a
+    /// lay-on roller [R18], the inputs held.
+    fn controlled_step<const N: usize>(&self, t: f64, h: f64, states: &[State; N]) -> FmiResult<[f64; N]> {
+        let held = self.held();
+        let y0 = states.map(|s| held.get(s));
         let scale = |x: f64| SLIP_ATOL * x.abs().max(1.0);
         let control = solver::Control { rtol: SLIP_RTOL, atol: y0.map(scale), initial_step: h, max_steps: 100_000 };
-        solver::rosenbrock::integrate(&Controlled { roller: self, t0: t }, h, y0, &control)
+        solver::rosenbrock::integrate(&Controlled { roller: self, t0: t, states }, h, y0, &control)
             .map(|solution| solution.y)
             .map_err(|failure| FmiError::discard(format!("the roller's loop could not be followed over the step ({failure:?}): take a shorter step")))
     }
 
-    /// The roller at time t with (omega, r, loop.I, motor.torque, dancer.I, brake.grip, angle) at y, the rest as now (a step's trial point).
-    fn at_trial(&self, t: f64, y: &[f64; 7]) -> Roller {
+    /// Sets `states` to y (J moves with r [R3]); the others as they are.
+    fn take<const N: usize>(&mut self, states: &[State; N], y: &[f64; N]) {
+        for (&s, &value) in states.iter().zip(y) {
+            match s {
+                State::Omega => self.omega = CompensatedSum::from_parts(value, 0.0),
+                State::Radius => self.roll = Roll { radius: value, inertia: self.roll.inertia(&self.params, value), ..self.roll },
+                State::LoopIntegrator => self.integrator = value,
+                State::MotorTorque => self.motor = value,
+                State::DancerIntegrator => self.dancer = value,
+                State::BrakeGrip => self.brake_grip = value,
+                State::Angle => self.angle = value,
+                State::LayonX => self.layon[0] = value,
+                State::LayonSpeed => self.layon[1] = value,
+                State::LayonSpin => self.layon[2] = value,
+                State::CarriageY | State::CarriageSpeed | State::WebSpeed | State::Grip => unreachable!("{s:?} is not a controlled piece's state"),
+            }
+        }
+    }
+
+    /// The roller at time t with `states` at y, the rest as now (a step's trial point).
+    fn at_trial<const N: usize>(&self, t: f64, states: &[State; N], y: &[f64; N]) -> Roller {
         let mut trial = self.clone();
-        let inertia = self.roll.inertia(&self.params, y[1]);
-        trial.omega = CompensatedSum::from_parts(y[0], 0.0);
-        trial.roll = Roll { radius: y[1], inertia, ..self.roll };
-        (trial.integrator, trial.motor, trial.dancer, trial.brake_grip, trial.angle, trial.time) = (y[2], y[3], y[4], y[5], y[6], t);
+        trial.take(states, y);
+        trial.time = t;
         trial
     }
 
@@ -239,6 +263,9 @@ impl Roller {
         self.grip = if p.traction { bristle::sliding(p.traction_slip_start, p.traction_static, p.traction_v_slip) } else { 0.0 };
         self.brake_grip = if self.braked() { bristle::sliding(speed, 1.0, p.brake_v_slip) } else { 0.0 };
         self.angle = 0.0;
+        // Pressed by its load at the start on the roll as it stands, at rest, turning with the surface [R18].
+        let load = self.value(Key::Layon, time).map_or(p.layon_f, |(f, _)| f);
+        self.layon = if p.layon { crate::layon::start(p, p.radius, speed / p.radius, load) } else { [0.0; 3] };
         self.restart_hold(time);
     }
 }
@@ -294,30 +321,42 @@ fn time_derivative<const N: usize>(ode: &impl solver::Ode<N>, roller: &Roller, t
     std::array::from_fn(|i| (hi[i] - lo[i]) / (2.0 * e))
 }
 
-/// [R1], [R3], [R10]-[R13], [R15] over a piece, as an ODE in (omega, r, loop.I, motor.torque, dancer.I, brake.grip,
-/// angle) from the piece's start t0; its Jacobian from the right-hand side's tangents.
-struct Controlled<'a> {
+/// [R1], [R3], [R10]-[R13], [R15], [R18] over a piece, as an ODE in `states` from the piece's start t0; its
+/// Jacobian from the right-hand side's tangents.
+struct Controlled<'a, const N: usize> {
     roller: &'a Roller,
     t0: f64,
+    states: &'a [State; N],
 }
 
-/// The states the loop's step integrates.
+/// The states the loop's step integrates, and with a lay-on roller's.
 const CONTROLLED: [State; 7] = [State::Omega, State::Radius, State::LoopIntegrator, State::MotorTorque, State::DancerIntegrator, State::BrakeGrip, State::Angle];
+const CONTROLLED_LAYON: [State; 10] = [
+    State::Omega,
+    State::Radius,
+    State::LoopIntegrator,
+    State::MotorTorque,
+    State::DancerIntegrator,
+    State::BrakeGrip,
+    State::Angle,
+    State::LayonX,
+    State::LayonSpeed,
+    State::LayonSpin,
+];
 
-impl solver::Ode<7> for Controlled<'_> {
-    fn rhs(&self, s: f64, y: &[f64; 7]) -> [f64; 7] {
-        let d = self.roller.at_trial(self.t0 + s, y).rates();
-        CONTROLLED.map(|i| d.get(i))
+impl<const N: usize> solver::Ode<N> for Controlled<'_, N> {
+    fn rhs(&self, s: f64, y: &[f64; N]) -> [f64; N] {
+        let d = self.roller.at_trial(self.t0 + s, self.states, y).rates();
+        self.states.map(|i| d.get(i))
     }
 
-    fn jacobian(&self, s: f64, y: &[f64; 7]) -> [[f64; 7]; 7] {
-        let trial = self.roller.at_trial(self.t0 + s, y);
-        trial.rate_jacobian(&trial.point(), &trial.held(), CONTROLLED)
+    fn jacobian(&self, s: f64, y: &[f64; N]) -> [[f64; N]; N] {
+        let trial = self.roller.at_trial(self.t0 + s, self.states, y);
+        trial.rate_jacobian(&trial.point(), &trial.held(), *self.states)
     }
 
     /// Tables of time (a set point's or a reference's ramp) move f at fixed y: a central difference.
-    fn time_derivative(&self, s: f64, y: &[f64; 7]) -> [f64; 7] {
+    fn time_derivative(&self, s: f64, y: &[f64; N]) -> [f64; N] {
         time_derivative(self, self.roller, self.t0, s, y)
     }
 }
-

@@ -121,6 +121,24 @@ fmi_core::bind_variables! {
         der_angle: computed(rates().angle),
         drive_taper: param(params.drive_taper),
         wound_merge: param(params.wound_merge),
+        layon_m: param(params.layon_m),
+        layon_k: param(params.layon_k),
+        layon_c: param(params.layon_c),
+        layon_r: param(params.layon_r),
+        layon_J: param(params.layon_j),
+        layon_b: param(params.layon_b),
+        layon_mu: param(params.layon_mu),
+        layon_v_slip: param(params.layon_v_slip),
+        layon_angle: param(params.layon_angle),
+        layon_F: param(params.layon_f),
+        layon_x: computed(layon[0]),
+        der_layon_x: computed(rates().layon_x),
+        layon_v: computed(layon[1]),
+        der_layon_v: computed(rates().layon_speed),
+        layon_omega: computed(layon[2]),
+        der_layon_omega: computed(rates().layon_spin),
+        layon_N: computed(layon_force()),
+        layon_delta: computed(layon_compression()),
     }
     integer {
         roll: param(params.roll),
@@ -137,6 +155,7 @@ fmi_core::bind_variables! {
         loop_compression: param(params.loop_compression),
         speed_input: param(params.speed_input),
         runout: param(params.runout),
+        layon: param(params.layon),
     }
     string {
         profile: param(params.profile),

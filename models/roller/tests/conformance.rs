@@ -10,7 +10,7 @@ use fmi_testkit::conformance::{Hints, Point};
 /// the nip at the entry and back with it at the exit; a drive's loop; a brake;
 /// an ideal speed drive on its input; a dancer loop [R13], without a lag (its position reaches tau) and with one;
 /// a speed-driven winder of four webs, whose r' reads their merged strain [R3] (it reaches tau); a
-/// winder and an unwinder with runout [R15].
+/// winder and an unwinder with runout [R15]; a winder with a lay-on roller [R18] pressed on it, round and with runout.
 fn hints() -> Hints {
     let speed_drive = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/speed_drive.json");
     let nip = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/traction_nip.json");
@@ -68,11 +68,18 @@ fn hints() -> Hints {
             // Rolls with runout [R15] that wind: the web's speed at the roll moves with the angle.
             Point { values: vec![("roll", 2.0), ("runout", 1.0), ("runout.e", 0.03), ("runout.L", 0.1), ("runout.phase", 0.5), ("wound.thickness", 1e-2), ("wound.density", 1000.0), ("inlets", 4.0), ("web_a.F", 100.0)], texts: vec![] },
             Point { values: vec![("roll", 1.0), ("runout", 1.0), ("runout.e", 0.03), ("runout.L", 0.1), ("runout.phase", -0.5), ("wound.thickness", 1e-2), ("wound.density", 1000.0), ("inlets", 4.0), ("web_b.F", 100.0)], texts: vec![] },
+            // A lay-on roller [R18] pressed on a winding roll with runout (its nip reads r' through the strains, and the
+            // angle), and on a round one.
+            Point {
+                values: vec![("roll", 2.0), ("layon", 1.0), ("layon.angle", 0.3), ("layon.F", 300.0), ("runout", 1.0), ("runout.e", 1e-4), ("runout.L", 0.1), ("runout.phase", 0.5), ("wound.thickness", 1e-2), ("wound.density", 1000.0), ("inlets", 4.0), ("web_a.F", 100.0), ("v_start", 5.0)],
+                texts: vec![],
+            },
+            Point { values: vec![("roll", 2.0), ("layon", 1.0), ("wound.thickness", 1e-3), ("wound.density", 1000.0), ("web_a.F", 100.0), ("v_start", 5.0)], texts: vec![] },
             // An ideal speed drive on its input loop.speed (speed.input), the web pulling on both sides.
             Point { values: vec![("speed.input", 1.0), ("loop.speed", 6.0), ("web_a.F", 100.0), ("web_b.F", 120.0)], texts: vec![] },
         ],
         texts: vec![("profile", speed_drive.into())],
-        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop", "a sampled loop's period is 0 (continuous) or at least", "a sampled loop's delay is at most its period", "runout [R15] is a roll's", "a stepwise radius [R17] runs in Model Exchange", "runout with a stepwise radius [R17] is not modelled", "the span's fixed end must lie beyond the roll"],
+        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop", "a sampled loop's period is 0 (continuous) or at least", "a sampled loop's delay is at most its period", "runout [R15] is a roll's", "a stepwise radius [R17] runs in Model Exchange", "runout with a stepwise radius [R17] is not modelled", "the span's fixed end must lie beyond the roll", "a lay-on roller [R18] presses on a winder", "a layon table needs layon = true", "a lay-on roller on a stepwise radius"],
     }
 }
 

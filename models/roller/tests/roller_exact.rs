@@ -66,14 +66,15 @@ fn description_is_the_roller() {
     assert!(range("b").contains(0.0) && !range("b").contains(-1e-12));
     assert!(!range("web_a.eps").contains(-1.0) && range("web_a.eps").contains(-0.999));
     // Only the strains passed on, the drive's torque and, where the web may slip, the share of
-    // traction and the air film (both read the tensions) and the load cell feed through from an input within a step.
+    // traction and the air film (both read the tensions), the load cell and a lay-on roller's nip (its damper reads
+    // the roll's growth, which reads the arriving strains) feed through from an input within a step.
     let through: Vec<&str> = DESCRIPTION
         .output_dependencies
         .iter()
         .filter(|d| d.on.as_ref().is_some_and(|on| on.iter().any(|vr| DESCRIPTION.variable(*vr).unwrap().causality == Causality::Input)))
         .map(|d| &*DESCRIPTION.variable(d.vr).unwrap().name)
         .collect();
-    assert_eq!(through, ["web_b.eps", "tau", "web_b2.eps", "web_b3.eps", "web_b4.eps", "traction", "mu_eff", "h_air", "load_cell.F"]);
+    assert_eq!(through, ["web_b.eps", "tau", "web_b2.eps", "web_b3.eps", "web_b4.eps", "traction", "mu_eff", "h_air", "load_cell.F", "layon.N"]);
 }
 
 #[test]
