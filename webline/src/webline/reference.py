@@ -557,9 +557,11 @@ class LineODE:
         balance = [i + 1 for i in held]  # their accelerations: checked afterwards
         # A roll's radius is never steady while web winds: held at its start, its rate not solved for.
         rolls = list(self.i_r.values()) + list(self.i_angle.values())  # and a roll's angle, which turns
-        # A lay-on's carriage: held where its start presses the nip by F/k (its balance is N = F there); its spin solved.
-        rolls += [i + k for i in self.i_layon.values() for k in (0, 1)]
         held, balance = held + rolls, balance + rolls
+        # A lay-on's carriage at rest (X' = 0 held, so X's own rate is nil): its position solved from its balance
+        # N = F, its roller's spin from its own.
+        held += [i + 1 for i in self.i_layon.values()]
+        balance += list(self.i_layon.values())
         # A laminate at rest is steady at any strains of its layers that pull as one: its layers move
         # together from their start (each layer's rate is zero whatever its strain; [M6]).
         tied = {first + i: first for first, k in self.resting_laminates(t, z0) for i in range(1, k)}
