@@ -51,7 +51,7 @@ trap 'kill -- -"$BESIDE" 2>/dev/null || true' EXIT
 # --rootdir: webline/pyproject.toml would otherwise become the rootdir (it is among the
 # arguments' folders), and the test ids of tests/integration/python would lose their folder.
 stage "pytest: FMPy, C importer, fmi-sim, libcosim, README, set-up, webline" \
-    "$PY" -m pytest --rootdir "$ROOT" tests/integration/python tests/validation fmu/tests webline/tests -q
+    "$PY" -m pytest --rootdir "$ROOT" tests/integration/python tests/validation fmu/tests webline/tests -q --durations=25
 if ! wait "$BESIDE"; then
     tail -60 "$BESIDE_LOG"
     echo "tests/run.sh: tests/integration/hardening.sh or cross.sh failed (beside pytest); their whole log: $BESIDE_LOG"

@@ -152,6 +152,7 @@ def test_separations_are_counted_and_timed():
 
 @pytest.mark.parametrize("layon, winder, words", [
     ({}, {"wound": {"thickness": "50 um", "stepwise": {"merge": "30 deg"}}}, "stepwise"),
+    ({}, {"runout": {"eccentricity": "1 mm", "harmonics": [{"order": 2, "amplitude": "0.1 mm"}]}}, "out-of-round"),
     ({"load": "-5 N"}, {}, "load >= 0"),
     ({"mu": 20}, {}, "friction coefficient"),
     ({"mass": None}, {}, "mass"),

@@ -32,11 +32,11 @@ pub enum Binding {
 }
 
 /// Part parameters the line does not offer: the line solves and starts the
-/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side), runout (and its span's length), a lay-on roller and
+/// parts itself, and its outputs are SI; a roller's ports, roll, carriage, traction (and its nip's side), runout (and its span's length and its harmonics' orders), a lay-on roller and
 /// layers, a drive's loop (its kind, feed-forward and lag decide its states and what it
 /// measures) and a span's variable length are the line's structure, which line.json fixes; a feed-forward's
 /// loop.acceleration the line sets from its reference (`feed`).
-const NOT_OFFERED: [&str; 27] = [
+const NOT_OFFERED: [&str; 31] = [
     "startAtEquilibrium",
     "useSensor",
     "toUnitV",
@@ -63,6 +63,10 @@ const NOT_OFFERED: [&str; 27] = [
     "nip.side",
     "runout",
     "runout.L",
+    "runout.h1.k",
+    "runout.h2.k",
+    "runout.h3.k",
+    "runout.h4.k",
     "layon",
 ];
 

@@ -1219,39 +1219,75 @@ fn runout_line(e: f64, r: f64, length: f64, v: f64, eps0: f64) -> Value {
 fn a_roll_with_runout_ripples_its_span_at_its_turn_by_the_first_order_lag() {
     let (e, r, length, v, eps0) = (1e-5, 0.5, 1.0, 10.0, 1e-3);
     let ea = 4.5e9 * 50e-6;
-    let mut line = initialized(&runout_line(e, r, length, v, eps0));
-    let omega = v / r;
-    let turn = 2.0 * std::f64::consts::PI / omega;
+    let samples = ripple(&mut initialized(&runout_line(e, r, length, v, eps0)), v / r);
+    let (mean, amplitude) = fitted(&samples, v / r);
+    let expected = ea * (e / length) * (1.0 + eps0) / (1.0 + (r / length).powi(2)).sqrt();
+    assert!((amplitude / expected - 1.0).abs() < 1e-4, "ripple {amplitude} N against {expected} N");
+    assert!((mean / (ea * eps0) - 1.0).abs() < 1e-4, "mean tension {mean} N against {} N", ea * eps0);
+    let turn = std::f64::consts::TAU * r / v;
+    let period = crossing_period(&samples, mean);
+    assert!((period / turn - 1.0).abs() < 1e-4, "period {period} s against the turn {turn} s");
+}
+
+/// An oval roll [R15] (its support function's second harmonic, a = 1e-5 m, without runout): the payout
+/// omega*(r + a cos(2 omega t)) forces the same lag at twice the turn's frequency, so T ripples by
+/// EA (a/(2L))(1 + eps0)/sqrt(1 + (r/(2L))^2) there, to 1e-4; its period half a turn, to 1e-4.
+#[test]
+fn an_oval_roll_ripples_its_span_twice_a_turn_by_the_first_order_lag() {
+    let (a, r, length, v, eps0) = (1e-5, 0.5, 1.0, 10.0, 1e-3);
+    let ea = 4.5e9 * 50e-6;
+    let mut spec = runout_line(0.0, r, length, v, eps0);
+    for (k, x) in [("runout.h1.k", json!(2)), ("runout.h1.a", json!(a)), ("runout.h1.phase", json!(0.7))] {
+        spec["parts"][0]["start"][k] = x;
+    }
+    let samples = ripple(&mut initialized(&spec), v / r);
+    let (mean, amplitude) = fitted(&samples, 2.0 * v / r);
+    let expected = ea * (a / (2.0 * length)) * (1.0 + eps0) / (1.0 + (r / (2.0 * length)).powi(2)).sqrt();
+    assert!((amplitude / expected - 1.0).abs() < 1e-4, "ripple {amplitude} N against {expected} N");
+    let (_, at_turn) = fitted(&samples, v / r);
+    assert!(at_turn < 1e-6 * expected, "an oval without runout ripples at the turn by {at_turn} N");
+    let turn = std::f64::consts::TAU * r / v;
+    let period = crossing_period(&samples, mean);
+    assert!((period / (0.5 * turn) - 1.0).abs() < 1e-4, "period {period} s against half the turn {turn} s");
+}
+
+/// The span's tension over ten whole turns of a roll turning at omega, 200 samples a turn, after thirty
+/// time constants L/v and more (three seconds): (time from the first sample, T).
+fn ripple(line: &mut Line, omega: f64) -> Vec<(f64, f64)> {
+    let turn = std::f64::consts::TAU / omega;
     let per_turn = 200;
     let h = turn / per_turn as f64;
-    let settle = (3.0 / turn).ceil() as usize * per_turn;
-    for _ in 0..settle {
+    for _ in 0..(3.0 / turn).ceil() as usize * per_turn {
         line.do_step(h).unwrap();
     }
     let start = line.time();
-    let samples: Vec<(f64, f64)> = (0..10 * per_turn)
+    (0..10 * per_turn)
         .map(|_| {
             line.do_step(h).unwrap();
-            (line.time() - start, get(&line, "film.T"))
+            (line.time() - start, get(line, "film.T"))
         })
-        .collect();
-    // Least squares on (1, cos, sin) over whole turns: the columns are orthogonal there.
+        .collect()
+}
+
+/// The mean and the amplitude at the frequency omega by least squares on (1, cos, sin) over whole
+/// periods, where the columns are orthogonal.
+fn fitted(samples: &[(f64, f64)], omega: f64) -> (f64, f64) {
     let n = samples.len() as f64;
     let mean = samples.iter().map(|s| s.1).sum::<f64>() / n;
     let a = 2.0 / n * samples.iter().map(|&(t, y)| (y - mean) * (omega * t).cos()).sum::<f64>();
     let b = 2.0 / n * samples.iter().map(|&(t, y)| (y - mean) * (omega * t).sin()).sum::<f64>();
-    let amplitude = a.hypot(b);
-    let expected = ea * (e / length) * (1.0 + eps0) / (1.0 + (r / length).powi(2)).sqrt();
-    assert!((amplitude / expected - 1.0).abs() < 1e-4, "ripple {amplitude} N against {expected} N");
-    assert!((mean / (ea * eps0) - 1.0).abs() < 1e-4, "mean tension {mean} N against {} N", ea * eps0);
-    // Upward zero crossings of T - mean, linearly interpolated: their spacing is the ripple's period.
+    (mean, a.hypot(b))
+}
+
+/// The mean spacing of the upward crossings of `level`, linearly interpolated: the ripple's period.
+fn crossing_period(samples: &[(f64, f64)], level: f64) -> f64 {
     let crossings: Vec<f64> = samples
         .windows(2)
-        .filter(|w| w[0].1 < mean && w[1].1 >= mean)
-        .map(|w| w[0].0 + (mean - w[0].1) / (w[1].1 - w[0].1) * (w[1].0 - w[0].0))
+        .filter(|w| w[0].1 < level && w[1].1 >= level)
+        .map(|w| w[0].0 + (level - w[0].1) / (w[1].1 - w[0].1) * (w[1].0 - w[0].0))
         .collect();
-    let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
-    assert!(crossings.len() >= 9 && (period / turn - 1.0).abs() < 1e-4, "period {period} s against the turn {turn} s ({} crossings)", crossings.len());
+    assert!(crossings.len() >= 9, "{} crossings", crossings.len());
+    (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64
 }
 
 /// A source and a speed-driven winder of radius r at v, with a lay-on roller [R18] pressed on the winder

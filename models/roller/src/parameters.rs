@@ -87,6 +87,10 @@ pub struct Parameters {
     pub runout_e: f64,
     pub runout_phase: f64,
     pub runout_length: f64,
+    /// The roll's out-of-round harmonics [R15]: each slot's order k >= 2, amplitude (m, 0: none) and phase (rad).
+    pub runout_orders: [i32; HARMONICS],
+    pub runout_amplitudes: [f64; HARMONICS],
+    pub runout_phases: [f64; HARMONICS],
     /// A winder's taper k: its tension drive holds T0*(1 - k*(1 - R/r)) (`drive::torque`).
     pub drive_taper: f64,
     /// The angle over which a stepwise radius moves by a layer (0: smooth) [R17], rad.
@@ -132,6 +136,9 @@ impl Kind {
 /// The roller's Model Exchange states: (omega, r, y, y', v_web, loop.I, motor.torque, dancer.I,
 /// grip, brake.grip, angle, layon.x, layon.v, layon.omega).
 pub const STATES: usize = 14;
+
+/// The out-of-round harmonics a roll with runout may have [R15].
+pub const HARMONICS: usize = 4;
 
 /// The most webs a roller takes in or gives out.
 pub const PORTS: usize = 4;
@@ -295,7 +302,17 @@ impl Parameters {
             Real::dancer_set | Real::dancer_kp | Real::dancer_ki => kind == Kind::Dancer,
             Real::loop_kp | Real::loop_ki | Real::motor_limit => kind != Kind::None,
             Real::loop_sign | Real::motor_lag | Real::load_cell_wrap => true,
-            Real::runout_e | Real::runout_phase | Real::runout_L => self.runout,
+            Real::runout_e
+            | Real::runout_phase
+            | Real::runout_L
+            | Real::runout_h1_a
+            | Real::runout_h1_phase
+            | Real::runout_h2_a
+            | Real::runout_h2_phase
+            | Real::runout_h3_a
+            | Real::runout_h3_phase
+            | Real::runout_h4_a
+            | Real::runout_h4_phase => self.runout,
             Real::layon_m
             | Real::layon_k
             | Real::layon_c

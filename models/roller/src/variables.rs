@@ -137,6 +137,14 @@ fmi_core::bind_variables! {
         der_layon_v: computed(rates().layon_speed),
         layon_omega: computed(layon[2]),
         der_layon_omega: computed(rates().layon_spin),
+        runout_h1_a: param(params.runout_amplitudes[0]),
+        runout_h1_phase: param(params.runout_phases[0]),
+        runout_h2_a: param(params.runout_amplitudes[1]),
+        runout_h2_phase: param(params.runout_phases[1]),
+        runout_h3_a: param(params.runout_amplitudes[2]),
+        runout_h3_phase: param(params.runout_phases[2]),
+        runout_h4_a: param(params.runout_amplitudes[3]),
+        runout_h4_phase: param(params.runout_phases[3]),
         layon_N: computed(layon_force()),
         layon_delta: computed(layon_compression()),
     }
@@ -146,6 +154,10 @@ fmi_core::bind_variables! {
         outlets: param(params.outlets),
         loop_kind: param(params.loop_kind),
         nip_side: param(params.nip_side),
+        runout_h1_k: param(params.runout_orders[0]),
+        runout_h2_k: param(params.runout_orders[1]),
+        runout_h3_k: param(params.runout_orders[2]),
+        runout_h4_k: param(params.runout_orders[3]),
     }
     boolean {
         carriage: param(params.carriage),

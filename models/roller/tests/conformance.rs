@@ -68,6 +68,11 @@ fn hints() -> Hints {
             // Rolls with runout [R15] that wind: the web's speed at the roll moves with the angle.
             Point { values: vec![("roll", 2.0), ("runout", 1.0), ("runout.e", 0.03), ("runout.L", 0.1), ("runout.phase", 0.5), ("wound.thickness", 1e-2), ("wound.density", 1000.0), ("inlets", 4.0), ("web_a.F", 100.0)], texts: vec![] },
             Point { values: vec![("roll", 1.0), ("runout", 1.0), ("runout.e", 0.03), ("runout.L", 0.1), ("runout.phase", -0.5), ("wound.thickness", 1e-2), ("wound.density", 1000.0), ("inlets", 4.0), ("web_b.F", 100.0)], texts: vec![] },
+            // An out-of-round roll [R15] (oval and five-lobed besides its runout) that winds.
+            Point {
+                values: vec![("roll", 2.0), ("runout", 1.0), ("runout.e", 0.01), ("runout.L", 0.1), ("runout.phase", 0.5), ("runout.h1.a", 2e-3), ("runout.h2.k", 5.0), ("runout.h2.a", 1e-3), ("runout.h2.phase", 0.4), ("wound.thickness", 1e-2), ("wound.density", 1000.0), ("inlets", 4.0), ("web_a.F", 100.0)],
+                texts: vec![],
+            },
             // A lay-on roller [R18] pressed on a winding roll with runout (its nip reads r' through the strains, and the
             // angle), and on a round one.
             Point {
@@ -79,7 +84,7 @@ fn hints() -> Hints {
             Point { values: vec![("speed.input", 1.0), ("loop.speed", 6.0), ("web_a.F", 100.0), ("web_b.F", 120.0)], texts: vec![] },
         ],
         texts: vec![("profile", speed_drive.into())],
-        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop", "a sampled loop's period is 0 (continuous) or at least", "a sampled loop's delay is at most its period", "runout [R15] is a roll's", "a stepwise radius [R17] runs in Model Exchange", "runout with a stepwise radius [R17] is not modelled", "the span's fixed end must lie beyond the roll", "a lay-on roller [R18] presses on a winder", "a layon table needs layon = true", "a lay-on roller on a stepwise radius"],
+        refusals: vec!["a nip table needs includeTraction", "a web slips only on a roller", "a loop on a roller where the web may slip", "a loop drives by torque", "a brake acts on a roller whose speed is free", "a brake table with includeTraction", "the surface speed is loop.speed", "an ideal speed drive has no loop", "a sampled loop's period is 0 (continuous) or at least", "a sampled loop's delay is at most its period", "runout [R15] is a roll's", "a stepwise radius [R17] runs in Model Exchange", "runout with a stepwise radius [R17] is not modelled", "the span's fixed end must lie beyond the roll", "a lay-on roller [R18] presses on a winder", "a layon table needs layon = true", "a lay-on roller on a stepwise radius", "the roll's surface must stay convex", "a lay-on roller is modelled on runout's offset circle only"],
     }
 }
 

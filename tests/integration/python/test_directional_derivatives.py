@@ -362,18 +362,22 @@ def roller_label(case):
 
 @pytest.mark.parametrize("kind", ["ModelExchange", "CoSimulation"])
 @pytest.mark.parametrize("roll", [1, 2])
-def test_roller_with_runout_matches_finite_differences(roller, tmp_path, kind, roll):
+@pytest.mark.parametrize("lobed", [False, True], ids=["round", "lobed"])
+def test_roller_with_runout_matches_finite_differences(roller, tmp_path, kind, roll, lobed):
     """A roll with runout [R15], winding, its angle 1.3 rad (ME): the arm p, the span's end and the
-    web's speed at the moving tangent point move with the angle, omega and r."""
+    web's speed at the moving tangent point move with the angle, omega and r; `lobed`: an out-of-round
+    roll besides (an oval and a three-lobed harmonic), its tangent found by Newton's method."""
     me = kind == "ModelExchange"
     params = {k: v for k, v in ROLLER_PARAMS.items() if not k.startswith("carriage.")}
-    values = {**params, **ROLLER_POINT, "roll": roll, "runout": True, "runout.e": 0.01, "runout.phase": 0.4, "runout.L": 0.6}
+    harmonics = {"runout.h1.a": 3e-3, "runout.h1.phase": 0.2, "runout.h2.a": 1e-3, "runout.h2.phase": -0.6} if lobed else {}
+    values = {**params, **ROLLER_POINT, "roll": roll, "runout": True, "runout.e": 0.01, "runout.phase": 0.4, "runout.L": 0.6,
+              **harmonics}
     (a, f, n), _ = roller_case(roller, tmp_path, kind, {"torque": [[0, 1.0], [10, 3.0]]}, values,
                                (33.0, 0.16, 0.0, 0.0, 33.0 * 0.16, 0.0, 0.0, 0.0, 0.0, 0.0, 1.3), *every_pair(roller, me)[::-1])
     if me:
         assert a["web_b.y" if roll == 1 else "web_a.y", "angle"] != 0.0, "the span's end must move with the angle"
         assert a["der(omega)", "angle"] != 0.0, "the web's arm must move with the angle"
-    what = f"Roller {kind} runout roll {roll}"
+    what = f"Roller {kind} runout roll {roll}{' lobed' if lobed else ''}"
     print(f"{what}: max relative error {compare(what, a, f, n):.1e}")
 
 

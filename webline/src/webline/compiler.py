@@ -206,8 +206,11 @@ def runout_values(scene: Scene, node) -> dict:
     runout = getattr(node, "runout", None)
     if runout is None:
         return {}
-    return {"runout": True, "runout.e": float(runout.eccentricity), "runout.phase": float(runout.phase),
-            "runout.L": float(runout_span(scene, node).length)}
+    values = {"runout": True, "runout.e": float(runout.eccentricity), "runout.phase": float(runout.phase),
+              "runout.L": float(runout_span(scene, node).length)}
+    for j, (order, amplitude, phase) in enumerate(runout.harmonics, start=1):
+        values.update({f"runout.h{j}.k": order, f"runout.h{j}.a": float(amplitude), f"runout.h{j}.phase": float(phase)})
+    return values
 
 
 def layon_values(layon) -> dict:

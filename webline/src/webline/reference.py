@@ -925,6 +925,8 @@ def runout_geometry(node, L0, angle, omega, R) -> dict:
     the span's length L = |T - B| and its rate dL/dt, the arm p (the axis's distance from the line),
     and the web's speed across the span's moving end, omega*p + dL/dt (a winder's omega*p - dL/dt)."""
     s = 1.0 if node.type == "unwinder" else -1.0
+    if node.runout.harmonics:
+        return out_of_round_geometry(node, L0, angle, omega, R, s)
     e = node.runout.eccentricity
     psi = s * (angle + node.runout.phase)
     C = e * np.array([np.sin(psi), np.cos(psi)])
@@ -938,6 +940,32 @@ def runout_geometry(node, L0, angle, omega, R) -> dict:
     direction = np.array([u[0] * math.cos(beta) - u[1] * math.sin(beta), u[0] * math.sin(beta) + u[1] * math.cos(beta)])
     p = abs(float(direction[1] * B[0] - direction[0] * B[1]))  # |direction x (O - B)|
     dL = float(np.dot(C - B, C_rate)) / L
+    return {"L": L, "dL": dL, "p": p, "v": omega * p + s * dL}
+
+
+def out_of_round_geometry(node, L0, angle, omega, R, s) -> dict:
+    """`runout_geometry` of an out-of-round roll [R15]: its support function h(theta) = R + e cos(theta - psi)
+    + sum a_k cos(k (theta - psi_k)) over the normal n = (sin theta, cos theta); the web's line through
+    B = (L0, R) touches where B.n = h, found by Brent's method on the web's side (|theta| < pi/2, where
+    B.n - h changes sign once); p = h there, L the distance from the touching point h n + h' t to B,
+    and dL/dt from L at the angle +- 1e-6 rad (a central difference, unlike the Roller's closed form)."""
+    runout = node.runout
+    terms = ((1, runout.eccentricity, runout.phase),) + tuple(runout.harmonics)
+
+    def support(theta, at):
+        h = R + sum(a * math.cos(k * (theta - s * (at + ph))) for k, a, ph in terms)
+        slope = -sum(a * k * math.sin(k * (theta - s * (at + ph))) for k, a, ph in terms)
+        return h, slope
+
+    def touch(at):
+        theta = brentq(lambda th: L0 * math.sin(th) + R * math.cos(th) - support(th, at)[0], -0.5 * math.pi, 0.5 * math.pi,
+                       xtol=1e-15, rtol=1e-15)
+        h, slope = support(theta, at)
+        point = h * np.array([math.sin(theta), math.cos(theta)]) + slope * np.array([math.cos(theta), -math.sin(theta)])
+        return h, float(np.hypot(*(np.array([L0, R]) - point)))
+
+    p, L = touch(angle)
+    dL = omega * (touch(angle + 1e-6)[1] - touch(angle - 1e-6)[1]) / 2e-6
     return {"L": L, "dL": dL, "p": p, "v": omega * p + s * dL}
 
 

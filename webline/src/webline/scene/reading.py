@@ -16,6 +16,7 @@ from ..profiles import Profile, ScurveError
 from ..units import UnitError
 from .checks import WIDTH_TOLERANCE, check_dancer_spans, check_positions, check_layers, check_loops, check_merge, check_split, check_traction
 from .types import (
+    HARMONICS,
     NIP_SIDES,
     STRAIN_RANGE,
     TRACTION_QUANTITIES,
@@ -563,6 +564,9 @@ def _roller(r, o_node, name, kind) -> Roller:
         if getattr(c.wound, "merge", 0.0):
             raise r.err(r.key_pos(o["layon"]), f"{what}: a lay-on roller on a stepwise radius (wound.stepwise) is not modelled "
                                                "(the nip presses on the smooth radius); drop one")
+        if c.runout is not None and c.runout.harmonics:
+            raise r.err(r.key_pos(o["layon"]), f"{what}: a lay-on roller on an out-of-round roll (runout: harmonics) is not "
+                                               "modelled (the nip presses on runout's circle); drop one")
     return c
 
 
@@ -593,13 +597,30 @@ def _layon(r, node, what, kind) -> LayOn:
 
 
 def _runout(r, node, what, kind) -> Runout:
-    """`"runout": {"eccentricity": length, "phase": angle}` on an unwinder or a winder [R15]."""
+    """`"runout": {"eccentricity": length, "phase": angle, "harmonics": [...]}` on an unwinder or a winder [R15];
+    each harmonic `{"order": k >= 2, "amplitude": length, "phase": angle}`, at most HARMONICS."""
     if kind == "roller":
         raise r.err(r.key_pos(node), f"{what}: runout is a roll's: put it on an unwinder or a winder")
-    o = r.keys(node, f"{what}: runout", required=("eccentricity",), optional=("phase",))
+    o = r.keys(node, f"{what}: runout", required=("eccentricity",), optional=("phase", "harmonics"))
     e = r.quantity(o["eccentricity"], units.LENGTH, f"{what}: runout: eccentricity", nonnegative=True)
     phase = math.radians(r.quantity(o["phase"], units.ANGLE, f"{what}: runout: phase")) if "phase" in o else 0.0
-    return Runout(eccentricity=e, phase=phase)
+    harmonics = []
+    if "harmonics" in o:
+        items = o["harmonics"].value
+        if not isinstance(items, list) or len(items) > HARMONICS:
+            raise r.err(o["harmonics"], f"{what}: runout: harmonics must be a list of at most {HARMONICS} "
+                                        "{\"order\", \"amplitude\", \"phase\"}")
+        for i, item in enumerate(items):
+            where = f"{what}: runout: harmonics[{i}]"
+            h = r.keys(item, where, required=("order", "amplitude"), optional=("phase",))
+            order = h["order"].value
+            if isinstance(order, bool) or not isinstance(order, int) or not 2 <= order <= 64:
+                raise r.err(h["order"], f"{where}.order = {order!r}: a harmonic's order is a whole number from 2 to 64 "
+                                        "(the first, 1, is the eccentricity)")
+            amplitude = r.quantity(h["amplitude"], units.LENGTH, f"{where}.amplitude", nonnegative=True)
+            angle = math.radians(r.quantity(h["phase"], units.ANGLE, f"{where}.phase")) if "phase" in h else 0.0
+            harmonics.append((order, amplitude, angle))
+    return Runout(eccentricity=e, phase=phase, harmonics=tuple(harmonics))
 
 
 def check_runout(r, scene, raw):
@@ -620,9 +641,15 @@ def check_runout(r, scene, raw):
             raise SceneError(f"{c.where}: {c.type} {c.name!r} has runout and the scene starts at \"equilibrium\": a roll that "
                              "turns off its centre holds no steady state (its tangent point moves once a turn); start it "
                              "\"given\" (the steady state of its round roll) and let the ripple settle")
-        if not sp.length > c.runout.eccentricity + c.R:
+        reach = c.runout.eccentricity + sum(a for _, a, _ in c.runout.harmonics)
+        if not sp.length > reach + c.R:
             raise SceneError(f"{sp.where}: span {sp.name!r} of {sp.length:g} m is too short for {c.type} {c.name!r}'s runout: "
-                             f"its length must exceed the roll's radius plus its eccentricity ({c.R + c.runout.eccentricity:g} m)")
+                             f"its length must exceed the roll's radius plus its eccentricity and harmonics ({c.R + reach:g} m)")
+        lobes = sum((k * k - 1) * a for k, a, _ in c.runout.harmonics)
+        if not lobes < c.R:
+            raise SceneError(f"{c.where}: {c.type} {c.name!r}: its runout's harmonics sum (k^2 - 1)*amplitude to {lobes:g} m, "
+                             f"not below its radius {c.R:g} m: the roll's surface must stay convex (the web would bridge its "
+                             "hollows, which is not modelled)")
 
 
 def _stepwise(r: _Reader, node: Node, what: str) -> float:

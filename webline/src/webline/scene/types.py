@@ -245,14 +245,20 @@ class Wound:
     merge: float = 0.0  # a stepwise radius [R17]: the angle (rad) over which it steps by a layer; 0: smooth
 
 
+# The out-of-round harmonics a roll may have: the Roller's slots runout.h1 ... runout.h4.
+HARMONICS = 4
+
+
 @dataclass
 class Runout:
     """An unwinder's or winder's roll whose surface, a circle of its radius, turns about an axis
     `eccentricity` (m) off its centre [R15]; `phase` (rad) is the centre's angle from the web's side
-    at the start, in the roll's sense of turning (docs/physics.md, "A roll with runout")."""
+    at the start, in the roll's sense of turning (docs/physics.md, "A roll with runout"). `harmonics`:
+    an out-of-round surface's, (order k >= 2, amplitude m, phase rad) each, of its support function."""
 
     eccentricity: float
     phase: float = 0.0
+    harmonics: tuple = ()
 
 
 @dataclass
