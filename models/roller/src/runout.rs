@@ -241,17 +241,19 @@ mod tests {
     }
 
     /// dL/dt is L's rate along the angle at omega (central differences), and the web's speed
-    /// relative to the tangent point is omega*p + dL/dt; a winder's omega*p - dL/dt.
+    /// relative to the tangent point is omega*p + dL/dt; a winder's omega*p - dL/dt: on the offset circle
+    /// and on the out-of-round roll.
     #[test]
     fn the_length_rate_is_the_tangent_points_motion() {
         for role in [UNWINDER, WINDER] {
-            let p = Parameters { roll: role, ..roll(0.02, -0.7) };
-            let (angle, omega, r, h) = (2.1, 3.0, 0.3, 1e-6);
-            let g = at(&p, angle, omega, r);
-            let rate = (at(&p, angle + h, 0.0, r).length - at(&p, angle - h, 0.0, r).length) / (2.0 * h) * omega;
-            assert!((g.length_rate - rate).abs() < 1e-8, "{} {rate}", g.length_rate);
-            let s = if role == UNWINDER { 1.0 } else { -1.0 };
-            assert!((g.speed - (omega * g.arm + s * g.length_rate)).abs() < 1e-14);
+            for p in [Parameters { roll: role, ..roll(0.02, -0.7) }, lobed(role)] {
+                let (angle, omega, r, h) = (2.1, 3.0, 0.3, 1e-6);
+                let g = at(&p, angle, omega, r);
+                let rate = (at(&p, angle + h, 0.0, r).length - at(&p, angle - h, 0.0, r).length) / (2.0 * h) * omega;
+                assert!((g.length_rate - rate).abs() < 1e-8, "{} {rate}", g.length_rate);
+                let s = if role == UNWINDER { 1.0 } else { -1.0 };
+                assert!((g.speed - (omega * g.arm + s * g.length_rate)).abs() < 1e-14);
+            }
         }
     }
 
@@ -320,22 +322,12 @@ mod tests {
         }
     }
 
-    /// On the out-of-round roll dL/dt is L's rate along the angle at omega (central differences), the speed
-    /// omega*p + s*dL/dt, and the arm's mean over a turn r (the harmonics average out; to e^2 and a^2).
+    /// Over a turn the out-of-round roll's arm averages to r too (its harmonics average out; to e^2 and a^2).
     #[test]
-    fn the_out_of_round_length_rate_is_the_tangent_points_motion() {
-        for role in [UNWINDER, WINDER] {
-            let p = lobed(role);
-            let (angle, omega, r, h) = (2.1, 3.0, 0.3, 1e-6);
-            let g = at(&p, angle, omega, r);
-            let rate = (at(&p, angle + h, 0.0, r).length - at(&p, angle - h, 0.0, r).length) / (2.0 * h) * omega;
-            assert!((g.length_rate - rate).abs() < 1e-8, "{} {rate}", g.length_rate);
-            let s = if role == UNWINDER { 1.0 } else { -1.0 };
-            assert!((g.speed - (omega * g.arm + s * g.length_rate)).abs() < 1e-14);
-            let n = 4096;
-            let mean: f64 = (0..n).map(|k| at(&p, std::f64::consts::TAU * k as f64 / n as f64, 0.0, r).arm).sum::<f64>() / n as f64;
-            assert!((mean - r).abs() < 2e-5, "{mean}");
-        }
+    fn the_out_of_round_arm_averages_to_the_radius_over_a_turn() {
+        let (p, n, r) = (lobed(UNWINDER), 4096, 0.3);
+        let mean: f64 = (0..n).map(|k| at(&p, std::f64::consts::TAU * k as f64 / n as f64, 0.0, r).arm).sum::<f64>() / n as f64;
+        assert!((mean - r).abs() < 2e-5, "{mean}");
     }
 
     /// Written once, generic over the number: on the out-of-round roll the tangents of p, L, dL/dt and
