@@ -143,6 +143,9 @@ def cmd_run(args):
     # the web's speed leaves it none.
     scene.record += list(dict.fromkeys(q for c in scene.parts if getattr(c, "traction", None) is not None
                                        for q in traction_columns(scene, c) if q not in scene.record))
+    # Every lay-on roller reports where its nip let go (the summary's separations, a warning).
+    scene.record += [(c.name, "layon.N") for c in scene.parts if getattr(c, "layon", None) is not None
+                     and (c.name, "layon.N") not in scene.record]
     engine = args.engine
     if args.reference and engine == "reference":
         raise SceneError("--reference compares an engine with the reference; --engine reference is the reference itself")

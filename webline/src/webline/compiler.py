@@ -96,6 +96,11 @@ def _roller(scene: Scene, node, fmu: Path, positions: dict) -> Component:
         if wound.merge:
             start["wound.merge"] = float(wound.merge)
     start.update(runout_values(scene, node))
+    layon = getattr(node, "layon", None)
+    if layon is not None:
+        start.update(layon_values(layon))
+        if not layon.load.is_constant():
+            profile["layon"] = table(layon.load)
     drive = getattr(node, "drive", None)
     if drive is not None and drive.kind in ("torque", "tension", "brake"):
         profile[drive.kind] = table(drive.profile)
@@ -205,6 +210,17 @@ def runout_values(scene: Scene, node) -> dict:
               "runout.L": float(runout_span(scene, node).length)}
     for j, (order, amplitude, phase) in enumerate(runout.harmonics, start=1):
         values.update({f"runout.h{j}.k": order, f"runout.h{j}.a": float(amplitude), f"runout.h{j}.phase": float(phase)})
+    return values
+
+
+def layon_values(layon) -> dict:
+    """A winder's lay-on roller [R18] as the Roller takes it; its load `layon.F` where it is constant (else the
+    profile's table "layon")."""
+    values = {"layon": True, "layon.m": float(layon.mass), "layon.k": float(layon.stiffness), "layon.c": float(layon.damping),
+              "layon.r": float(layon.radius), "layon.J": float(layon.inertia), "layon.b": float(layon.bearing),
+              "layon.mu": float(layon.mu), "layon.v_slip": float(layon.v_slip), "layon.angle": float(layon.angle)}
+    if layon.load.is_constant():
+        values["layon.F"] = float(layon.load.value(0.0))
     return values
 
 

@@ -70,26 +70,36 @@ def refuse_slack_laminates(scene):
                          "as one Line FMU (webline run's default engine) or with --engine reference")
 
 
+ONE_LINE = "run the scene as one Line FMU (webline run's default engine) or with --engine reference"
+
+
+def refuse_first(parts, why: str):
+    """The first of `parts` refused by name: `why` the parts' co-simulation and its SSP export do not run it."""
+    if parts:
+        c = parts[0]
+        raise SceneError(f"{c.where}: {c.type} {c.name!r} {why}; {ONE_LINE}")
+
+
 def refuse_runout(scene):
     """A roll with runout [R15] moves its span's length with its angle; the parts' co-simulation and its
     SSP export are not checked against the reference for it (nor is its stable step predicted)."""
-    rolls = [c for c in scene.nodes if getattr(c, "runout", None) is not None]
-    if rolls:
-        c = rolls[0]
-        raise SceneError(f"{c.where}: {c.type} {c.name!r} has runout: the parts' co-simulation and its SSP export do not "
-                         "run a roll with runout; run the scene as one Line FMU (webline run's default engine) or with "
-                         "--engine reference")
+    refuse_first([c for c in scene.nodes if getattr(c, "runout", None) is not None],
+                 "has runout: the parts' co-simulation and its SSP export do not run a roll with runout")
+
+
+def refuse_layon(scene):
+    """A lay-on roller [R18] presses on its winder through a stiff nip that lets go; the parts' co-simulation and
+    its SSP export do not run it (the Roller's co-simulation step is not checked against the reference for it)."""
+    refuse_first([c for c in scene.nodes if getattr(c, "layon", None) is not None],
+                 "has a lay-on roller (layon): the parts' co-simulation and its SSP export do not run it")
 
 
 def refuse_stepwise(scene):
     """A stepwise radius [R17] moves the radius the web meets by a layer within a few degrees of a turn; the
     Roller FMU's co-simulation step holds the radius over a piece, so it refuses it (docs/physics.md)."""
-    stepped = [c for c in scene.nodes if getattr(getattr(c, "wound", None), "merge", 0.0)]
-    if stepped:
-        c = stepped[0]
-        raise SceneError(f"{c.where}: {c.type} {c.name!r} has a stepwise radius (wound.stepwise): the Roller FMU's "
-                         "co-simulation step holds its radius over a piece, so the parts' co-simulation and its SSP export "
-                         "refuse it; run the scene as one Line FMU (webline run's default engine) or with --engine reference")
+    refuse_first([c for c in scene.nodes if getattr(getattr(c, "wound", None), "merge", 0.0)],
+                 "has a stepwise radius (wound.stepwise): the Roller FMU's co-simulation step holds its radius over a "
+                 "piece, so the parts' co-simulation and its SSP export refuse it")
 
 
 def refuse_scurves(scene):
@@ -105,7 +115,9 @@ def refuse_scurves(scene):
 
 def refuse_for_parts(scene):
     """What a line of part FMUs cannot run (the parts' co-simulation and its SSP export): a web that may
-    slip, a drive's loop, a laminate that may go slack, a roll with runout, a stepwise radius, an S-curve."""
+    slip, a drive's loop, a laminate that may go slack, a roll with runout, a lay-on roller, a stepwise radius,
+    an S-curve."""
+    refuse_layon(scene)
     refuse_runout(scene)
     refuse_traction(scene)
     refuse_loops(scene)

@@ -7,7 +7,7 @@ a System's recorded variables are named back by `scene_columns`, an SSP archive'
 
 from __future__ import annotations
 
-from .scene import LOAD_CELL_QUANTITIES, QUANTITIES, TRACTION_QUANTITIES
+from .scene import LAYON_QUANTITIES, LOAD_CELL_QUANTITIES, QUANTITIES, TRACTION_QUANTITIES
 
 # The engines (engines.py runs them): the Line FMU, the reference, webline's co-simulation of the parts,
 # and an SSP archive in libcosim or FMPy.
@@ -20,7 +20,7 @@ ARCHIVE_ENGINES = ("parts", "libcosim", "fmpy")  # what runs an SSP archive (par
 SPAN_VARIABLES = {"T": "summary_Tension", "eps": "summary_Strain", "L": "summary_Length", "F_a": "web_a.F", "F_b": "web_b.F"}
 ROLLER_VARIABLES = {"v": "v", "omega": "omega", "tau": "tau", "r": "r", "y": "y", "y_dot": "y_dot", "eps": "web_b.eps",
                     "v_web": "v_web", "slip": "slip", "traction": "traction", "mu_eff": "mu_eff", "h_air": "h_air",
-                    "F": "load_cell.F"}
+                    "F": "load_cell.F", **{q: q for q in LAYON_QUANTITIES}}
 
 
 def engine_name(text: str) -> str:
@@ -40,7 +40,7 @@ def scene_quantity(kind: str, variable: str):
     else:
         names = {**{v: q for q, v in ROLLER_VARIABLES.items()}, "web_a.v": "v", "web_b.v": "v"}
         units = {**QUANTITIES["dancer"], **QUANTITIES["winder"], **QUANTITIES["source"], **TRACTION_QUANTITIES,
-                 **LOAD_CELL_QUANTITIES}
+                 **LOAD_CELL_QUANTITIES, **LAYON_QUANTITIES}
     q = names.get(variable)
     return (q, units[q]) if q is not None else None
 

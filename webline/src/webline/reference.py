@@ -30,6 +30,9 @@ scene. States:
 * each roll with runout (docs/physics.md, "A roll with runout"), its angle, d(angle)/dt = omega: the web
   touches the offset circle on the line from its span's far end, pulls with the arm p and crosses the
   span's moving end at omega*p +- dL/dt (`runout_geometry`);
+* each winder's lay-on roller (docs/physics.md, "A lay-on roller", [R18]): its carriage's position X and
+  speed X', the roller's spin omega_l; the nip (a spring and damper that only push) between the roller and
+  the winder's surface, the traction that turns the roller, and its torque on the winder (`layon_nip`);
 * where the web may slip on a roller or dancer (docs/physics.md, "Rollers that slip"), the web's
   speed over it v_w: m_w dv_w/dt = T_b - T_a + f, the spans on both sides see v_w, and the roller
   turns by -R*f instead of R*(T_b - T_a) (`friction`); and the contact's grip u, the bristles' share
@@ -152,7 +155,11 @@ class LineODE:
         # A roll with runout: its angle [R15].
         self.runouts = [c for c in scene.nodes if getattr(c, "runout", None) is not None]
         self.i_angle = {c.name: first + len(trims) + i for i, c in enumerate(self.runouts)}
-        self.n = first + len(trims) + len(self.runouts)
+        # A winder's lay-on roller [R18]: its carriage's X, X' and the roller's omega_l.
+        self.layons = [c for c in scene.nodes if getattr(c, "layon", None) is not None]
+        first_layon = first + len(trims) + len(self.runouts)
+        self.i_layon = {c.name: first_layon + 3 * i for i, c in enumerate(self.layons)}
+        self.n = first_layon + 3 * len(self.layons)
         # A sampled loop's hold [R14]: the command it applies (None before its first sample: continuous),
         # a sample waiting out the delay (when it applies, its command), the last continuous command.
         self.sampled = {c.name: c.drive.loop for c in self.loops if c.drive.loop.sample > 0.0}
@@ -395,10 +402,17 @@ class LineODE:
             if node.name in runout:  # the web at the roll pulls with the arm p [R15]
                 p = runout[node.name]["p"]
                 F_down, F_up = (F_down * p / R, F_up) if node.type == "unwinder" else (F_down, F_up * p / R)
+            if node.name in self.i_layon:  # the lay-on roller's traction on the roll [R18]
+                r_rate = dz[self.i_r[node.name]] if node.name in self.i_r else 0.0
+                q[f"{node.name}.layon"] = self.layon_state(node, t, z, dz, omega, self.radius(node, z), r_rate)
+                tau = tau + q[f"{node.name}.layon"]["torque"]
             num = R * (F_down - F_up) + tau - b * omega
             domega = num / (J + m_up * R * R)
             dz[self.i_omega[node.name]] = domega
             accel[node.name] = R * domega + omega * slope * dz[self.i_r[node.name]] if node.name in self.i_r else R * domega
+        for node in self.layons:
+            if node.name not in self.i_omega:  # a speed-driven winder: it turns as its profile says, whatever the nip
+                q[f"{node.name}.layon"] = self.layon_state(node, t, z, dz, self.speed(node, t, z) / node.R, node.R, 0.0)
         for sp in self.spans:
             down = self.down[sp.name]
             if down.name in accel:
@@ -434,6 +448,17 @@ class LineODE:
             out[node.name] = runout_geometry(node, span.length, z[self.i_angle[node.name]], omega, R)
             dz[self.i_angle[node.name]] = omega
         return out
+
+    def layon_state(self, node, t, z, dz, omega, r, r_rate):
+        """A winder's lay-on roller at (t, z) (`layon_nip`): the winder turning at omega, its radius r growing at
+        r_rate, its centre where its runout's angle puts it; its three rates into dz."""
+        i = self.i_layon[node.name]
+        e, psi = 0.0, 0.0
+        if node.runout is not None:  # a winder's psi = -(angle + phase) [R15]
+            e, psi = node.runout.eccentricity, -(z[self.i_angle[node.name]] + node.runout.phase)
+        nip = layon_nip(node.layon, self.pv(node.layon.load, t), z[i], z[i + 1], z[i + 2], r, r_rate, e, psi, -omega, omega)
+        dz[i], dz[i + 1], dz[i + 2] = z[i + 1], nip["X''"], nip["omega_l'"]
+        return nip
 
     @staticmethod
     def layer(sp, w1, w2, eps, deps, L, qa, va, vb, clamp=True):
@@ -533,6 +558,10 @@ class LineODE:
         # A roll's radius is never steady while web winds: held at its start, its rate not solved for.
         rolls = list(self.i_r.values()) + list(self.i_angle.values())  # and a roll's angle, which turns
         held, balance = held + rolls, balance + rolls
+        # A lay-on's carriage at rest (X' = 0 held, so X's own rate is nil): its position solved from its balance
+        # N = F, its roller's spin from its own.
+        held += [i + 1 for i in self.i_layon.values()]
+        balance += list(self.i_layon.values())
         # A laminate at rest is steady at any strains of its layers that pull as one: its layers move
         # together from their start (each layer's rate is zero whatever its strain; [M6]).
         tied = {first + i: first for first, k in self.resting_laminates(t, z0) for i in range(1, k)}
@@ -712,6 +741,9 @@ class LineODE:
             names[i] = f"{k!r}'s dancer loop integrator"
         for k, i in self.i_angle.items():
             names[i] = f"roll {k!r}'s angle"
+        for k, i in self.i_layon.items():
+            names[i], names[i + 1], names[i + 2] = (f"{k!r}'s lay-on carriage's position", f"{k!r}'s lay-on carriage's speed",
+                                                    f"{k!r}'s lay-on roller's speed")
         return names
 
     def given_state(self, t=0.0):
@@ -729,6 +761,9 @@ class LineODE:
             z[self.i_grip[c.name]] = start_grip(c.traction)
         for b in self.brakes:  # a brake that starts turning starts sliding, as a web that starts slipping
             z[self.i_brake[b.name]] = np.sign(s.initial_speed(b, t))
+        for c in self.layons:
+            i = self.i_layon[c.name]
+            z[i:i + 3] = layon_start(c, s.initial_speed(c, t), self.pv(c.layon.load, t))
         for sp in self.spans:  # in the order the web flows: what feeds a span comes before it
             first = self.i_eps[sp.name]
             if sp.eps_start is not None:  # every layer of a laminate at it
@@ -799,6 +834,8 @@ class LineODE:
                 row.append(z[self.i_y[cname] + 1])
             elif quantity == "F":
                 row.append(self.load_cell(c, q))
+            elif quantity.startswith("layon."):
+                row.append(q[f"{cname}.layon"][quantity])
         return row
 
 
@@ -824,7 +861,61 @@ def atol_of(ode: LineODE, z0):
         a[i] = 1e-12
     for name, i in ode.i_angle.items():  # radians
         a[i] = 1e-12
+    for name, i in ode.i_layon.items():  # a carriage's metres (its nip compresses by micrometres), m/s, rad/s
+        a[i], a[i + 1], a[i + 2] = 1e-14, 1e-12, 1e-11
     return a
+
+
+def layon_nip(layon, load, X, X_rate, omega_l, r, r_rate, e, psi, psi_rate, omega) -> dict:
+    """A lay-on roller against a winder [R18] (docs/physics.md, "A lay-on roller"), in vectors: the winder's
+    axis O at the origin, its surface a circle of radius r about C = e (sin psi, cos psi) (runout [R15]), the
+    carriage's line u = (sin beta, cos beta) with psi - beta = phi, the roller's axis D = X u. The nip along
+    n = (D - C)/|D - C| compresses by delta = r + r_l - |D - C| and pushes with N = k delta + c delta' while
+    both are positive; the carriage takes N n.u against the load; at the contact P = C + r n the winder's
+    surface moves at omega (n.P) across n, the roller's at omega_l r_l, and the traction mu N tanh(slip/v_s)
+    turns the roller and brakes the winder with the arm n.P. Returns N, delta, X'', omega_l', and the
+    winder's torque."""
+    beta = -layon.angle  # the carriage's line in runout's frame, mirrored on a winder (s = -1)
+    u = np.array([math.sin(beta), math.cos(beta)])
+    C = e * np.array([math.sin(psi), math.cos(psi)])
+    C_rate = e * psi_rate * np.array([math.cos(psi), -math.sin(psi)])
+    gap = X * u - C
+    d = math.hypot(*gap)
+    n = gap / d
+    delta = r + layon.radius - d
+    delta_rate = r_rate - float(n @ (X_rate * u - C_rate))
+    push = layon.stiffness * delta + layon.damping * delta_rate
+    N = push if delta > 0.0 and push > 0.0 else 0.0
+    arm = r + float(n @ C)  # n.P, P = C + r n
+    f = layon.mu * N * math.tanh((omega * arm - omega_l * layon.radius) / layon.v_slip)
+    return {"layon.N": N, "layon.delta": delta, "layon.x": X, "layon.v": X_rate, "layon.omega": omega_l,
+            "X''": (N * float(n @ u) - load) / layon.mass, "omega_l'": (layon.radius * f - layon.bearing * omega_l) / layon.inertia,
+            "torque": -arm * f}
+
+
+def bounce_omega(layon, load, e):
+    """The winder's speed of rotation above which a lay-on roller under `load` lets go of a roll with runout e
+    [R18]: the carriage on the nip's spring k and damper c, its base moved by the surface's e cos(omega t), takes a
+    force that swings by m omega^2 e |k + i c omega| / |k - m omega^2 + i c omega|; that swing reaches the load at
+    omega_c (below the nip's resonance sqrt(k/m), where it grows with omega). None where it never does there.
+    A rigid nip's is sqrt(F/(m e))."""
+    m, k, c = layon.mass, layon.stiffness, layon.damping
+
+    def excess(w):
+        return m * w * w * e * abs(complex(k, c * w)) / abs(complex(k - m * w * w, c * w)) - load
+
+    top = math.sqrt(k / m)
+    return brentq(excess, 0.0, top, xtol=1e-14, rtol=4 * np.finfo(float).eps) if excess(top) >= 0.0 else None
+
+
+def layon_start(node, v0, load):
+    """(X, X', omega_l) of a winder's lay-on roller at the start: the nip pressed by load/k at the roll's start
+    angle (runout's centre at phi0 = layon.angle - phase from the carriage's line), the carriage at rest, the roller
+    turning with the roll's surface speed v0."""
+    layon, R = node.layon, node.R
+    e, phi0 = (node.runout.eccentricity, layon.angle - node.runout.phase) if node.runout is not None else (0.0, 0.0)
+    reach = R + layon.radius - load / layon.stiffness
+    return (e * math.cos(phi0) + math.sqrt(reach**2 - (e * math.sin(phi0)) ** 2), 0.0, v0 / layon.radius)
 
 
 def runout_geometry(node, L0, angle, omega, R) -> dict:

@@ -85,9 +85,52 @@ def summary(scene, result: Result) -> Summary:
         floating = floating_report(scene, c, result)
         if floating is not None:
             findings.append(floating)
+    warnings = list(info.get("warnings", []))
+    for c in [c for c in scene.parts if getattr(c, "layon", None) is not None and f"{c.name}.layon.N" in keys]:
+        finding, warning = layon_report(c, result.time, result.column(f"{c.name}.layon.N"))
+        findings.append(finding)
+        if warning is not None:
+            warnings.append(warning)
     for t, name, what in info.get("events", []):
         findings.append(f"event at t = {t:g} s: {name} changed {what}")
-    return Summary(headline, list(info.get("warnings", [])), tables, findings)
+    return Summary(headline, warnings, tables, findings)
+
+
+@dataclass
+class Separations:
+    """Where a lay-on's nip let go (N <= 0) at the output samples [R18]: how often, the first time, the
+    longest and the total time apart (s). A separation runs from its first sample at N <= 0 to the next
+    sample at N > 0 (or the end), so one shorter than the output step may be missed."""
+
+    count: int = 0
+    first: float | None = None
+    longest: float = 0.0
+    total: float = 0.0
+
+
+def separations(time, force) -> Separations:
+    apart = np.asarray(force) <= 0.0
+    starts = np.flatnonzero(apart & ~np.concatenate([[False], apart[:-1]]))
+    ends = np.flatnonzero(~apart & np.concatenate([[False], apart[:-1]]))
+    out = Separations(count=len(starts))
+    if len(starts):
+        closing = np.append(np.asarray(time)[ends], time[-1]) if len(ends) < len(starts) else np.asarray(time)[ends]
+        durations = closing - np.asarray(time)[starts]
+        out.first, out.longest, out.total = float(time[starts[0]]), float(durations.max()), float(durations.sum())
+    return out
+
+
+def layon_report(c, time, force) -> tuple:
+    """(finding, warning or None) of a winder's lay-on roller from its nip's force at the output samples: the
+    least force where it kept contact, or when and how long it lost it (`separations`)."""
+    apart = separations(time, force)
+    if apart.count == 0:
+        k = int(np.argmin(force))
+        return f"{c.name}: its lay-on roller kept contact (least nip force {force[k]:.4g} N at t = {time[k]:.4g} s)", None
+    said = (f"lost contact {apart.count} times, first at t = {apart.first:.4g} s, longest {apart.longest:.3g} s, "
+            f"{apart.total:.3g} s in all")
+    return (f"{c.name}: its lay-on roller {said} (read at the output samples: a separation shorter than the output "
+            "step can be missed)"), f"lay-on at {c.name} {said}"
 
 
 # A contact slides where its grip sits on its limit, |g| >= psi(s) (1 - ON_LIMIT), or it slips faster

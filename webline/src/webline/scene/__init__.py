@@ -16,6 +16,6 @@ strictly, `parse_scene` and `load_scene`), `checks` (the line's rules, once its 
 
 from .reading import load_scene, parse_scene, set_path  # noqa: F401
 from .types import (  # noqa: F401
-    BRAKE_CREEP, BRAKE_V_SLIP, LOAD_CELL_QUANTITIES, NIP_SIDES, QUANTITIES, STRAIN_RANGE, TRACTION_CREEP, TRACTION_QUANTITIES, Branch, Component, Dancer, Drive, Event, Loop,
-    Node, Prescribed, Roller, Runout, Scene, SceneError, Span, Traction, Web, Wound, quantities_of, quantity_unit, span_layers,
+    BRAKE_CREEP, BRAKE_V_SLIP, LAYON_QUANTITIES, LOAD_CELL_QUANTITIES, NIP_SIDES, QUANTITIES, STRAIN_RANGE, TRACTION_CREEP, TRACTION_QUANTITIES, Branch, Component, Dancer, Drive, Event, Loop,
+    LayOn, Node, Prescribed, Roller, Runout, Scene, SceneError, Span, Traction, Web, Wound, quantities_of, quantity_unit, span_layers,
 )

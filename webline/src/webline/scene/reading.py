@@ -25,6 +25,7 @@ from .types import (
     DancerLoop,
     Drive,
     Event,
+    LayOn,
     Loop,
     Prescribed,
     Roller,
@@ -478,7 +479,7 @@ def _span(r, o_node, name, webs) -> Span:
 
 def _roller(r, o_node, name, kind) -> Roller:
     what = f"{kind} {name!r}"
-    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip", "wound", "runout", "at"]
+    optional = ["J", "R", "b", "v_start", "drive", "description", "wrap", "traction", "nip", "wound", "runout", "layon", "at"]
     if kind == "roller":
         optional += ["merge", "split", "trim"]  # side paths: read by _branch
     required = ["type", "name"]
@@ -496,15 +497,18 @@ def _roller(r, o_node, name, kind) -> Roller:
     slips = "traction" in o or "nip" in o
     if c.drive.kind == "speed":
         # With traction the roll's radius sets the web's mass on it and the air film, with runout where
-        # the web touches [R15]: R is needed then.
-        radius = slips or "runout" in o
+        # the web touches [R15], with a lay-on roller where the nip presses [R18]: R is needed then.
+        needs = [(k, why) for k, why in (("traction", "the web's mass on the wrap and the air film depend on it"),
+                                         ("nip", "the web's mass on the wrap depends on it"),
+                                         ("runout", "the roll's surface, where the web touches"),
+                                         ("layon", "the roll's surface, where the nip presses")) if k in o]
+        radius = bool(needs)
         for k in ("J", "b", "v_start") if radius else ("J", "R", "b", "v_start"):
             if k in o:
                 raise r.err(r.key_pos(o[k]), f"{what}: {k} is not used: a speed-driven roller follows its speed profile exactly")
         if radius:
             if "R" not in o:
-                why = "the web's mass on the wrap and the air film depend on it" if slips else "the roll's surface, where the web touches"
-                raise r.err(o_node, f"{what} needs the key 'R' with {'traction' if slips else 'runout'} ({why})")
+                raise r.err(o_node, f"{what} needs the key 'R' with {needs[0][0]} ({needs[0][1]})")
             c.R = r.quantity(o["R"], units.LENGTH, f"{what}: R", positive=True)
     else:
         for k in ("J", "R"):
@@ -555,7 +559,41 @@ def _roller(r, o_node, name, kind) -> Roller:
             c.wound.merge = _stepwise(r, w["stepwise"], f"{what}: wound: stepwise")
     if "runout" in o:
         c.runout = _runout(r, o["runout"], what, kind)
+    if "layon" in o:
+        c.layon = _layon(r, o["layon"], what, kind)
+        if getattr(c.wound, "merge", 0.0):
+            raise r.err(r.key_pos(o["layon"]), f"{what}: a lay-on roller on a stepwise radius (wound.stepwise) is not modelled "
+                                               "(the nip presses on the smooth radius); drop one")
+        if c.runout is not None and c.runout.harmonics:
+            raise r.err(r.key_pos(o["layon"]), f"{what}: a lay-on roller on an out-of-round roll (runout: harmonics) is not "
+                                               "modelled (the nip presses on runout's circle); drop one")
     return c
+
+
+def _layon(r, node, what, kind) -> LayOn:
+    """`"layon": {"mass", "stiffness", "damping", "radius", "load", ...}` on a winder [R18]."""
+    if kind != "winder":
+        raise r.err(r.key_pos(node), f"{what}: a lay-on roller presses on a roll being wound: put it on a winder")
+    w = f"{what}: layon"
+    o = r.keys(node, w, required=("mass", "stiffness", "damping", "radius", "load"),
+               optional=("inertia", "bearing", "mu", "v_slip", "angle"))
+    load = r.profile(o["load"], units.FORCE, f"{w}: load")
+    negative = next(((t, v) for t, v in load.knots if v < 0), None)
+    if negative is not None:
+        raise r.err(o["load"], f"{w}: load {negative[1]:g} N at t = {negative[0]:g} s: a lay-on roller presses with a load >= 0")
+    layon = LayOn(mass=r.quantity(o["mass"], units.MASS, f"{w}: mass", positive=True),
+                  stiffness=r.quantity(o["stiffness"], units.STIFFNESS, f"{w}: stiffness", positive=True),
+                  damping=r.quantity(o["damping"], units.LIN_DAMPING, f"{w}: damping", nonnegative=True),
+                  radius=r.quantity(o["radius"], units.LENGTH, f"{w}: radius", positive=True), load=load)
+    for key, kind, sign in (("inertia", units.INERTIA, "positive"), ("bearing", units.ROT_DAMPING, "nonnegative"),
+                            ("mu", units.DIMENSIONLESS, "nonnegative"), ("v_slip", units.SPEED, "positive")):
+        if key in o:
+            setattr(layon, key, r.quantity(o[key], kind, f"{w}: {key}", **{sign: True}))
+    if layon.mu > MU_MAX:
+        raise r.err(o["mu"], f"{w}: mu = {layon.mu:g}: a friction coefficient is 0 to {MU_MAX:g}")
+    if "angle" in o:
+        layon.angle = math.radians(r.quantity(o["angle"], units.ANGLE, f"{w}: angle"))
+    return layon
 
 
 def _runout(r, node, what, kind) -> Runout:

@@ -27,12 +27,17 @@ TRACTION_QUANTITIES = {"v_web": "m/s", "slip": "m/s", "traction": "1", "mu_eff":
 # What a roller with a wrap records besides: its load cell (docs/physics.md, "A load cell").
 LOAD_CELL_QUANTITIES = {"F": "N"}
 
+# What a winder with a lay-on roller records besides (docs/physics.md, "A lay-on roller", [R18]): the nip's
+# force and compression, the carriage's position and speed, the roller's spin (the Roller's outputs).
+LAYON_QUANTITIES = {"layon.N": "N", "layon.delta": "m", "layon.x": "m", "layon.v": "m/s", "layon.omega": "rad/s"}
+
 
 def quantities_of(c) -> dict:
-    """What a component records: its type's quantities, where the web may slip the traction's, and a
-    roller's load cell where it has a wrap (every quantity a loop may measure)."""
+    """What a component records: its type's quantities, where the web may slip the traction's, a
+    roller's load cell where it has a wrap (every quantity a loop may measure), a lay-on roller's."""
     return {**QUANTITIES[c.type], **(TRACTION_QUANTITIES if getattr(c, "traction", None) is not None else {}),
-            **(LOAD_CELL_QUANTITIES if getattr(c, "wrap", None) else {})}
+            **(LOAD_CELL_QUANTITIES if getattr(c, "wrap", None) else {}),
+            **(LAYON_QUANTITIES if getattr(c, "layon", None) is not None else {})}
 
 
 class SceneError(ValueError):
@@ -257,6 +262,26 @@ class Runout:
 
 
 @dataclass
+class LayOn:
+    """A lay-on roller pressed against a winder by `load` (N, a profile) [R18]: its carriage's moving mass
+    (kg), the nip's stiffness (N/m) and damping (N s/m), the roller's radius (m), inertia (kg m^2) and
+    bearing (N m s), the nip's friction mu and its slip speed (m/s), and `angle` (rad), the carriage's
+    line from the web's side in the roll's sense of turning (docs/physics.md, "A lay-on roller").
+    The defaults are the Roller FMU's start values."""
+
+    mass: float
+    stiffness: float
+    damping: float
+    radius: float
+    load: Profile
+    inertia: float = 0.05
+    bearing: float = 1e-3
+    mu: float = 0.5
+    v_slip: float = 1e-3
+    angle: float = 0.0
+
+
+@dataclass
 class Component:
     name: str
     type: str
@@ -318,6 +343,7 @@ class Roller(Node):
     traction: Traction | None = None  # the web may slip on it
     wound: Wound | None = None  # an unwinder's or winder's roll that changes as web winds off or on
     runout: Runout | None = None  # an unwinder's or winder's roll off its axis [R15]
+    layon: LayOn | None = None  # a winder's lay-on roller [R18]
 
     @property
     def has_fmu(self):
@@ -575,4 +601,7 @@ def profiles_of(c):
     t = getattr(c, "traction", None)
     if t is not None and t.nip_load is not None:
         out.append(t.nip_load)
+    layon = getattr(c, "layon", None)
+    if layon is not None:
+        out.append(layon.load)
     return out
