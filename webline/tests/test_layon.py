@@ -162,6 +162,23 @@ def test_a_layon_that_cannot_be_is_refused_by_name(layon, winder, words):
         scene(layon=layon, winder=winder)
 
 
+def test_a_new_roll_under_a_layon_is_refused_by_name():
+    """A set event of R (a new roll) would move the roll's surface under the carriage: refused; J and b may change."""
+    base = json.loads(json.dumps({"name": "layon", "stop_time": "0.5 s", "step": "1 ms", "webs": WEB,
+                                  "line": [{"type": "source", "name": "in", "speed": "5 m/s", "strain": 0.0005},
+                                           {"type": "span", "name": "film", "L": "2 m", "web": "PET"},
+                                           {"type": "winder", "name": "wind", "J": "1 kg.m2", "R": "0.2 m", "drive": {"tension": "100 N"},
+                                            "layon": {"mass": "20 kg", "stiffness": "1e7 N/m", "damping": "5000 N.s/m",
+                                                      "radius": "0.1 m", "load": "100 N"}}]}))
+    for change, refused in [({"R": "0.3 m"}, True), ({"J": "2 kg.m2"}, False)]:
+        base["events"] = [{"time": "0.2 s", "component": "wind", "set": change}]
+        if refused:
+            with pytest.raises(SceneError, match="a new roll .set R. would move its surface"):
+                parse_scene(json.dumps(base), "layon.json")
+        else:
+            parse_scene(json.dumps(base), "layon.json")
+
+
 def test_a_layon_is_a_winders_and_the_parts_refuse_it(fmus):
     text = json.dumps({
         "name": "x", "stop_time": "0.1 s", "step": "1 ms", "webs": WEB,

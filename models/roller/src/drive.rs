@@ -132,6 +132,11 @@ pub fn parse(p: &Parameters, text: &str) -> Result<Loaded, String> {
     if loaded.table(Key::Nip).is_some() && !p.traction {
         return Err("a nip table needs includeTraction = true (a nip acts through the web's friction on the roller)".into());
     }
+    if p.layon && loaded.profile.events.iter().any(|e| e.changes.iter().any(|(name, _)| name == "R")) {
+        return Err("a set event of R with layon = true: a new roll would move its surface under the lay-on roller's carriage [R18], \
+                    which is not modelled (J and b may change)"
+            .into());
+    }
     let kind = crate::parameters::Kind::of(p);
     if p.speed_input && (loaded.drive != Drive::Torque || kind != crate::parameters::Kind::None || loaded.table(Key::Brake).is_some()) {
         return Err("speed.input = true: the surface speed is loop.speed; the profile may have no speed, torque, tension or brake table and loop.kind must be 0".into());

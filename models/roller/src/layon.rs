@@ -1,5 +1,5 @@
 //! A lay-on (contact) roller pressed against a winder [R18]: its carriage, the nip's force, the
-//! traction that turns it, and the record of where it lost contact. The winder's axis is at the
+//! traction that turns it, and the speed above which it bounces. The winder's axis is at the
 //! origin and its surface a circle of radius r whose centre C sits at e from the axis (runout [R15],
 //! e = 0 for a round roll); the lay-on roller (radius r_l) rides a carriage guided along the unit
 //! line u through the winder's axis, its axis at D = X u. Angles in runout's frame: C = e (sin psi,
@@ -174,52 +174,53 @@ pub fn bounce_omega(l: &LayOn, load: f64, eccentricity: f64) -> Option<f64> {
     Some(0.5 * (lo + hi))
 }
 
-/// Where the nip let go and for how long [R18], recorded from the force at each sample.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Separations {
-    /// Times it let go, the first time, the longest and the total time apart (s).
-    pub count: u32,
-    pub first: Option<f64>,
-    pub longest: f64,
-    pub total: f64,
-    apart_since: Option<f64>,
-}
-
-impl Separations {
-    /// The nip's force `force` at time t (samples in time order).
-    pub fn observe(&mut self, t: f64, force: f64) {
-        match (self.apart_since, force > 0.0) {
-            (None, false) => {
-                self.apart_since = Some(t);
-                self.count += 1;
-                self.first.get_or_insert(t);
-            }
-            (Some(since), true) => {
-                self.close(t - since);
-                self.apart_since = None;
-            }
-            _ => {}
-        }
-    }
-
-    /// At the end of the record: a separation still open closes at t.
-    pub fn finish(&mut self, t: f64) {
-        if let Some(since) = self.apart_since.take() {
-            self.close(t - since);
-        }
-    }
-
-    fn close(&mut self, duration: f64) {
-        self.longest = self.longest.max(duration);
-        self.total += duration;
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use solver::fixed::{integrate, Method};
     use solver::Ode;
+
+    /// Where the nip let go and for how long, recorded from the force at each sample of a test's run (webline
+    /// reports a run's separations from its output samples: summary.py).
+    #[derive(Clone, Copy, Debug, Default, PartialEq)]
+    struct Separations {
+        /// Times it let go, the first time, the longest and the total time apart (s).
+        count: u32,
+        first: Option<f64>,
+        longest: f64,
+        total: f64,
+        apart_since: Option<f64>,
+    }
+
+    impl Separations {
+        /// The nip's force `force` at time t (samples in time order).
+        fn observe(&mut self, t: f64, force: f64) {
+            match (self.apart_since, force > 0.0) {
+                (None, false) => {
+                    self.apart_since = Some(t);
+                    self.count += 1;
+                    self.first.get_or_insert(t);
+                }
+                (Some(since), true) => {
+                    self.close(t - since);
+                    self.apart_since = None;
+                }
+                _ => {}
+            }
+        }
+
+        /// At the end of the record: a separation still open closes at t.
+        fn finish(&mut self, t: f64) {
+            if let Some(since) = self.apart_since.take() {
+                self.close(t - since);
+            }
+        }
+
+        fn close(&mut self, duration: f64) {
+            self.longest = self.longest.max(duration);
+            self.total += duration;
+        }
+    }
 
     fn roller(stiffness: f64, damping: f64) -> LayOn {
         LayOn { mass: 20.0, stiffness, damping, radius: 0.1, inertia: 0.05, bearing: 1e-3, mu: 0.5, v_slip: 1e-3, angle: 0.3 }

@@ -261,6 +261,17 @@ fn bad_profiles_are_refused_naming_the_file_and_the_problem() {
     assert!(err(r#"{"sped": [[0, 1]]}"#, 0).contains("unknown key \"sped\""));
     assert!(err(r#"{"set": [{"time": 1, "v_start": 2}]}"#, 0).contains("\"v_start\" cannot change during a run"));
     assert!(err(r#"{"set": [{"time": 1, "J": -2}]}"#, 0).contains("J = -2 is outside"));
+    // A lay-on roller [R18]: its load table only with layon, never negative, and no new roll (R) under it.
+    assert!(err(r#"{"layon": [[0, 100]]}"#, 2).contains("a layon table needs layon = true"));
+    let layon = |text: &str| {
+        let setup = |m: &mut Roller| {
+            m.set_integer(Integer::roll.vr(), 2).unwrap();
+            m.set_boolean(Boolean::layon.vr(), true).unwrap();
+        };
+        roller(&[], Some(text), setup).map(|_| ()).unwrap_err()
+    };
+    assert!(layon(r#"{"layon": [[0, 100], [1, -5]]}"#).contains("layon: the load at 1 s is -5 N"));
+    assert!(layon(r#"{"set": [{"time": 1, "R": 0.3}]}"#).contains("a set event of R with layon = true"));
     let e = err(r#"{"speed": [[1, 1], [0, 2]]}"#, 0);
     assert!(e.starts_with("profile ") && e.contains(".json: speed: entry 1"), "{e}");
     // A missing file names itself (an absolute path on every platform).

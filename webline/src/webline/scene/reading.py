@@ -815,6 +815,11 @@ def _event(r, node, i, scene_line, webs, stop_time) -> Event:
         allowed = ("web", "wp1", "wp2")
     elif getattr(comp, "wound", None) is not None:
         allowed = ("b",)  # J and R move with the roll's web [R3]
+    elif getattr(comp, "layon", None) is not None:
+        allowed = ("J", "b")
+        if isinstance(o["set"].value, Obj) and "R" in o["set"].value:
+            raise r.err(o["set"], f"{what}: {comp.type} {cname!r} has a lay-on roller: a new roll (set R) would move its surface "
+                                  "under the lay-on's carriage [R18], which is not modelled (J and b may change)")
     elif isinstance(comp, (Roller, Dancer)) and comp.has_fmu:
         allowed = ("J", "R", "b")
     else:
