@@ -24,7 +24,7 @@ impl Model for Roller {
         out.f64(self.omega.hi());
         out.f64(self.omega.lo());
         let r = &self.roll;
-        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.v_web, self.integrator, self.motor, self.dancer, self.time, self.events_at, self.angle, self.layon[0], self.layon[1], self.layon[2]] {
+        for x in [r.radius, r.inertia, r.reference_radius, r.reference_inertia, self.carriage[0], self.carriage[1], self.v_web, self.integrator, self.motor, self.dancer, self.time, self.events_at, self.angle, self.layon[0], self.layon[1], self.layon[2], self.grip, self.brake_grip] {
             out.f64(x);
         }
         let h = &self.hold;
@@ -55,6 +55,7 @@ impl Model for Roller {
         self.events_at = r.finite("events applied until")?;
         self.angle = r.finite("angle")?;
         self.layon = [r.finite("layon.x")?, r.finite("layon.v")?, r.finite("layon.omega")?];
+        (self.grip, self.brake_grip) = (r.finite("grip")?, r.finite("brake.grip")?);
         let (engaged, has_waiting) = (r.bool("hold engaged")?, r.bool("hold waiting")?);
         let (applied, at, waiting) = (r.finite("held command")?, r.finite("waiting's time")?, r.finite("waiting command")?);
         let (origin, next) = (r.finite("samples' origin")?, r.finite("next sample")?);
