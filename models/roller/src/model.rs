@@ -85,6 +85,12 @@ impl Roller {
         if !(x.radius > 0.0) {
             return Err(fmi_core::FmiError::discard(format!("r = {} m is not a radius (it must be > 0)", x.radius)));
         }
+        self.place(x);
+        Ok(())
+    }
+
+    /// Puts the roller at `x` (J moves with r [R3]), unchecked: a step's trial point, or `set_states`'s.
+    pub(crate) fn place(&mut self, x: &States) {
         self.omega = CompensatedSum::from_parts(x.omega, 0.0);
         self.roll = Roll { radius: x.radius, inertia: self.roll.inertia(&self.params, x.radius), ..self.roll };
         self.carriage = [x.carriage_y, x.carriage_speed];
@@ -95,7 +101,6 @@ impl Roller {
         (self.integrator, self.motor, self.dancer) = (x.loop_integrator, x.motor_torque, x.dancer_integrator);
         (self.grip, self.brake_grip, self.angle) = (x.grip, x.brake_grip, x.angle);
         self.layon = [x.layon_x, x.layon_speed, x.layon_spin];
-        Ok(())
     }
 
     #[inline(always)]
@@ -494,27 +499,23 @@ impl Roller {
 
     /// A lay-on roller's nip force [R18] (0 without one).
     pub fn layon_force(&self) -> f64 {
-        self.layon_outputs().map_or(0.0, |o| o.layon_force)
+        self.params.layon.then(|| self.outputs_now().layon_force).unwrap_or(0.0)
     }
 
     /// A lay-on roller's nip compression [R18] (0 without one).
     pub fn layon_compression(&self) -> f64 {
-        self.layon_outputs().map_or(0.0, |o| o.layon_compression)
-    }
-
-    fn layon_outputs(&self) -> Option<rhs::Outputs> {
-        self.params.layon.then(|| {
-            let x = self.held();
-            rhs::outputs(&self.params, &self.point_at(self.time, &x), &x, &self.inputs)
-        })
+        self.params.layon.then(|| self.outputs_now().layon_compression).unwrap_or(0.0)
     }
 
     /// Everything the roller computes now, where its roll has runout (its ends move with the angle).
     fn runout_outputs(&self) -> Option<rhs::Outputs> {
-        self.params.runout.then(|| {
-            let x = self.held();
-            rhs::outputs(&self.params, &self.point_at(self.time, &x), &x, &self.inputs)
-        })
+        self.params.runout.then(|| self.outputs_now())
+    }
+
+    /// Everything the roller computes now (`rhs::outputs`).
+    fn outputs_now(&self) -> rhs::Outputs {
+        let x = self.held();
+        rhs::outputs(&self.params, &self.point_at(self.time, &x), &x, &self.inputs)
     }
 
     /// d/dt of the states now, by name.

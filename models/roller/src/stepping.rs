@@ -163,21 +163,11 @@ impl Roller {
 
     /// Sets `states` to y (J moves with r [R3]); the others as they are.
     fn take<const N: usize>(&mut self, states: &[State; N], y: &[f64; N]) {
+        let mut x = self.held();
         for (&s, &value) in states.iter().zip(y) {
-            match s {
-                State::Omega => self.omega = CompensatedSum::from_parts(value, 0.0),
-                State::Radius => self.roll = Roll { radius: value, inertia: self.roll.inertia(&self.params, value), ..self.roll },
-                State::LoopIntegrator => self.integrator = value,
-                State::MotorTorque => self.motor = value,
-                State::DancerIntegrator => self.dancer = value,
-                State::BrakeGrip => self.brake_grip = value,
-                State::Angle => self.angle = value,
-                State::LayonX => self.layon[0] = value,
-                State::LayonSpeed => self.layon[1] = value,
-                State::LayonSpin => self.layon[2] = value,
-                State::CarriageY | State::CarriageSpeed | State::WebSpeed | State::Grip => unreachable!("{s:?} is not a controlled piece's state"),
-            }
+            *x.get_mut(s) = value;
         }
+        self.place(&x);
     }
 
     /// The roller at time t with `states` at y, the rest as now (a step's trial point).
